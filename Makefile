@@ -1,0 +1,125 @@
+# Detailed-surface graphics headers: build, demo, tests, benches.
+#   make demo      build the examples and render the default scenes into out/
+#   make test      install missing test dependencies (as root), build and run every test
+#   make sanitize  the same tests built with AddressSanitizer + UndefinedBehaviorSanitizer
+#   make fuzz      clang libFuzzer targets, each run for FUZZ_TIME seconds (default 60)
+#   make bench     install the peers, run the side-by-side benchmarks, write bench/RESULTS.md
+#   make clean
+# Works with CC=gcc and CC=clang (CXX follows CC unless given). Everything is built under build/.
+
+B        ?= build
+OUT      ?= out
+ifeq ($(origin CXX),default)
+  ifneq ($(findstring clang,$(CC)),)
+    CXX = clang++
+  else
+    CXX = g++
+  endif
+endif
+WARN     = -Wall -Wextra -pedantic -Werror
+OPT      ?= -O2 -g
+XFLAGS   ?=
+INC      = -I. -Iexamples -Itests -Ibench
+CFLAGS_ALL   = -std=c99 $(WARN) $(OPT) $(XFLAGS) $(INC)
+CXXFLAGS_ALL = -std=c++17 $(WARN) $(OPT) $(XFLAGS) $(INC)
+SANFLAGS = -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+FUZZ_TIME ?= 60
+
+# The library headers that exist so far, and the examples' shared headers.
+LIBHEADERS = $(wildcard dispmesh.h erosion.h texel.h subdiv4.h deform.h)
+EXHEADERS  = $(wildcard examples/*.h)
+HEADERS    = $(LIBHEADERS) $(EXHEADERS)
+ALLDEPS    = $(HEADERS) $(wildcard tests/*.h bench/*.h) Makefile
+
+HAVE_OPENMESH := $(wildcard /usr/include/OpenMesh/Core/IO/MeshIO.hh)
+HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
+HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
+
+EXAMPLES   = $(B)/meshconv
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere
+FUZZ_FMTS  = obj off ply stl
+FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
+REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree)
+BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio)
+TOOLS      = $(B)/gen_sphere
+
+.PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
+.DELETE_ON_ERROR:
+
+all: $(EXAMPLES) $(TOOLS) $(C_TESTS) $(FUZZ_PLAIN) $(REF_TESTS) $(BENCHES)
+
+# ---- examples -------------------------------------------------------------------------------------
+$(EXAMPLES): $(B)/%: examples/%.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
+
+$(B)/gen_sphere: bench/gen_sphere.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
+
+demo: $(EXAMPLES) $(TOOLS)
+	@mkdir -p $(OUT)
+	@sh examples/demo.sh $(B) $(OUT)
+
+# ---- tests ----------------------------------------------------------------------------------------
+$(B)/test_%: tests/test_%.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
+
+$(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< tests/fuzz_main.c -o $@ -lm
+
+$(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
+
+$(B)/ref_embree: tests/ref_embree.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
+
+# Dependencies are installed first; the build is a separate make so that it sees what was installed.
+test:
+	@tests/deps.sh test
+	@$(MAKE) --no-print-directory test-build
+	@HEADERS="$(HEADERS)" tests/run.sh $(B)
+
+test-build: $(C_TESTS) $(FUZZ_PLAIN) $(REF_TESTS)
+
+sanitize:
+	@tests/deps.sh test
+	@$(MAKE) --no-print-directory test-build B=$(B)/san OPT="-O1 -g" XFLAGS="$(SANFLAGS)"
+	@ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 tests/run.sh $(B)/san sanitize
+
+# ---- fuzzing (clang + libFuzzer) ------------------------------------------------------------------
+FUZZ_LF = $(FUZZ_FMTS:%=$(B)/fuzz/fuzz_%)
+$(B)/fuzz/fuzz_%: tests/fuzz_%.c $(ALLDEPS)
+	@mkdir -p $(B)/fuzz
+	clang -std=c99 -g -O1 $(INC) -fsanitize=fuzzer,address,undefined $< -o $@ -lm
+
+fuzz-build: $(FUZZ_LF)
+
+fuzz: fuzz-build
+	@for f in $(FUZZ_FMTS); do \
+	  mkdir -p $(B)/fuzz/corpus_$$f && cp -n tests/fuzz/corpus/$$f/* $(B)/fuzz/corpus_$$f/ 2>/dev/null; \
+	  echo "fuzz_$$f: $(FUZZ_TIME) s" >&2; \
+	  $(B)/fuzz/fuzz_$$f -max_total_time=$(FUZZ_TIME) -rss_limit_mb=2048 -print_final_stats=1 \
+	     -artifact_prefix=$(B)/fuzz/crash_$$f- $(B)/fuzz/corpus_$$f 2>$(B)/fuzz/fuzz_$$f.log || { tail -n 30 $(B)/fuzz/fuzz_$$f.log; exit 1; }; \
+	  echo "RESULT fuzz_$$f $$(grep -E 'stat::number_of_executed_units' $(B)/fuzz/fuzz_$$f.log | awk '{print "executions=" $$2}') seconds=$(FUZZ_TIME)"; \
+	done
+
+# ---- benchmarks -----------------------------------------------------------------------------------
+$(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ -lOpenMeshCore -lm
+
+$(B)/sphere1m.off: $(B)/gen_sphere
+	$(B)/gen_sphere -f 224 -o $@
+
+bench:
+	@tests/deps.sh bench
+	@$(MAKE) --no-print-directory bench-build
+	@sh bench/run.sh $(B)
+
+bench-build: $(TOOLS) $(BENCHES) $(B)/sphere1m.off
+
+# ---------------------------------------------------------------------------------------------------
+$(B):
+	@mkdir -p $(B)
+
+clean:
+	rm -rf build out
