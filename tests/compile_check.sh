@@ -27,7 +27,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     -o) work="$2"; shift 2 ;;
     --self-test) self_test=1; shift ;;
-    *) headers+=("$1"); shift ;;
+    *) headers+=("$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"); shift ;;
   esac
 done
 [ -n "$work" ] || work=$(mktemp -d)
@@ -60,6 +60,20 @@ include_violations() {
       return 0
     }
     function optin(   i) { for (i = 1; i <= depth; i++) if (ok[i]) return 1; return 0 }
+    # directives inside /* */ comments (a doc block showing how to include the header) do not count
+    {
+      line = $0; out = ""
+      while (length(line) > 0) {
+        if (incomment) {
+          e = index(line, "*/"); if (!e) { line = ""; break }
+          line = substr(line, e + 2); incomment = 0
+        } else {
+          b = index(line, "/*"); if (!b) { out = out line; break }
+          out = out substr(line, 1, b - 1); line = substr(line, b + 2); incomment = 1
+        }
+      }
+      $0 = out
+    }
     /^[ \t]*#[ \t]*if/ {
       depth++
       # an opt-in conditional names a macro with the header prefix and does not negate it
