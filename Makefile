@@ -104,8 +104,10 @@ fuzz: fuzz-build
 	done
 
 # ---- benchmarks -----------------------------------------------------------------------------------
+# Each bench names the peer libraries it links in BENCH_LIBS_<name>.
+BENCH_LIBS_meshio = -lOpenMeshCore
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
-	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ -lOpenMeshCore -lm
+	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
 $(B)/sphere1m.off: $(B)/gen_sphere
 	$(B)/gen_sphere -f 224 -o $@
