@@ -13,16 +13,7 @@
    TriMesh. Peak RSS is measured per side from a reset high-water mark. Details in README.md. */
 #include "bench.h"
 
-#if defined(__GNUC__) && !defined(__clang__)
-/* g++ 12 -O2 reports maybe-uninitialized inside OpenMesh's Property.hh; not in this file */
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-#include <OpenMesh/Core/IO/MeshIO.hh> /* before the mesh type, as OpenMesh's docs require */
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
+#include "openmesh.hpp"
 
 #include <cstdio>
 #include <cstdlib>
@@ -34,7 +25,6 @@
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
 
-typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
 
 struct meshio_side {
     const char *path;

@@ -12,17 +12,7 @@
        with one fan holding all its triangles, Euler characteristic 2, and the positions and
        triples bit-identical to what the generator made (so %.9g round-trips through a third
        party parser too). */
-#if defined(__GNUC__) && !defined(__clang__)
-/* g++ 12 -O2 reports maybe-uninitialized inside OpenMesh's Property.hh (a vector of
-   default-constructed VectorT); it is in the library's headers, not in this test */
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
+#include "openmesh.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -38,7 +28,6 @@
 #include "meshio.h"
 #include "../bench/sphere.h"
 
-typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
 
 #ifndef REF_BUNNY_PATH /* overridable to exercise the skip path */
 #define REF_BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
