@@ -34,14 +34,16 @@ ALLDEPS    = $(HEADERS) $(wildcard tests/*.h bench/*.h) Makefile
 HAVE_OPENMESH := $(wildcard /usr/include/OpenMesh/Core/IO/MeshIO.hh)
 HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
 HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
+HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 
-EXAMPLES   = $(B)/meshconv
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere
+EXAMPLES   = $(B)/meshconv $(B)/render_mesh
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree)
-BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio)
+BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
+             $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -106,6 +108,7 @@ fuzz: fuzz-build
 # ---- benchmarks -----------------------------------------------------------------------------------
 # Each bench names the peer libraries it links in BENCH_LIBS_<name>.
 BENCH_LIBS_meshio = -lOpenMeshCore
+BENCH_LIBS_raster = -lOSMesa
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 

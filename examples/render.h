@@ -1,0 +1,2337 @@
+/* render.h - v0.1 - MIT licence or public domain (see end of file)
+   A minimal software rasterizer, height-field and volume ray marcher, and image writers
+   (PNG, PPM, PFM, contact sheets) for the examples of this project. libc + libm only.
+
+   WHAT
+     - Framebuffer: float RGBA colour + float depth (GL convention: 0 near, 1 far, cleared to 1),
+       row 0 at the top of the picture. Look-at camera, perspective or orthographic, with
+       column-major GL matrices (view, proj, viewproj) that can be handed to OpenGL unchanged.
+     - Triangle rasterizer: clipping in homogeneous space against the near and far planes (and a
+       guard band), 8-bit sub-pixel fixed-point edge functions with the top-left fill rule,
+       perspective-correct interpolation, GL_LESS depth test, optional culling, flat / Gouraud /
+       per-pixel Phong lighting (the fixed-function GL model: ambient + diffuse + Blinn specular,
+       directional and point lights), per-vertex colour, object-space normal map, wireframe
+       overlay, a fragment callback, and a fragment-counting mode for coverage tests.
+       It is a deferred ("visibility buffer") rasterizer: each draw first resolves depth,
+       triangle and barycentrics per pixel, then shades every covered pixel once.
+     - Relief mapping of a height map over a world-space quad (Policarpo et al. 2005: linear
+       search then binary refinement), ray marching of a terrain height field, and ray marching
+       of a box-bounded volume given by callbacks (front-to-back compositing, early termination,
+       shadow rays, Kajiya-Kay hair/grass lighting). All of them write depth and so composite
+       with rasterized geometry in either order (opaque ones; draw volumes last).
+     - PNG (real deflate: fixed Huffman codes + LZ77), PPM, PFM writers; contact sheets with a
+       built-in 3x5 bitmap font for captions.
+
+   HOW TO USE (in ten lines)
+       #define SR_IMPLEMENTATION          // in exactly one C or C++ file, followed by
+       ...  #include "render.h"           // (in every file that uses it)
+       sr_framebuffer fb;  sr_camera cam;  sr_draw_desc d;  float eye[3] = {0, 0, 3}, at[3] = {0, 0, 0};
+       sr_framebuffer_create(&fb, 512, 512, NULL);
+       sr_framebuffer_clear(&fb, NULL, 1.0f);                        // NULL colour = black, alpha 1
+       sr_camera_look_at(&cam, eye, at, NULL, 45.0f, 1.0f, 0.1f, 100.0f); // NULL up = +y
+       sr_draw_desc_default(&d);  d.positions = pos; d.vertex_count = nv; d.indices = idx; d.triangle_count = nt;
+       sr_draw_mesh(&fb, &cam, &d);                                  // Phong, a default head light
+       sr_write_framebuffer_png(&fb, "out.png", 0);
+       sr_framebuffer_free(&fb);
+
+   OPTIONS
+     Compile time: SR_STATIC (all functions static), SR_MALLOC(sz)/SR_FREE(p) (both or neither).
+     Run time: sr_draw_desc, sr_relief_desc, sr_terrain_desc, sr_volume_desc. Call the matching
+     *_default() first; zero fields then mean "default" where the field comment says so.
+
+   MEMORY
+     The framebuffer owns its arrays (allocated through the allocator given to
+     sr_framebuffer_create and kept in fb->allocator): colour, depth, and 12 bytes per pixel of
+     scratch for the deferred shading. sr_draw_mesh also needs about 40 bytes per vertex of
+     scratch, which it allocates through the same allocator the first time and keeps in the
+     framebuffer (grown when a bigger mesh comes) until sr_framebuffer_free. Encoders return
+     buffers that must be released with sr_free(allocator, p).
+
+   ERRORS
+     Functions return sr_result (SR_OK = 0); sr_result_string() names it. Invalid arguments give
+     SR_ERR_INVALID_ARGUMENT and leave the framebuffer untouched.
+
+   THREAD SAFETY
+     No global state. Different framebuffers may be drawn from different threads at once.
+
+   DETERMINISM
+     The same scene gives the same bytes on every run of the same build (no threads, no random
+     numbers; ties in the depth test are won by the first fragment drawn).
+
+   PERFORMANCE
+     One thread. 1024 x 1024 per-pixel Phong with back-face culling (bench/bench_raster), on the
+     2-core AMD EPYC virtual machine this was written on: the 70k-triangle Stanford bunny in about
+     18 ms a frame, a 1M-triangle sphere in about 57 ms; Mesa llvmpipe on one thread with a GLSL
+     Phong shader took about 27 ms and 114 ms. With few large triangles the balance turns: a
+     180-triangle sphere filling the frame takes about 21 ms here and 10 ms in llvmpipe, which
+     shades 8 pixels per instruction. Each draw shades every covered pixel once, whatever the
+     overdraw. The ray marchers are plain per-pixel loops: use them at preview sizes.
+
+   LIMITS
+     Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
+     triangles per draw. Vertices must be finite (checked). One draw is opaque (no blending);
+     volumes blend over what is in the framebuffer.
+
+   REFERENCES
+     Pineda, "A parallel algorithm for polygon rasterization", SIGGRAPH 1988 (edge functions).
+     Blinn & Newell, "Clipping using homogeneous coordinates", SIGGRAPH 1978.
+     Policarpo, Oliveira & Comba, "Real-time relief mapping on arbitrary polygonal surfaces", I3D 2005.
+     Kajiya & Kay, "Rendering fur with three dimensional textures", SIGGRAPH 1989.
+     Levoy, "Display of surfaces from volume data", IEEE CG&A 1988 (front-to-back compositing).
+     RFC 1950 / 1951 (zlib, deflate), PNG specification (ISO/IEC 15948).
+*/
+#ifndef SR_RENDER_H
+#define SR_RENDER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef SR_STATIC
+#if defined(__GNUC__) || defined(__clang__)
+#define SRDEF static __attribute__((unused))
+#else
+#define SRDEF static
+#endif
+#else
+#define SRDEF extern
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ============================================================================================
+   Declarations
+   ============================================================================================ */
+
+typedef enum sr_result {
+    SR_OK = 0,
+    SR_ERR_INVALID_ARGUMENT, /* NULL pointer, bad size, index out of range, non-finite input */
+    SR_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
+    SR_ERR_IO,               /* fopen / fwrite / fclose failed */
+    SR_ERR_TOO_LARGE         /* sizes past the documented limits */
+} sr_result;
+
+/* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
+typedef struct sr_allocator {
+    void *(*alloc)(void *user, size_t size);
+    void (*free)(void *user, void *ptr);
+    void *user;
+} sr_allocator;
+
+typedef struct sr_framebuffer {
+    int width, height;
+    float *color;      /* 4 floats (RGBA, linear, 0..1) per pixel, row 0 at the top */
+    float *depth;      /* 1 float per pixel, 0 = near plane, 1 = far plane */
+    uint32_t *tri_id;  /* scratch for sr_draw_mesh: triangle per pixel (UINT32_MAX = none) */
+    float *bary;       /* scratch for sr_draw_mesh: 2 perspective-correct barycentrics per pixel */
+    void *scratch;     /* scratch for sr_draw_mesh: transformed vertices, grown as needed and kept */
+    size_t scratch_size;
+    sr_allocator allocator;
+} sr_framebuffer;
+
+typedef struct sr_camera {
+    float view[16], proj[16], viewproj[16]; /* column-major, GL conventions */
+    float eye[3], forward[3], right[3], up[3];
+    float tan_half_fovy;  /* perspective */
+    float half_height;    /* orthographic: half the view height in world units */
+    float aspect, znear, zfar;
+    int orthographic;
+} sr_camera;
+
+typedef enum sr_light_type { SR_LIGHT_DIRECTIONAL = 0, SR_LIGHT_POINT = 1 } sr_light_type;
+
+typedef struct sr_light {
+    sr_light_type type;
+    float vector[3];   /* directional: direction TOWARD the light (need not be unit); point: position */
+    float ambient[3], diffuse[3], specular[3];
+} sr_light;
+
+typedef struct sr_material {
+    float ambient[3], diffuse[3], specular[3], emission[3];
+    float shininess;   /* Blinn exponent (GL_SHININESS) */
+} sr_material;
+
+typedef enum sr_shading {
+    SR_SHADE_PHONG = 0,   /* per-pixel lighting with interpolated normals */
+    SR_SHADE_GOURAUD,     /* lighting per vertex, colours interpolated */
+    SR_SHADE_FLAT,        /* lighting per triangle (face normal at the centroid) */
+    SR_SHADE_UNLIT,       /* vertex colour or material diffuse, no lighting */
+    SR_SHADE_COUNT        /* no depth test: adds 1 to red for a front-facing fragment, to green for a back-facing one */
+} sr_shading;
+
+typedef enum sr_cull { SR_CULL_NONE = 0, SR_CULL_BACK, SR_CULL_FRONT } sr_cull;
+
+/* A float image (maps): row-major, channels per texel, texel (x,y) centred at UV
+   ((x+0.5)/width, (y+0.5)/height). */
+typedef struct sr_image {
+    int width, height, channels;
+    const float *data;
+    int wrap;          /* 0: clamp to edge, 1: repeat */
+} sr_image;
+
+/* What a fragment callback sees. */
+typedef struct sr_fragment {
+    int x, y;                 /* pixel */
+    uint32_t triangle;        /* index of the triangle in the draw */
+    int front_facing;
+    float bary[3];            /* perspective-correct barycentrics of the triangle's 3 vertices */
+    float position[3];        /* world space */
+    float normal[3];          /* world space, unit, flipped toward the viewer on back faces */
+    float uv[2];              /* 0,0 without uvs */
+    float color[3];           /* interpolated vertex colour, or material diffuse */
+} sr_fragment;
+
+typedef struct sr_draw_desc {
+    const float *positions;   /* 3 per vertex */
+    size_t vertex_count;
+    const uint32_t *indices;  /* 3 per triangle, counter-clockwise front faces */
+    size_t triangle_count;
+    const float *normals;     /* 3 per vertex, or NULL: flat shading uses face normals, others use
+                                 face normals per pixel as well (call sr_compute_vertex_normals) */
+    const float *colors;      /* 3 per vertex (replace ambient and diffuse material), or NULL */
+    const float *uvs;         /* 2 per vertex, or NULL */
+    const float *model;       /* 16 floats column-major model-to-world, or NULL = identity */
+    sr_shading shading;
+    sr_cull cull;
+    int no_depth_test;        /* nonzero: every fragment passes (still writes depth) */
+    int no_depth_write;
+    const sr_light *lights;   /* NULL or light_count == 0: one white directional head light */
+    int light_count;
+    sr_material material;
+    const sr_image *normal_map; /* object-space normals (3 channels, -1..1) looked up at the uvs */
+    int wireframe;              /* nonzero: draw triangle edges over the shading (not on triangles
+                                   cut by the near/far plane or the guard band) */
+    float wire_color[3];
+    float wire_width;           /* pixels, 0 = 1 */
+    /* optional: replaces lighting; rgb receives the colour */
+    void (*fragment)(void *user, const sr_fragment *frag, float rgb[3]);
+    void *fragment_user;
+} sr_draw_desc;
+
+/* Relief mapping: a height map over the quad origin + s*axis_u + t*axis_v, s,t in [0,1]; the
+   quad is the top surface and the map's value d in [0,1] is depth below it along -n, where
+   n = normalize(axis_u x axis_v), scaled by depth_scale world units. (s,t) are the map's UV. */
+typedef struct sr_relief_desc {
+    float origin[3], axis_u[3], axis_v[3];
+    float depth_scale;
+    sr_image depth;           /* 1 channel, 0 = on the quad, 1 = deepest */
+    const sr_image *albedo;   /* 3 channels, or NULL = material diffuse */
+    const sr_image *normal_map; /* tangent space (x along u, y along v, z along n), or NULL = from depth */
+    int linear_steps, binary_steps; /* 0 = 10 and 5 (the paper's values) */
+    int shadows;              /* nonzero: shadow ray toward each light through the height field */
+    const sr_light *lights; int light_count;
+    sr_material material;
+} sr_relief_desc;
+
+/* Terrain: heights[y*width+x] at world (origin_x + x*spacing, base_y + h*height_scale,
+   origin_z + y*spacing), y up. Bilinear between samples. */
+typedef struct sr_terrain_desc {
+    const float *heights;
+    int width, height;
+    float origin_x, origin_z, base_y, spacing, height_scale;
+    float step;               /* march step in world units, 0 = spacing / 2 */
+    const float *colors;      /* 3 per sample, or NULL = material diffuse */
+    const sr_light *lights; int light_count;
+    sr_material material;
+} sr_terrain_desc;
+
+typedef enum sr_volume_direction {
+    SR_VOLUME_NONE = 0,       /* isotropic: diffuse = 1 */
+    SR_VOLUME_NORMAL,         /* Lambert with the returned normal (two-sided) */
+    SR_VOLUME_TANGENT         /* Kajiya-Kay with the returned fibre tangent */
+} sr_volume_direction;
+
+typedef struct sr_volume_desc {
+    float box_min[3], box_max[3];
+    float (*density)(void *user, const float p[3]);                 /* extinction per world unit, >= 0 */
+    void (*shade)(void *user, const float p[3], float rgb[3], float dir[3]); /* NULL = material diffuse */
+    void *user;
+    sr_volume_direction direction;
+    float step;               /* world units, 0 = box diagonal / 256 */
+    float shadow_step;        /* 0 = 2 * step */
+    int shadows;              /* nonzero: shadow ray toward each light */
+    float depth_threshold;    /* opacity at which depth is written, 0 = 0.5 */
+    float termination;        /* opacity for early termination, 0 = 0.995 */
+    const sr_light *lights; int light_count;
+    sr_material material;
+} sr_volume_desc;
+
+/* An 8-bit image for writers and contact sheets: row 0 is the top row. */
+typedef struct sr_image8 {
+    int width, height, channels; /* channels 1, 3 or 4 */
+    uint8_t *pixels;             /* width*height*channels */
+} sr_image8;
+
+/* ---- results, memory ---------------------------------------------------------------------- */
+
+/* "SR_OK", "SR_ERR_INVALID_ARGUMENT", ...; "SR_ERR_?" outside the enum. */
+SRDEF const char *sr_result_string(sr_result r);
+/* Frees memory returned by this library with the given allocator (NULL = SR_FREE). */
+SRDEF void sr_free(const sr_allocator *allocator, void *p);
+
+/* ---- framebuffer and camera --------------------------------------------------------------- */
+
+/* width, height in 1..16384. allocator NULL = SR_MALLOC/SR_FREE. Colour cleared to 0, depth to 1. */
+SRDEF sr_result sr_framebuffer_create(sr_framebuffer *fb, int width, int height, const sr_allocator *allocator);
+SRDEF void sr_framebuffer_free(sr_framebuffer *fb);
+/* rgba NULL = (0,0,0,1). */
+SRDEF void sr_framebuffer_clear(sr_framebuffer *fb, const float rgba[4], float depth);
+/* Converts to 8 bits (round to nearest, clamped), channels 3 or 4, rows top first. */
+SRDEF void sr_framebuffer_to_rgb8(const sr_framebuffer *fb, uint8_t *out, int channels);
+
+/* Perspective look-at camera. up NULL = +y (or +z when looking along y). fovy in degrees. */
+SRDEF void sr_camera_look_at(sr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                             float fovy_degrees, float aspect, float znear, float zfar);
+/* Orthographic look-at camera showing half_height world units above and below the centre. */
+SRDEF void sr_camera_ortho(sr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                           float half_height, float aspect, float znear, float zfar);
+/* Ray through the image point (x, y) of a width x height image, in pixels from the top-left corner
+   (pixel (i, j) has its centre at x = i + 0.5, y = j + 0.5); dir is unit length. */
+SRDEF void sr_camera_ray(const sr_camera *cam, int width, int height, float x, float y,
+                         float origin[3], float dir[3]);
+/* Window depth (0..1) of a world point; returns 0 when it is behind the eye (perspective). */
+SRDEF int sr_camera_depth(const sr_camera *cam, const float p[3], float *depth);
+
+/* ---- rasterizer --------------------------------------------------------------------------- */
+
+/* Defaults: Phong, no culling, depth test on, white material (ambient 0.2, diffuse 0.8,
+   specular 0.3, shininess 32), default head light, wire colour black, width 1. */
+SRDEF void sr_draw_desc_default(sr_draw_desc *d);
+/* Fills a material and a light with the defaults used above. */
+SRDEF void sr_material_default(sr_material *m);
+SRDEF void sr_light_default(sr_light *l, const float toward_light[3]);
+/* Area-weighted vertex normals (unit; zero for unreferenced vertices). out: 3 * vertex_count. */
+SRDEF sr_result sr_compute_vertex_normals(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                          size_t triangle_count, float *out);
+/* Draws a triangle mesh. */
+SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_draw_desc *d);
+
+/* Blinn-Phong with the GL fixed-function model: emission + sum over lights of
+   la*ma + ld*md*max(N.L,0) + ls*ms*max(N.H,0)^shininess (specular only where N.L > 0).
+   P, N world space (N unit), eye the camera position. Used by all renderers here. */
+SRDEF void sr_shade_blinn(const sr_material *m, const float diffuse_rgb[3], const sr_light *lights, int light_count,
+                          const float P[3], const float N[3], const float eye[3], float rgb[3]);
+
+/* ---- ray marchers ------------------------------------------------------------------------- */
+
+SRDEF void sr_relief_desc_default(sr_relief_desc *d);
+/* Intersects one ray with the relief: returns 1 and the hit distance t along dir (unit) and
+   (s, t_map, depth) in uvd, or 0 for a miss. */
+SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t,
+                              float uvd[3]);
+SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const sr_relief_desc *d);
+
+SRDEF void sr_terrain_desc_default(sr_terrain_desc *d);
+SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const sr_terrain_desc *d);
+
+SRDEF void sr_volume_desc_default(sr_volume_desc *d);
+SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const sr_volume_desc *d);
+
+/* ---- images ------------------------------------------------------------------------------- */
+
+/* Encodes 8-bit pixels (channels 1 gray, 3 RGB, 4 RGBA; row stride = width*channels) as PNG in
+   memory. flip_y nonzero: the last row goes on top. *out is allocated with allocator (NULL =
+   SR_MALLOC), release it with sr_free. */
+SRDEF sr_result sr_encode_png(const uint8_t *pixels, int width, int height, int channels, int flip_y,
+                              const sr_allocator *allocator, uint8_t **out, size_t *out_size);
+SRDEF sr_result sr_write_png(const char *path, const uint8_t *pixels, int width, int height, int channels, int flip_y);
+/* Binary PPM (P6) of RGB pixels (channels 3, or 4 with alpha dropped). */
+SRDEF sr_result sr_write_ppm(const char *path, const uint8_t *pixels, int width, int height, int channels, int flip_y);
+/* PFM of a float map with 1 or 3 channels; memory row 0 is written first, which PFM shows at
+   the bottom (the project's map convention). */
+SRDEF sr_result sr_write_pfm(const char *path, const float *data, int width, int height, int channels);
+/* The framebuffer as an RGB PNG (flip_y as sr_encode_png). */
+SRDEF sr_result sr_write_framebuffer_png(const sr_framebuffer *fb, const char *path, int flip_y);
+
+/* Draws text with the built-in 3x5 font (letters drawn upper case) at pixel (x, y) = top left,
+   each font pixel scale x scale. Characters without a glyph draw as a box. Clipped to the image. */
+SRDEF void sr_draw_text(sr_image8 *img, int x, int y, const char *text, int scale, const uint8_t rgb[3]);
+/* Places count images (channels 3 or 4) side by side in rows of `columns` (0 = all in one row),
+   each with its caption (captions or captions[i] may be NULL) under it, on a white background.
+   out->pixels is allocated (RGB) with allocator (NULL = SR_MALLOC); free with sr_free. */
+SRDEF sr_result sr_contact_sheet(const sr_image8 *images, const char *const *captions, int count, int columns,
+                                 const sr_allocator *allocator, sr_image8 *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SR_RENDER_H */
+
+/* ============================================================================================
+   Implementation
+   ============================================================================================ */
+#ifdef SR_IMPLEMENTATION
+#ifndef SR_IMPLEMENTATION_DONE
+#define SR_IMPLEMENTATION_DONE
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#if defined(SR_MALLOC) && defined(SR_FREE)
+/* both given */
+#elif !defined(SR_MALLOC) && !defined(SR_FREE)
+#include <stdlib.h>
+#define SR_MALLOC(sz) malloc(sz)
+#define SR_FREE(p) free(p)
+#else
+#error "render.h: define both SR_MALLOC and SR_FREE, or neither"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------------------------------
+   Section: results, allocation, small vector maths
+   --------------------------------------------------------------------------------------------- */
+
+#if defined(__GNUC__) || defined(__clang__)
+#define SR__INLINE inline __attribute__((always_inline))
+#else
+#define SR__INLINE inline
+#endif
+#define SR__NO_ID 0xFFFFFFFFu
+#define SR__BACK_BIT 0x80000000u
+#define SR__MAX_SIZE 16384
+
+SRDEF const char *sr_result_string(sr_result r)
+{
+    switch (r) {
+    case SR_OK: return "SR_OK";
+    case SR_ERR_INVALID_ARGUMENT: return "SR_ERR_INVALID_ARGUMENT";
+    case SR_ERR_OUT_OF_MEMORY: return "SR_ERR_OUT_OF_MEMORY";
+    case SR_ERR_IO: return "SR_ERR_IO";
+    case SR_ERR_TOO_LARGE: return "SR_ERR_TOO_LARGE";
+    }
+    return "SR_ERR_?";
+}
+
+static void *sr__default_alloc(void *user, size_t size) { (void)user; return SR_MALLOC(size); }
+static void sr__default_free(void *user, void *ptr) { (void)user; SR_FREE(ptr); }
+
+static sr_allocator sr__resolve_allocator(const sr_allocator *a)
+{
+    sr_allocator r;
+    if (a && a->alloc && a->free) return *a;
+    r.alloc = sr__default_alloc;
+    r.free = sr__default_free;
+    r.user = NULL;
+    return r;
+}
+
+static void *sr__alloc(const sr_allocator *a, size_t size) { return a->alloc(a->user, size ? size : 1); }
+
+SRDEF void sr_free(const sr_allocator *allocator, void *p)
+{
+    sr_allocator a = sr__resolve_allocator(allocator);
+    if (p) a.free(a.user, p);
+}
+
+static SR__INLINE float sr__dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static SR__INLINE void sr__sub(const float a[3], const float b[3], float r[3])
+{
+    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
+}
+static SR__INLINE void sr__cross(const float a[3], const float b[3], float r[3])
+{
+    float x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    r[0] = x; r[1] = y; r[2] = z;
+}
+static SR__INLINE float sr__normalize(float v[3])
+{
+    float l = sqrtf(sr__dot(v, v));
+    if (l > 0.0f) { float s = 1.0f / l; v[0] *= s; v[1] *= s; v[2] *= s; }
+    return l;
+}
+static SR__INLINE float sr__clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+static int sr__finite3(const float *p) { return p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f; }
+
+/* r = a * b, column-major 4x4 */
+static void sr__mat_mul(const float a[16], const float b[16], float r[16])
+{
+    float t[16];
+    int i, j, k;
+    for (j = 0; j < 4; j++)
+        for (i = 0; i < 4; i++) {
+            float s = 0.0f;
+            for (k = 0; k < 4; k++) s += a[k * 4 + i] * b[j * 4 + k];
+            t[j * 4 + i] = s;
+        }
+    memcpy(r, t, sizeof t);
+}
+
+static void sr__mat_point(const float m[16], const float p[3], float r[3])
+{
+    float x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12];
+    float y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13];
+    float z = m[2] * p[0] + m[6] * p[1] + m[10] * p[2] + m[14];
+    r[0] = x; r[1] = y; r[2] = z;
+}
+
+/* cofactor matrix of the upper 3x3 = det * inverse transpose: maps normals (renormalised after) */
+static void sr__normal_matrix(const float m[16], float n[9])
+{
+    float a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    float det;
+    n[0] = e * i - f * h; n[3] = c * h - b * i; n[6] = b * f - c * e;
+    n[1] = f * g - d * i; n[4] = a * i - c * g; n[7] = c * d - a * f;
+    n[2] = d * h - e * g; n[5] = b * g - a * h; n[8] = a * e - b * d;
+    det = a * n[0] + b * n[1] + c * n[2];
+    if (det < 0.0f) { int k; for (k = 0; k < 9; k++) n[k] = -n[k]; }
+}
+/* n is stored so that world normal = (n0 n1 n2)*x + ... : out_j = sum_k n[j*3+k] * v_k */
+static void sr__mat3_vec(const float n[9], const float v[3], float r[3])
+{
+    float x = n[0] * v[0] + n[3] * v[1] + n[6] * v[2];
+    float y = n[1] * v[0] + n[4] * v[1] + n[7] * v[2];
+    float z = n[2] * v[0] + n[5] * v[1] + n[8] * v[2];
+    r[0] = x; r[1] = y; r[2] = z;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: framebuffer and camera
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF sr_result sr_framebuffer_create(sr_framebuffer *fb, int width, int height, const sr_allocator *allocator)
+{
+    size_t n;
+    sr_allocator a;
+    if (!fb) return SR_ERR_INVALID_ARGUMENT;
+    memset(fb, 0, sizeof *fb);
+    if (width < 1 || height < 1) return SR_ERR_INVALID_ARGUMENT;
+    if (width > SR__MAX_SIZE || height > SR__MAX_SIZE) return SR_ERR_TOO_LARGE;
+    a = sr__resolve_allocator(allocator);
+    n = (size_t)width * (size_t)height;
+    fb->color = (float *)sr__alloc(&a, n * 4 * sizeof(float));
+    fb->depth = (float *)sr__alloc(&a, n * sizeof(float));
+    fb->tri_id = (uint32_t *)sr__alloc(&a, n * sizeof(uint32_t));
+    fb->bary = (float *)sr__alloc(&a, n * 2 * sizeof(float));
+    fb->allocator = a;
+    fb->width = width;
+    fb->height = height;
+    if (!fb->color || !fb->depth || !fb->tri_id || !fb->bary) {
+        sr_framebuffer_free(fb);
+        return SR_ERR_OUT_OF_MEMORY;
+    }
+    memset(fb->tri_id, 0xFF, n * sizeof(uint32_t));
+    memset(fb->bary, 0, n * 2 * sizeof(float));
+    sr_framebuffer_clear(fb, NULL, 1.0f);
+    {
+        size_t i;
+        for (i = 0; i < n; i++) fb->color[4 * i + 3] = 0.0f;
+    }
+    return SR_OK;
+}
+
+SRDEF void sr_framebuffer_free(sr_framebuffer *fb)
+{
+    if (!fb) return;
+    if (fb->allocator.free) {
+        if (fb->color) fb->allocator.free(fb->allocator.user, fb->color);
+        if (fb->depth) fb->allocator.free(fb->allocator.user, fb->depth);
+        if (fb->tri_id) fb->allocator.free(fb->allocator.user, fb->tri_id);
+        if (fb->bary) fb->allocator.free(fb->allocator.user, fb->bary);
+        if (fb->scratch) fb->allocator.free(fb->allocator.user, fb->scratch);
+    }
+    memset(fb, 0, sizeof *fb);
+}
+
+SRDEF void sr_framebuffer_clear(sr_framebuffer *fb, const float rgba[4], float depth)
+{
+    size_t i, n;
+    float c[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+    if (!fb || !fb->color) return;
+    if (rgba) memcpy(c, rgba, sizeof c);
+    n = (size_t)fb->width;
+    /* fill the first row, then copy it: memcpy streams far faster than a strided store loop */
+    for (i = 0; i < n; i++) {
+        fb->color[4 * i + 0] = c[0]; fb->color[4 * i + 1] = c[1];
+        fb->color[4 * i + 2] = c[2]; fb->color[4 * i + 3] = c[3];
+        fb->depth[i] = depth;
+    }
+    for (i = 1; i < (size_t)fb->height; i++) {
+        memcpy(fb->color + 4 * n * i, fb->color, 4 * n * sizeof(float));
+        memcpy(fb->depth + n * i, fb->depth, n * sizeof(float));
+    }
+}
+
+static uint8_t sr__to8(float v)
+{
+    v = sr__clampf(v, 0.0f, 1.0f) * 255.0f + 0.5f;
+    return (uint8_t)(int)v;
+}
+
+SRDEF void sr_framebuffer_to_rgb8(const sr_framebuffer *fb, uint8_t *out, int channels)
+{
+    size_t i, n;
+    int c;
+    if (!fb || !out || (channels != 3 && channels != 4)) return;
+    n = (size_t)fb->width * (size_t)fb->height;
+    for (i = 0; i < n; i++)
+        for (c = 0; c < channels; c++) out[i * (size_t)channels + (size_t)c] = sr__to8(fb->color[4 * i + (size_t)c]);
+}
+
+static void sr__camera_basis(sr_camera *cam, const float eye[3], const float target[3], const float up[3])
+{
+    float f[3], u[3], r[3], *m = cam->view;
+    float upv[3] = {0.0f, 1.0f, 0.0f};
+    sr__sub(target, eye, f);
+    sr__normalize(f);
+    if (up) memcpy(upv, up, sizeof upv);
+    sr__cross(f, upv, r);
+    if (sr__normalize(r) < 1e-6f) { /* looking along up: pick +z, then +x */
+        float alt[3] = {0.0f, 0.0f, 1.0f};
+        sr__cross(f, alt, r);
+        if (sr__normalize(r) < 1e-6f) { alt[0] = 1.0f; alt[2] = 0.0f; sr__cross(f, alt, r); sr__normalize(r); }
+    }
+    sr__cross(r, f, u);
+    memcpy(cam->eye, eye, sizeof cam->eye);
+    memcpy(cam->forward, f, sizeof f);
+    memcpy(cam->right, r, sizeof r);
+    memcpy(cam->up, u, sizeof u);
+    m[0] = r[0]; m[4] = r[1]; m[8] = r[2]; m[12] = -sr__dot(r, eye);
+    m[1] = u[0]; m[5] = u[1]; m[9] = u[2]; m[13] = -sr__dot(u, eye);
+    m[2] = -f[0]; m[6] = -f[1]; m[10] = -f[2]; m[14] = sr__dot(f, eye);
+    m[3] = 0.0f; m[7] = 0.0f; m[11] = 0.0f; m[15] = 1.0f;
+}
+
+SRDEF void sr_camera_look_at(sr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                             float fovy_degrees, float aspect, float znear, float zfar)
+{
+    float *p;
+    if (!cam || !eye || !target) return;
+    memset(cam, 0, sizeof *cam);
+    sr__camera_basis(cam, eye, target, up);
+    cam->tan_half_fovy = (float)tan((double)fovy_degrees * 3.14159265358979323846 / 360.0);
+    cam->aspect = aspect;
+    cam->znear = znear;
+    cam->zfar = zfar;
+    p = cam->proj;
+    p[0] = 1.0f / (cam->tan_half_fovy * aspect);
+    p[5] = 1.0f / cam->tan_half_fovy;
+    p[10] = (zfar + znear) / (znear - zfar);
+    p[11] = -1.0f;
+    p[14] = 2.0f * zfar * znear / (znear - zfar);
+    sr__mat_mul(cam->proj, cam->view, cam->viewproj);
+}
+
+SRDEF void sr_camera_ortho(sr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                           float half_height, float aspect, float znear, float zfar)
+{
+    float *p;
+    if (!cam || !eye || !target) return;
+    memset(cam, 0, sizeof *cam);
+    sr__camera_basis(cam, eye, target, up);
+    cam->orthographic = 1;
+    cam->half_height = half_height;
+    cam->aspect = aspect;
+    cam->znear = znear;
+    cam->zfar = zfar;
+    p = cam->proj;
+    p[0] = 1.0f / (half_height * aspect);
+    p[5] = 1.0f / half_height;
+    p[10] = -2.0f / (zfar - znear);
+    p[14] = -(zfar + znear) / (zfar - znear);
+    p[15] = 1.0f;
+    sr__mat_mul(cam->proj, cam->view, cam->viewproj);
+}
+
+SRDEF void sr_camera_ray(const sr_camera *cam, int width, int height, float x, float y, float origin[3], float dir[3])
+{
+    float nx = 2.0f * x / (float)width - 1.0f, ny = 1.0f - 2.0f * y / (float)height;
+    int k;
+    if (cam->orthographic) {
+        float sx = nx * cam->half_height * cam->aspect, sy = ny * cam->half_height;
+        for (k = 0; k < 3; k++) {
+            origin[k] = cam->eye[k] + cam->right[k] * sx + cam->up[k] * sy;
+            dir[k] = cam->forward[k];
+        }
+    } else {
+        float sx = nx * cam->tan_half_fovy * cam->aspect, sy = ny * cam->tan_half_fovy;
+        for (k = 0; k < 3; k++) {
+            origin[k] = cam->eye[k];
+            dir[k] = cam->forward[k] + cam->right[k] * sx + cam->up[k] * sy;
+        }
+        sr__normalize(dir);
+    }
+}
+
+SRDEF int sr_camera_depth(const sr_camera *cam, const float p[3], float *depth)
+{
+    const float *m = cam->viewproj;
+    float z = m[2] * p[0] + m[6] * p[1] + m[10] * p[2] + m[14];
+    float w = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
+    if (w <= 0.0f) return 0;
+    *depth = 0.5f * z / w + 0.5f;
+    return 1;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: lighting (GL fixed-function model)
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_material_default(sr_material *m)
+{
+    int k;
+    memset(m, 0, sizeof *m);
+    for (k = 0; k < 3; k++) { m->ambient[k] = 0.8f; m->diffuse[k] = 0.8f; m->specular[k] = 0.3f; }
+    m->shininess = 32.0f;
+}
+
+SRDEF void sr_light_default(sr_light *l, const float toward_light[3])
+{
+    int k;
+    memset(l, 0, sizeof *l);
+    l->type = SR_LIGHT_DIRECTIONAL;
+    for (k = 0; k < 3; k++) {
+        l->vector[k] = toward_light ? toward_light[k] : (k == 2 ? 1.0f : 0.0f);
+        l->ambient[k] = 0.2f; l->diffuse[k] = 1.0f; l->specular[k] = 1.0f;
+    }
+}
+
+/* unit vector from P toward the light */
+static SR__INLINE void sr__light_dir(const sr_light *l, const float P[3], float L[3])
+{
+    if (l->type == SR_LIGHT_POINT) {
+        sr__sub(l->vector, P, L);
+        sr__normalize(L);
+    } else {
+        memcpy(L, l->vector, 3 * sizeof(float));
+        if (fabsf(sr__dot(L, L) - 1.0f) > 1e-6f) sr__normalize(L); /* most callers pass unit vectors */
+    }
+}
+
+/* one light's contribution (ambient always, diffuse+specular scaled by visibility) */
+/* the N.H below which the specular term is under 1e-4 (1/40 of an 8-bit step) */
+static float sr__spec_cut(const sr_material *m)
+{
+    return m->shininess > 0.0f ? powf(1e-4f, 1.0f / m->shininess) : 0.0f;
+}
+
+static SR__INLINE void sr__shade_light(const sr_material *m, const float kd[3], const float ka[3], const sr_light *l,
+                            const float P[3], const float N[3], const float V[3], float visibility, float spec_cut, float rgb[3])
+{
+    float L[3], H[3], ndl, spec = 0.0f;
+    int k;
+    sr__light_dir(l, P, L);
+    ndl = sr__dot(N, L);
+    if (ndl > 0.0f) {
+        float hh, nh;
+        H[0] = L[0] + V[0]; H[1] = L[1] + V[1]; H[2] = L[2] + V[2];
+        hh = sr__dot(H, H);
+        nh = sr__dot(N, H);
+        /* (N.H/|H|)^s computed as ((N.H)^2/|H|^2)^(s/2), no square root; skipped below spec_cut
+           (computed once per material), where it is under 1e-4 */
+        if (nh > 0.0f && nh * nh > spec_cut * spec_cut * hh) spec = powf(nh * nh / hh, 0.5f * m->shininess);
+    } else {
+        ndl = 0.0f;
+    }
+    for (k = 0; k < 3; k++)
+        rgb[k] += l->ambient[k] * ka[k] + visibility * (l->diffuse[k] * kd[k] * ndl + l->specular[k] * m->specular[k] * spec);
+}
+
+static SR__INLINE void sr__view_dir(const float eye[3], const float P[3], float V[3])
+{
+    sr__sub(eye, P, V);
+    sr__normalize(V);
+}
+
+SRDEF void sr_shade_blinn(const sr_material *m, const float diffuse_rgb[3], const sr_light *lights, int light_count,
+                          const float P[3], const float N[3], const float eye[3], float rgb[3])
+{
+    float V[3];
+    const float *kd = diffuse_rgb ? diffuse_rgb : m->diffuse, *ka = diffuse_rgb ? diffuse_rgb : m->ambient;
+    int i;
+    sr__view_dir(eye, P, V);
+    rgb[0] = m->emission[0]; rgb[1] = m->emission[1]; rgb[2] = m->emission[2];
+    for (i = 0; i < light_count; i++) sr__shade_light(m, kd, ka, &lights[i], P, N, V, 1.0f, sr__spec_cut(m), rgb);
+}
+
+/* the light list of a draw: the caller's, or a white head light */
+static const sr_light *sr__lights(const sr_light *lights, int count, const sr_camera *cam, sr_light *head, int *n)
+{
+    float toward[3];
+    if (lights && count > 0) { *n = count; return lights; }
+    toward[0] = -cam->forward[0]; toward[1] = -cam->forward[1]; toward[2] = -cam->forward[2];
+    sr_light_default(head, toward);
+    *n = 1;
+    return head;
+}
+
+/* bilinear lookup of up to 4 channels; texel centres at (i+0.5)/w */
+static void sr__sample(const sr_image *img, float u, float v, float *out)
+{
+    float x = u * (float)img->width - 0.5f, y = v * (float)img->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy;
+    int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1, c, ch = img->channels;
+    const float *d = img->data;
+    if (img->wrap) {
+        x0 %= img->width; if (x0 < 0) x0 += img->width;
+        y0 %= img->height; if (y0 < 0) y0 += img->height;
+        x1 = (x0 + 1) % img->width; y1 = (y0 + 1) % img->height;
+    } else {
+        x0 = x0 < 0 ? 0 : (x0 >= img->width ? img->width - 1 : x0);
+        x1 = x1 < 0 ? 0 : (x1 >= img->width ? img->width - 1 : x1);
+        y0 = y0 < 0 ? 0 : (y0 >= img->height ? img->height - 1 : y0);
+        y1 = y1 < 0 ? 0 : (y1 >= img->height ? img->height - 1 : y1);
+    }
+    for (c = 0; c < ch && c < 4; c++) {
+        float a = d[((size_t)y0 * (size_t)img->width + (size_t)x0) * (size_t)ch + (size_t)c];
+        float b = d[((size_t)y0 * (size_t)img->width + (size_t)x1) * (size_t)ch + (size_t)c];
+        float e = d[((size_t)y1 * (size_t)img->width + (size_t)x0) * (size_t)ch + (size_t)c];
+        float f = d[((size_t)y1 * (size_t)img->width + (size_t)x1) * (size_t)ch + (size_t)c];
+        out[c] = (a + (b - a) * ax) * (1.0f - ay) + (e + (f - e) * ax) * ay;
+    }
+}
+
+static int sr__image_ok(const sr_image *img, int min_channels)
+{
+    return img && img->data && img->width > 0 && img->height > 0 && img->channels >= min_channels && img->channels <= 4;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: rasterizer - vertex stage
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_draw_desc_default(sr_draw_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    sr_material_default(&d->material);
+    d->wire_width = 1.0f;
+}
+
+SRDEF sr_result sr_compute_vertex_normals(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                          size_t triangle_count, float *out)
+{
+    size_t t, v;
+    if (!out || (vertex_count && !positions) || (triangle_count && !indices)) return SR_ERR_INVALID_ARGUMENT;
+    for (t = 0; t < 3 * triangle_count; t++)
+        if (indices[t] >= vertex_count) return SR_ERR_INVALID_ARGUMENT;
+    memset(out, 0, vertex_count * 3 * sizeof(float));
+    for (t = 0; t < triangle_count; t++) {
+        const uint32_t *i = indices + 3 * t;
+        float e1[3], e2[3], n[3];
+        int k;
+        sr__sub(positions + 3 * (size_t)i[1], positions + 3 * (size_t)i[0], e1);
+        sr__sub(positions + 3 * (size_t)i[2], positions + 3 * (size_t)i[0], e2);
+        sr__cross(e1, e2, n); /* length = twice the area: area weighting */
+        for (k = 0; k < 3; k++) {
+            float *o = out + 3 * (size_t)i[k];
+            o[0] += n[0]; o[1] += n[1]; o[2] += n[2];
+        }
+    }
+    for (v = 0; v < vertex_count; v++) sr__normalize(out + 3 * v);
+    return SR_OK;
+}
+
+/* Outcodes: bits 0-5 the view frustum (trivial reject), bits 4-9 what forces clipping
+   (near, far, and a guard band of SR__GUARD viewports that keeps fixed-point values small). */
+#define SR__OUT_NEAR 16u
+#define SR__OUT_FAR 32u
+#define SR__CLIP_BITS (16u | 32u | 64u | 128u | 256u | 512u)
+#define SR__GUARD 4.0f
+#define SR__SUBPIX 256.0f
+
+typedef struct sr__cv {
+    float clip[4];
+    float sx, sy, sz, invw; /* screen position (pixels, y down), window depth, 1/w */
+    int32_t fx, fy;         /* screen position in 1/256 pixel */
+    uint32_t code;
+} sr__cv;
+
+static uint32_t sr__outcode(const float c[4])
+{
+    uint32_t k = 0;
+    float gw = SR__GUARD * c[3];
+    if (c[0] < -c[3]) k |= 1u;
+    if (c[0] > c[3]) k |= 2u;
+    if (c[1] < -c[3]) k |= 4u;
+    if (c[1] > c[3]) k |= 8u;
+    if (c[2] < -c[3]) k |= 16u;
+    if (c[2] > c[3]) k |= 32u;
+    if (c[0] < -gw) k |= 64u;
+    if (c[0] > gw) k |= 128u;
+    if (c[1] < -gw) k |= 256u;
+    if (c[1] > gw) k |= 512u;
+    return k;
+}
+
+/* perspective divide and viewport; only for vertices inside near plane and guard band */
+static void sr__to_screen(sr__cv *v, float w, float h)
+{
+    float iw = 1.0f / v->clip[3];
+    v->invw = iw;
+    v->sx = (v->clip[0] * iw * 0.5f + 0.5f) * w;
+    v->sy = (0.5f - v->clip[1] * iw * 0.5f) * h;
+    v->sz = v->clip[2] * iw * 0.5f + 0.5f;
+    v->fx = (int32_t)floorf(v->sx * SR__SUBPIX + 0.5f);
+    v->fy = (int32_t)floorf(v->sy * SR__SUBPIX + 0.5f);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: rasterizer - triangle setup and edge-function scan (visibility pass)
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct sr__raster {
+    sr_framebuffer *fb;
+    int count_mode, depth_test, depth_write;
+    sr_cull cull;
+    int minx, miny, maxx, maxy; /* pixels touched by this draw */
+} sr__raster;
+
+/* Rasterizes one screen triangle. B (may be NULL = identity) gives each corner's barycentrics
+   with respect to the original triangle `id` (clipped pieces). */
+static void sr__raster_tri(sr__raster *r, const sr__cv *v0, const sr__cv *v1, const sr__cv *v2,
+                           const float B[3][3], uint32_t id)
+{
+    sr_framebuffer *fb = r->fb;
+    int64_t X0 = v0->fx, Y0 = v0->fy, X1 = v1->fx, Y1 = v1->fy, X2 = v2->fx, Y2 = v2->fy;
+    int64_t area = (X1 - X0) * (Y2 - Y0) - (X2 - X0) * (Y1 - Y0);
+    int64_t A0, B0, A1, B1, A2, B2, E0, E1, E2, Px, Py, mnx, mny, mxx, mxy;
+    int front, swapped = 0, x, y, minx, miny, maxx, maxy;
+    float z0, z1, z2, iw0, iw1, iw2, inv_area, dzdx, dzdy, zrow;
+    int b0bias, b1bias, b2bias;
+    const float *Bc1 = B ? B[1] : NULL, *Bc2 = B ? B[2] : NULL;
+    if (area == 0) return;
+    front = area < 0; /* counter-clockwise in y-up NDC is clockwise in y-down pixels */
+    if ((r->cull == SR_CULL_BACK && !front) || (r->cull == SR_CULL_FRONT && front)) return;
+    z0 = v0->sz; iw0 = v0->invw;
+    if (area < 0) { /* orient so that the inside has positive edge functions */
+        const sr__cv *t = v1; v1 = v2; v2 = t;
+        X1 = v1->fx; Y1 = v1->fy; X2 = v2->fx; Y2 = v2->fy;
+        area = -area;
+        swapped = 1;
+        if (B) { Bc1 = B[2]; Bc2 = B[1]; }
+    }
+    z1 = v1->sz; z2 = v2->sz; iw1 = v1->invw; iw2 = v2->invw;
+    /* bounding box of pixel centres (x*256+128) inside [min, max] */
+    mnx = X0 < X1 ? (X0 < X2 ? X0 : X2) : (X1 < X2 ? X1 : X2);
+    mxx = X0 > X1 ? (X0 > X2 ? X0 : X2) : (X1 > X2 ? X1 : X2);
+    mny = Y0 < Y1 ? (Y0 < Y2 ? Y0 : Y2) : (Y1 < Y2 ? Y1 : Y2);
+    mxy = Y0 > Y1 ? (Y0 > Y2 ? Y0 : Y2) : (Y1 > Y2 ? Y1 : Y2);
+    /* +2^24 keeps the shifted values positive (guard band keeps |coords| < 2^24 / 256 px) */
+    minx = (int)(((mnx - 128 + 255) + ((int64_t)1 << 32)) >> 8) - (1 << 24);
+    maxx = (int)(((mxx - 128) + ((int64_t)1 << 32)) >> 8) - (1 << 24);
+    miny = (int)(((mny - 128 + 255) + ((int64_t)1 << 32)) >> 8) - (1 << 24);
+    maxy = (int)(((mxy - 128) + ((int64_t)1 << 32)) >> 8) - (1 << 24);
+    if (minx < 0) minx = 0;
+    if (miny < 0) miny = 0;
+    if (maxx > fb->width - 1) maxx = fb->width - 1;
+    if (maxy > fb->height - 1) maxy = fb->height - 1;
+    if (minx > maxx || miny > maxy) return;
+    /* edge functions: w0 = E12, w1 = E20, w2 = E01; E_ab(p) = (Xb-Xa)(Py-Ya) - (Yb-Ya)(Px-Xa) */
+    A0 = Y1 - Y2; B0 = X2 - X1;
+    A1 = Y2 - Y0; B1 = X0 - X2;
+    A2 = Y0 - Y1; B2 = X1 - X0;
+    /* top-left rule: an edge owns its pixels when it is a top edge (dy == 0, dx > 0) or a left
+       edge (dy < 0); for other edges E == 0 is outside, done by a bias of -1 (E is integer) */
+    b0bias = (A0 > 0 || (A0 == 0 && B0 > 0)) ? 0 : -1;
+    b1bias = (A1 > 0 || (A1 == 0 && B1 > 0)) ? 0 : -1;
+    b2bias = (A2 > 0 || (A2 == 0 && B2 > 0)) ? 0 : -1;
+    Px = (int64_t)minx * 256 + 128;
+    Py = (int64_t)miny * 256 + 128;
+    E0 = B0 * (Py - Y1) + A0 * (Px - X1);
+    E1 = B1 * (Py - Y2) + A1 * (Px - X2);
+    E2 = B2 * (Py - Y0) + A2 * (Px - X0);
+    inv_area = 1.0f / (float)area;
+    dzdx = ((float)A0 * z0 + (float)A1 * z1 + (float)A2 * z2) * 256.0f * inv_area;
+    dzdy = ((float)B0 * z0 + (float)B1 * z1 + (float)B2 * z2) * 256.0f * inv_area;
+    zrow = (float)(((double)E0 * z0 + (double)E1 * z1 + (double)E2 * z2) / (double)area);
+    E0 += b0bias; E1 += b1bias; E2 += b2bias;
+    A0 *= 256; A1 *= 256; A2 *= 256; B0 *= 256; B1 *= 256; B2 *= 256;
+    if (minx < r->minx) r->minx = minx;
+    if (miny < r->miny) r->miny = miny;
+    if (maxx > r->maxx) r->maxx = maxx;
+    if (maxy > r->maxy) r->maxy = maxy;
+    for (y = miny; y <= maxy; y++) {
+        int64_t e0 = E0, e1 = E1, e2 = E2;
+        size_t row = (size_t)y * (size_t)fb->width;
+        for (x = minx; x <= maxx; x++, e0 += A0, e1 += A1, e2 += A2) {
+            size_t i;
+            float z;
+            if ((e0 | e1 | e2) < 0) continue;
+            i = row + (size_t)x;
+            if (r->count_mode) {
+                fb->color[4 * i + (front ? 0 : 1)] += 1.0f;
+                continue;
+            }
+            z = zrow + dzdx * (float)(x - minx);
+            if (r->depth_test && !(z < fb->depth[i])) continue;
+            if (r->depth_write) fb->depth[i] = z;
+            {
+                /* perspective-correct barycentrics: screen weights divided by w, renormalised */
+                float f0 = (float)e0 * iw0, f1 = (float)e1 * iw1, f2 = (float)e2 * iw2;
+                float s = 1.0f / (f0 + f1 + f2), b1, b2;
+                f0 *= s; f1 *= s; f2 *= s;
+                if (B) {
+                    b1 = f0 * B[0][1] + f1 * Bc1[1] + f2 * Bc2[1];
+                    b2 = f0 * B[0][2] + f1 * Bc1[2] + f2 * Bc2[2];
+                } else if (swapped) {
+                    b1 = f2; b2 = f1;
+                } else {
+                    b1 = f1; b2 = f2;
+                }
+                fb->tri_id[i] = id | (front ? 0u : SR__BACK_BIT);
+                fb->bary[2 * i] = b1;
+                fb->bary[2 * i + 1] = b2;
+            }
+        }
+        E0 += B0; E1 += B1; E2 += B2;
+        zrow += dzdy;
+    }
+}
+
+/* Sutherland-Hodgman in clip space against the planes named in `bits`, then a fan. */
+static void sr__clip_tri(sr__raster *r, const sr__cv *v[3], uint32_t bits, uint32_t id)
+{
+    sr__cv poly[2][16];
+    float bary[2][16][3];
+    int n = 3, cur = 0, p, i, k;
+    for (i = 0; i < 3; i++) {
+        poly[0][i] = *v[i];
+        for (k = 0; k < 3; k++) bary[0][i][k] = (i == k) ? 1.0f : 0.0f;
+    }
+    for (p = 0; p < 6; p++) {
+        uint32_t bit = 16u << p;
+        int m = 0, nxt = 1 - cur;
+        if (!(bits & bit)) continue;
+        for (i = 0; i < n; i++) {
+            const sr__cv *a = &poly[cur][i], *b = &poly[cur][(i + 1) % n];
+            const float *ba = bary[cur][i], *bb = bary[cur][(i + 1) % n];
+            float da, db;
+            switch (p) {
+            case 0: da = a->clip[2] + a->clip[3]; db = b->clip[2] + b->clip[3]; break;
+            case 1: da = a->clip[3] - a->clip[2]; db = b->clip[3] - b->clip[2]; break;
+            case 2: da = SR__GUARD * a->clip[3] + a->clip[0]; db = SR__GUARD * b->clip[3] + b->clip[0]; break;
+            case 3: da = SR__GUARD * a->clip[3] - a->clip[0]; db = SR__GUARD * b->clip[3] - b->clip[0]; break;
+            case 4: da = SR__GUARD * a->clip[3] + a->clip[1]; db = SR__GUARD * b->clip[3] + b->clip[1]; break;
+            default: da = SR__GUARD * a->clip[3] - a->clip[1]; db = SR__GUARD * b->clip[3] - b->clip[1]; break;
+            }
+            if (da >= 0.0f) { poly[nxt][m] = *a; memcpy(bary[nxt][m], ba, sizeof bary[0][0]); m++; }
+            if ((da >= 0.0f) != (db >= 0.0f) && m < 15) {
+                /* interpolate from the inside vertex so both triangles of a shared edge agree */
+                const sr__cv *in = da >= 0.0f ? a : b, *out = da >= 0.0f ? b : a;
+                const float *bin = da >= 0.0f ? ba : bb, *bout = da >= 0.0f ? bb : ba;
+                float din = da >= 0.0f ? da : db, dout = da >= 0.0f ? db : da;
+                float t = din / (din - dout);
+                sr__cv *o = &poly[nxt][m];
+                for (k = 0; k < 4; k++) o->clip[k] = in->clip[k] + t * (out->clip[k] - in->clip[k]);
+                for (k = 0; k < 3; k++) bary[nxt][m][k] = bin[k] + t * (bout[k] - bin[k]);
+                m++;
+            }
+        }
+        n = m;
+        cur = nxt;
+        if (n < 3) return;
+    }
+    for (i = 0; i < n; i++) {
+        if (!(poly[cur][i].clip[3] > 0.0f)) return;
+        sr__to_screen(&poly[cur][i], (float)r->fb->width, (float)r->fb->height);
+    }
+    for (i = 1; i + 1 < n; i++) {
+        float B[3][3];
+        memcpy(B[0], bary[cur][0], sizeof B[0]);
+        memcpy(B[1], bary[cur][i], sizeof B[1]);
+        memcpy(B[2], bary[cur][i + 1], sizeof B[2]);
+        sr__raster_tri(r, &poly[cur][0], &poly[cur][i], &poly[cur][i + 1], (const float(*)[3])B, id);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: rasterizer - shading pass and sr_draw_mesh
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct sr__shader {
+    const sr_draw_desc *d;
+    const sr_camera *cam;
+    const sr__cv *cv;
+    const float *wpos, *wnrm; /* world positions and normals (the inputs when model is NULL) */
+    const float *gouraud;     /* 6 floats per vertex: lit colour front, back */
+    const sr_light *lights;
+    int light_count;
+    float nmat[9];
+    int has_model;
+    float spec_cut;
+} sr__shader;
+
+static void sr__face_normal(const float *p0, const float *p1, const float *p2, float n[3])
+{
+    float e1[3], e2[3];
+    sr__sub(p1, p0, e1);
+    sr__sub(p2, p0, e2);
+    sr__cross(e1, e2, n);
+    sr__normalize(n);
+}
+
+static void sr__fill_fragment(const sr__shader *s, int x, int y, uint32_t id, float b1, float b2, sr_fragment *f)
+{
+    const sr_draw_desc *d = s->d;
+    const uint32_t *idx = d->indices + 3 * (size_t)(id & ~SR__BACK_BIT);
+    size_t i0 = idx[0], i1 = idx[1], i2 = idx[2];
+    float b0 = 1.0f - b1 - b2;
+    int k;
+    f->x = x; f->y = y;
+    f->triangle = id & ~SR__BACK_BIT;
+    f->front_facing = (id & SR__BACK_BIT) == 0;
+    f->bary[0] = b0; f->bary[1] = b1; f->bary[2] = b2;
+    for (k = 0; k < 3; k++)
+        f->position[k] = b0 * s->wpos[3 * i0 + k] + b1 * s->wpos[3 * i1 + k] + b2 * s->wpos[3 * i2 + k];
+    if (d->normal_map && d->uvs) {
+        float uv[2], n[4] = {0.0f, 0.0f, 1.0f, 0.0f};
+        for (k = 0; k < 2; k++) uv[k] = b0 * d->uvs[2 * i0 + k] + b1 * d->uvs[2 * i1 + k] + b2 * d->uvs[2 * i2 + k];
+        sr__sample(d->normal_map, uv[0], uv[1], n);
+        if (s->has_model) sr__mat3_vec(s->nmat, n, f->normal);
+        else memcpy(f->normal, n, 3 * sizeof(float));
+    } else if (s->wnrm && d->shading != SR_SHADE_FLAT) {
+        for (k = 0; k < 3; k++)
+            f->normal[k] = b0 * s->wnrm[3 * i0 + k] + b1 * s->wnrm[3 * i1 + k] + b2 * s->wnrm[3 * i2 + k];
+    } else {
+        sr__face_normal(s->wpos + 3 * i0, s->wpos + 3 * i1, s->wpos + 3 * i2, f->normal);
+    }
+    sr__normalize(f->normal);
+    if (!f->front_facing) { f->normal[0] = -f->normal[0]; f->normal[1] = -f->normal[1]; f->normal[2] = -f->normal[2]; }
+    if (d->uvs) {
+        for (k = 0; k < 2; k++) f->uv[k] = b0 * d->uvs[2 * i0 + k] + b1 * d->uvs[2 * i1 + k] + b2 * d->uvs[2 * i2 + k];
+    } else {
+        f->uv[0] = f->uv[1] = 0.0f;
+    }
+    if (d->colors) {
+        for (k = 0; k < 3; k++)
+            f->color[k] = b0 * d->colors[3 * i0 + k] + b1 * d->colors[3 * i1 + k] + b2 * d->colors[3 * i2 + k];
+    } else {
+        memcpy(f->color, d->material.diffuse, sizeof f->color);
+    }
+}
+
+static void sr__shade_pixel(const sr__shader *s, int x, int y, uint32_t id, float b1, float b2, float rgb[3])
+{
+    const sr_draw_desc *d = s->d;
+    sr_fragment f;
+    if (d->shading == SR_SHADE_GOURAUD && !d->fragment && s->gouraud) {
+        const uint32_t *idx = d->indices + 3 * (size_t)(id & ~SR__BACK_BIT);
+        size_t off = (id & SR__BACK_BIT) ? 3 : 0;
+        float b0 = 1.0f - b1 - b2;
+        int k;
+        for (k = 0; k < 3; k++)
+            rgb[k] = b0 * s->gouraud[6 * (size_t)idx[0] + off + (size_t)k] + b1 * s->gouraud[6 * (size_t)idx[1] + off + (size_t)k] +
+                     b2 * s->gouraud[6 * (size_t)idx[2] + off + (size_t)k];
+        return;
+    }
+    if (d->shading == SR_SHADE_FLAT) { b1 = b2 = 1.0f / 3.0f; }
+    sr__fill_fragment(s, x, y, id, b1, b2, &f);
+    if (d->fragment) { d->fragment(d->fragment_user, &f, rgb); return; }
+    if (d->shading == SR_SHADE_UNLIT) { memcpy(rgb, f.color, 3 * sizeof(float)); return; }
+    {
+        float V[3];
+        const float *kd = d->colors ? f.color : d->material.diffuse, *ka = d->colors ? f.color : d->material.ambient;
+        int l;
+        if (s->cam->orthographic) { V[0] = -s->cam->forward[0]; V[1] = -s->cam->forward[1]; V[2] = -s->cam->forward[2]; }
+        else sr__view_dir(s->cam->eye, f.position, V);
+        memcpy(rgb, d->material.emission, 3 * sizeof(float));
+        for (l = 0; l < s->light_count; l++) sr__shade_light(&d->material, kd, ka, &s->lights[l], f.position, f.normal, V, 1.0f, s->spec_cut, rgb);
+    }
+}
+
+/* coverage of the wireframe at a pixel centre: distance to the nearest edge of its triangle */
+static float sr__wire_alpha(const sr__shader *s, int x, int y, uint32_t id)
+{
+    const uint32_t *idx = s->d->indices + 3 * (size_t)(id & ~SR__BACK_BIT);
+    const sr__cv *v[3];
+    float px = (float)x + 0.5f, py = (float)y + 0.5f, dmin = 1e30f, half;
+    int k;
+    for (k = 0; k < 3; k++) {
+        v[k] = &s->cv[idx[k]];
+        if (v[k]->code & SR__CLIP_BITS) return 0.0f;
+    }
+    for (k = 0; k < 3; k++) {
+        const sr__cv *a = v[k], *b = v[(k + 1) % 3];
+        float ex = b->sx - a->sx, ey = b->sy - a->sy, len = sqrtf(ex * ex + ey * ey), dist;
+        if (len <= 0.0f) continue;
+        dist = fabsf(ex * (py - a->sy) - ey * (px - a->sx)) / len;
+        if (dist < dmin) dmin = dist;
+    }
+    half = (s->d->wire_width > 0.0f ? s->d->wire_width : 1.0f) * 0.5f;
+    return sr__clampf(half + 0.5f - dmin, 0.0f, 1.0f);
+}
+
+/* Per-pixel Phong for a batch of pixels, one step at a time over the whole batch: the steps of
+   one pixel form a long chain of dependent square roots and divisions, while the same step for
+   different pixels is independent work the processor can overlap. Same formula as
+   sr__shade_light. */
+#define SR__BATCH 64
+
+typedef struct sr__batch {
+    int n;
+    size_t pixel[SR__BATCH];
+    uint32_t id[SR__BATCH];
+    float b1[SR__BATCH], b2[SR__BATCH];
+    float P[3][SR__BATCH], N[3][SR__BATCH], V[3][SR__BATCH], kd[3][SR__BATCH], rgb[3][SR__BATCH];
+} sr__batch;
+
+static void sr__shade_batch(const sr__shader *s, sr__batch *b, sr_framebuffer *fb)
+{
+    const sr_draw_desc *d = s->d;
+    const sr_material *m = &d->material;
+    int j, k, l, n = b->n;
+    for (j = 0; j < n; j++) { /* gather and interpolate */
+        const uint32_t *idx = d->indices + 3 * (size_t)(b->id[j] & ~SR__BACK_BIT);
+        const float *p0 = s->wpos + 3 * (size_t)idx[0], *p1 = s->wpos + 3 * (size_t)idx[1], *p2 = s->wpos + 3 * (size_t)idx[2];
+        const float *n0 = s->wnrm + 3 * (size_t)idx[0], *n1 = s->wnrm + 3 * (size_t)idx[1], *n2 = s->wnrm + 3 * (size_t)idx[2];
+        float b1 = b->b1[j], b2 = b->b2[j], b0 = 1.0f - b1 - b2;
+        for (k = 0; k < 3; k++) {
+            b->P[k][j] = b0 * p0[k] + b1 * p1[k] + b2 * p2[k];
+            b->N[k][j] = b0 * n0[k] + b1 * n1[k] + b2 * n2[k];
+        }
+        if (d->colors) {
+            const float *c0 = d->colors + 3 * (size_t)idx[0], *c1 = d->colors + 3 * (size_t)idx[1], *c2 = d->colors + 3 * (size_t)idx[2];
+            for (k = 0; k < 3; k++) b->kd[k][j] = b0 * c0[k] + b1 * c1[k] + b2 * c2[k];
+        }
+    }
+    for (j = 0; j < n; j++) { /* unit normal (toward the viewer on back faces) and view vector */
+        float nn = b->N[0][j] * b->N[0][j] + b->N[1][j] * b->N[1][j] + b->N[2][j] * b->N[2][j], sn;
+        float vx, vy, vz, vv, sv;
+        if (s->cam->orthographic) { vx = -s->cam->forward[0]; vy = -s->cam->forward[1]; vz = -s->cam->forward[2]; }
+        else { vx = s->cam->eye[0] - b->P[0][j]; vy = s->cam->eye[1] - b->P[1][j]; vz = s->cam->eye[2] - b->P[2][j]; }
+        vv = vx * vx + vy * vy + vz * vz;
+        sn = nn > 0.0f ? 1.0f / sqrtf(nn) : 0.0f;
+        sv = vv > 0.0f ? 1.0f / sqrtf(vv) : 0.0f;
+        if (b->id[j] & SR__BACK_BIT) sn = -sn;
+        for (k = 0; k < 3; k++) b->N[k][j] *= sn;
+        b->V[0][j] = vx * sv; b->V[1][j] = vy * sv; b->V[2][j] = vz * sv;
+        for (k = 0; k < 3; k++) b->rgb[k][j] = m->emission[k];
+    }
+    for (l = 0; l < s->light_count; l++) {
+        const sr_light *lt = &s->lights[l];
+        float Ld[3], amb[3], dif[3], spc[3], half_shininess = 0.5f * m->shininess, cut2 = s->spec_cut * s->spec_cut;
+        int point = lt->type == SR_LIGHT_POINT, vcol = d->colors != NULL;
+        sr__light_dir(lt, lt->vector, Ld); /* directional: the unit direction; point: unused */
+        for (k = 0; k < 3; k++) { /* per-light constants (vertex colours multiply them per pixel) */
+            amb[k] = lt->ambient[k] * (vcol ? 1.0f : m->ambient[k]);
+            dif[k] = lt->diffuse[k] * (vcol ? 1.0f : m->diffuse[k]);
+            spc[k] = lt->specular[k] * m->specular[k];
+        }
+        for (j = 0; j < n; j++) {
+            float L[3], nx = b->N[0][j], ny = b->N[1][j], nz = b->N[2][j], ndl, spec = 0.0f;
+            if (point) {
+                float P[3];
+                P[0] = b->P[0][j]; P[1] = b->P[1][j]; P[2] = b->P[2][j];
+                sr__light_dir(lt, P, L);
+            } else {
+                L[0] = Ld[0]; L[1] = Ld[1]; L[2] = Ld[2];
+            }
+            ndl = nx * L[0] + ny * L[1] + nz * L[2];
+            if (ndl > 0.0f) {
+                float hx = L[0] + b->V[0][j], hy = L[1] + b->V[1][j], hz = L[2] + b->V[2][j];
+                float hh = hx * hx + hy * hy + hz * hz, nh = nx * hx + ny * hy + nz * hz;
+                /* (N.H/|H|)^s as ((N.H)^2/|H|^2)^(s/2): no square root */
+                if (nh > 0.0f && nh * nh > cut2 * hh) spec = powf(nh * nh / hh, half_shininess);
+            } else {
+                ndl = 0.0f;
+            }
+            if (vcol) {
+                for (k = 0; k < 3; k++) b->rgb[k][j] += b->kd[k][j] * (amb[k] + dif[k] * ndl) + spc[k] * spec;
+            } else {
+                for (k = 0; k < 3; k++) b->rgb[k][j] += amb[k] + dif[k] * ndl + spc[k] * spec;
+            }
+        }
+    }
+    for (j = 0; j < n; j++) {
+        float *c = fb->color + 4 * b->pixel[j];
+        c[0] = b->rgb[0][j]; c[1] = b->rgb[1][j]; c[2] = b->rgb[2][j];
+    }
+    b->n = 0;
+}
+
+static void sr__shading_pass(const sr__shader *s, sr__raster *r)
+{
+    sr_framebuffer *fb = r->fb;
+    int x, y;
+    const sr_draw_desc *d = s->d;
+    if (d->shading == SR_SHADE_PHONG && !d->fragment && !d->normal_map && s->wnrm) {
+        sr__batch batch;
+        batch.n = 0;
+        for (y = r->miny; y <= r->maxy; y++) {
+            size_t row = (size_t)y * (size_t)fb->width;
+            for (x = r->minx; x <= r->maxx; x++) {
+                size_t i = row + (size_t)x;
+                uint32_t id = fb->tri_id[i];
+                if (id == SR__NO_ID) continue;
+                batch.pixel[batch.n] = i;
+                batch.id[batch.n] = id;
+                batch.b1[batch.n] = fb->bary[2 * i];
+                batch.b2[batch.n] = fb->bary[2 * i + 1];
+                if (++batch.n == SR__BATCH) sr__shade_batch(s, &batch, fb);
+            }
+        }
+        if (batch.n) sr__shade_batch(s, &batch, fb);
+        /* the wireframe and the bookkeeping over the shaded colours */
+        for (y = r->miny; y <= r->maxy; y++) {
+            size_t row = (size_t)y * (size_t)fb->width;
+            for (x = r->minx; x <= r->maxx; x++) {
+                size_t i = row + (size_t)x;
+                uint32_t id = fb->tri_id[i];
+                if (id == SR__NO_ID) continue;
+                fb->tri_id[i] = SR__NO_ID;
+                if (d->wireframe) {
+                    float a = sr__wire_alpha(s, x, y, id), *c = fb->color + 4 * i;
+                    int k;
+                    for (k = 0; k < 3; k++) c[k] += (d->wire_color[k] - c[k]) * a;
+                }
+                fb->color[4 * i + 3] = 1.0f;
+            }
+        }
+        return;
+    }
+    for (y = r->miny; y <= r->maxy; y++) {
+        size_t row = (size_t)y * (size_t)fb->width;
+        for (x = r->minx; x <= r->maxx; x++) {
+            size_t i = row + (size_t)x;
+            uint32_t id = fb->tri_id[i];
+            float rgb[3];
+            if (id == SR__NO_ID) continue;
+            fb->tri_id[i] = SR__NO_ID;
+            sr__shade_pixel(s, x, y, id, fb->bary[2 * i], fb->bary[2 * i + 1], rgb);
+            if (s->d->wireframe) {
+                float a = sr__wire_alpha(s, x, y, id);
+                int k;
+                for (k = 0; k < 3; k++) rgb[k] += (s->d->wire_color[k] - rgb[k]) * a;
+            }
+            fb->color[4 * i + 0] = rgb[0];
+            fb->color[4 * i + 1] = rgb[1];
+            fb->color[4 * i + 2] = rgb[2];
+            fb->color[4 * i + 3] = 1.0f;
+        }
+    }
+}
+
+SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_draw_desc *d)
+{
+    sr_allocator a;
+    sr__raster r;
+    sr__shader s;
+    sr_light head;
+    float mvp[16];
+    size_t v, t, nv, per_vertex, bytes;
+    unsigned char *mem;
+    sr__cv *cv;
+    float *extra;
+    int gouraud;
+    if (!fb || !fb->color || !cam || !d) return SR_ERR_INVALID_ARGUMENT;
+    if ((d->vertex_count && !d->positions) || (d->triangle_count && !d->indices)) return SR_ERR_INVALID_ARGUMENT;
+    if (d->triangle_count >= (size_t)SR__BACK_BIT || d->vertex_count > (size_t)UINT32_MAX) return SR_ERR_TOO_LARGE;
+    if (d->normal_map && !sr__image_ok(d->normal_map, 3)) return SR_ERR_INVALID_ARGUMENT;
+    nv = d->vertex_count;
+    for (t = 0; t < 3 * d->triangle_count; t++)
+        if (d->indices[t] >= nv) return SR_ERR_INVALID_ARGUMENT;
+    for (v = 0; v < nv; v++)
+        if (!sr__finite3(d->positions + 3 * v)) return SR_ERR_INVALID_ARGUMENT;
+    if (d->triangle_count == 0) return SR_OK;
+
+    a = fb->allocator;
+    gouraud = d->shading == SR_SHADE_GOURAUD && !d->fragment;
+    per_vertex = sizeof(sr__cv) + (d->model ? 6 * sizeof(float) : 0) + (gouraud ? 6 * sizeof(float) : 0);
+    if (nv > ((size_t)-1) / per_vertex) return SR_ERR_TOO_LARGE;
+    bytes = nv * per_vertex;
+    if (fb->scratch_size < bytes) { /* kept between draws: no page faults for a fresh block every frame */
+        if (fb->scratch) a.free(a.user, fb->scratch);
+        fb->scratch_size = 0;
+        fb->scratch = sr__alloc(&a, bytes);
+        if (!fb->scratch) return SR_ERR_OUT_OF_MEMORY;
+        fb->scratch_size = bytes;
+    }
+    mem = (unsigned char *)fb->scratch;
+    cv = (sr__cv *)mem;
+    extra = (float *)(mem + nv * sizeof(sr__cv));
+
+    memset(&s, 0, sizeof s);
+    s.d = d;
+    s.cam = cam;
+    s.cv = cv;
+    s.lights = sr__lights(d->lights, d->light_count, cam, &head, &s.light_count);
+    s.spec_cut = sr__spec_cut(&d->material);
+    s.wpos = d->positions;
+    s.wnrm = d->normals;
+    if (d->model) {
+        float *wp = extra, *wn = extra + 3 * nv;
+        s.has_model = 1;
+        sr__normal_matrix(d->model, s.nmat);
+        for (v = 0; v < nv; v++) {
+            sr__mat_point(d->model, d->positions + 3 * v, wp + 3 * v);
+            if (d->normals) { sr__mat3_vec(s.nmat, d->normals + 3 * v, wn + 3 * v); sr__normalize(wn + 3 * v); }
+        }
+        s.wpos = wp;
+        s.wnrm = d->normals ? wn : NULL;
+        extra += 6 * nv;
+        sr__mat_mul(cam->viewproj, d->model, mvp);
+    } else {
+        memcpy(mvp, cam->viewproj, sizeof mvp);
+    }
+
+    /* vertex stage */
+    for (v = 0; v < nv; v++) {
+        const float *p = d->positions + 3 * v;
+        sr__cv *o = &cv[v];
+        o->clip[0] = mvp[0] * p[0] + mvp[4] * p[1] + mvp[8] * p[2] + mvp[12];
+        o->clip[1] = mvp[1] * p[0] + mvp[5] * p[1] + mvp[9] * p[2] + mvp[13];
+        o->clip[2] = mvp[2] * p[0] + mvp[6] * p[1] + mvp[10] * p[2] + mvp[14];
+        o->clip[3] = mvp[3] * p[0] + mvp[7] * p[1] + mvp[11] * p[2] + mvp[15];
+        o->code = sr__outcode(o->clip);
+        if (!(o->code & SR__CLIP_BITS)) sr__to_screen(o, (float)fb->width, (float)fb->height);
+        else { o->sx = o->sy = o->sz = o->invw = 0.0f; o->fx = o->fy = 0; }
+    }
+    if (gouraud) {
+        s.gouraud = extra;
+        for (v = 0; v < nv; v++) {
+            float *g = extra + 6 * v, N[3], V[3];
+            const float *P = s.wpos + 3 * v;
+            const float *kd = d->colors ? d->colors + 3 * v : d->material.diffuse;
+            const float *ka = d->colors ? d->colors + 3 * v : d->material.ambient;
+            int side, k, l;
+            if (s.wnrm) memcpy(N, s.wnrm + 3 * v, sizeof N);
+            else { N[0] = 0.0f; N[1] = 0.0f; N[2] = 1.0f; }
+            if (cam->orthographic) { V[0] = -cam->forward[0]; V[1] = -cam->forward[1]; V[2] = -cam->forward[2]; }
+            else sr__view_dir(cam->eye, P, V);
+            for (side = 0; side < 2; side++) {
+                float *o = g + 3 * side;
+                memcpy(o, d->material.emission, 3 * sizeof(float));
+                for (l = 0; l < s.light_count; l++) sr__shade_light(&d->material, kd, ka, &s.lights[l], P, N, V, 1.0f, s.spec_cut, o);
+                for (k = 0; k < 3; k++) N[k] = -N[k];
+            }
+        }
+    }
+
+    /* visibility pass */
+    memset(&r, 0, sizeof r);
+    r.fb = fb;
+    r.count_mode = d->shading == SR_SHADE_COUNT;
+    r.depth_test = !d->no_depth_test;
+    r.depth_write = !d->no_depth_write;
+    r.cull = d->cull;
+    r.minx = fb->width; r.miny = fb->height; r.maxx = -1; r.maxy = -1;
+    for (t = 0; t < d->triangle_count; t++) {
+        const uint32_t *idx = d->indices + 3 * t;
+        const sr__cv *tv[3];
+        uint32_t c0, c1, c2;
+        tv[0] = &cv[idx[0]]; tv[1] = &cv[idx[1]]; tv[2] = &cv[idx[2]];
+        c0 = tv[0]->code; c1 = tv[1]->code; c2 = tv[2]->code;
+        if (c0 & c1 & c2 & 63u) continue;
+        if ((c0 | c1 | c2) & SR__CLIP_BITS) sr__clip_tri(&r, tv, (c0 | c1 | c2) & SR__CLIP_BITS, (uint32_t)t);
+        else sr__raster_tri(&r, tv[0], tv[1], tv[2], NULL, (uint32_t)t);
+    }
+    /* shading pass */
+    if (!r.count_mode) sr__shading_pass(&s, &r);
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: relief mapping (Policarpo, Oliveira & Comba 2005)
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_relief_desc_default(sr_relief_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    d->axis_u[0] = 1.0f; d->axis_v[1] = 1.0f;
+    d->depth_scale = 0.1f;
+    d->linear_steps = 10;
+    d->binary_steps = 5;
+    sr_material_default(&d->material);
+}
+
+/* the quad's frame: unit normal n and the dual basis that maps a world offset to (s, t) */
+typedef struct sr__relief_frame { float n[3], du[3], dv[3]; } sr__relief_frame;
+
+static int sr__relief_frame_init(const sr_relief_desc *d, sr__relief_frame *f)
+{
+    float a, b;
+    sr__cross(d->axis_u, d->axis_v, f->n);
+    if (sr__normalize(f->n) <= 0.0f) return 0;
+    sr__cross(d->axis_v, f->n, f->du);
+    sr__cross(f->n, d->axis_u, f->dv);
+    a = sr__dot(d->axis_u, f->du);
+    b = sr__dot(d->axis_v, f->dv);
+    if (a == 0.0f || b == 0.0f) return 0;
+    f->du[0] /= a; f->du[1] /= a; f->du[2] /= a;
+    f->dv[0] /= b; f->dv[1] /= b; f->dv[2] /= b;
+    return 1;
+}
+
+static float sr__depth_at(const sr_image *img, float s, float t)
+{
+    float h[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    sr__sample(img, s, t, h);
+    return h[0];
+}
+
+/* Search along the map-space ray (s0 + d*ds, t0 + d*dt, d) for the first d >= depth(s, t):
+   `linear` uniform steps (the last one, d = 1, always hits since depth <= 1), then `binary`
+   halvings of the bracketing interval; returns its midpoint. */
+static float sr__relief_search(const sr_image *img, float s0, float t0, float ds, float dt, int linear, int binary)
+{
+    float lo = 0.0f, hi = 1.0f, step = 1.0f / (float)linear;
+    int i;
+    for (i = 1; i <= linear; i++) {
+        float dd = (float)i * step;
+        if (i == linear || dd >= sr__depth_at(img, s0 + dd * ds, t0 + dd * dt)) { hi = dd; lo = dd - step; break; }
+    }
+    for (i = 0; i < binary; i++) {
+        float mid = 0.5f * (lo + hi);
+        if (mid >= sr__depth_at(img, s0 + mid * ds, t0 + mid * dt)) hi = mid;
+        else lo = mid;
+    }
+    return 0.5f * (lo + hi);
+}
+
+SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t, float uvd[3])
+{
+    sr__relief_frame f;
+    float denom, t0, E[3], rel[3], s0, tm0, step[3], ds, dt, hit, sh, th;
+    int k, linear, binary;
+    if (!d || !origin || !dir || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f)) return 0;
+    if (!sr__relief_frame_init(d, &f)) return 0;
+    denom = sr__dot(dir, f.n);
+    if (!(denom < 0.0f)) return 0; /* only rays entering the surface from above */
+    sr__sub(d->origin, origin, rel);
+    t0 = sr__dot(rel, f.n) / denom;
+    if (t0 < 0.0f) return 0;
+    for (k = 0; k < 3; k++) E[k] = origin[k] + t0 * dir[k];
+    sr__sub(E, d->origin, rel);
+    s0 = sr__dot(rel, f.du);
+    tm0 = sr__dot(rel, f.dv);
+    if (s0 < 0.0f || s0 > 1.0f || tm0 < 0.0f || tm0 > 1.0f) return 0;
+    /* world offset per unit of map depth: depth_scale along -n */
+    for (k = 0; k < 3; k++) step[k] = dir[k] * d->depth_scale / -denom;
+    ds = sr__dot(step, f.du);
+    dt = sr__dot(step, f.dv);
+    linear = d->linear_steps > 0 ? d->linear_steps : 10;
+    binary = d->binary_steps > 0 ? d->binary_steps : 5;
+    hit = sr__relief_search(&d->depth, s0, tm0, ds, dt, linear, binary);
+    sh = s0 + hit * ds;
+    th = tm0 + hit * dt;
+    if (!d->depth.wrap && (sh < 0.0f || sh > 1.0f || th < 0.0f || th > 1.0f)) return 0; /* left through a side */
+    if (t) *t = t0 + hit * d->depth_scale / -denom;
+    if (uvd) { uvd[0] = sh; uvd[1] = th; uvd[2] = hit; }
+    return 1;
+}
+
+/* 1 if the light ray from map point (s, t, depth) escapes the height field */
+static float sr__relief_visibility(const sr_relief_desc *d, const sr__relief_frame *f, const float L[3], const float uvd[3])
+{
+    float ln = sr__dot(L, f->n), step[3], ds, dt;
+    int k, i, n = 2 * (d->linear_steps > 0 ? d->linear_steps : 10);
+    if (ln <= 0.0f) return 0.0f;
+    for (k = 0; k < 3; k++) step[k] = L[k] * d->depth_scale / ln; /* world offset per unit of depth rise */
+    ds = sr__dot(step, f->du);
+    dt = sr__dot(step, f->dv);
+    for (i = 1; i < n; i++) {
+        float rise = uvd[2] * (float)i / (float)n, depth = uvd[2] - rise;
+        if (depth > sr__depth_at(&d->depth, uvd[0] + rise * ds, uvd[1] + rise * dt) + 0.02f) return 0.0f;
+    }
+    return 1.0f;
+}
+
+SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const sr_relief_desc *d)
+{
+    sr__relief_frame f;
+    sr_light head;
+    const sr_light *lights;
+    float spec_cut;
+    int nl, x, y;
+    if (!fb || !fb->color || !cam || !d || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f))
+        return SR_ERR_INVALID_ARGUMENT;
+    if ((d->albedo && !sr__image_ok(d->albedo, 3)) || (d->normal_map && !sr__image_ok(d->normal_map, 3)))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (!sr__relief_frame_init(d, &f)) return SR_ERR_INVALID_ARGUMENT;
+    lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
+    spec_cut = sr__spec_cut(&d->material);
+    for (y = 0; y < fb->height; y++)
+        for (x = 0; x < fb->width; x++) {
+            float o[3], dir[3], t, uvd[3], P[3], N[3], V[3], kd[3], rgb[3], z;
+            size_t i = (size_t)y * (size_t)fb->width + (size_t)x;
+            int k, l;
+            sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            if (!sr_relief_intersect(d, o, dir, &t, uvd)) continue;
+            for (k = 0; k < 3; k++) P[k] = o[k] + t * dir[k];
+            if (!sr_camera_depth(cam, P, &z) || !(z < fb->depth[i]) || z < 0.0f) continue;
+            if (d->normal_map) {
+                float tn[4] = {0.0f, 0.0f, 1.0f, 0.0f}, uh[3], vh[3];
+                sr__sample(d->normal_map, uvd[0], uvd[1], tn);
+                memcpy(uh, d->axis_u, sizeof uh); sr__normalize(uh);
+                memcpy(vh, d->axis_v, sizeof vh); sr__normalize(vh);
+                for (k = 0; k < 3; k++) N[k] = tn[0] * uh[k] + tn[1] * vh[k] + tn[2] * f.n[k];
+            } else {
+                /* P(s,t) = O + sU + tV - scale*h(s,t) n; N = dP/ds x dP/dt */
+                float es = 1.0f / (float)d->depth.width, et = 1.0f / (float)d->depth.height, hs, ht, Ps[3], Pt[3];
+                hs = (sr__depth_at(&d->depth, uvd[0] + es, uvd[1]) - sr__depth_at(&d->depth, uvd[0] - es, uvd[1])) / (2.0f * es);
+                ht = (sr__depth_at(&d->depth, uvd[0], uvd[1] + et) - sr__depth_at(&d->depth, uvd[0], uvd[1] - et)) / (2.0f * et);
+                for (k = 0; k < 3; k++) {
+                    Ps[k] = d->axis_u[k] - d->depth_scale * hs * f.n[k];
+                    Pt[k] = d->axis_v[k] - d->depth_scale * ht * f.n[k];
+                }
+                sr__cross(Ps, Pt, N);
+            }
+            sr__normalize(N);
+            if (d->albedo) { float a4[4]; sr__sample(d->albedo, uvd[0], uvd[1], a4); memcpy(kd, a4, sizeof kd); }
+            else memcpy(kd, d->material.diffuse, sizeof kd);
+            sr__view_dir(o, P, V);
+            memcpy(rgb, d->material.emission, sizeof rgb);
+            for (l = 0; l < nl; l++) {
+                float vis = 1.0f;
+                if (d->shadows) { float L[3]; sr__light_dir(&lights[l], P, L); vis = sr__relief_visibility(d, &f, L, uvd); }
+                sr__shade_light(&d->material, kd, d->albedo ? kd : d->material.ambient, &lights[l], P, N, V, vis, spec_cut, rgb);
+            }
+            fb->depth[i] = z;
+            fb->color[4 * i] = rgb[0]; fb->color[4 * i + 1] = rgb[1]; fb->color[4 * i + 2] = rgb[2];
+            fb->color[4 * i + 3] = 1.0f;
+        }
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: terrain ray marching
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_terrain_desc_default(sr_terrain_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    d->spacing = 1.0f;
+    d->height_scale = 1.0f;
+    sr_material_default(&d->material);
+}
+
+/* bilinear height (world y) at world (x, z), clamped to the grid */
+static float sr__terrain_y(const sr_terrain_desc *d, float x, float z)
+{
+    float gx = (x - d->origin_x) / d->spacing, gz = (z - d->origin_z) / d->spacing, fx, fz, ax, az;
+    int x0, z0, x1, z1;
+    const float *h = d->heights;
+    gx = sr__clampf(gx, 0.0f, (float)(d->width - 1));
+    gz = sr__clampf(gz, 0.0f, (float)(d->height - 1));
+    fx = floorf(gx); fz = floorf(gz);
+    x0 = (int)fx; z0 = (int)fz;
+    x1 = x0 + 1 < d->width ? x0 + 1 : x0;
+    z1 = z0 + 1 < d->height ? z0 + 1 : z0;
+    ax = gx - fx; az = gz - fz;
+    {
+        float a = h[(size_t)z0 * (size_t)d->width + (size_t)x0], b = h[(size_t)z0 * (size_t)d->width + (size_t)x1];
+        float c = h[(size_t)z1 * (size_t)d->width + (size_t)x0], e = h[(size_t)z1 * (size_t)d->width + (size_t)x1];
+        return d->base_y + d->height_scale * ((a + (b - a) * ax) * (1.0f - az) + (c + (e - c) * ax) * az);
+    }
+}
+
+/* slab test against an axis-aligned box; returns 0 when the ray misses */
+static int sr__ray_box(const float o[3], const float dir[3], const float lo[3], const float hi[3], float *t0, float *t1)
+{
+    float a = -1e30f, b = 1e30f;
+    int k;
+    for (k = 0; k < 3; k++) {
+        if (dir[k] == 0.0f) {
+            if (o[k] < lo[k] || o[k] > hi[k]) return 0;
+        } else {
+            float inv = 1.0f / dir[k], ta = (lo[k] - o[k]) * inv, tb = (hi[k] - o[k]) * inv;
+            if (ta > tb) { float s = ta; ta = tb; tb = s; }
+            if (ta > a) a = ta;
+            if (tb < b) b = tb;
+        }
+    }
+    if (a < 0.0f) a = 0.0f;
+    if (a > b) return 0;
+    *t0 = a; *t1 = b;
+    return 1;
+}
+
+SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const sr_terrain_desc *d)
+{
+    float lo[3], hi[3], hmin = 1e30f, hmax = -1e30f, step, spec_cut;
+    size_t n, i;
+    sr_light head;
+    const sr_light *lights;
+    int nl, x, y;
+    if (!fb || !fb->color || !cam || !d || !d->heights || d->width < 2 || d->height < 2 || !(d->spacing > 0.0f))
+        return SR_ERR_INVALID_ARGUMENT;
+    n = (size_t)d->width * (size_t)d->height;
+    for (i = 0; i < n; i++) {
+        float h = d->heights[i];
+        if (h - h != 0.0f) return SR_ERR_INVALID_ARGUMENT;
+        if (h < hmin) hmin = h;
+        if (h > hmax) hmax = h;
+    }
+    lo[0] = d->origin_x; hi[0] = d->origin_x + d->spacing * (float)(d->width - 1);
+    lo[2] = d->origin_z; hi[2] = d->origin_z + d->spacing * (float)(d->height - 1);
+    lo[1] = d->base_y + d->height_scale * (d->height_scale >= 0.0f ? hmin : hmax) - 1e-4f;
+    hi[1] = d->base_y + d->height_scale * (d->height_scale >= 0.0f ? hmax : hmin) + 1e-4f;
+    step = d->step > 0.0f ? d->step : 0.5f * d->spacing;
+    lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
+    spec_cut = sr__spec_cut(&d->material);
+    for (y = 0; y < fb->height; y++)
+        for (x = 0; x < fb->width; x++) {
+            float o[3], dir[3], t0, t1, t, prev, P[3], z;
+            size_t pi = (size_t)y * (size_t)fb->width + (size_t)x;
+            int k, hit = 0;
+            sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            if (!sr__ray_box(o, dir, lo, hi, &t0, &t1)) continue;
+            prev = t0;
+            for (t = t0; t <= t1 + step; t += step) {
+                float tt = t > t1 ? t1 : t;
+                float py = o[1] + tt * dir[1];
+                if (py <= sr__terrain_y(d, o[0] + tt * dir[0], o[2] + tt * dir[2])) {
+                    float a = prev, b = tt;
+                    int it;
+                    for (it = 0; it < 12; it++) { /* refine the crossing */
+                        float m = 0.5f * (a + b);
+                        if (o[1] + m * dir[1] <= sr__terrain_y(d, o[0] + m * dir[0], o[2] + m * dir[2])) b = m;
+                        else a = m;
+                    }
+                    t = b;
+                    hit = 1;
+                    break;
+                }
+                prev = tt;
+                if (tt >= t1) break;
+            }
+            if (!hit) continue;
+            for (k = 0; k < 3; k++) P[k] = o[k] + t * dir[k];
+            if (!sr_camera_depth(cam, P, &z) || !(z < fb->depth[pi]) || z < 0.0f) continue;
+            {
+                float e = 0.5f * d->spacing, N[3], V[3], kd[3], rgb[3];
+                int l;
+                N[0] = -(sr__terrain_y(d, P[0] + e, P[2]) - sr__terrain_y(d, P[0] - e, P[2])) / (2.0f * e);
+                N[1] = 1.0f;
+                N[2] = -(sr__terrain_y(d, P[0], P[2] + e) - sr__terrain_y(d, P[0], P[2] - e)) / (2.0f * e);
+                sr__normalize(N);
+                if (d->colors) {
+                    int gx = (int)floorf((P[0] - d->origin_x) / d->spacing + 0.5f), gz = (int)floorf((P[2] - d->origin_z) / d->spacing + 0.5f);
+                    gx = gx < 0 ? 0 : (gx >= d->width ? d->width - 1 : gx);
+                    gz = gz < 0 ? 0 : (gz >= d->height ? d->height - 1 : gz);
+                    memcpy(kd, d->colors + 3 * ((size_t)gz * (size_t)d->width + (size_t)gx), sizeof kd);
+                } else {
+                    memcpy(kd, d->material.diffuse, sizeof kd);
+                }
+                sr__view_dir(o, P, V);
+                memcpy(rgb, d->material.emission, sizeof rgb);
+                for (l = 0; l < nl; l++) sr__shade_light(&d->material, kd, d->colors ? kd : d->material.ambient, &lights[l], P, N, V, 1.0f, spec_cut, rgb);
+                fb->depth[pi] = z;
+                fb->color[4 * pi] = rgb[0]; fb->color[4 * pi + 1] = rgb[1]; fb->color[4 * pi + 2] = rgb[2];
+                fb->color[4 * pi + 3] = 1.0f;
+            }
+        }
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: volume ray marching (front-to-back compositing, Kajiya-Kay texels)
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_volume_desc_default(sr_volume_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    sr_material_default(&d->material);
+    d->box_min[0] = d->box_min[1] = d->box_min[2] = -1.0f;
+    d->box_max[0] = d->box_max[1] = d->box_max[2] = 1.0f;
+}
+
+/* transmittance from p toward the light, through the box */
+static float sr__volume_shadow(const sr_volume_desc *d, const float p[3], const float L[3], float step)
+{
+    float t0, t1, tau = 0.0f, t;
+    if (!sr__ray_box(p, L, d->box_min, d->box_max, &t0, &t1)) return 1.0f;
+    for (t = t0 + 0.5f * step; t < t1; t += step) {
+        float q[3];
+        q[0] = p[0] + t * L[0]; q[1] = p[1] + t * L[1]; q[2] = p[2] + t * L[2];
+        tau += d->density(d->user, q) * step;
+        if (tau > 12.0f) return 0.0f;
+    }
+    return expf(-tau);
+}
+
+/* colour of one sample: ambient + diffuse + specular per light, with the direction model */
+static void sr__volume_light(const sr_volume_desc *d, const sr_light *lights, int nl, const float p[3], const float V[3],
+                             const float kd[3], const float dir[3], float shadow_step, float rgb[3])
+{
+    int l, k;
+    memcpy(rgb, d->material.emission, 3 * sizeof(float));
+    for (l = 0; l < nl; l++) {
+        float L[3], diff = 1.0f, spec = 0.0f, vis = 1.0f;
+        sr__light_dir(&lights[l], p, L);
+        if (d->direction == SR_VOLUME_NORMAL) {
+            float N[3], H[3], nh;
+            memcpy(N, dir, sizeof N);
+            sr__normalize(N);
+            if (sr__dot(N, V) < 0.0f) { N[0] = -N[0]; N[1] = -N[1]; N[2] = -N[2]; }
+            diff = sr__dot(N, L); if (diff < 0.0f) diff = 0.0f;
+            H[0] = L[0] + V[0]; H[1] = L[1] + V[1]; H[2] = L[2] + V[2];
+            sr__normalize(H);
+            nh = sr__dot(N, H);
+            spec = (diff > 0.0f && nh > 0.0f) ? powf(nh, d->material.shininess) : 0.0f;
+        } else if (d->direction == SR_VOLUME_TANGENT) {
+            /* Kajiya & Kay 1989: diffuse sin(T,L); specular (T.L T.V' + sin(T,L) sin(T,V'))^p with V' = -V */
+            float T[3], tl, tv, sl, sv, c;
+            memcpy(T, dir, sizeof T);
+            sr__normalize(T);
+            tl = sr__dot(T, L); tv = -sr__dot(T, V);
+            sl = sqrtf(sr__clampf(1.0f - tl * tl, 0.0f, 1.0f));
+            sv = sqrtf(sr__clampf(1.0f - tv * tv, 0.0f, 1.0f));
+            diff = sl;
+            c = tl * tv + sl * sv;
+            spec = c > 0.0f ? powf(c, d->material.shininess) : 0.0f;
+        }
+        if (d->shadows) vis = sr__volume_shadow(d, p, L, shadow_step);
+        for (k = 0; k < 3; k++)
+            rgb[k] += lights[l].ambient[k] * kd[k] + vis * (lights[l].diffuse[k] * kd[k] * diff + lights[l].specular[k] * d->material.specular[k] * spec);
+    }
+}
+
+SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const sr_volume_desc *d)
+{
+    float step, sstep, thr, term, diag[3];
+    sr_light head;
+    const sr_light *lights;
+    int nl, x, y;
+    const float *m;
+    if (!fb || !fb->color || !cam || !d || !d->density) return SR_ERR_INVALID_ARGUMENT;
+    sr__sub(d->box_max, d->box_min, diag);
+    if (!(diag[0] > 0.0f && diag[1] > 0.0f && diag[2] > 0.0f)) return SR_ERR_INVALID_ARGUMENT;
+    step = d->step > 0.0f ? d->step : sqrtf(sr__dot(diag, diag)) / 256.0f;
+    sstep = d->shadow_step > 0.0f ? d->shadow_step : 2.0f * step;
+    thr = d->depth_threshold > 0.0f ? d->depth_threshold : 0.5f;
+    term = d->termination > 0.0f ? d->termination : 0.995f;
+    lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
+    m = cam->viewproj;
+    for (y = 0; y < fb->height; y++)
+        for (x = 0; x < fb->width; x++) {
+            float o[3], dir[3], V[3], t0, t1, t, acc[3] = {0.0f, 0.0f, 0.0f}, A = 0.0f, zhit = 2.0f;
+            size_t i = (size_t)y * (size_t)fb->width + (size_t)x;
+            float D = fb->depth[i];
+            int k;
+            sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            if (!sr__ray_box(o, dir, d->box_min, d->box_max, &t0, &t1)) continue;
+            if (D < 1.0f) {
+                /* stop at the opaque surface: ndc z(t) = (cz0 + t cz1) / (cw0 + t cw1) = 2D - 1 */
+                float cz0 = m[2] * o[0] + m[6] * o[1] + m[10] * o[2] + m[14], cz1 = m[2] * dir[0] + m[6] * dir[1] + m[10] * dir[2];
+                float cw0 = m[3] * o[0] + m[7] * o[1] + m[11] * o[2] + m[15], cw1 = m[3] * dir[0] + m[7] * dir[1] + m[11] * dir[2];
+                float nd = 2.0f * D - 1.0f, den = cz1 - nd * cw1;
+                if (den != 0.0f) { float ts = (nd * cw0 - cz0) / den; if (ts < t1) t1 = ts; }
+            }
+            V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
+            for (t = t0 + 0.5f * step; t < t1; t += step) {
+                float p[3], sigma, alpha, rgb[3], kd[3], sdir[3] = {0.0f, 0.0f, 1.0f};
+                for (k = 0; k < 3; k++) p[k] = o[k] + t * dir[k];
+                sigma = d->density(d->user, p);
+                if (!(sigma > 0.0f)) continue;
+                alpha = 1.0f - expf(-sigma * step);
+                if (d->shade) d->shade(d->user, p, kd, sdir);
+                else memcpy(kd, d->material.diffuse, sizeof kd);
+                sr__volume_light(d, lights, nl, p, V, kd, sdir, sstep, rgb);
+                for (k = 0; k < 3; k++) acc[k] += (1.0f - A) * alpha * rgb[k];
+                A += (1.0f - A) * alpha;
+                if (zhit > 1.0f && A >= thr) { float z; if (sr_camera_depth(cam, p, &z)) zhit = z; }
+                if (A >= term) break;
+            }
+            if (A <= 0.0f) continue;
+            for (k = 0; k < 3; k++) fb->color[4 * i + (size_t)k] = acc[k] + (1.0f - A) * fb->color[4 * i + (size_t)k];
+            fb->color[4 * i + 3] = A + (1.0f - A) * fb->color[4 * i + 3];
+            if (zhit < fb->depth[i]) fb->depth[i] = zhit;
+        }
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: PNG encoder (zlib stream, fixed-Huffman deflate with greedy LZ77)
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct sr__buf {
+    uint8_t *data;
+    size_t size, cap;
+    sr_allocator a;
+    int failed;
+    uint32_t bits; /* bit accumulator for deflate, LSB first */
+    int nbits;
+} sr__buf;
+
+static void sr__buf_reserve(sr__buf *b, size_t extra)
+{
+    size_t cap;
+    uint8_t *p;
+    if (b->failed) return;
+    if (extra <= b->cap - b->size) return;
+    cap = b->cap ? b->cap : 4096;
+    while (cap - b->size < extra) {
+        if (cap > ((size_t)-1) / 2) { b->failed = 1; return; }
+        cap *= 2;
+    }
+    p = (uint8_t *)sr__alloc(&b->a, cap);
+    if (!p) { b->failed = 1; return; }
+    if (b->data) { memcpy(p, b->data, b->size); b->a.free(b->a.user, b->data); }
+    b->data = p;
+    b->cap = cap;
+}
+
+static void sr__put(sr__buf *b, const void *src, size_t n)
+{
+    sr__buf_reserve(b, n);
+    if (b->failed) return;
+    memcpy(b->data + b->size, src, n);
+    b->size += n;
+}
+
+static void sr__put_u32be(sr__buf *b, uint32_t v)
+{
+    uint8_t s[4];
+    s[0] = (uint8_t)(v >> 24); s[1] = (uint8_t)(v >> 16); s[2] = (uint8_t)(v >> 8); s[3] = (uint8_t)v;
+    sr__put(b, s, 4);
+}
+
+static void sr__bits(sr__buf *b, uint32_t value, int n)
+{
+    b->bits |= value << b->nbits;
+    b->nbits += n;
+    while (b->nbits >= 8) {
+        uint8_t c = (uint8_t)b->bits;
+        sr__put(b, &c, 1);
+        b->bits >>= 8;
+        b->nbits -= 8;
+    }
+}
+
+/* Huffman codes are sent most significant bit first */
+static void sr__huff(sr__buf *b, uint32_t code, int len)
+{
+    uint32_t r = 0;
+    int i;
+    for (i = 0; i < len; i++) r |= ((code >> i) & 1u) << (len - 1 - i);
+    sr__bits(b, r, len);
+}
+
+static void sr__fixed_literal(sr__buf *b, int sym)
+{
+    if (sym < 144) sr__huff(b, 0x30u + (uint32_t)sym, 8);
+    else if (sym < 256) sr__huff(b, 0x190u + (uint32_t)(sym - 144), 9);
+    else if (sym < 280) sr__huff(b, (uint32_t)(sym - 256), 7);
+    else sr__huff(b, 0xC0u + (uint32_t)(sym - 280), 8);
+}
+
+static void sr__deflate_match(sr__buf *b, int len, int dist)
+{
+    static const unsigned short lbase[29] = {3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31,
+                                             35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+    static const unsigned char lextra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+    static const unsigned short dbase[30] = {1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385,
+                                             513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+    static const unsigned char dextra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+    int li = 28, di = 29;
+    while (lbase[li] > len) li--;
+    while (dbase[di] > dist) di--;
+    sr__fixed_literal(b, 257 + li);
+    if (lextra[li]) sr__bits(b, (uint32_t)(len - lbase[li]), lextra[li]);
+    sr__huff(b, (uint32_t)di, 5);
+    if (dextra[di]) sr__bits(b, (uint32_t)(dist - dbase[di]), dextra[di]);
+}
+
+#define SR__HASH_BITS 15
+#define SR__WINDOW 32768
+#define SR__CHAIN 32
+
+/* zlib stream of one final fixed-Huffman block */
+static sr_result sr__zlib(const uint8_t *in, size_t n, sr__buf *b)
+{
+    int32_t *head = NULL, *prev = NULL;
+    size_t i = 0, k;
+    uint32_t s1 = 1, s2 = 0;
+    uint8_t hdr[2];
+    head = (int32_t *)sr__alloc(&b->a, sizeof(int32_t) << SR__HASH_BITS);
+    prev = (int32_t *)sr__alloc(&b->a, sizeof(int32_t) * SR__WINDOW);
+    if (!head || !prev) {
+        if (head) b->a.free(b->a.user, head);
+        if (prev) b->a.free(b->a.user, prev);
+        return SR_ERR_OUT_OF_MEMORY;
+    }
+    for (k = 0; k < ((size_t)1 << SR__HASH_BITS); k++) head[k] = -1;
+    hdr[0] = 0x78; hdr[1] = 0x01; /* deflate, 32K window, check bits: 0x7801 % 31 == 0 */
+    sr__put(b, hdr, 2);
+    sr__bits(b, 1, 1); /* BFINAL */
+    sr__bits(b, 1, 2); /* BTYPE = fixed Huffman */
+    while (i < n && !b->failed) {
+        int best = 0, bestd = 0;
+        if (i + 3 <= n) {
+            uint32_t h = ((uint32_t)in[i] * 506832829u ^ (uint32_t)in[i + 1] * 2654435761u ^ (uint32_t)in[i + 2] * 40503u) >> (32 - SR__HASH_BITS);
+            int32_t cand = head[h];
+            int chain = SR__CHAIN;
+            size_t maxlen = n - i < 258 ? n - i : 258;
+            while (cand >= 0 && chain-- > 0 && i - (size_t)cand <= SR__WINDOW - 1) {
+                size_t l = 0;
+                const uint8_t *p = in + cand, *q = in + i;
+                while (l < maxlen && p[l] == q[l]) l++;
+                if ((int)l > best) { best = (int)l; bestd = (int)(i - (size_t)cand); if (l == maxlen) break; }
+                cand = prev[(size_t)cand % SR__WINDOW];
+            }
+            prev[i % SR__WINDOW] = head[h];
+            head[h] = (int32_t)i;
+        }
+        if (best >= 3) {
+            size_t end = i + (size_t)best;
+            sr__deflate_match(b, best, bestd);
+            for (i++; i < end; i++) /* keep the hash chains complete inside the match */
+                if (i + 3 <= n) {
+                    uint32_t h = ((uint32_t)in[i] * 506832829u ^ (uint32_t)in[i + 1] * 2654435761u ^ (uint32_t)in[i + 2] * 40503u) >> (32 - SR__HASH_BITS);
+                    prev[i % SR__WINDOW] = head[h];
+                    head[h] = (int32_t)i;
+                }
+        } else {
+            sr__fixed_literal(b, in[i]);
+            i++;
+        }
+    }
+    sr__fixed_literal(b, 256);
+    if (b->nbits > 0) sr__bits(b, 0, 8 - b->nbits);
+    for (k = 0; k < n; k++) { /* Adler-32 */
+        s1 = (s1 + in[k]) % 65521u;
+        s2 = (s2 + s1) % 65521u;
+    }
+    sr__put_u32be(b, (s2 << 16) | s1);
+    b->a.free(b->a.user, head);
+    b->a.free(b->a.user, prev);
+    return b->failed ? SR_ERR_OUT_OF_MEMORY : SR_OK;
+}
+
+static uint32_t sr__crc(const uint8_t *p, size_t n, uint32_t crc)
+{
+    size_t i;
+    int k;
+    crc = ~crc;
+    for (i = 0; i < n; i++) {
+        crc ^= p[i];
+        for (k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static void sr__chunk(sr__buf *b, const char *type, const uint8_t *data, size_t n)
+{
+    uint32_t crc;
+    sr__put_u32be(b, (uint32_t)n);
+    sr__put(b, type, 4);
+    if (n) sr__put(b, data, n);
+    crc = sr__crc((const uint8_t *)type, 4, 0);
+    crc = sr__crc(data, n, crc);
+    sr__put_u32be(b, crc);
+}
+
+static int sr__paeth(int a, int b, int c)
+{
+    int p = a + b - c, pa = p > a ? p - a : a - p, pb = p > b ? p - b : b - p, pc = p > c ? p - c : c - p;
+    return (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+}
+
+/* filter every row with each of the five filters and keep the smallest sum of |residual| */
+static void sr__filter_rows(const uint8_t *pixels, int w, int h, int ch, int flip, uint8_t *out)
+{
+    size_t stride = (size_t)w * (size_t)ch, y, x;
+    for (y = 0; y < (size_t)h; y++) {
+        const uint8_t *row = pixels + (flip ? (size_t)h - 1 - y : y) * stride;
+        const uint8_t *up = y ? pixels + (flip ? (size_t)h - y : y - 1) * stride : NULL;
+        uint8_t *o = out + y * (stride + 1);
+        unsigned long best_cost = (unsigned long)-1;
+        int f, best = 0;
+        for (f = 0; f < 5; f++) {
+            unsigned long cost = 0;
+            for (x = 0; x < stride; x++) {
+                int a = x >= (size_t)ch ? row[x - (size_t)ch] : 0, b = up ? up[x] : 0, c = (up && x >= (size_t)ch) ? up[x - (size_t)ch] : 0;
+                int pred = f == 0 ? 0 : f == 1 ? a : f == 2 ? b : f == 3 ? (a + b) / 2 : sr__paeth(a, b, c);
+                int r = (uint8_t)(row[x] - pred);
+                cost += (unsigned long)(r < 128 ? r : 256 - r);
+            }
+            if (cost < best_cost) { best_cost = cost; best = f; }
+        }
+        o[0] = (uint8_t)best;
+        for (x = 0; x < stride; x++) {
+            int a = x >= (size_t)ch ? row[x - (size_t)ch] : 0, b = up ? up[x] : 0, c = (up && x >= (size_t)ch) ? up[x - (size_t)ch] : 0;
+            int pred = best == 0 ? 0 : best == 1 ? a : best == 2 ? b : best == 3 ? (a + b) / 2 : sr__paeth(a, b, c);
+            o[1 + x] = (uint8_t)(row[x] - pred);
+        }
+    }
+}
+
+SRDEF sr_result sr_encode_png(const uint8_t *pixels, int width, int height, int channels, int flip_y,
+                              const sr_allocator *allocator, uint8_t **out, size_t *out_size)
+{
+    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    sr__buf b, z;
+    uint8_t ihdr[13], *filtered;
+    size_t raw;
+    sr_result res;
+    if (out) *out = NULL;
+    if (out_size) *out_size = 0;
+    if (!pixels || !out || !out_size || width < 1 || height < 1 || (channels != 1 && channels != 3 && channels != 4))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (width > 1000000 || height > 1000000 || (size_t)width * (size_t)channels + 1 > ((size_t)-1) / (size_t)height)
+        return SR_ERR_TOO_LARGE;
+    memset(&b, 0, sizeof b);
+    b.a = sr__resolve_allocator(allocator);
+    z = b;
+    raw = ((size_t)width * (size_t)channels + 1) * (size_t)height;
+    filtered = (uint8_t *)sr__alloc(&b.a, raw);
+    if (!filtered) return SR_ERR_OUT_OF_MEMORY;
+    sr__filter_rows(pixels, width, height, channels, flip_y, filtered);
+    res = sr__zlib(filtered, raw, &z);
+    b.a.free(b.a.user, filtered);
+    if (res != SR_OK) { if (z.data) z.a.free(z.a.user, z.data); return res; }
+    ihdr[0] = (uint8_t)(width >> 24); ihdr[1] = (uint8_t)(width >> 16); ihdr[2] = (uint8_t)(width >> 8); ihdr[3] = (uint8_t)width;
+    ihdr[4] = (uint8_t)(height >> 24); ihdr[5] = (uint8_t)(height >> 16); ihdr[6] = (uint8_t)(height >> 8); ihdr[7] = (uint8_t)height;
+    ihdr[8] = 8;
+    ihdr[9] = (uint8_t)(channels == 1 ? 0 : channels == 3 ? 2 : 6);
+    ihdr[10] = 0; ihdr[11] = 0; ihdr[12] = 0;
+    sr__put(&b, sig, 8);
+    sr__chunk(&b, "IHDR", ihdr, 13);
+    sr__chunk(&b, "IDAT", z.data, z.size);
+    sr__chunk(&b, "IEND", NULL, 0);
+    z.a.free(z.a.user, z.data);
+    if (b.failed) { if (b.data) b.a.free(b.a.user, b.data); return SR_ERR_OUT_OF_MEMORY; }
+    *out = b.data;
+    *out_size = b.size;
+    return SR_OK;
+}
+
+static sr_result sr__write_file(const char *path, const void *head, size_t head_n, const void *data, size_t n)
+{
+    FILE *f;
+    int ok;
+    if (!path) return SR_ERR_INVALID_ARGUMENT;
+    f = fopen(path, "wb");
+    if (!f) return SR_ERR_IO;
+    ok = fwrite(head, 1, head_n, f) == head_n;
+    if (ok && n) ok = fwrite(data, 1, n, f) == n;
+    if (fclose(f) != 0) ok = 0;
+    return ok ? SR_OK : SR_ERR_IO;
+}
+
+SRDEF sr_result sr_write_png(const char *path, const uint8_t *pixels, int width, int height, int channels, int flip_y)
+{
+    uint8_t *png;
+    size_t n;
+    sr_result r;
+    if (!path) return SR_ERR_INVALID_ARGUMENT;
+    r = sr_encode_png(pixels, width, height, channels, flip_y, NULL, &png, &n);
+    if (r != SR_OK) return r;
+    r = sr__write_file(path, png, n, NULL, 0);
+    sr_free(NULL, png);
+    return r;
+}
+
+SRDEF sr_result sr_write_ppm(const char *path, const uint8_t *pixels, int width, int height, int channels, int flip_y)
+{
+    char head[64];
+    uint8_t *rgb;
+    size_t n, y, x;
+    sr_result r;
+    sr_allocator a = sr__resolve_allocator(NULL);
+    if (!path || !pixels || width < 1 || height < 1 || (channels != 3 && channels != 4)) return SR_ERR_INVALID_ARGUMENT;
+    n = (size_t)width * (size_t)height * 3;
+    rgb = (uint8_t *)sr__alloc(&a, n);
+    if (!rgb) return SR_ERR_OUT_OF_MEMORY;
+    for (y = 0; y < (size_t)height; y++) {
+        const uint8_t *row = pixels + (flip_y ? (size_t)height - 1 - y : y) * (size_t)width * (size_t)channels;
+        for (x = 0; x < (size_t)width; x++) memcpy(rgb + (y * (size_t)width + x) * 3, row + x * (size_t)channels, 3);
+    }
+    sprintf(head, "P6\n%d %d\n255\n", width, height);
+    r = sr__write_file(path, head, strlen(head), rgb, n);
+    a.free(a.user, rgb);
+    return r;
+}
+
+SRDEF sr_result sr_write_pfm(const char *path, const float *data, int width, int height, int channels)
+{
+    char head[64];
+    uint8_t *bytes;
+    size_t n, i;
+    sr_result r;
+    sr_allocator a = sr__resolve_allocator(NULL);
+    if (!path || !data || width < 1 || height < 1 || (channels != 1 && channels != 3)) return SR_ERR_INVALID_ARGUMENT;
+    n = (size_t)width * (size_t)height * (size_t)channels;
+    bytes = (uint8_t *)sr__alloc(&a, n * 4);
+    if (!bytes) return SR_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) { /* little-endian on any host (scale -1 below) */
+        uint32_t u;
+        memcpy(&u, data + i, 4);
+        bytes[4 * i] = (uint8_t)u; bytes[4 * i + 1] = (uint8_t)(u >> 8);
+        bytes[4 * i + 2] = (uint8_t)(u >> 16); bytes[4 * i + 3] = (uint8_t)(u >> 24);
+    }
+    sprintf(head, "%s\n%d %d\n-1.0\n", channels == 3 ? "PF" : "Pf", width, height);
+    r = sr__write_file(path, head, strlen(head), bytes, n * 4);
+    a.free(a.user, bytes);
+    return r;
+}
+
+SRDEF sr_result sr_write_framebuffer_png(const sr_framebuffer *fb, const char *path, int flip_y)
+{
+    uint8_t *rgb;
+    sr_result r;
+    sr_allocator a;
+    if (!fb || !fb->color || !path) return SR_ERR_INVALID_ARGUMENT;
+    a = fb->allocator;
+    rgb = (uint8_t *)sr__alloc(&a, (size_t)fb->width * (size_t)fb->height * 3);
+    if (!rgb) return SR_ERR_OUT_OF_MEMORY;
+    sr_framebuffer_to_rgb8(fb, rgb, 3);
+    r = sr_write_png(path, rgb, fb->width, fb->height, 3, flip_y);
+    a.free(a.user, rgb);
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: bitmap font and contact sheets
+   --------------------------------------------------------------------------------------------- */
+
+/* 3x5 glyphs, rows top to bottom, '#' = ink */
+static const char *sr__glyph(int c)
+{
+    static const char chars[] = " 0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ.,:;-_+=/|()[]%'\"!?<>*#";
+    static const char *const glyphs[] = {
+        "...............",
+        "####.##.##.####", ".#.##..#..#.###", "###..#####..###", "###..#.##..####", "#.##.####..#..#",
+        "####..###..####", "####..###.#####", "###..#..#.#..#.", "####.#####.####", "####.####..####",
+        ".#.#.#####.##.#", "##.#.###.#.###.", ".###..#..#...##", "##.#.##.##.###.", "####..##.#..###",
+        "####..##.#..#..", ".###..#.##.#.##", "#.##.#####.##.#", "###.#..#..#.###", "..#..#..##.#.#.",
+        "#.##.###.#.##.#", "#..#..#..#..###", "#.########.##.#", "##.#.##.##.##.#", ".#.#.##.##.#.#.",
+        "##.#.###.#..#..", ".#.#.##.###..##", "##.#.###.#.##.#", ".###...#...###.", "###.#..#..#..#.",
+        "#.##.##.##.####", "#.##.##.##.#.#.", "#.##.########.#", "#.##.#.#.#.##.#", "#.##.#.#..#..#.",
+        "###..#.#.#..###",
+        ".............#.", "..........#.#..", "....#.....#....", "....#.....#.#..", "......###......",
+        "............###", "....#.###.#....", "...###...###...", "..#..#.#.#..#..", ".#..#..#..#..#.",
+        "..#.#..#..#...#", "#...#..#..#.#..", "##.#..#..#..##.", ".##..#..#..#.##", "#.#..#.#.#..#.#",
+        ".#..#..........", "#.##.#.........", ".#..#..#.....#.", "##...#.#.....#.", "..#.#.#...#...#",
+        "#...#...#.#.#..", "...#.#.#.#.#...", "#.#####.#####.#"};
+    const char *p;
+    if (c >= 'a' && c <= 'z') c -= 'a' - 'A';
+    p = c ? strchr(chars, c) : NULL;
+    if (!p) return NULL;
+    return glyphs[p - chars];
+}
+
+SRDEF void sr_draw_text(sr_image8 *img, int x, int y, const char *text, int scale, const uint8_t rgb[3])
+{
+    int gx, gy, sx, sy, k;
+    if (!img || !img->pixels || !text || !rgb) return;
+    if (scale < 1) scale = 1;
+    for (; *text; text++, x += 4 * scale) {
+        const char *g = sr__glyph((unsigned char)*text);
+        for (gy = 0; gy < 5; gy++)
+            for (gx = 0; gx < 3; gx++) {
+                int on = g ? (strlen(g) > (size_t)(gy * 3 + gx) && g[gy * 3 + gx] == '#') : (gx == 0 || gx == 2 || gy == 0 || gy == 4);
+                if (!on) continue;
+                for (sy = 0; sy < scale; sy++)
+                    for (sx = 0; sx < scale; sx++) {
+                        int px = x + gx * scale + sx, py = y + gy * scale + sy;
+                        uint8_t *o;
+                        if (px < 0 || py < 0 || px >= img->width || py >= img->height) continue;
+                        o = img->pixels + ((size_t)py * (size_t)img->width + (size_t)px) * (size_t)img->channels;
+                        if (img->channels >= 3) for (k = 0; k < 3; k++) o[k] = rgb[k];
+                        else o[0] = rgb[1];
+                    }
+            }
+    }
+}
+
+SRDEF sr_result sr_contact_sheet(const sr_image8 *images, const char *const *captions, int count, int columns,
+                                 const sr_allocator *allocator, sr_image8 *out)
+{
+    int i, cw = 0, ch = 0, rows, margin = 8, caption_h = 5 * 2 + 8, W, H;
+    sr_allocator a;
+    size_t n;
+    if (!out) return SR_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!images || count < 1) return SR_ERR_INVALID_ARGUMENT;
+    for (i = 0; i < count; i++) {
+        if (!images[i].pixels || images[i].width < 1 || images[i].height < 1 || (images[i].channels != 3 && images[i].channels != 4))
+            return SR_ERR_INVALID_ARGUMENT;
+        if (images[i].width > cw) cw = images[i].width;
+        if (images[i].height > ch) ch = images[i].height;
+        if (captions && captions[i]) { /* cells are wide enough for their captions (8 px per character) */
+            size_t len = strlen(captions[i]);
+            int tw = len > 2000 ? 16000 : 8 * (int)len;
+            if (tw > cw) cw = tw;
+        }
+    }
+    if (columns < 1 || columns > count) columns = count;
+    rows = (count + columns - 1) / columns;
+    if (cw > 16384 || ch > 16384 || columns > 64 || rows > 64) return SR_ERR_TOO_LARGE;
+    W = margin + columns * (cw + margin);
+    H = margin + rows * (ch + caption_h + margin);
+    a = sr__resolve_allocator(allocator);
+    n = (size_t)W * (size_t)H * 3;
+    out->pixels = (uint8_t *)sr__alloc(&a, n);
+    if (!out->pixels) return SR_ERR_OUT_OF_MEMORY;
+    memset(out->pixels, 255, n);
+    out->width = W; out->height = H; out->channels = 3;
+    for (i = 0; i < count; i++) {
+        const sr_image8 *im = &images[i];
+        int ox = margin + (i % columns) * (cw + margin), oy = margin + (i / columns) * (ch + caption_h + margin), x, y;
+        static const uint8_t black[3] = {0, 0, 0};
+        for (y = 0; y < im->height; y++)
+            for (x = 0; x < im->width; x++)
+                memcpy(out->pixels + ((size_t)(oy + y) * (size_t)W + (size_t)(ox + x)) * 3,
+                       im->pixels + ((size_t)y * (size_t)im->width + (size_t)x) * (size_t)im->channels, 3);
+        if (captions && captions[i]) sr_draw_text(out, ox, oy + ch + 4, captions[i], 2, black);
+    }
+    return SR_OK;
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SR_IMPLEMENTATION_DONE */
+#endif /* SR_IMPLEMENTATION */
+
+/*
+------------------------------------------------------------------------------
+This software is available under two licences; choose whichever you prefer.
+
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+
+Copyright (c) 2026 the detailed-surface graphics headers authors
+
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication for the benefit of the public at large and to
+the detriment of our heirs and successors. We intend this dedication to be an
+overt act of relinquishment in perpetuity of all present and future rights to
+this software under copyright law.
+
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER LIABILITY, WHETHER IN AN
+ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM, OUT OF OR IN CONNECTION
+WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+------------------------------------------------------------------------------
+*/
