@@ -35,15 +35,17 @@ HAVE_OPENMESH := $(wildcard /usr/include/OpenMesh/Core/IO/MeshIO.hh)
 HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
 HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
 HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
+HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
-             $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster)
+             $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -72,7 +74,7 @@ $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)
 $(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
 
-$(B)/ref_embree: tests/ref_embree.cpp $(ALLDEPS) | $(B)
+$(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
 
 # Dependencies are installed first; the build is a separate make so that it sees what was installed.
@@ -109,6 +111,7 @@ fuzz: fuzz-build
 # Each bench names the peer libraries it links in BENCH_LIBS_<name>.
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
+BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
