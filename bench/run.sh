@@ -1,32 +1,40 @@
 #!/bin/sh
-# run.sh BUILD_DIR [MESH] - run every built bench on MESH (default BUILD_DIR/sphere1m.off) and write
-# bench/RESULTS.md from their RESULT lines. Progress and each bench's stderr go to the terminal.
+# run.sh BUILD_DIR [MESH...] - run every built bench on each MESH (default: BUILD_DIR/sphere1m.off and,
+# when glmark2-data is installed, the Stanford bunny) and write bench/RESULTS.md from their RESULT
+# lines. Progress and each bench's stderr go to the terminal.
 set -u
-B="$1"
-MESH="${2:-$B/sphere1m.off}"
+B="$1"; shift
+if [ $# -eq 0 ]; then
+  set -- "$B/sphere1m.off"
+  bunny=/usr/share/glmark2/models/bunny.obj
+  if [ -f "$bunny" ]; then set -- "$bunny" "$@"; else echo "bench: $bunny missing (apt-get install glmark2-data)" >&2; fi
+fi
 out=bench/RESULTS.md
 tmp="$B/bench_results.txt"
 : > "$tmp"
 status=0
-for prog in "$B"/bench_*; do
-  [ -x "$prog" ] || continue
-  echo "bench: $(basename "$prog") $MESH" >&2
-  if ! "$prog" "$MESH" >>"$tmp"; then
-    echo "bench: $(basename "$prog") failed" >&2
-    status=1
-  fi
+for mesh in "$@"; do
+  for prog in "$B"/bench_*; do
+    [ -x "$prog" ] || continue
+    echo "bench: $(basename "$prog") $mesh" >&2
+    if ! "$prog" "$mesh" | sed "s|^RESULT |RESULT $(basename "$mesh") |" >>"$tmp"; then
+      echo "bench: $(basename "$prog") failed on $mesh" >&2
+      status=1
+    fi
+  done
 done
 {
   echo "# Benchmark results"
   echo
   echo "Written by \`make bench\` on $(date -u '+%Y-%m-%d %H:%M UTC'); machine: $(nproc) cores,"
-  echo "$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //'); input: \`$MESH\`."
+  echo "$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //')."
   echo "Every figure is the median of 5 runs after a warm-up, both sides in one process, one thread each;"
-  echo "the timed regions are described in bench/README.md. Ratios are ours / peer (below 1 means faster)."
+  echo "the timed regions are described in bench/README.md. Ratios are ours / peer: for times (\`_ms\`)"
+  echo "below 1 means we are faster, for throughputs (\`_mrays\`) above 1 means we are faster."
   echo
-  echo '| bench | figures |'
-  echo '|---|---|'
-  grep '^RESULT ' "$tmp" | while read -r _ name rest; do echo "| $name | $rest |"; done
+  echo '| mesh | figure | values |'
+  echo '|---|---|---|'
+  grep '^RESULT ' "$tmp" | while read -r _ mesh name rest; do echo "| $mesh | $name | $rest |"; done
 } > "$out"
 grep '^RESULT ' "$tmp"
 echo "bench: wrote $out" >&2
