@@ -40,27 +40,7 @@
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
 
-static uint64_t splitmix64(uint64_t x)
-{
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-static double unit_random(uint64_t i, uint64_t stream)
-{
-    return (double)(splitmix64(i * 16 + stream) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static void random_direction(uint64_t i, uint64_t stream, float d[3])
-{
-    double z = 2.0 * unit_random(i, stream) - 1.0, phi = 6.283185307179586 * unit_random(i, stream + 1);
-    double s = std::sqrt(std::fmax(0.0, 1.0 - z * z));
-    d[0] = (float)(s * std::cos(phi));
-    d[1] = (float)(s * std::sin(phi));
-    d[2] = (float)z;
-}
+#include "hashrand.h"
 
 struct mesh_view {
     const float *pos;
