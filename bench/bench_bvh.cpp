@@ -40,33 +40,7 @@
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
 
-#include "hashrand.h"
-
-struct mesh_view {
-    const float *pos;
-    size_t nv;
-    const uint32_t *idx;
-    size_t nt;
-};
-
-static void incoherent_rays(const mesh_view &m, size_t count, std::vector<dm_ray> &rays)
-{
-    float lo[3], hi[3];
-    for (int k = 0; k < 3; k++) lo[k] = hi[k] = m.pos[k];
-    for (size_t v = 0; v < m.nv; v++)
-        for (int k = 0; k < 3; k++) {
-            lo[k] = std::fmin(lo[k], m.pos[3 * v + k]);
-            hi[k] = std::fmax(hi[k], m.pos[3 * v + k]);
-        }
-    rays.resize(count);
-    for (size_t i = 0; i < count; i++) {
-        dm_ray &r = rays[i];
-        for (int k = 0; k < 3; k++) r.org[k] = (float)(lo[k] + (hi[k] - lo[k]) * unit_random(i, 1 + (uint64_t)k));
-        random_direction(i, 4, r.dir);
-        r.tmin = 0.0f;
-        r.tmax = std::numeric_limits<float>::infinity();
-    }
-}
+#include "bvh_rays.hpp"
 
 /* meshopt_simplify to 1% of the triangles, then area-uniform samples with interpolated
    area-weighted vertex normals; rays alternate +n / -n */
@@ -79,59 +53,7 @@ static bool bake_rays(const mesh_view &m, size_t count, std::vector<dm_ray> &ray
     simple.resize(n);
     *simplified_tris = n / 3;
     if (n == 0) return false;
-    std::vector<double> normals(3 * m.nv, 0.0), cdf(n / 3);
-    double total = 0.0;
-    for (size_t t = 0; t < n / 3; t++) {
-        const float *a = m.pos + 3 * (size_t)simple[3 * t], *b = m.pos + 3 * (size_t)simple[3 * t + 1],
-                    *c = m.pos + 3 * (size_t)simple[3 * t + 2];
-        double e1[3], e2[3];
-        for (int k = 0; k < 3; k++) {
-            e1[k] = (double)b[k] - a[k];
-            e2[k] = (double)c[k] - a[k];
-        }
-        double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        for (int j = 0; j < 3; j++)
-            for (int k = 0; k < 3; k++) normals[3 * (size_t)simple[3 * t + j] + k] += nrm[k];
-        total += 0.5 * std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-        cdf[t] = total;
-    }
-    rays.resize(count);
-    for (size_t i = 0; i < count; i++) {
-        double x = unit_random(i, 7) * total;
-        size_t lo = 0, hi = cdf.size() - 1;
-        while (lo < hi) {
-            size_t mid = (lo + hi) / 2;
-            if (cdf[mid] < x) lo = mid + 1;
-            else hi = mid;
-        }
-        double r1 = unit_random(i, 8), r2 = unit_random(i, 9);
-        if (r1 + r2 > 1.0) {
-            r1 = 1.0 - r1;
-            r2 = 1.0 - r2;
-        }
-        double w[3] = {1.0 - r1 - r2, r1, r2}, p[3] = {0, 0, 0}, nn[3] = {0, 0, 0};
-        for (int j = 0; j < 3; j++) {
-            uint32_t v = simple[3 * lo + j];
-            double len = std::sqrt(normals[3 * v] * normals[3 * v] + normals[3 * v + 1] * normals[3 * v + 1] +
-                                   normals[3 * v + 2] * normals[3 * v + 2]);
-            for (int k = 0; k < 3; k++) {
-                p[k] += w[j] * m.pos[3 * (size_t)v + k];
-                if (len > 0) nn[k] += w[j] * normals[3 * v + k] / len;
-            }
-        }
-        double len = std::sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-        if (!(len > 0)) {
-            nn[0] = 0; nn[1] = 0; nn[2] = 1; len = 1;
-        }
-        double sign = (i & 1) ? -1.0 : 1.0;
-        dm_ray &r = rays[i];
-        for (int k = 0; k < 3; k++) {
-            r.org[k] = (float)p[k];
-            r.dir[k] = (float)(sign * nn[k] / len);
-        }
-        r.tmin = 0.0f;
-        r.tmax = std::numeric_limits<float>::infinity();
-    }
+    surface_rays(m.pos, m.nv, simple.data(), n / 3, 0.0, count, rays);
     return true;
 }
 
@@ -268,18 +190,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "rtcNewDevice failed\n");
         return 1;
     }
-    double diag = 0.0;
-    {
-        float lo[3], hi[3];
-        for (int k = 0; k < 3; k++) lo[k] = hi[k] = s.m.pos[k];
-        for (size_t v = 0; v < s.m.nv; v++)
-            for (int k = 0; k < 3; k++) {
-                lo[k] = std::fmin(lo[k], s.m.pos[3 * v + k]);
-                hi[k] = std::fmax(hi[k], s.m.pos[3 * v + k]);
-            }
-        for (int k = 0; k < 3; k++) diag += (double)(hi[k] - lo[k]) * (hi[k] - lo[k]);
-        diag = std::sqrt(diag);
-    }
+    bounds(s.m);
+    const double diag = s.m.diag;
 
     fprintf(stderr, "bench_bvh: %s, %zu triangles: build\n", path, s.m.nt);
     double embree_build = bench_median(run_embree_build, free_embree, &s);

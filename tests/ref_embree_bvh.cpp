@@ -39,100 +39,14 @@
 
 static const int CHECKS_PER_MESH = 9; /* counted checks of one mesh, for T_SKIP_N */
 
-#include "hashrand.h"
+#include "bvh_rays.hpp"
 
-struct mesh_view {
-    const float *pos;
-    size_t nv;
-    const uint32_t *idx;
-    size_t nt;
-    float lo[3], hi[3];
-    double diag;
-};
-
-static void bounds(mesh_view &m)
-{
-    for (int k = 0; k < 3; k++) m.lo[k] = m.hi[k] = m.pos[k];
-    for (size_t v = 0; v < m.nv; v++)
-        for (int k = 0; k < 3; k++) {
-            m.lo[k] = std::fmin(m.lo[k], m.pos[3 * v + k]);
-            m.hi[k] = std::fmax(m.hi[k], m.pos[3 * v + k]);
-        }
-    m.diag = 0;
-    for (int k = 0; k < 3; k++) m.diag += (double)(m.hi[k] - m.lo[k]) * (m.hi[k] - m.lo[k]);
-    m.diag = std::sqrt(m.diag);
-}
-
-static void incoherent_rays(const mesh_view &m, size_t count, std::vector<dm_ray> &rays)
-{
-    rays.resize(count);
-    for (size_t i = 0; i < count; i++) {
-        dm_ray &r = rays[i];
-        for (int k = 0; k < 3; k++) r.org[k] = (float)(m.lo[k] + (m.hi[k] - m.lo[k]) * unit_random(i, 1 + (uint64_t)k));
-        random_direction(i, 4, r.dir);
-        r.tmin = 0.0f;
-        r.tmax = std::numeric_limits<float>::infinity();
-    }
-}
-
+/* bake-style rays on the mesh itself, origins moved up to 1% of the diagonal along the normal */
 static void bake_rays(const mesh_view &m, size_t count, std::vector<dm_ray> &rays)
 {
-    std::vector<double> normals(3 * m.nv, 0.0), cdf(m.nt);
-    double total = 0.0;
-    for (size_t t = 0; t < m.nt; t++) {
-        const float *a = m.pos + 3 * (size_t)m.idx[3 * t], *b = m.pos + 3 * (size_t)m.idx[3 * t + 1],
-                    *c = m.pos + 3 * (size_t)m.idx[3 * t + 2];
-        double e1[3], e2[3];
-        for (int k = 0; k < 3; k++) {
-            e1[k] = (double)b[k] - a[k];
-            e2[k] = (double)c[k] - a[k];
-        }
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        for (int j = 0; j < 3; j++)
-            for (int k = 0; k < 3; k++) normals[3 * (size_t)m.idx[3 * t + j] + k] += n[k];
-        total += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        cdf[t] = total;
-    }
-    rays.resize(count);
-    for (size_t i = 0; i < count; i++) {
-        double x = unit_random(i, 7) * total;
-        size_t lo = 0, hi = m.nt - 1;
-        while (lo < hi) {
-            size_t mid = (lo + hi) / 2;
-            if (cdf[mid] < x) lo = mid + 1;
-            else hi = mid;
-        }
-        double r1 = unit_random(i, 8), r2 = unit_random(i, 9);
-        if (r1 + r2 > 1.0) {
-            r1 = 1.0 - r1;
-            r2 = 1.0 - r2;
-        }
-        double w[3] = {1.0 - r1 - r2, r1, r2}, p[3] = {0, 0, 0}, n[3] = {0, 0, 0};
-        for (int j = 0; j < 3; j++) {
-            uint32_t v = m.idx[3 * lo + j];
-            double len = std::sqrt(normals[3 * v] * normals[3 * v] + normals[3 * v + 1] * normals[3 * v + 1] +
-                                   normals[3 * v + 2] * normals[3 * v + 2]);
-            for (int k = 0; k < 3; k++) {
-                p[k] += w[j] * m.pos[3 * (size_t)v + k];
-                if (len > 0) n[k] += w[j] * normals[3 * v + k] / len;
-            }
-        }
-        double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(len > 0)) {
-            n[0] = 0; n[1] = 0; n[2] = 1; len = 1;
-        }
-        double offset = 0.01 * m.diag * (2.0 * unit_random(i, 10) - 1.0), sign = (i & 1) ? -1.0 : 1.0;
-        dm_ray &r = rays[i];
-        for (int k = 0; k < 3; k++) {
-            r.org[k] = (float)(p[k] + offset * n[k] / len);
-            r.dir[k] = (float)(sign * n[k] / len);
-        }
-        r.tmin = 0.0f;
-        r.tmax = std::numeric_limits<float>::infinity();
-    }
+    surface_rays(m.pos, m.nv, m.idx, m.nt, 0.01 * m.diag, count, rays);
 }
 
-/* t where the ray meets triangle tri's plane, in double: the exact answer both sides round */
 static double plane_t(const mesh_view &m, uint32_t tri, const dm_ray &r)
 {
     if (tri >= m.nt) return NAN;
