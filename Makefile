@@ -39,6 +39,9 @@ HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
+ifeq ($(shell uname -m),x86_64)
+  C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
+endif
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
@@ -67,6 +70,12 @@ demo: $(EXAMPLES) $(TOOLS)
 # ---- tests ----------------------------------------------------------------------------------------
 $(B)/test_%: tests/test_%.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
+
+# dispmesh.h's SIMD paths, for tests/simd_same.sh (x86-64 only)
+$(B)/test_dispmesh_bvh_sse2: tests/test_dispmesh_bvh.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) -DDM_USE_SSE2 $< -o $@ -lm
+$(B)/test_dispmesh_bvh_avx2: tests/test_dispmesh_bvh.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) -DDM_USE_AVX2 -mavx2 $< -o $@ -lm
 
 $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< tests/fuzz_main.c -o $@ -lm
@@ -112,8 +121,12 @@ fuzz: fuzz-build
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
+# and the flags it is built with: dispmesh.h's SIMD path as its docs recommend for this machine (Embree
+# picks its best instruction set at run time)
+HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)
+BENCH_FLAGS_bvh = $(if $(HAVE_AVX2),-DDM_USE_AVX2 -mavx2,$(if $(filter x86_64,$(shell uname -m)),-DDM_USE_SSE2))
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
-	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
+	$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
 $(B)/sphere1m.off: $(B)/gen_sphere
 	$(B)/gen_sphere -f 224 -o $@

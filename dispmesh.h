@@ -26,10 +26,14 @@
        DM_STATIC             all functions are static (DMDEF = static), for private use in one file
        DM_MALLOC(sz)         default allocator; define both DM_MALLOC and DM_FREE or neither
        DM_FREE(p)
-       DM_USE_SSE2           opt-in SSE2 test of the four child boxes of a wide node (x86);
-                             bit-identical hits to the portable scalar path, which is written
-                             so that compilers vectorize it too (gcc -O2 does, for SSE2);
-                             about the same speed
+       DM_USE_SSE2           opt-in SSE2 box and triangle tests (x86, x86-64: always available
+                             there); recommended on x86
+       DM_USE_AVX2           opt-in AVX box and triangle tests (eight lanes); needs AVX code
+                             generation (-mavx2, /arch:AVX2), implies DM_USE_SSE2; recommended
+                             when the program may require AVX2 (Haswell, 2013, and later)
+                             All paths give bit-identical answers (tests/simd_same.sh checks it):
+                             the portable path is written lane by lane over arrays so that
+                             compilers can vectorize it, but it is 1.5-2x slower than SSE2
      Run time, dm_bvh_options (a zeroed struct, or NULL, means defaults; dm_bvh_default_options()
      returns the resolved values):
        quality        DM_BVH_QUALITY_DEFAULT: binned SAH over the axis where the centroids
@@ -48,23 +52,30 @@
    STRUCTURE
      The primary structure is a binary SAH tree of compact 32-byte nodes (box, child or triangle
      offset, count); refit and the closest-point query work on it, and dm_bvh_get_info()
-     describes it. Ray queries run on a 4-wide tree derived from it by collapsing (each 128-byte
-     wide node holds the boxes of up to four binary descendants side by side, so one node load
-     gives four box tests and the tree is half as deep). Its leaves are the binary tree's leaves,
-     so both share one triangle array; a refit recomputes the binary boxes and re-derives the
-     wide ones. The wide tree (with its vectorizable box test) made single rays 15-20% faster on
-     the 1M-triangle sphere, whose traversal mostly waits on memory, and 50% on the bunny.
+     describes it. Ray queries run on an 8-wide tree derived from it by collapsing (each 256-byte
+     wide node holds the boxes of up to eight binary descendants side by side, so one node load
+     gives eight box tests and the tree is a third as deep). Its leaves are the binary tree's
+     leaves, so both share one triangle array; a refit recomputes the binary boxes and
+     re-derives the wide ones. The triangles are stored four to a 160-byte block, coordinates
+     side by side, so that one ray meets four (with AVX eight) triangles in one pass; each leaf
+     starts a block. Against a 4-wide tree of single triangles (the previous version) this cut
+     the instructions per incoherent ray on the bunny from about 1400 to 900 (AVX) or 1200
+     (SSE2). A child's entry distance orders the visit (nearest first; two children compared,
+     three or more insertion-sorted on the stack); prefetching the children's cache lines
+     (DM__PREFETCH_CHILDREN) made no measurable difference and is off.
 
    MEMORY
-     A BVH holds 32-byte binary nodes, 128-byte wide nodes and a 40-byte copy of each triangle
-     in leaf order. The binary node array is allocated for the worst case, 2 nodes per triangle
-     (64 bytes), of which about 0.35 are used with the default leaf size (pages never written
-     cost no physical memory on systems with lazy allocation); the wide node array for one wide
-     node per binary interior node (about 21 bytes per triangle), of which half or less is
-     used: about 125 bytes per triangle allocated in all, about 70 touched; dm_bvh_get_info()
-     reports the allocated figure (memory_bytes) and the binary nodes in use. While the build
-     runs, the triangle array holds each triangle's box and id instead (no extra memory).
-     Queries never allocate.
+     A BVH holds 32-byte binary nodes, 256-byte wide nodes and the triangles in 160-byte blocks
+     of four. The binary node array is allocated for the worst case, 2 nodes per triangle (64
+     bytes), of which about 0.35 are used with the default leaf size (pages never written cost
+     no physical memory on systems with lazy allocation); the wide nodes (about 8 bytes per
+     triangle) live in its unused tail when they fit there, which they do unless leaves are
+     tiny. While the build runs, each triangle has a 32-byte box and id in an array of 56 bytes
+     per triangle, which the blocks then replace in place (45 bytes per triangle on the bunny,
+     blocks 7/8 full; a tree whose blocks need more gets a second allocation). In all about 120
+     bytes per triangle allocated, about 70 touched; dm_bvh_get_info() reports the allocated
+     figure (memory_bytes) and the binary nodes in use. Queries never allocate; a ray query
+     keeps a 10 KB stack.
 
    ERRORS
      dm_bvh_build and dm_bvh_refit return a dm_result (DM_OK = 0); dm_result_string() names it.
@@ -91,7 +102,8 @@
      edge computing the same products.
 
    LIMITS
-     At most 2^31 - 2 triangles; coordinates up to 1e18 in magnitude. The closest-point query
+     At most 2^30 - 1 triangles (slots of the padded blocks are 32-bit); coordinates up to 1e18
+     in magnitude. The closest-point query
      works in double.
 
    REFERENCES
@@ -268,6 +280,15 @@ DMDEF const char *dm_result_string(dm_result r);
 #error "dispmesh.h: define both DM_MALLOC and DM_FREE, or neither"
 #endif
 
+#if defined(DM_USE_AVX2)
+#if !defined(__AVX__)
+#error "dispmesh.h: DM_USE_AVX2 needs AVX code generation (gcc/clang -mavx2, MSVC /arch:AVX2)"
+#endif
+#include <immintrin.h>
+#ifndef DM_USE_SSE2
+#define DM_USE_SSE2
+#endif
+#endif
 #if defined(DM_USE_SSE2)
 #include <emmintrin.h>
 #endif
@@ -323,7 +344,7 @@ static void *dm__alloc_array(const dm_allocator *a, size_t count, size_t size, i
    --------------------------------------------------------------------------------------------- */
 
 /* 32 bytes. Interior: count == 0, children at first and first + 1 (siblings share one 64-byte
-   line). Leaf: count triangles starting at tris[first]. */
+   line). Leaf: count triangles starting at slot first (a multiple of 4, see dm__tri4). */
 typedef struct dm__node {
     float lo[3];
     uint32_t first;
@@ -331,22 +352,29 @@ typedef struct dm__node {
     uint32_t count;
 } dm__node;
 
-/* a triangle copied in leaf order: the three corners and its index in the input */
-typedef struct dm__tri {
-    float p[9];
-    uint32_t id;
-} dm__tri;
+/* Four triangles of a leaf, side by side (160 bytes): v[3 c + k][lane] is coordinate k of
+   corner c, so one ray is tested against four triangles with the same instruction stream.
+   Leaves start at a block boundary; unused lanes of a leaf's last block have id DM_NO_HIT
+   and a copy of the leaf's first triangle (never reported: lanes past the leaf's count are
+   masked). A triangle's slot is 4 block + lane. */
+typedef struct dm__tri4 {
+    float v[9][4];
+    uint32_t id[4];
+} dm__tri4;
 
-/* 128 bytes, two cache lines: a node of the 4-wide traversal tree, derived from the binary tree
-   by collapsing (dm__collapse). The four child boxes lie side by side (lo[axis][child]), so one
-   node load gives four box tests. Child i: count[i] == 0 is an interior child (wide node
-   ref[i]), count[i] > 0 a leaf of count[i] triangles at tris[ref[i]]. Unused slots have NaN
+/* The width of the traversal tree's nodes. */
+#define DM__W 8
+
+/* 256 bytes, four cache lines: a node of the 8-wide traversal tree, derived from the binary
+   tree by collapsing (dm__collapse). The child boxes lie side by side (lo[axis][child]), so one
+   node load gives eight box tests. Child i: count[i] == 0 is an interior child (wide node
+   ref[i]), count[i] > 0 a leaf of count[i] triangles from slot ref[i]. Unused slots have NaN
    boxes, which every box test misses. */
 typedef struct dm__wnode {
-    float lo[3][4];
-    float hi[3][4];
-    uint32_t ref[4];
-    uint32_t count[4];
+    float lo[3][DM__W];
+    float hi[3][DM__W];
+    uint32_t ref[DM__W];
+    uint32_t count[DM__W];
 } dm__wnode;
 
 struct dm_bvh {
@@ -358,8 +386,11 @@ struct dm_bvh {
     dm__wnode *wnodes;  /* 64-byte aligned inside wide_block; wnodes[0] is the root */
     void *wide_block;
     size_t wide_count;  /* wide nodes in use */
-    size_t wide_bytes;  /* size of wide_block */
-    dm__tri *tris;
+    size_t wide_bytes;  /* size of wide_block; 0 when the wide nodes live in node_block's tail */
+    dm__tri4 *blocks;   /* 64-byte aligned inside tri_block */
+    void *tri_block;
+    size_t tri_bytes;   /* size of tri_block */
+    size_t block_count;
     size_t triangle_count;
     size_t max_depth;
 };
@@ -380,6 +411,10 @@ struct dm_bvh {
 #else
 #define DM__PREFETCH(p) ((void)(p))
 #endif
+
+/* min and max as the SSE instructions define them: the second operand when either is NaN */
+#define DM__MINF(a, b) ((a) < (b) ? (a) : (b))
+#define DM__MAXF(a, b) ((a) > (b) ? (a) : (b))
 
 /* Traversal stacks are fixed arrays; the build caps the depth below this (see dm__build). */
 #define DM__STACK 128
@@ -679,20 +714,20 @@ static int dm__build(dm__builder *b, float root_clo[3], float root_chi[3])
     }
 }
 
-/* The 4-wide traversal tree from the binary tree: each wide node takes a binary interior node's
+/* The 8-wide traversal tree from the binary tree: each wide node takes a binary interior node's
    two children and keeps opening the interior child with the largest surface area until it has
-   four (or only leaves are left). A node's interior children get consecutive numbers, after
+   eight (or only leaves are left). A node's interior children get consecutive numbers, after
    their parent's; w must hold bvh->node_slots / 2 + 1 of them (a wide node uses up at least one
    binary interior node). Run again after a refit (the new areas may open other nodes; the
    bound holds for any choice). Returns the wide nodes in use. */
 static size_t dm__collapse(const dm__node *nodes, dm__wnode *w)
 {
-    uint32_t stack_b[4 * DM__STACK], stack_w[4 * DM__STACK], used = 1;
+    uint32_t stack_b[DM__W * DM__STACK], stack_w[DM__W * DM__STACK], used = 1;
     size_t sp = 0;
     stack_b[sp] = 0;
     stack_w[sp++] = 0;
     while (sp) {
-        uint32_t cand[4], nc, bi, wi, s, next[4];
+        uint32_t cand[DM__W], nc, bi, wi, s, next[DM__W];
         int k, pushed = 0;
         dm__wnode *wn;
         sp--;
@@ -706,8 +741,8 @@ static size_t dm__collapse(const dm__node *nodes, dm__wnode *w)
             cand[1] = nodes[bi].first + 1;
             nc = 2;
         }
-        while (nc < 4) {
-            uint32_t pick = 4;
+        while (nc < DM__W) {
+            uint32_t pick = DM__W;
             float best = -1.0f;
             for (s = 0; s < nc; s++) {
                 const dm__node *c = &nodes[cand[s]];
@@ -719,7 +754,7 @@ static size_t dm__collapse(const dm__node *nodes, dm__wnode *w)
                     pick = s;
                 }
             }
-            if (pick == 4) break;
+            if (pick == DM__W) break;
             { /* the child's two children take its slot and the next free one */
                 uint32_t first = nodes[cand[pick]].first;
                 cand[pick] = first;
@@ -727,7 +762,7 @@ static size_t dm__collapse(const dm__node *nodes, dm__wnode *w)
             }
         }
         wn = &w[wi];
-        for (s = 0; s < 4; s++) {
+        for (s = 0; s < DM__W; s++) {
             if (s < nc) {
                 const dm__node *c = &nodes[cand[s]];
                 for (k = 0; k < 3; k++) {
@@ -784,6 +819,9 @@ static dm_bvh_options dm__resolve_options(const dm_bvh_options *given)
     return o;
 }
 
+/* slots (4 per block, at most one partly used block per triangle) stay below 2^32 */
+#define DM__MAX_TRIANGLES 0x3fffffffu
+
 /* coordinates beyond this could overflow float in the intersection arithmetic */
 #define DM__MAX_COORD 1e18f
 
@@ -814,6 +852,58 @@ DM__INLINE void dm__load_triangle(const float *positions, const uint32_t *indice
     p[6] = c[0], p[7] = c[1], p[8] = c[2];
 }
 
+/* Bytes per triangle allocated for the build's refs, which the leaf blocks then replace in
+   place when they fit: 56 holds blocks filled to 5/7 on average (the bench meshes fill them
+   to 7/8); a tree with more padding gets a second allocation. */
+#define DM__REF_BYTES 56
+
+/* Writes every leaf's triangles into blocks (lane j of block j / 4 holds triangle j; unused
+   lanes of the last block copy its lane 0 and have id DM_NO_HIT) and points the leaf at its
+   first slot. The blocks may lie over the refs themselves: leaves are taken from the last
+   range to the first (the build gives the left child the lower range, so a right-first
+   depth-first walk does that), each leaf's ids are read before its blocks are written, and a
+   leaf starting at ref k starts at block >= k / 4, that is at byte >= 160 k / 4 = 40 k, past
+   the 32 k bytes of the refs still to be read. */
+static void dm__place_blocks(dm__node *nodes, const dm__ref *refs, dm__tri4 *blocks, size_t end,
+                             const float *positions, const uint32_t *indices)
+{
+    uint32_t stack[DM__STACK + 2];
+    size_t sp = 0;
+    stack[sp++] = 0;
+    while (sp) {
+        dm__node *n = &nodes[stack[--sp]];
+        if (!n->count) {
+            stack[sp++] = n->first;     /* left: visited second */
+            stack[sp++] = n->first + 1; /* right: visited first */
+            continue;
+        }
+        {
+            uint32_t ids[16], j, count = n->count, nb = (count + 3) / 4;
+            dm__tri4 *blk;
+            for (j = 0; j < count; j++) ids[j] = refs[n->first + j].id;
+            end -= nb;
+            blk = blocks + end;
+            for (j = 0; j < 4 * nb; j++) {
+                uint32_t id = ids[j < count ? j : (j & ~3u)];
+                float p[9];
+                int q;
+                dm__load_triangle(positions, indices, id, p);
+                for (q = 0; q < 9; q++) blk[j >> 2].v[q][j & 3] = p[q];
+                blk[j >> 2].id[j & 3] = j < count ? id : DM_NO_HIT;
+            }
+            n->first = (uint32_t)(4 * end);
+        }
+    }
+}
+
+/* the corners of the triangle in slot (4 block + lane) */
+DM__INLINE void dm__slot_triangle(const dm_bvh *bvh, size_t slot, float p[9])
+{
+    const dm__tri4 *q = &bvh->blocks[slot >> 2];
+    int k;
+    for (k = 0; k < 9; k++) p[k] = q->v[k][slot & 3];
+}
+
 static dm_result dm__check_sizes(const float *positions, size_t vertex_count, const uint32_t *indices,
                                  size_t triangle_count)
 {
@@ -823,7 +913,9 @@ static dm_result dm__check_sizes(const float *positions, size_t vertex_count, co
     /* every byte size we form: 3 floats per vertex, 3 indices and 6 box floats per triangle,
        2 nodes per triangle, node ids in uint32 */
     if (vertex_count > (size_t)-1 / (3 * sizeof(float))) return DM_ERR_TOO_LARGE;
-    if (triangle_count > (size_t)-1 / (6 * sizeof(float)) || triangle_count > 0x7ffffffeu) return DM_ERR_TOO_LARGE;
+    if (triangle_count > (size_t)-1 / (6 * sizeof(float)) || triangle_count > DM__MAX_TRIANGLES) return DM_ERR_TOO_LARGE;
+    if (triangle_count > ((size_t)-1 - 64) / sizeof(dm__tri4) || triangle_count > ((size_t)-1 - 64) / DM__REF_BYTES)
+        return DM_ERR_TOO_LARGE;
     if (triangle_count > ((size_t)-1 - 64) / (2 * sizeof(dm__node))) return DM_ERR_TOO_LARGE;
     return DM_OK;
 }
@@ -848,7 +940,7 @@ DMDEF void dm_bvh_free(dm_bvh *bvh)
     a = bvh->allocator;
     a.free(a.user, bvh->node_block);
     a.free(a.user, bvh->wide_block);
-    a.free(a.user, bvh->tris);
+    a.free(a.user, bvh->tri_block);
     a.free(a.user, bvh);
 }
 
@@ -877,8 +969,8 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     memset(&b, 0, sizeof b);
 
     /* validate and take every triangle's box */
-    /* sized for the triangles in leaf order, which later replace the refs in place */
-    b.refs = (dm__ref *)dm__alloc_array(&a, triangle_count, sizeof(dm__tri), &overflow);
+    /* sized so that the leaf blocks usually fit in place of the refs (see dm__place_blocks) */
+    b.refs = (dm__ref *)dm__alloc_array(&a, triangle_count, DM__REF_BYTES, &overflow);
     if (!b.refs) goto out_of_memory;
     for (i = 0; i < triangle_count; i++) {
         float p[9];
@@ -922,19 +1014,24 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     if (dm__build(&b, root_clo, root_chi)) goto cancelled;
     bvh->max_depth = b.max_depth;
 
-    /* Triangles in leaf order, written over the refs in their own block (one block touched
-       instead of two): backwards, triangle i (bytes 40 i to 40 i + 40) only overwrites refs i
-       and above (32 bytes each), whose ids have already been read. */
+    /* triangles in leaf order, four to a block, over the refs when they fit */
     {
-        dm__tri *tris = (dm__tri *)(void *)b.refs;
-        for (i = triangle_count; i-- > 0;) {
-            uint32_t id;
-            memcpy(&id, (const char *)b.refs + i * sizeof(dm__ref) + offsetof(dm__ref, id), sizeof id);
-            dm__load_triangle(positions, indices, id, tris[i].p);
-            tris[i].id = id;
+        size_t blocks = 0;
+        for (i = 0; i < b.used; i++)
+            if (i != 1 && wide[i].count) blocks += (wide[i].count + 3) / 4;
+        if (blocks * sizeof(dm__tri4) + 64 <= triangle_count * DM__REF_BYTES) {
+            bvh->tri_block = b.refs;
+            bvh->tri_bytes = triangle_count * DM__REF_BYTES;
+            b.refs = NULL;
+        } else {
+            bvh->tri_bytes = blocks * sizeof(dm__tri4) + 64;
+            bvh->tri_block = dm__alloc_array(&a, bvh->tri_bytes, 1, &overflow);
+            if (!bvh->tri_block) goto out_of_memory;
         }
-        bvh->tris = tris;
-        b.refs = NULL;
+        bvh->blocks = (dm__tri4 *)((char *)bvh->tri_block + ((64 - ((uintptr_t)bvh->tri_block & 63)) & 63));
+        bvh->block_count = blocks;
+        dm__place_blocks(wide, b.refs ? b.refs : (const dm__ref *)bvh->tri_block, bvh->blocks, blocks, positions,
+                         indices);
     }
 
     /* The node array keeps its worst-case size (2 slots per triangle): a copy to the used size
@@ -946,11 +1043,20 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     bvh->nodes = wide;
     wide_block = NULL;
 
-    /* the 4-wide traversal tree */
-    bvh->wide_bytes = (b.used / 2 + 1) * sizeof(dm__wnode) + 64;
-    bvh->wide_block = dm__alloc_array(&a, bvh->wide_bytes, 1, &overflow);
-    if (!bvh->wide_block) goto out_of_memory;
-    bvh->wnodes = (dm__wnode *)((char *)bvh->wide_block + ((64 - ((uintptr_t)bvh->wide_block & 63)) & 63));
+    /* The 8-wide traversal tree, in the unused tail of the node array when it fits there
+       (one allocation fewer, and pages next to the ones just written) */
+    {
+        size_t first_free = (b.used + 1) & ~(size_t)1; /* 64-byte aligned */
+        size_t need = (b.used / 2 + 1) * sizeof(dm__wnode);
+        if (need <= (slots - first_free) * sizeof(dm__node)) {
+            bvh->wnodes = (dm__wnode *)(void *)(wide + first_free);
+        } else {
+            bvh->wide_bytes = need + 64;
+            bvh->wide_block = dm__alloc_array(&a, bvh->wide_bytes, 1, &overflow);
+            if (!bvh->wide_block) goto out_of_memory;
+            bvh->wnodes = (dm__wnode *)((char *)bvh->wide_block + ((64 - ((uintptr_t)bvh->wide_block & 63)) & 63));
+        }
+    }
     bvh->wide_count = dm__collapse(bvh->nodes, bvh->wnodes);
 
     if (opt.progress && opt.progress(opt.progress_user, 1.0f)) goto cancelled;
@@ -986,8 +1092,11 @@ static void dm__refit_node(dm_bvh *bvh, size_t i)
     int c;
     dm__box_empty(n->lo, n->hi);
     if (n->count) {
-        for (j = 0; j < n->count; j++)
-            for (c = 0; c < 3; c++) dm__box_grow(n->lo, n->hi, bvh->tris[n->first + j].p + 3 * c, bvh->tris[n->first + j].p + 3 * c);
+        for (j = 0; j < n->count; j++) {
+            float p[9];
+            dm__slot_triangle(bvh, (size_t)n->first + j, p);
+            for (c = 0; c < 3; c++) dm__box_grow(n->lo, n->hi, p + 3 * c, p + 3 * c);
+        }
     } else {
         dm__box_grow(n->lo, n->hi, bvh->nodes[n->first].lo, bvh->nodes[n->first].hi);
         dm__box_grow(n->lo, n->hi, bvh->nodes[n->first + 1].lo, bvh->nodes[n->first + 1].hi);
@@ -1008,8 +1117,14 @@ DMDEF dm_result dm_bvh_refit(dm_bvh *bvh, const float *positions, size_t vertex_
         r = dm__fetch_triangle(positions, vertex_count, indices, i, p);
         if (r != DM_OK) return r;
     }
-    for (i = 0; i < triangle_count; i++)
-        dm__load_triangle(positions, indices, bvh->tris[i].id, bvh->tris[i].p);
+    for (i = 0; i < 4 * bvh->block_count; i++) { /* an unused lane copies lane 0 of its block */
+        dm__tri4 *q = &bvh->blocks[i >> 2];
+        uint32_t id = q->id[i & 3] != DM_NO_HIT ? q->id[i & 3] : q->id[0];
+        float p[9];
+        int k;
+        dm__load_triangle(positions, indices, id, p);
+        for (k = 0; k < 9; k++) q->v[k][i & 3] = p[k];
+    }
     /* children always come after their parent: one backward pass refits bottom-up */
     for (i = bvh->node_slots; i-- > 0;)
         if (i != 1) dm__refit_node(bvh, i);
@@ -1028,7 +1143,7 @@ DMDEF void dm_bvh_get_info(const dm_bvh *bvh, dm_bvh_info *info)
     for (i = 0; i < bvh->node_slots; i++)
         if (i != 1 && bvh->nodes[i].count) info->leaf_count++;
     info->max_depth = bvh->max_depth;
-    info->memory_bytes = sizeof *bvh + bvh->node_bytes + bvh->wide_bytes + bvh->triangle_count * sizeof(dm__tri);
+    info->memory_bytes = sizeof *bvh + bvh->node_bytes + bvh->wide_bytes + bvh->tri_bytes;
     info->sah_cost = dm__sah_cost(bvh);
 }
 
@@ -1043,6 +1158,10 @@ typedef struct dm__ray_pre {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;
     float sx, sy;
+    int near_off[3], far_off[3]; /* per axis, the float offset in a wide node of the near and far planes */
+#if defined(DM_USE_AVX2)
+    __m256 org8[3], inv8[3]; /* org and inv, each component in all eight lanes */
+#endif
 #if defined(DM_USE_SSE2)
     __m128 org4[3], inv4[3]; /* org and inv, each component in all four lanes */
 #endif
@@ -1050,32 +1169,41 @@ typedef struct dm__ray_pre {
 
 static int dm__prepare_ray(const float org[3], const float dir[3], float sign, dm__ray_pre *r)
 {
-    int k, kz = 0;
-    float d[3], best = -1.0f;
+    const float d0 = sign * dir[0], d1 = sign * dir[1], d2 = sign * dir[2];
+    const float a0 = fabsf(d0), a1 = fabsf(d1), a2 = fabsf(d2);
+    int k, kz;
+    /* x - x is 0 for finite x and NaN for NaN or an infinity: one test for all six */
+    if (!((org[0] - org[0]) + (org[1] - org[1]) + (org[2] - org[2]) + (d0 - d0) + (d1 - d1) + (d2 - d2) == 0.0f))
+        return 0;
+    kz = a0 >= a1 ? (a0 >= a2 ? 0 : 2) : (a1 >= a2 ? 1 : 2); /* the first of equal maxima */
+    if ((kz == 0 ? a0 : kz == 1 ? a1 : a2) == 0.0f) return 0;
+    r->dir[0] = d0;
+    r->dir[1] = d1;
+    r->dir[2] = d2;
     for (k = 0; k < 3; k++) {
-        float a;
-        d[k] = sign * dir[k];
-        a = fabsf(d[k]);
-        if (!(org[k] >= -FLT_MAX && org[k] <= FLT_MAX) || !(a <= FLT_MAX)) return 0; /* NaN, inf */
-        if (a > best) {
-            best = a;
-            kz = k;
-        }
+        const float d = r->dir[k];
         r->org[k] = org[k];
-        r->dir[k] = d[k];
-        r->inv[k] = 1.0f / (a < 1e-20f ? (d[k] < 0.0f ? -1e-20f : 1e-20f) : d[k]);
+        r->inv[k] = 1.0f / (fabsf(d) < 1e-20f ? (d < 0.0f ? -1e-20f : 1e-20f) : d);
+        /* a wide node is lo[3][W] then hi[3][W]: the near plane is lo when the ray goes up */
+        r->near_off[k] = r->inv[k] >= 0.0f ? DM__W * k : DM__W * (3 + k);
+        r->far_off[k] = r->inv[k] >= 0.0f ? DM__W * (3 + k) : DM__W * k;
     }
-    if (best == 0.0f) return 0;
     r->kz = kz;
     r->kx = kz == 2 ? 0 : kz + 1;
     r->ky = r->kx == 2 ? 0 : r->kx + 1;
-    if (d[kz] < 0.0f) { /* keep the winding, so that U, V, W keep their signs */
+    if (r->dir[kz] < 0.0f) { /* keep the winding, so that U, V, W keep their signs */
         int swap = r->kx;
         r->kx = r->ky;
         r->ky = swap;
     }
-    r->sx = d[r->kx] / d[kz];
-    r->sy = d[r->ky] / d[kz];
+    r->sx = r->dir[r->kx] / r->dir[kz];
+    r->sy = r->dir[r->ky] / r->dir[kz];
+#if defined(DM_USE_AVX2)
+    for (k = 0; k < 3; k++) {
+        r->org8[k] = _mm256_set1_ps(r->org[k]);
+        r->inv8[k] = _mm256_set1_ps(r->inv[k]);
+    }
+#endif
 #if defined(DM_USE_SSE2)
     for (k = 0; k < 3; k++) {
         r->org4[k] = _mm_set1_ps(r->org[k]);
@@ -1130,6 +1258,111 @@ DM__INLINE int dm__triangle(const dm__ray_pre *r, const float *p, float tmin, fl
     return 1;
 }
 
+/* The edge functions of the ray against the four triangles of block q, as in dm__triangle
+   (the same float operations, so the same values). Returns the lanes that pass (all three of
+   one sign, none zero) and, in *zero, the lanes where one or more are exactly zero and the
+   others agree in sign, which dm__triangle decides with its double fallback. (A lane with a
+   zero and both signs among the others misses in double too: nonzero floats keep their sign.)
+   In terms of mn = min(U, V, W) and mx = max(U, V, W): pass is mn > 0 or mx < 0, a candidate
+   mn >= 0 or mx <= 0. */
+#if defined(DM_USE_SSE2)
+DM__INLINE int dm__edges4(const dm__ray_pre *r, const dm__tri4 *q, float U[4], float V[4], float W[4], int *zero)
+{
+    const __m128 ox = _mm_set1_ps(r->org[r->kx]), oy = _mm_set1_ps(r->org[r->ky]), oz = _mm_set1_ps(r->org[r->kz]);
+    const __m128 sx = _mm_set1_ps(r->sx), sy = _mm_set1_ps(r->sy), z0 = _mm_setzero_ps();
+    const __m128 az = _mm_sub_ps(_mm_load_ps(q->v[r->kz]), oz);
+    const __m128 bz = _mm_sub_ps(_mm_load_ps(q->v[3 + r->kz]), oz);
+    const __m128 cz = _mm_sub_ps(_mm_load_ps(q->v[6 + r->kz]), oz);
+    const __m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[r->kx]), ox), _mm_mul_ps(sx, az));
+    const __m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[r->ky]), oy), _mm_mul_ps(sy, az));
+    const __m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[3 + r->kx]), ox), _mm_mul_ps(sx, bz));
+    const __m128 by = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[3 + r->ky]), oy), _mm_mul_ps(sy, bz));
+    const __m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[6 + r->kx]), ox), _mm_mul_ps(sx, cz));
+    const __m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->v[6 + r->ky]), oy), _mm_mul_ps(sy, cz));
+    const __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+    const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+    const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+    const __m128 mn = _mm_min_ps(_mm_min_ps(u, v), w), mx = _mm_max_ps(_mm_max_ps(u, v), w);
+    const int pass = _mm_movemask_ps(_mm_or_ps(_mm_cmpgt_ps(mn, z0), _mm_cmplt_ps(mx, z0)));
+    const int cand = _mm_movemask_ps(_mm_or_ps(_mm_cmpge_ps(mn, z0), _mm_cmple_ps(mx, z0)));
+    _mm_storeu_ps(U, u);
+    _mm_storeu_ps(V, v);
+    _mm_storeu_ps(W, w);
+    *zero = cand & ~pass;
+    return pass;
+}
+#else
+DM__INLINE int dm__edges4(const dm__ray_pre *r, const dm__tri4 *q, float U[4], float V[4], float W[4], int *zero)
+{
+    const float *pax = q->v[r->kx], *pay = q->v[r->ky], *paz = q->v[r->kz];
+    const float *pbx = q->v[3 + r->kx], *pby = q->v[3 + r->ky], *pbz = q->v[3 + r->kz];
+    const float *pcx = q->v[6 + r->kx], *pcy = q->v[6 + r->ky], *pcz = q->v[6 + r->kz];
+    const float ox = r->org[r->kx], oy = r->org[r->ky], oz = r->org[r->kz], sx = r->sx, sy = r->sy;
+    float mn[4], mx[4];
+    int i;
+    for (i = 0; i < 4; i++) {
+        const float az = paz[i] - oz, bz = pbz[i] - oz, cz = pcz[i] - oz;
+        const float ax = pax[i] - ox - sx * az, ay = pay[i] - oy - sy * az;
+        const float bx = pbx[i] - ox - sx * bz, by = pby[i] - oy - sy * bz;
+        const float cx = pcx[i] - ox - sx * cz, cy = pcy[i] - oy - sy * cz;
+        U[i] = cx * by - cy * bx;
+        V[i] = ax * cy - ay * cx;
+        W[i] = bx * ay - by * ax;
+        mn[i] = DM__MINF(DM__MINF(U[i], V[i]), W[i]);
+        mx[i] = DM__MAXF(DM__MAXF(U[i], V[i]), W[i]);
+    }
+    {
+        const int pass = ((mn[0] > 0.0f) | (mx[0] < 0.0f)) | ((mn[1] > 0.0f) | (mx[1] < 0.0f)) << 1 |
+                         ((mn[2] > 0.0f) | (mx[2] < 0.0f)) << 2 | ((mn[3] > 0.0f) | (mx[3] < 0.0f)) << 3;
+        const int cand = ((mn[0] >= 0.0f) | (mx[0] <= 0.0f)) | ((mn[1] >= 0.0f) | (mx[1] <= 0.0f)) << 1 |
+                         ((mn[2] >= 0.0f) | (mx[2] <= 0.0f)) << 2 | ((mn[3] >= 0.0f) | (mx[3] <= 0.0f)) << 3;
+        *zero = cand & ~pass;
+        return pass;
+    }
+}
+#endif
+
+/* Lane i of block q after dm__edges4 said it passes: the distance in double from the plane
+   (as dm__triangle computes it) checked against [tmin, tmax], then u, v. */
+DM__INLINE int dm__finish(const dm__ray_pre *r, const dm__tri4 *q, int i, float U, float V, float W, float tmin,
+                          float tmax, float *t_out, float *u_out, float *v_out)
+{
+    const float rcp = 1.0f / (U + V + W);
+    double e1[3], e2[3], s[3], n0, n1, n2, td;
+    float t;
+    int k;
+    for (k = 0; k < 3; k++) {
+        e1[k] = (double)q->v[3 + k][i] - (double)q->v[k][i];
+        e2[k] = (double)q->v[6 + k][i] - (double)q->v[k][i];
+        s[k] = (double)q->v[k][i] - (double)r->org[k];
+    }
+    n0 = e1[1] * e2[2] - e1[2] * e2[1];
+    n1 = e1[2] * e2[0] - e1[0] * e2[2];
+    n2 = e1[0] * e2[1] - e1[1] * e2[0];
+    td = (n0 * s[0] + n1 * s[1] + n2 * s[2]) / (n0 * r->dir[0] + n1 * r->dir[1] + n2 * r->dir[2]);
+    t = (float)td;
+    if (!(t >= tmin && t <= tmax && t <= FLT_MAX)) return 0;
+    *t_out = t;
+    *u_out = V * rcp;
+    *v_out = W * rcp;
+    return 1;
+}
+
+/* Hit of lane i of block q, for a lane that passed dm__edges4 (pass) or has a zero edge
+   function (decided by dm__triangle). */
+DM__INLINE int dm__lane_hit(const dm__ray_pre *r, const dm__tri4 *q, int i, int pass, const float *U,
+                            const float *V, const float *W, float tmin, float tmax, float *t, float *u, float *v)
+{
+    float p[9];
+    int k;
+    if (pass) return dm__finish(r, q, i, U[i], V[i], W[i], tmin, tmax, t, u, v);
+    for (k = 0; k < 9; k++) p[k] = q->v[k][i];
+    return dm__triangle(r, p, tmin, tmax, t, u, v);
+}
+
+/* the lanes of a leaf's block that hold its triangles, given how many are left */
+#define DM__LANES(left) ((left) >= 4 ? 15 : (1 << (left)) - 1)
+
 /* ---------------------------------------------------------------------------------------------
    Section: traversal (near child first, Ize's conservative box test)
    --------------------------------------------------------------------------------------------- */
@@ -1157,72 +1390,91 @@ DM__INLINE int dm__box(const dm__node *n, const dm__ray_pre *r, float tmin, floa
     return tn <= tf;
 }
 
-/* The four child boxes of a wide node: bit i of the result tells whether the ray enters child
-   i within [tmin, tmax], t[i] its entry distance. The same products, minima and maxima as
-   dm__box; min and max are written as the SSE2 instructions define them (the second operand
-   when either is NaN), so the SSE2 path gives bit-identical answers, and the NaN boxes of
-   unused slots miss in both. */
-#define DM__MINF(a, b) ((a) < (b) ? (a) : (b))
-#define DM__MAXF(a, b) ((a) > (b) ? (a) : (b))
-#if defined(DM_USE_SSE2)
-DM__INLINE int dm__box4(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[4])
+/* The child boxes of a wide node: bit i of the result tells whether the ray enters child i
+   within [tmin, tmax], t[i] its entry distance. Per axis the ray meets the near plane (lo when
+   it goes up, hi when it goes down) first, so no per-axis min/max is needed; the values are
+   those of dm__box. The maxima and minima are ordered so that a NaN (the boxes of unused
+   slots) reaches the final comparison, which it fails; MINF/MAXF return the second operand
+   when either is NaN, as the SSE and AVX instructions do, so every path gives the same bits. */
+#if defined(DM_USE_AVX2)
+DM__INLINE int dm__boxw(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[DM__W])
 {
-    const __m128 x0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->lo[0]), r->org4[0]), r->inv4[0]);
-    const __m128 x1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->hi[0]), r->org4[0]), r->inv4[0]);
-    const __m128 y0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->lo[1]), r->org4[1]), r->inv4[1]);
-    const __m128 y1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->hi[1]), r->org4[1]), r->inv4[1]);
-    const __m128 z0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->lo[2]), r->org4[2]), r->inv4[2]);
-    const __m128 z1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->hi[2]), r->org4[2]), r->inv4[2]);
-    __m128 tn = _mm_max_ps(_mm_min_ps(x0, x1), _mm_min_ps(y0, y1));
-    __m128 tf = _mm_min_ps(_mm_max_ps(x0, x1), _mm_max_ps(y0, y1));
-    tn = _mm_max_ps(_mm_min_ps(z0, z1), tn);
-    tn = _mm_max_ps(_mm_set1_ps(tmin), tn);
-    tf = _mm_min_ps(_mm_max_ps(z0, z1), tf);
-    tf = _mm_mul_ps(tf, _mm_set1_ps(DM__FAR_SCALE));
-    tf = _mm_min_ps(_mm_set1_ps(tmax), tf);
-    _mm_storeu_ps(t, tn);
-    return _mm_movemask_ps(_mm_cmple_ps(tn, tf));
+    const float *f = &n->lo[0][0];
+    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[0]), r->org8[0]), r->inv8[0]);
+    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[1]), r->org8[1]), r->inv8[1]);
+    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[2]), r->org8[2]), r->inv8[2]);
+    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[0]), r->org8[0]), r->inv8[0]);
+    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[1]), r->org8[1]), r->inv8[1]);
+    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[2]), r->org8[2]), r->inv8[2]);
+    const __m256 tn = _mm256_max_ps(_mm256_set1_ps(tmin), _mm256_max_ps(nz, _mm256_max_ps(ny, nx)));
+    const __m256 tf = _mm256_min_ps(_mm256_set1_ps(tmax),
+                                    _mm256_mul_ps(_mm256_min_ps(fz, _mm256_min_ps(fy, fx)), _mm256_set1_ps(DM__FAR_SCALE)));
+    _mm256_storeu_ps(t, tn);
+    return _mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
+}
+#elif defined(DM_USE_SSE2)
+DM__INLINE int dm__boxw(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[DM__W])
+{
+    const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax), scale = _mm_set1_ps(DM__FAR_SCALE);
+    int h, mask = 0;
+    for (h = 0; h < DM__W; h += 4) {
+        const float *f = &n->lo[0][h];
+        const __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->near_off[0]), r->org4[0]), r->inv4[0]);
+        const __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->near_off[1]), r->org4[1]), r->inv4[1]);
+        const __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->near_off[2]), r->org4[2]), r->inv4[2]);
+        const __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->far_off[0]), r->org4[0]), r->inv4[0]);
+        const __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->far_off[1]), r->org4[1]), r->inv4[1]);
+        const __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + r->far_off[2]), r->org4[2]), r->inv4[2]);
+        const __m128 tn = _mm_max_ps(lo, _mm_max_ps(nz, _mm_max_ps(ny, nx)));
+        const __m128 tf = _mm_min_ps(hi, _mm_mul_ps(_mm_min_ps(fz, _mm_min_ps(fy, fx)), scale));
+        _mm_storeu_ps(t + h, tn);
+        mask |= _mm_movemask_ps(_mm_cmple_ps(tn, tf)) << h;
+    }
+    return mask;
 }
 #else
-DM__INLINE int dm__box4(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[4])
+DM__INLINE int dm__boxw(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[DM__W])
 {
     /* written lane by lane over arrays, so that compilers may vectorize it */
-    float tf[4];
-    int i;
-    for (i = 0; i < 4; i++) {
-        const float x0 = (n->lo[0][i] - r->org[0]) * r->inv[0], x1 = (n->hi[0][i] - r->org[0]) * r->inv[0];
-        const float y0 = (n->lo[1][i] - r->org[1]) * r->inv[1], y1 = (n->hi[1][i] - r->org[1]) * r->inv[1];
-        const float z0 = (n->lo[2][i] - r->org[2]) * r->inv[2], z1 = (n->hi[2][i] - r->org[2]) * r->inv[2];
-        float tn = DM__MAXF(DM__MINF(x0, x1), DM__MINF(y0, y1));
-        float f = DM__MINF(DM__MAXF(x0, x1), DM__MAXF(y0, y1));
-        tn = DM__MAXF(DM__MINF(z0, z1), tn);
-        t[i] = DM__MAXF(tmin, tn);
-        f = DM__MINF(DM__MAXF(z0, z1), f);
-        f = f * DM__FAR_SCALE;
-        tf[i] = DM__MINF(tmax, f);
+    const float *f = &n->lo[0][0];
+    const float *nx = f + r->near_off[0], *ny = f + r->near_off[1], *nz = f + r->near_off[2];
+    const float *fx = f + r->far_off[0], *fy = f + r->far_off[1], *fz = f + r->far_off[2];
+    float tf[DM__W];
+    int i, mask = 0;
+    for (i = 0; i < DM__W; i++) {
+        const float x0 = (nx[i] - r->org[0]) * r->inv[0], x1 = (fx[i] - r->org[0]) * r->inv[0];
+        const float y0 = (ny[i] - r->org[1]) * r->inv[1], y1 = (fy[i] - r->org[1]) * r->inv[1];
+        const float z0 = (nz[i] - r->org[2]) * r->inv[2], z1 = (fz[i] - r->org[2]) * r->inv[2];
+        t[i] = DM__MAXF(tmin, DM__MAXF(z0, DM__MAXF(y0, x0)));
+        tf[i] = DM__MINF(tmax, DM__MINF(z1, DM__MINF(y1, x1)) * DM__FAR_SCALE);
     }
-    return (t[0] <= tf[0]) | (t[1] <= tf[1]) << 1 | (t[2] <= tf[2]) << 2 | (t[3] <= tf[3]) << 3;
+    for (i = 0; i < DM__W; i++) mask |= (t[i] <= tf[i]) << i;
+    return mask;
 }
 #endif
 
 /* A subtree waiting on the traversal stack: a wide node (count 0) or a leaf, and the ray's
-   entry distance into its box. A wide node pushes at most 3 entries and the wide tree is no
-   deeper than the binary one (below DM__STACK). */
+   entry distance into its box. A wide node pushes at most DM__W - 1 entries and the wide tree
+   is no deeper than the binary one (below DM__STACK). */
 typedef struct dm__entry {
     uint32_t ref, count;
     float t;
 } dm__entry;
-#define DM__WSTACK (3 * DM__STACK)
+#define DM__WSTACK ((DM__W - 1) * DM__STACK)
 
-/* Start loading child i: the two cache lines of its wide node, or the first two of its
-   triangles. (Prefetching every line of the leaves cost more than it saved.) */
+/* Start loading the first two cache lines of child i (a wide node or a leaf's first block).
+   Off by default: it cost as much as it saved (see STRUCTURE). */
+#if defined(DM__PREFETCH_CHILDREN)
 #define DM__PREFETCH_CHILD(wn, tris, n, i)                                                       \
     do {                                                                                         \
-        const char *p_ = (n)->count[i] ? (const char *)&(tris)[(n)->ref[i]]                       \
+        const char *p_ = (n)->count[i] ? (const char *)&(tris)[(n)->ref[i] >> 2]                  \
                                        : (const char *)&(wn)[(n)->ref[i]];                        \
         DM__PREFETCH(p_);                                                                        \
         DM__PREFETCH(p_ + 64);                                                                   \
     } while (0)
+#else
+#define DM__PREFETCH_CHILD(wn, tris, n, i) ((void)0)
+#endif
 
 /* index of the lowest set bit of x != 0 */
 #if defined(__GNUC__) || defined(__clang__)
@@ -1239,13 +1491,112 @@ DM__INLINE uint32_t DM__CTZ(uint32_t x)
 }
 #endif
 
-/* Nearest hit in [tmin, tmax]; equal t goes to the lower triangle id. The hit children of a
-   wide node are visited nearest first; the others wait on the stack with their entry distance
-   and are skipped when a hit closer than that has been found. */
+#if defined(DM_USE_AVX2)
+/* dm__edges4 for the eight triangles of blocks q[0] and q[1] at once: the same operations
+   lane by lane, so the same bits. */
+#define DM__LOAD8(q, row) _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps((q)[0].v[row])), _mm_load_ps((q)[1].v[row]), 1)
+DM__INLINE int dm__edges8(const dm__ray_pre *r, const dm__tri4 *q, float U[8], float V[8], float W[8], int *zero)
+{
+    const __m256 ox = _mm256_set1_ps(r->org[r->kx]), oy = _mm256_set1_ps(r->org[r->ky]), oz = _mm256_set1_ps(r->org[r->kz]);
+    const __m256 sx = _mm256_set1_ps(r->sx), sy = _mm256_set1_ps(r->sy), z0 = _mm256_setzero_ps();
+    const __m256 az = _mm256_sub_ps(DM__LOAD8(q, r->kz), oz);
+    const __m256 bz = _mm256_sub_ps(DM__LOAD8(q, 3 + r->kz), oz);
+    const __m256 cz = _mm256_sub_ps(DM__LOAD8(q, 6 + r->kz), oz);
+    const __m256 ax = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, r->kx), ox), _mm256_mul_ps(sx, az));
+    const __m256 ay = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, r->ky), oy), _mm256_mul_ps(sy, az));
+    const __m256 bx = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, 3 + r->kx), ox), _mm256_mul_ps(sx, bz));
+    const __m256 by = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, 3 + r->ky), oy), _mm256_mul_ps(sy, bz));
+    const __m256 cx = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, 6 + r->kx), ox), _mm256_mul_ps(sx, cz));
+    const __m256 cy = _mm256_sub_ps(_mm256_sub_ps(DM__LOAD8(q, 6 + r->ky), oy), _mm256_mul_ps(sy, cz));
+    const __m256 u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+    const __m256 v = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+    const __m256 w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+    const __m256 mn = _mm256_min_ps(_mm256_min_ps(u, v), w), mx = _mm256_max_ps(_mm256_max_ps(u, v), w);
+    const int pass = _mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(mn, z0, _CMP_GT_OQ), _mm256_cmp_ps(mx, z0, _CMP_LT_OQ)));
+    const int cand = _mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(mn, z0, _CMP_GE_OQ), _mm256_cmp_ps(mx, z0, _CMP_LE_OQ)));
+    _mm256_storeu_ps(U, u);
+    _mm256_storeu_ps(V, v);
+    _mm256_storeu_ps(W, w);
+    *zero = cand & ~pass;
+    return pass;
+}
+#endif
+
+/* The candidate lanes of the next one or two blocks of a leaf with left triangles to go:
+   fills U, V, W (8 each), *pass (lanes decided in float) and sets *nb to the blocks taken. */
+DM__INLINE int dm__leaf_lanes(const dm__ray_pre *r, const dm__tri4 *q, uint32_t left, float *U, float *V, float *W,
+                              int *pass, int *nb)
+{
+    int zero;
+#if defined(DM_USE_AVX2)
+    if (left > 4) {
+        *pass = dm__edges8(r, q, U, V, W, &zero);
+        *nb = 2;
+        return (*pass | zero) & (left >= 8 ? 255 : (1 << left) - 1);
+    }
+#endif
+    *pass = dm__edges4(r, q, U, V, W, &zero);
+    *nb = 1;
+    return (*pass | zero) & DM__LANES(left);
+}
+
+/* Visits a wide node's hit children (mask, entry distances te) nearest first: the nearest
+   becomes the current subtree (*ref, *count); the others are pushed, farthest deepest. Equal
+   distances keep the slot order. */
+#define DM__ORDER_CHILDREN(n, mask, te, stack, sp, ref, count)                                   \
+    do {                                                                                         \
+        uint32_t m_ = (uint32_t)(mask), i_ = DM__CTZ(m_), j_;                                    \
+        m_ &= m_ - 1;                                                                            \
+        DM__PREFETCH_CHILD(wn, tris, n, i_);                                                     \
+        if (m_) {                                                                                \
+            j_ = DM__CTZ(m_);                                                                    \
+            m_ &= m_ - 1;                                                                        \
+            DM__PREFETCH_CHILD(wn, tris, n, j_);                                                 \
+            if (!m_) { /* two: push the farther */                                               \
+                if (te[j_] < te[i_]) {                                                           \
+                    uint32_t s_ = i_;                                                            \
+                    i_ = j_;                                                                     \
+                    j_ = s_;                                                                     \
+                }                                                                                \
+                stack[sp].ref = (n)->ref[j_];                                                    \
+                stack[sp].count = (n)->count[j_];                                                \
+                stack[sp++].t = te[j_];                                                          \
+            } else { /* three or more: push all, sort the new entries, take the nearest */       \
+                size_t b_ = sp, k_;                                                              \
+                stack[sp].ref = (n)->ref[i_];                                                    \
+                stack[sp].count = (n)->count[i_];                                                \
+                stack[sp++].t = te[i_];                                                          \
+                m_ |= 1u << j_;                                                                  \
+                do {                                                                             \
+                    dm__entry e_;                                                                \
+                    j_ = DM__CTZ(m_);                                                            \
+                    m_ &= m_ - 1;                                                                \
+                    DM__PREFETCH_CHILD(wn, tris, n, j_);                                         \
+                    e_.ref = (n)->ref[j_];                                                       \
+                    e_.count = (n)->count[j_];                                                   \
+                    e_.t = te[j_];                                                               \
+                    /* insertion: nearer entries (and equal ones, being later slots) go deeper */ \
+                    for (k_ = sp++; k_ > b_ && stack[k_ - 1].t < e_.t; k_--) stack[k_] = stack[k_ - 1]; \
+                    stack[k_] = e_;                                                              \
+                } while (m_);                                                                    \
+                sp--;                                                                            \
+                ref = stack[sp].ref;                                                             \
+                count = stack[sp].count;                                                         \
+                break;                                                                           \
+            }                                                                                    \
+        }                                                                                        \
+        ref = (n)->ref[i_];                                                                      \
+        count = (n)->count[i_];                                                                  \
+    } while (0)
+
+/* Nearest hit in [tmin, tmax]; equal t goes to the lower triangle id (whatever the order of
+   the visit). The hit children of a wide node are visited nearest first; the others wait on
+   the stack with their entry distance and are skipped when a hit closer than that has been
+   found. */
 static int dm__closest_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax, dm_hit *hit)
 {
     const dm__wnode *wn = bvh->wnodes;
-    const dm__tri *tris = bvh->tris;
+    const dm__tri4 *tris = bvh->blocks;
     dm__entry stack[DM__WSTACK];
     uint32_t ref = 0, count = 0, best_id = DM_NO_HIT;
     float best = tmax, bu = 0.0f, bv = 0.0f, tn;
@@ -1253,45 +1604,34 @@ static int dm__closest_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, 
     if (!dm__box(&bvh->nodes[0], r, tmin, best, &tn)) return 0;
     for (;;) {
         if (count) {
-            uint32_t i, end = ref + count;
-            for (i = ref; i < end; i++) {
-                float t, u, v;
-                if (dm__triangle(r, tris[i].p, tmin, best, &t, &u, &v) && (t < best || tris[i].id < best_id)) {
-                    best = t;
-                    best_id = tris[i].id;
-                    bu = u;
-                    bv = v;
+            const dm__tri4 *q = &tris[ref >> 2];
+            uint32_t left = count;
+            for (;;) {
+                float U[8], V[8], W[8];
+                int pass, nb, m = dm__leaf_lanes(r, q, left, U, V, W, &pass, &nb);
+                while (m) {
+                    const int i = (int)DM__CTZ((uint32_t)m), b = i >> 2, l = i & 3;
+                    float t, u, v;
+                    m &= m - 1;
+                    if (dm__lane_hit(r, q + b, l, (pass >> i) & 1, U + 4 * b, V + 4 * b, W + 4 * b, tmin, best, &t,
+                                     &u, &v) &&
+                        (t < best || q[b].id[l] < best_id)) {
+                        best = t;
+                        best_id = q[b].id[l];
+                        bu = u;
+                        bv = v;
+                    }
                 }
+                if (left <= 4 * (uint32_t)nb) break;
+                left -= 4 * (uint32_t)nb;
+                q += nb;
             }
         } else {
             const dm__wnode *n = &wn[ref];
-            float te[4];
-            int mask = dm__box4(n, r, tmin, best, te);
+            float te[DM__W];
+            int mask = dm__boxw(n, r, tmin, best, te);
             if (mask) {
-                uint32_t order[4], k = 1, i, j, m = (uint32_t)mask;
-                i = DM__CTZ(m);
-                m &= m - 1;
-                DM__PREFETCH_CHILD(wn, tris, n, i);
-                if (!m) { /* one child hit: the common case */
-                    ref = n->ref[i];
-                    count = n->count[i];
-                    continue;
-                }
-                order[0] = i;
-                do { /* insertion sort, farthest first; equal distances keep the slot order */
-                    i = DM__CTZ(m);
-                    m &= m - 1;
-                    DM__PREFETCH_CHILD(wn, tris, n, i);
-                    for (j = k++; j > 0 && te[order[j - 1]] < te[i]; j--) order[j] = order[j - 1];
-                    order[j] = i;
-                } while (m);
-                for (i = 0; i + 1 < k; i++) {
-                    stack[sp].ref = n->ref[order[i]];
-                    stack[sp].count = n->count[order[i]];
-                    stack[sp++].t = te[order[i]];
-                }
-                ref = n->ref[order[k - 1]];
-                count = n->count[order[k - 1]];
+                DM__ORDER_CHILDREN(n, mask, te, stack, sp, ref, count);
                 continue;
             }
         }
@@ -1314,10 +1654,11 @@ done:
     return 1;
 }
 
+/* Any hit in [tmin, tmax]: children in slot order, the first hit ends the search. */
 static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax)
 {
     const dm__wnode *wn = bvh->wnodes;
-    const dm__tri *tris = bvh->tris;
+    const dm__tri4 *tris = bvh->blocks;
     dm__entry stack[DM__WSTACK];
     uint32_t ref = 0, count = 0;
     size_t sp = 0;
@@ -1325,15 +1666,27 @@ static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, floa
     if (!dm__box(&bvh->nodes[0], r, tmin, tmax, &tn)) return 0;
     for (;;) {
         if (count) {
-            uint32_t i, end = ref + count;
-            for (i = ref; i < end; i++) {
-                float t, u, v;
-                if (dm__triangle(r, tris[i].p, tmin, tmax, &t, &u, &v)) return 1;
+            const dm__tri4 *q = &tris[ref >> 2];
+            uint32_t left = count;
+            for (;;) {
+                float U[8], V[8], W[8];
+                int pass, nb, m = dm__leaf_lanes(r, q, left, U, V, W, &pass, &nb);
+                while (m) {
+                    const int i = (int)DM__CTZ((uint32_t)m), b = i >> 2, l = i & 3;
+                    float t, u, v;
+                    m &= m - 1;
+                    if (dm__lane_hit(r, q + b, l, (pass >> i) & 1, U + 4 * b, V + 4 * b, W + 4 * b, tmin, tmax, &t,
+                                     &u, &v))
+                        return 1;
+                }
+                if (left <= 4 * (uint32_t)nb) break;
+                left -= 4 * (uint32_t)nb;
+                q += nb;
             }
         } else {
             const dm__wnode *n = &wn[ref];
-            float te[4];
-            int mask = dm__box4(n, r, tmin, tmax, te);
+            float te[DM__W];
+            int mask = dm__boxw(n, r, tmin, tmax, te);
             if (mask) {
                 uint32_t i, m = (uint32_t)mask, take = DM__CTZ(m);
                 DM__PREFETCH_CHILD(wn, tris, n, take);
@@ -1559,10 +1912,14 @@ DMDEF int dm_bvh_closest_point(const dm_bvh *bvh, const float point[3], float ma
         if (n->count) {
             uint32_t i;
             for (i = n->first; i < n->first + n->count; i++) {
-                double u, v, d2 = dm__triangle_d2(p, bvh->tris[i].p, &u, &v);
-                if (d2 < best || (d2 == best && bvh->tris[i].id < best_id)) {
+                float tri[9];
+                uint32_t id = bvh->blocks[i >> 2].id[i & 3];
+                double u, v, d2;
+                dm__slot_triangle(bvh, i, tri);
+                d2 = dm__triangle_d2(p, tri, &u, &v);
+                if (d2 < best || (d2 == best && id < best_id)) {
                     best = d2;
-                    best_id = bvh->tris[i].id;
+                    best_id = id;
                     best_slot = i;
                     bu = u;
                     bv = v;
@@ -1595,7 +1952,8 @@ DMDEF int dm_bvh_closest_point(const dm_bvh *bvh, const float point[3], float ma
 done:
     if (best_id == DM_NO_HIT) return 0;
     for (k = 0; k < 3; k++) {
-        const float *t = bvh->tris[best_slot].p;
+        float t[9];
+        dm__slot_triangle(bvh, best_slot, t);
         out->point[k] = (float)((1.0 - bu - bv) * t[k] + bu * t[3 + k] + bv * t[6 + k]);
     }
     out->distance = (float)sqrt(best);

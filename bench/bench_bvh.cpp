@@ -167,10 +167,12 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; i++)
         if (argv[i][0] != '-') path = argv[i];
     BENCH_PRINT_FLAGS("bench_bvh");
-#if defined(DM_USE_SSE2)
-    printf("RESULT bench_bvh_config dm_use_sse2=1\n");
+#if defined(DM_USE_AVX2)
+    printf("RESULT bench_bvh_config path=avx2\n");
+#elif defined(DM_USE_SSE2)
+    printf("RESULT bench_bvh_config path=sse2\n");
 #else
-    printf("RESULT bench_bvh_config dm_use_sse2=0\n");
+    printf("RESULT bench_bvh_config path=portable\n");
 #endif
     mio_mesh mesh;
     mio_error err;

@@ -10,7 +10,10 @@
    - the line query (both directions), occlusion, batches;
    - bad input returns codes; allocation-failure injection returns DM_ERR_OUT_OF_MEMORY and
      leaks nothing; progress and cancel; determinism (identical trees and hits on a rebuild and
-     with the HIGH quality option); refit after the vertices move. */
+     with the HIGH quality option and every leaf size); refit after the vertices move;
+   - `--digest` prints a hash of every query's answer on a fixed set of rays (random, aimed at
+     vertices, axis-aligned, limited) instead of testing: tests/simd_same.sh builds this file
+     with the portable path, DM_USE_SSE2 and DM_USE_AVX2 and requires the same digest. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -685,12 +688,12 @@ static void test_determinism_refit(const mesh *m)
         return;
     }
     T_CHECK(a->node_slots == b->node_slots && memcmp(a->nodes, b->nodes, a->node_slots * sizeof(dm__node)) == 0 &&
-            memcmp(a->tris, b->tris, m->nt * sizeof(dm__tri)) == 0);
+            a->block_count == b->block_count && memcmp(a->blocks, b->blocks, a->block_count * sizeof(dm__tri4)) == 0);
     dm_bvh_get_info(a, &ia);
     dm_bvh_get_info(high, &ih);
     printf("default build: %zu nodes, %zu leaves, depth %zu, SAH %.3f, %zu bytes; high: %zu nodes, SAH %.3f\n",
            ia.node_count, ia.leaf_count, ia.max_depth, ia.sah_cost, ia.memory_bytes, ih.node_count, ih.sah_cost);
-    T_CHECK(ia.memory_bytes >= m->nt * sizeof(dm__tri) && ia.leaf_count * 2 == ia.node_count + 1);
+    T_CHECK(ia.memory_bytes >= m->nt * 9 * sizeof(float) && ia.leaf_count * 2 == ia.node_count + 1);
     for (i = 0; i < 2000; i++) {
         dm_ray r;
         dm_hit ha, hh;
@@ -732,6 +735,111 @@ static void test_determinism_refit(const mesh *m)
 }
 
 /* all triangles in one spot (identical centroids): the build must still make small leaves */
+/* Leaves of 1 to 16 triangles change the tree, never the answers. */
+static void test_leaf_sizes(const mesh *m)
+{
+    static const int sizes[] = {1, 3, 5, 8, 12, 16};
+    dm_bvh *ref = NULL;
+    size_t s;
+    T_EQ_INT(dm_bvh_build(m->pos, m->nv, m->idx, m->nt, NULL, &ref), DM_OK);
+    for (s = 0; ref && s < sizeof sizes / sizeof sizes[0]; s++) {
+        dm_bvh_options o;
+        dm_bvh *b = NULL;
+        size_t i, differ = 0;
+        memset(&o, 0, sizeof o);
+        o.max_leaf_size = sizes[s];
+        T_EQ_INT(dm_bvh_build(m->pos, m->nv, m->idx, m->nt, &o, &b), DM_OK);
+        if (!b) continue;
+        for (i = 0; i < 3000; i++) {
+            dm_ray r;
+            dm_hit ha, hb;
+            random_ray(m, i, &r);
+            dm_bvh_intersect(ref, &r, &ha);
+            dm_bvh_intersect(b, &r, &hb);
+            differ += memcmp(&ha, &hb, sizeof ha) != 0 || dm_bvh_occluded(ref, &r) != dm_bvh_occluded(b, &r);
+        }
+        T_CHECK_MSG(differ == 0, "max_leaf_size %d: %zu of 3000 rays answered differently", sizes[s], differ);
+        dm_bvh_free(b);
+    }
+    dm_bvh_free(ref);
+}
+
+/* FNV-1a over the bytes of every answer */
+static uint64_t digest_bytes(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *c = (const unsigned char *)p;
+    size_t i;
+    for (i = 0; i < n; i++) h = (h ^ c[i]) * 0x100000001b3ull;
+    return h;
+}
+
+static uint64_t digest_rays(uint64_t h, const mesh *m, int leaf)
+{
+    dm_bvh_options o;
+    dm_bvh *b = NULL;
+    size_t i;
+    int k;
+    memset(&o, 0, sizeof o);
+    o.max_leaf_size = leaf;
+    if (dm_bvh_build(m->pos, m->nv, m->idx, m->nt, &o, &b) != DM_OK) return 0;
+    for (i = 0; i < 20000 + 4 * m->nv; i++) {
+        dm_ray r;
+        dm_hit hit, line;
+        unsigned char occ;
+        if (i < 20000) {
+            random_ray(m, i, &r);
+            if (i % 5 == 1) { /* axis-aligned: zero direction components */
+                for (k = 0; k < 3; k++) r.dir[k] = k == (int)(i / 5 % 3) ? (i % 2 ? 1.0f : -1.0f) : 0.0f;
+            }
+            if (i % 7 == 3) { /* limited */
+                r.tmin = (float)(0.2 * m->diag * unit_random(i, 20));
+                r.tmax = r.tmin + (float)(0.5 * m->diag * unit_random(i, 21));
+            }
+        } else { /* at a vertex, or at the middle of an edge of triangle (i / 4) */
+            size_t t = (i - 20000) / 4 % m->nt;
+            const float *a = m->pos + 3 * m->idx[3 * t], *c = m->pos + 3 * m->idx[3 * t + (i % 4 == 0 ? 0 : 1)];
+            float d[3];
+            random_direction(i, 30, d);
+            for (k = 0; k < 3; k++) {
+                float target = 0.5f * (a[k] + c[k]);
+                r.org[k] = target + (float)(0.3 * m->diag) * d[k];
+                r.dir[k] = target - r.org[k];
+            }
+            r.tmin = 0.0f;
+            r.tmax = INFINITY;
+        }
+        dm_bvh_intersect(b, &r, &hit);
+        occ = (unsigned char)dm_bvh_occluded(b, &r);
+        r.tmin = -r.tmax;
+        dm_bvh_intersect_line(b, &r, &line);
+        h = digest_bytes(h, &hit, sizeof hit);
+        h = digest_bytes(h, &line, sizeof line);
+        h = digest_bytes(h, &occ, 1);
+    }
+    dm_bvh_free(b);
+    return h;
+}
+
+static int print_digest(const mesh *s7, const mesh *s16, const mesh *soup)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    int leaf;
+    for (leaf = 4; leaf <= 16; leaf += 4) {
+        h = digest_rays(h, s7, leaf);
+        h = digest_rays(h, s16, leaf);
+        h = digest_rays(h, soup, leaf);
+    }
+#if defined(DM_USE_AVX2)
+    printf("path avx2\n");
+#elif defined(DM_USE_SSE2)
+    printf("path sse2\n");
+#else
+    printf("path portable\n");
+#endif
+    printf("digest %016llx\n", (unsigned long long)h);
+    return 0;
+}
+
 static void test_coincident(void)
 {
     enum { N = 1000 };
@@ -765,6 +873,14 @@ int main(int argc, char **argv)
     memset(&soup, 0, sizeof soup);
     T_CHECK(sphere_mesh(3, &s3) && sphere_mesh(7, &s7) && sphere_mesh(16, &s16) && soup_mesh(&soup));
     if (!s3.pos || !s7.pos || !s16.pos || !soup.pos) return T_END();
+    if (argc > 1 && strcmp(argv[1], "--digest") == 0) {
+        int rc = print_digest(&s7, &s16, &soup);
+        mesh_free(&s3);
+        mesh_free(&s7);
+        mesh_free(&s16);
+        mesh_free(&soup);
+        return rc;
+    }
     if (sanitize) printf("note: TEST_SANITIZE is set: 2,000 brute-force rays per mesh instead of 10,000\n");
     test_brute_force("sphere f7", &s7, sanitize ? 2000 : 10000);
     test_brute_force("soup", &soup, sanitize ? 2000 : 10000);
@@ -776,6 +892,8 @@ int main(int argc, char **argv)
     test_alloc_failure(&s7);
     test_progress_cancel(&s16);
     test_determinism_refit(&s16);
+    test_leaf_sizes(&s16);
+    test_leaf_sizes(&soup);
     test_coincident();
     mesh_free(&s3);
     mesh_free(&s7);
