@@ -51,6 +51,33 @@
 #define BENCH_COMPILER "unknown"
 #endif
 
+/* An allocator for large blocks backed by transparent huge pages (Linux, THP in "madvise" or
+   "always" mode): blocks of 1 MiB and more are 2 MiB-aligned and madvise(MADV_HUGEPAGE)d, others
+   come from malloc. Embree does the same for its BVHs; a library user passes these two to the
+   library's allocator hook (dispmesh.h's dm_allocator documents it). Elsewhere it is malloc/free. */
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+static inline void *bench_hugepage_alloc(void *user, size_t size)
+{
+    (void)user;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (size >= ((size_t)1 << 20)) {
+        const size_t huge = (size_t)1 << 21;
+        size_t len = (size + huge - 1) & ~(huge - 1);
+        void *p = len >= size ? aligned_alloc(huge, len) : NULL;
+        if (p) madvise(p, len, MADV_HUGEPAGE);
+        return p;
+    }
+#endif
+    return malloc(size);
+}
+static inline void bench_hugepage_free(void *user, void *ptr)
+{
+    (void)user;
+    free(ptr);
+}
+
 /* warm-up runs and timed runs of bench_median */
 #define BENCH_WARMUP 1
 #define BENCH_RUNS 5

@@ -5,8 +5,9 @@
    Figures (each side in this process, on the same mesh and the same rays, median of 5 after a
    warm-up, see bench.h):
      RESULT bvh_build tris=<n> ours_ms=<t> embree_ms=<t> ratio=<ours/embree>
-         ours: dm_bvh_build (default options): validation, triangle boxes, binned SAH, copy of
-         the triangles in leaf order. Embree: rtcNewScene (default flags), quality MEDIUM,
+         ours: dm_bvh_build (default options, the huge-page allocator of bench.h as dispmesh.h
+         recommends on Linux, like Embree's own allocator): validation, triangle boxes, binned
+         SAH, the triangles in leaf order, the 8-wide tree. Embree: rtcNewScene (default flags), quality MEDIUM,
          rtcNewGeometry + shared vertex/index buffers + rtcCommitGeometry + rtcAttachGeometry +
          rtcCommitScene, on a device made with "threads=1" (outside the timer, like the padded
          vertex copy Embree's 16-byte loads need). Freeing is outside the timer on both sides.
@@ -19,6 +20,9 @@
          (alternating). mismatches: rays where ours and a second Embree scene built with
          RTC_SCENE_FLAG_ROBUST disagree on hit/miss or |dt| > 1e-5 max(t, 1e-3 diagonal); ties:
          hits at the same t on a different triangle (shared edges), not mismatches.
+     RESULT bvh_build_malloc / bvh_trace_malloc ...: ours with plain malloc (NULL allocator), for
+         comparison; the ratio is against the same Embree figure.
+     RESULT bvh_trace_batch ...: ours through dm_bvh_intersect_batch.
      RESULT bvh_memory ours_mb=<m> nodes=<n> leaves=<n> depth=<d> sah=<c>
    ratio < 1 for build time means we are faster; ratio > 1 for Mrays/s means we are faster.
    Rays are a pure function of the mesh (splitmix64 hashes, no rand()). */
@@ -70,6 +74,7 @@ struct state {
     std::vector<float> embree_t;
     std::vector<unsigned> embree_prim;
     size_t hits = 0;
+    const dm_allocator *alloc = nullptr; /* ours: NULL = malloc, else the huge-page allocator */
 };
 
 static RTCScene embree_scene(state &s, RTCSceneFlags flags)
@@ -102,7 +107,9 @@ static void free_embree(void *user)
 static int run_ours_build(void *user)
 {
     state &s = *(state *)user;
-    return dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, NULL, &s.bvh) == DM_OK ? 0 : 1;
+    dm_bvh_options o = {};
+    o.allocator = s.alloc;
+    return dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, &o, &s.bvh) == DM_OK ? 0 : 1;
 }
 static void free_ours(void *user)
 {
@@ -197,12 +204,18 @@ int main(int argc, char **argv)
 
     fprintf(stderr, "bench_bvh: %s, %zu triangles: build\n", path, s.m.nt);
     double embree_build = bench_median(run_embree_build, free_embree, &s);
+    static const dm_allocator hugepages = {bench_hugepage_alloc, bench_hugepage_free, nullptr};
+    double ours_build_malloc = bench_median(run_ours_build, free_ours, &s);
+    s.alloc = &hugepages;
     double ours_build = bench_median(run_ours_build, free_ours, &s);
     printf("RESULT bvh_build tris=%zu ours_ms=%.3f embree_ms=%.3f ratio=%.3f\n", s.m.nt, 1e3 * ours_build,
            1e3 * embree_build, ours_build / embree_build);
+    printf("RESULT bvh_build_malloc tris=%zu ours_ms=%.3f ratio=%.3f\n", s.m.nt, 1e3 * ours_build_malloc,
+           ours_build_malloc / embree_build);
     fflush(stdout);
 
-    if (run_ours_build(&s) != 0) {
+    dm_bvh *with_malloc = nullptr;
+    if (dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, NULL, &with_malloc) != DM_OK || run_ours_build(&s) != 0) {
         fprintf(stderr, "dm_bvh_build failed\n");
         return 1;
     }
@@ -266,8 +279,15 @@ int main(int argc, char **argv)
         double batch_s = bench_median(run_ours_batch, NULL, &s);
         printf("RESULT bvh_trace_batch kind=%s rays=%zu ours_mrays=%.3f ratio=%.3f\n", name, count,
                count / batch_s * 1e-6, embree_s / batch_s);
+        dm_bvh *thp_bvh = s.bvh;
+        s.bvh = with_malloc;
+        double malloc_s = bench_median(run_ours_trace, NULL, &s);
+        s.bvh = thp_bvh;
+        printf("RESULT bvh_trace_malloc kind=%s rays=%zu ours_mrays=%.3f ratio=%.3f\n", name, count,
+               count / malloc_s * 1e-6, embree_s / malloc_s);
         fflush(stdout);
     }
+    dm_bvh_free(with_malloc);
     rtcReleaseScene(robust);
     free_embree(&s);
     free_ours(&s);
