@@ -38,7 +38,7 @@ HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
