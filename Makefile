@@ -41,7 +41,7 @@ EXAMPLES   = $(B)/meshconv $(B)/render_mesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
-REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
+REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
@@ -72,6 +72,9 @@ $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< tests/fuzz_main.c -o $@ -lm
 
 $(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
+
+$(B)/ref_openmesh_butterfly: tests/ref_openmesh_butterfly.cpp tests/butterfly_compare.hpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
 
 $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
