@@ -37,7 +37,7 @@ HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
 HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
-EXAMPLES   = $(B)/meshconv $(B)/render_mesh
+EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)

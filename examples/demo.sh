@@ -23,3 +23,8 @@ for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done
 echo "demo: rendered $rendered scenes into $OUT/ (see the RESULT lines above)"
+# subdiv4.h: paper 001's four terrain scenes (its Figs 3-6)
+for scene in desert vegetation mountain5 mountain6; do
+  "$B/terrain" --preset "$scene" -o "$OUT/terrain_$scene.png"
+done
+echo "demo: rendered 4 terrain scenes of paper 001 into $OUT/ (terrain_desert/vegetation/mountain5/mountain6.png)"
