@@ -45,7 +45,8 @@ REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -115,6 +116,7 @@ fuzz: fuzz-build
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
+BENCH_LIBS_subdiv4 = -lOpenMeshCore
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
