@@ -99,7 +99,8 @@
          neighbours e_j (e_0 = the other end): 3/4 v + sum s_j e_j with s_j = (1/4 + cos(2 pi j/K)
          + 1/2 cos(4 pi j/K))/K for K >= 5, (5/12, -1/12, -1/12) for K = 3, (3/8, 0, -1/8, 0)
          for K = 4; both ends extraordinary: the average of the two stencils. These weights are
-         those of the w = 1/16 scheme whatever w is.
+         those of the w = 1/16 scheme whatever w is. Interior vertices of valence 1 or 2 (closed
+         "pillows") use the K >= 5 formula.
        boundary edge: the four-point rule above along the boundary loop.
      These are the rules OpenMesh's ModifiedButterflyT uses (the reference test matches it to
      float rounding on closed meshes). Deviation from Zorin's thesis: interior edges next to the
@@ -1108,8 +1109,13 @@ static void sd4__edge_point(const sd4__level *L, uint32_t h, double w, const dou
     if (t == SD4__NONE) { /* boundary edge: four-point rule along the boundary loop */
         sd4__acc(p, L->pos + 3 * (size_t)a, 0.5 + w);
         sd4__acc(p, L->pos + 3 * (size_t)b, 0.5 + w);
-        sd4__acc(p, L->pos + 3 * (size_t)L->bprev[a], -w);
-        sd4__acc(p, L->pos + 3 * (size_t)L->bnext[b], -w);
+        if (L->bprev[a] != SD4__NONE && L->bnext[b] != SD4__NONE) {
+            sd4__acc(p, L->pos + 3 * (size_t)L->bprev[a], -w);
+            sd4__acc(p, L->pos + 3 * (size_t)L->bnext[b], -w);
+        } else { /* cannot happen for a manifold boundary: linear ghosts, i.e. the midpoint */
+            sd4__acc(p, L->pos + 3 * (size_t)a, -w);
+            sd4__acc(p, L->pos + 3 * (size_t)b, -w);
+        }
     } else {
         int exa = !(L->vflag[a] & SD4__VBOUNDARY) && L->valence[a] != 6;
         int exb = !(L->vflag[b] & SD4__VBOUNDARY) && L->valence[b] != 6;
@@ -1260,7 +1266,7 @@ SD4DEF sd4_result sd4_butterfly(const float *positions, size_t vertex_count, con
     if (o->omega_convention == SD4_OMEGA_HALF) w *= 0.5;
     for (i = 0; i < 32 * 32; i++) {
         uint32_t K = (uint32_t)(i / 32), j = (uint32_t)(i % 32);
-        wtab[i] = (K >= 3 && j < K) ? sd4__zss_weight(K, j) : 0.0;
+        wtab[i] = (K >= 1 && j < K) ? sd4__zss_weight(K, j) : 0.0;
     }
     for (lev = 0; lev < levels; lev++) {
         sd4__level L;

@@ -359,6 +359,13 @@ static void test_terrain(void)
         }
         T_CHECK_MSG(tilt[1] > tilt[0] + 0.1, "mean tilt %g (sigma 0) vs %g (sigma 0.35)", tilt[0], tilt[1]);
     }
+    {
+        double h[4] = {0, NAN, 0, 0};
+        memset(&d, 0, sizeof d);
+        d.heights = h; d.nx = d.ny = 2; d.levels = 2; d.epsilon = 3.0; d.omega = 0.1;
+        T_EQ_INT(sd4_terrain_build(&d, &m), SD4_ERR_BAD_POSITION);
+        T_CHECK(m.positions == NULL && m.triangle_count == 0);
+    }
     T_EQ_INT(sd4_terrain_preset("moon", &d), SD4_ERR_INVALID_ARGUMENT);
     sd4_terrain_preset("desert", &d);
     d.levels = 11;
@@ -488,6 +495,36 @@ static void test_butterfly(void)
         T_EQ_SIZE(m.triangle_count, 2 + 3);
         T_EQ_SIZE(m.vertex_count, 6 + 2);
         T_CHECK(memcmp(m.indices, tt, 6 * sizeof(uint32_t)) == 0);
+        sd4_free_mesh(&m);
+    }
+    /* random soup on few vertices (non-manifold everywhere, degenerate triangles): never fails,
+       indices stay in range, triangles that are not frozen are split */
+    {
+        float pp[3 * 12];
+        uint32_t tt[3 * 40];
+        int trial, bad = 0;
+        for (trial = 0; trial < 200; trial++) {
+            size_t nt = 1 + (size_t)(unit_random((uint64_t)trial, 7) * 40), nv = 3 + (size_t)(unit_random((uint64_t)trial, 8) * 9);
+            for (i = 0; i < 3 * nv; i++) pp[i] = (float)unit_random((uint64_t)(trial * 100) + i, 9);
+            for (i = 0; i < 3 * nt; i++) tt[i] = (uint32_t)(unit_random((uint64_t)(trial * 1000) + i, 10) * (double)nv);
+            if (sd4_butterfly(pp, nv, tt, nt, 2, 1.0 / 16.0, NULL, &m) != SD4_OK) { bad++; continue; }
+            for (i = 0; i < 3 * m.triangle_count; i++)
+                if (m.indices[i] >= m.vertex_count) bad++;
+            for (i = 0; i < 3 * m.vertex_count; i++)
+                if (!isfinite(m.positions[i])) bad++;
+            sd4_free_mesh(&m);
+        }
+        T_CHECK_MSG(bad == 0, "random soups: %d problems", bad);
+    }
+    /* a closed pillow (two triangles, valence 2) and a lone triangle (boundary only) */
+    {
+        float pp[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        uint32_t tt[6] = {0, 1, 2, 0, 2, 1};
+        T_EQ_INT(sd4_butterfly(pp, 3, tt, 2, 1, 1.0 / 16.0, NULL, &m), SD4_OK);
+        T_EQ_SIZE(m.triangle_count, 8);
+        sd4_free_mesh(&m);
+        T_EQ_INT(sd4_butterfly(pp, 3, tt, 1, 3, 1.0 / 16.0, NULL, &m), SD4_OK);
+        T_EQ_SIZE(m.triangle_count, 64);
         sd4_free_mesh(&m);
     }
     /* errors, allocation failures, cancellation */
