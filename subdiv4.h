@@ -121,10 +121,12 @@
 
    ERRORS
      Functions return sd4_result (SD4_OK = 0); sd4_result_string() names it. Checked: NULL
-     arrays, zero or too many levels (at most 30 for curves/grids, 8 for butterfly), dim outside
-     1..64, sizes that overflow size_t or the 32-bit indices, too small an output buffer,
-     non-finite coordinates (SD4_ERR_BAD_POSITION), indices >= vertex_count. On failure an
-     sd4_mesh is zeroed and nothing is leaked.
+     arrays, levels outside 0..30 (curves, grids), 1..8 (butterfly) or 0..10 (terrain), dim
+     outside 1..64, unknown option values, non-finite w, sizes that overflow size_t or the
+     32-bit indices, too small an output buffer (SD4_ERR_BUFFER_TOO_SMALL), non-finite
+     coordinates or heights (SD4_ERR_BAD_POSITION), indices >= vertex_count. Non-manifold or
+     degenerate meshes are not errors (see BUTTERFLY). On failure an sd4_mesh is zeroed and
+     nothing is leaked; a caller-owned grid buffer may hold partial results.
 
    THREAD SAFETY
      No global state; every function is re-entrant. Same input and options give the same bits.
