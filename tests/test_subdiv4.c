@@ -163,6 +163,8 @@ static void test_basis(void)
     }
 }
 
+static int cancel_at_half(void *user, float done) { (void)user; return done >= 0.5f; }
+
 static void test_grids(void)
 {
     enum { NX = 7, NY = 5, DIM = 3, LV = 3 };
@@ -237,6 +239,10 @@ static void test_grids(void)
         T_EQ_INT(sd4_curve_refine(g, 2, 1, 0.3, 2, NULL, out, 5), SD4_OK);
         T_NEAR(out[2], 0.5 * (g[0] + g[1]), 1e-12); /* linear ghosts on both sides: the midpoint */
         T_CHECK(strcmp(sd4_result_string(SD4_ERR_TOO_LARGE), "SD4_ERR_TOO_LARGE") == 0);
+        /* the progress callback cancels */
+        o.end_rule = SD4_END_LINEAR;
+        o.progress = cancel_at_half;
+        T_EQ_INT(sd4_grid_refine(g, 3, 3, 1, 0.1, 3, &o, out, 1000), SD4_CANCELLED);
     }
 }
 
@@ -410,7 +416,6 @@ static void count_free(void *user, void *p)
     if (p) g_frees++;
     free(p);
 }
-static int cancel_at_half(void *user, float done) { (void)user; return done >= 0.5f; }
 
 static void test_butterfly(void)
 {
