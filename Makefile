@@ -37,18 +37,19 @@ HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
 HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
-EXAMPLES   = $(B)/meshconv $(B)/render_mesh
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
+EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
-REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
+REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -81,6 +82,9 @@ $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< tests/fuzz_main.c -o $@ -lm
 
 $(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
+
+$(B)/ref_openmesh_butterfly: tests/ref_openmesh_butterfly.cpp tests/butterfly_compare.hpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
 
 $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
@@ -121,6 +125,7 @@ fuzz: fuzz-build
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
+BENCH_LIBS_subdiv4 = -lOpenMeshCore
 # and the flags it is built with: dispmesh.h's SIMD path as its docs recommend for this machine (Embree
 # picks its best instruction set at run time)
 HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)

@@ -19,6 +19,10 @@ if [ -f "$bunny" ]; then
 else
   echo "demo: $bunny not found (apt-get install glmark2-data): bunny scenes skipped"
 fi
+# subdiv4.h: paper 001's four terrain scenes (its Figs 3-6)
+for scene in desert vegetation mountain5 mountain6; do
+  "$B/terrain" --preset "$scene" -o "$OUT/terrain_$scene.png" && rendered=$((rendered + 1))
+done
 for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done
