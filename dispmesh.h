@@ -61,8 +61,10 @@
      starts a block. Against a 4-wide tree of single triangles (the previous version) this cut
      the instructions per incoherent ray on the bunny from about 1400 to 900 (AVX) or 1200
      (SSE2). A child's entry distance orders the visit (nearest first; two children compared,
-     three or more insertion-sorted on the stack); prefetching the children's cache lines
-     (DM__PREFETCH_CHILDREN) made no measurable difference and is off.
+     three or more insertion-sorted on the stack). Every hit child's cache lines are
+     prefetched as soon as its box is hit (all four of a wide node, three of a leaf): against
+     no prefetch, 8% more incoherent rays per second on the bunny and 15% on the 1M-triangle
+     sphere, in CPU time measured alternately with Embree.
 
    MEMORY
      A BVH holds 32-byte binary nodes, 256-byte wide nodes and the triangles in 160-byte blocks
@@ -1159,11 +1161,8 @@ typedef struct dm__ray_pre {
     int kx, ky, kz;
     float sx, sy;
     int near_off[3], far_off[3]; /* per axis, the float offset in a wide node of the near and far planes */
-#if defined(DM_USE_AVX2)
-    __m256 org8[3], inv8[3]; /* org and inv, each component in all eight lanes */
-#endif
-#if defined(DM_USE_SSE2)
-    __m128 org4[3], inv4[3]; /* org and inv, each component in all four lanes */
+#if defined(DM_USE_SSE2) && !defined(DM_USE_AVX2)
+    __m128 org4[3], inv4[3]; /* org and inv, each component in all four lanes (AVX broadcasts them from memory) */
 #endif
 } dm__ray_pre;
 
@@ -1198,13 +1197,7 @@ static int dm__prepare_ray(const float org[3], const float dir[3], float sign, d
     }
     r->sx = r->dir[r->kx] / r->dir[kz];
     r->sy = r->dir[r->ky] / r->dir[kz];
-#if defined(DM_USE_AVX2)
-    for (k = 0; k < 3; k++) {
-        r->org8[k] = _mm256_set1_ps(r->org[k]);
-        r->inv8[k] = _mm256_set1_ps(r->inv[k]);
-    }
-#endif
-#if defined(DM_USE_SSE2)
+#if defined(DM_USE_SSE2) && !defined(DM_USE_AVX2)
     for (k = 0; k < 3; k++) {
         r->org4[k] = _mm_set1_ps(r->org[k]);
         r->inv4[k] = _mm_set1_ps(r->inv[k]);
@@ -1371,41 +1364,23 @@ DM__INLINE int dm__lane_hit(const dm__ray_pre *r, const dm__tri4 *q, int i, int 
    culls a box the ray touches (Ize 2013) */
 #define DM__FAR_SCALE 1.00000036f
 
-/* Entry distance of the ray into node n within [tmin, tmax], or a miss (returns 0). */
-DM__INLINE int dm__box(const dm__node *n, const dm__ray_pre *r, float tmin, float tmax, float *t_enter)
-{
-    float x0 = (n->lo[0] - r->org[0]) * r->inv[0], x1 = (n->hi[0] - r->org[0]) * r->inv[0];
-    float y0 = (n->lo[1] - r->org[1]) * r->inv[1], y1 = (n->hi[1] - r->org[1]) * r->inv[1];
-    float z0 = (n->lo[2] - r->org[2]) * r->inv[2], z1 = (n->hi[2] - r->org[2]) * r->inv[2];
-    float xn = x0 < x1 ? x0 : x1, xf = x0 < x1 ? x1 : x0;
-    float yn = y0 < y1 ? y0 : y1, yf = y0 < y1 ? y1 : y0;
-    float zn = z0 < z1 ? z0 : z1, zf = z0 < z1 ? z1 : z0;
-    float tn = xn > yn ? xn : yn, tf = xf < yf ? xf : yf;
-    tn = zn > tn ? zn : tn;
-    tn = tmin > tn ? tmin : tn;
-    tf = zf < tf ? zf : tf;
-    tf *= DM__FAR_SCALE;
-    tf = tmax < tf ? tmax : tf;
-    *t_enter = tn;
-    return tn <= tf;
-}
-
 /* The child boxes of a wide node: bit i of the result tells whether the ray enters child i
    within [tmin, tmax], t[i] its entry distance. Per axis the ray meets the near plane (lo when
-   it goes up, hi when it goes down) first, so no per-axis min/max is needed; the values are
-   those of dm__box. The maxima and minima are ordered so that a NaN (the boxes of unused
+   it goes up, hi when it goes down) first, so no per-axis min/max is needed. The maxima and minima are ordered so that a NaN (the boxes of unused
    slots) reaches the final comparison, which it fails; MINF/MAXF return the second operand
    when either is NaN, as the SSE and AVX instructions do, so every path gives the same bits. */
 #if defined(DM_USE_AVX2)
 DM__INLINE int dm__boxw(const dm__wnode *n, const dm__ray_pre *r, float tmin, float tmax, float t[DM__W])
 {
     const float *f = &n->lo[0][0];
-    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[0]), r->org8[0]), r->inv8[0]);
-    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[1]), r->org8[1]), r->inv8[1]);
-    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[2]), r->org8[2]), r->inv8[2]);
-    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[0]), r->org8[0]), r->inv8[0]);
-    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[1]), r->org8[1]), r->inv8[1]);
-    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[2]), r->org8[2]), r->inv8[2]);
+    const __m256 ox = _mm256_broadcast_ss(&r->org[0]), oy = _mm256_broadcast_ss(&r->org[1]), oz = _mm256_broadcast_ss(&r->org[2]);
+    const __m256 ix = _mm256_broadcast_ss(&r->inv[0]), iy = _mm256_broadcast_ss(&r->inv[1]), iz = _mm256_broadcast_ss(&r->inv[2]);
+    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[0]), ox), ix);
+    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[1]), oy), iy);
+    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->near_off[2]), oz), iz);
+    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[0]), ox), ix);
+    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[1]), oy), iy);
+    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(f + r->far_off[2]), oz), iz);
     const __m256 tn = _mm256_max_ps(_mm256_set1_ps(tmin), _mm256_max_ps(nz, _mm256_max_ps(ny, nx)));
     const __m256 tf = _mm256_min_ps(_mm256_set1_ps(tmax),
                                     _mm256_mul_ps(_mm256_min_ps(fz, _mm256_min_ps(fy, fx)), _mm256_set1_ps(DM__FAR_SCALE)));
@@ -1462,15 +1437,21 @@ typedef struct dm__entry {
 } dm__entry;
 #define DM__WSTACK ((DM__W - 1) * DM__STACK)
 
-/* Start loading the first two cache lines of child i (a wide node or a leaf's first block).
-   Off by default: it cost as much as it saved (see STRUCTURE). */
-#if defined(DM__PREFETCH_CHILDREN)
+/* Start loading child i: the four cache lines of a wide node, or the first three of a leaf
+   (its first block and a half), so that they arrive while the other children are ordered.
+   DM__PREFETCH_LINES (compile time, default 4) sets how many; 0 turns it off. */
+#ifndef DM__PREFETCH_LINES
+#define DM__PREFETCH_LINES 4
+#endif
+#if DM__PREFETCH_LINES > 0
 #define DM__PREFETCH_CHILD(wn, tris, n, i)                                                       \
     do {                                                                                         \
         const char *p_ = (n)->count[i] ? (const char *)&(tris)[(n)->ref[i] >> 2]                  \
                                        : (const char *)&(wn)[(n)->ref[i]];                        \
         DM__PREFETCH(p_);                                                                        \
-        DM__PREFETCH(p_ + 64);                                                                   \
+        if (DM__PREFETCH_LINES > 1) DM__PREFETCH(p_ + 64);                                       \
+        if (DM__PREFETCH_LINES > 2) DM__PREFETCH(p_ + 128);                                      \
+        if (DM__PREFETCH_LINES > 3 && !(n)->count[i]) DM__PREFETCH(p_ + 192);                    \
     } while (0)
 #else
 #define DM__PREFETCH_CHILD(wn, tris, n, i) ((void)0)
@@ -1599,9 +1580,8 @@ static int dm__closest_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, 
     const dm__tri4 *tris = bvh->blocks;
     dm__entry stack[DM__WSTACK];
     uint32_t ref = 0, count = 0, best_id = DM_NO_HIT;
-    float best = tmax, bu = 0.0f, bv = 0.0f, tn;
+    float best = tmax, bu = 0.0f, bv = 0.0f;
     size_t sp = 0;
-    if (!dm__box(&bvh->nodes[0], r, tmin, best, &tn)) return 0;
     for (;;) {
         if (count) {
             const dm__tri4 *q = &tris[ref >> 2];
@@ -1662,8 +1642,6 @@ static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, floa
     dm__entry stack[DM__WSTACK];
     uint32_t ref = 0, count = 0;
     size_t sp = 0;
-    float tn;
-    if (!dm__box(&bvh->nodes[0], r, tmin, tmax, &tn)) return 0;
     for (;;) {
         if (count) {
             const dm__tri4 *q = &tris[ref >> 2];
