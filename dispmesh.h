@@ -1451,7 +1451,8 @@ typedef struct dm__entry {
         DM__PREFETCH(p_);                                                                        \
         if (DM__PREFETCH_LINES > 1) DM__PREFETCH(p_ + 64);                                       \
         if (DM__PREFETCH_LINES > 2) DM__PREFETCH(p_ + 128);                                      \
-        if (DM__PREFETCH_LINES > 3 && !(n)->count[i]) DM__PREFETCH(p_ + 192);                    \
+        if (DM__PREFETCH_LINES > 3 && (!(n)->count[i] || (n)->count[i] > 4)) DM__PREFETCH(p_ + 192); \
+        if (DM__PREFETCH_LINES > 4 && (n)->count[i] > 4) DM__PREFETCH(p_ + 256);                 \
     } while (0)
 #else
 #define DM__PREFETCH_CHILD(wn, tris, n, i) ((void)0)
