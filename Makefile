@@ -38,14 +38,16 @@ HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT),$(HAVE_OPENMESH)),$(B)/bench_simplify)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -76,6 +78,9 @@ $(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
 
 $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
+
+$(B)/ref_openmesh_simplify: tests/ref_openmesh_simplify.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshTools -lOpenMeshCore -lembree3 -lm
 
 # Dependencies are installed first; the build is a separate make so that it sees what was installed.
 test:
@@ -112,6 +117,7 @@ fuzz: fuzz-build
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
+BENCH_LIBS_simplify = -lOpenMeshTools -lOpenMeshCore -lembree3 -lmeshoptimizer
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 

@@ -1935,14 +1935,17 @@ static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t
     dm__qem_quadric_sum(&q, &s->q[a], &s->q[b]);
     dm__qem_norm_pos(s, a, pa);
     dm__qem_norm_pos(s, b, pb);
-    if (fixed) {
+    if (fixed) { /* the caller takes keep's float position as it is (no round trip) */
         dm__qem_norm_pos(s, *keep, x);
+        *cost = dm__qem_quadric_eval(&q, x);
+    } else if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
+        dm__qem_segment_min(&q, pa, pb, x);
         *cost = dm__qem_quadric_eval(&q, x);
     } else {
         *cost = dm__qem_optimal(&q, pa, pb, x);
     }
     *err = q.w > 0.0 ? sqrt(*cost / q.w) * s->scale : 0.0;
-    return 1;
+    return fixed ? 2 : 1;
 }
 
 static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y)
@@ -2546,12 +2549,14 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         double x[3], cost, err;
         float at[3];
         size_t ring_count;
-        int k;
+        int k, placed;
         if ((s.flag[e.a] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
         if (s.ver[e.a] != e.va || s.ver[e.b] != e.vb) continue; /* stale */
-        if (!dm__qem_place(&s, e.a, e.b, &keep, &rem, x, &cost, &err)) continue;
+        placed = dm__qem_place(&s, e.a, e.b, &keep, &rem, x, &cost, &err);
+        if (!placed) continue;
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
-        for (k = 0; k < 3; k++) at[k] = (float)(s.center[k] + x[k] * s.scale);
+        for (k = 0; k < 3; k++)
+            at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
         if (!dm__qem_check_topology(&s, keep, rem) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
