@@ -94,6 +94,122 @@
      At most 2^31 - 2 triangles; coordinates up to 1e18 in magnitude. The closest-point query
      works in double.
 
+   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*)
+     WHAT. Edge-collapse simplification driven by quadric error metrics (Garland-Heckbert 1997),
+     recorded as a progressive mesh (Hoppe 1996): the base mesh, and one vertex split per
+     collapse, so that any level between the base and the input can be rebuilt exactly, up and
+     down; for every base vertex, the input vertices merged into it. Paper 000 builds its base
+     mesh this way, under constraints that keep the displacement map valid: a constraint hook
+     lets the caller veto or move each candidate collapse.
+
+     HOW TO USE
+       dm_simplify_options opt = {0};
+       opt.target_triangles = triangle_count / 100;            // and/or opt.target_error
+       dm_pm *pm; dm_simplify_report rep;
+       if (dm_simplify(positions, vertex_count, indices, triangle_count, &opt, &pm, &rep) != DM_OK)
+           return 1;
+       size_t nv, nt; dm_pm_counts(pm, &nv, &nt);              // the base mesh (level 0)
+       dm_pm_get_mesh(pm, out_positions, out_indices, out_ids); // compact arrays, caller-sized
+       dm_pm_set_level(pm, dm_pm_split_count(pm) / 2);          // any level; top level = input
+       dm_pm_free(pm);
+
+     OPTIONS (dm_simplify_options, zero = default)
+       target_triangles  stop at or below this count (a collapse removes 2 triangles, 1 on a
+                         boundary). 0: no count target.
+       target_error      no collapse whose error exceeds it is done (mesh units). 0: none. With
+                         neither target the mesh is simplified until no collapse passes the checks
+                         (the paper's "until no edge can be collapsed").
+       flags             DM_SIMPLIFY_LOCK_BOUNDARY: boundary vertices never move, never go.
+       locked            per-vertex bytes: a nonzero vertex never moves and is never removed (a free
+                         neighbour may still merge into it).
+       max_collapses     stop after this many collapses (0: no limit). The first k collapses of a
+                         run are the same whatever the limit: this is how level k is checked.
+       constraint        called for every candidate that passed all the checks below, with the
+                         edge (keep, remove), the proposed position, its error, the current
+                         positions and the triangles of keep's new one-ring. It returns
+                         DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE with a corrected
+                         position, which is checked again for flips and degenerate triangles (and
+                         must equal keep's position when keep is locked or absorbs an interior
+                         vertex from the boundary); if that fails it counts as a veto. A refused
+                         or vetoed edge is retried when a collapse changes its one-ring. When
+                         vetoes stop the simplification above the target, dm_simplify still
+                         returns DM_OK; the report says what was reached (reached_target = 0).
+       allocator, progress, progress_user   as for the BVH; progress gets the fraction of the
+                         triangles to remove that are gone, every 1024 collapses and at the end.
+
+     THE METHOD, step by step
+       1. Input checks (as dm_bvh_build); triangles with a repeated index are dropped (counted in
+          the report, absent from every level, so the top level is the input without them).
+       2. Per vertex, a list of its triangle corners; classification: a vertex is non-manifold
+          when an edge at it has more than two triangles, two triangles the same way round, or
+          its triangles form more than one fan. Non-manifold vertices and every vertex that shares
+          a triangle with one are frozen: their triangles are left exactly as they are.
+       3. Quadrics in a frame centred on the bounding box and scaled by its largest side: each
+          triangle's plane weighted by its area, added to its three vertices; each boundary edge
+          adds the plane through it perpendicular to its triangle, weighted 10 x its squared
+          length (Garland-Heckbert's boundary constraint).
+       4. Placement for an edge (a, b), Q = Qa + Qb. Both interior: the minimiser of Q, A x = -b,
+          solved by the adjugate when det(A) > 1e-7 trace(A)^3 and the solution lies within two
+          edge lengths of the midpoint; otherwise (flat or cylindrical regions: A singular or
+          nearly so) the minimiser of Q on the segment a b, which always exists; the better of
+          the two is kept. Both on the boundary (and the edge a boundary edge): the segment's
+          minimiser, so a boundary stays on its edges. One on the boundary: the boundary vertex
+          stays where it is. A locked vertex stays where it is; two locked vertices never merge.
+          The surviving id is the boundary or locked one, else the lower id.
+       5. Order: the cost Q(x) (area-weighted squared distance to the merged planes), ties by
+          the lower then the higher vertex id, in a 4-ary min-heap with lazy deletion (each
+          entry carries its endpoints' version numbers; a collapse bumps them).
+       6. Checks on each popped candidate, in this order: the link condition (the common
+          neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
+          on a boundary edge; two boundary vertices joined by an interior edge never merge); no
+          opposite vertex left with a degenerate fan (an interior one needs more than 3
+          triangles, a boundary one more than 1); every surviving triangle of the one-ring keeps
+          its orientation (its normal turns by less than acos(0.2) = 78 degrees) and is not
+          degenerate (2 area > 1e-5 longest edge^2); then the target error; then the constraint.
+       7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
+          the new position and Qa + Qb, and the record stores keep's positions before and after,
+          the dead triangles and the moved corners. New candidates for keep's edges go in the
+          heap; neighbours that had a candidate refused get all theirs again.
+
+     GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
+     a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
+     predecessor; boundaries keep their vertices on boundary edges (a vertex at a boundary corner
+     can slide along one of its edges by what the quadric balances, 1e-7 of the size in the
+     tests); locked and frozen vertices keep their position bit for bit. The output is a pure
+     function of the input and options (no randomness, ties by index).
+
+     ERROR. A collapse's error is sqrt(Q(x) / W) in mesh units, where W is the total area of the
+     planes in Q: the area-weighted RMS distance from the new position to the planes of the
+     triangles merged into it. The report's error is the largest over the collapses done.
+
+     PROGRESSIVE MESH. Level 0 is the base, level dm_pm_split_count() the input; level k is
+     bit for bit the simplifier's mesh after its (split_count - k)-th collapse (positions of
+     every vertex in use, the same triangles in the same order: triangles keep their input
+     order, and dead ones are skipped). dm_pm_set_level walks the records (no allocation);
+     dm_pm_get_vsplit describes one; dm_pm_merged_vertices gives, for a base vertex, the sorted
+     input vertices merged into it (itself included; a partition of all input vertices).
+
+     BAD INPUT. NULL arrays, zero triangles, bad indices, non-finite or huge referenced
+     coordinates, a NaN or negative target_error: an error code, nothing allocated. Duplicate
+     vertices (same position, different ids) are different vertices: a seam between them is two
+     boundaries, each kept as a boundary. Zero-area triangles have no plane; they may be collapsed
+     away, and are never the reason a new degenerate triangle appears. Edges with three or more
+     triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
+     positions, in no level's mesh. Unreferenced vertices may hold NaN.
+
+     MEMORY. During dm_simplify about 220 bytes per vertex and 40 per triangle, plus the heap (24
+     bytes an entry, about 1.5 entries per triangle at the start, growing by about 6 per
+     collapse). The progressive mesh keeps the positions, the triangles, 56 bytes per split and
+     4 bytes per moved corner or dead triangle (about 6 per split), and 12 bytes per vertex for
+     the merged sets and a scratch array.
+
+     THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads, but
+     dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
+     concurrently with anything else on the same pm.
+
+     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit).
+     Attributes (normals, UVs) are not simplified: the quadrics see positions only.
+
    REFERENCES
      S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
      I. Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007 (binning).
@@ -101,7 +217,14 @@
      C. Ericson, "Real-Time Collision Detection", 2005, 5.1.5 (closest point on a triangle).
      J. Bikker, tinybvh (2024-2025): 32-byte node layout, near-child-first traversal.
      H. Dammertz, J. Hanika, A. Keller, "Shallow Bounding Volume Hierarchies for Fast SIMD Ray
-     Tracing of Incoherent Rays", EGSR 2008 (4-wide nodes collapsed from a binary tree). */
+     Tracing of Incoherent Rays", EGSR 2008 (4-wide nodes collapsed from a binary tree).
+     M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997
+     (quadrics, optimal placement, boundary planes).
+     H. Hoppe, "Progressive Meshes", SIGGRAPH 1996 (vertex split records).
+     T. Dey, H. Edelsbrunner, S. Guha, D. Nekhayev, "Topology Preserving Edge Contraction", Publ.
+     Inst. Math. (Beograd) 66, 1999 (the link condition).
+     P. Lindstrom, G. Turk, "Fast and Memory Efficient Polygonal Simplification", IEEE Vis 1998
+     (constrained placement when the quadric is singular; ours falls back to the edge). */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
@@ -1955,16 +2078,21 @@ static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y)
     return x->b < y->b;
 }
 
+/* A 4-ary min-heap: half the depth of a binary one, and the four children share a cache line
+   or two, which is what the pops (the simplifier's hottest loop) wait on. */
 static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
 {
     dm__qem_cand e = h[i];
     for (;;) {
-        size_t c = 2 * i + 1;
+        size_t c = 4 * i + 1, best, j, end;
         if (c >= n) break;
-        if (c + 1 < n && dm__qem_cand_less(&h[c + 1], &h[c])) c++;
-        if (!dm__qem_cand_less(&h[c], &e)) break;
-        h[i] = h[c];
-        i = c;
+        best = c;
+        end = c + 4 < n ? c + 4 : n;
+        for (j = c + 1; j < end; j++)
+            if (dm__qem_cand_less(&h[j], &h[best])) best = j;
+        if (!dm__qem_cand_less(&h[best], &e)) break;
+        h[i] = h[best];
+        i = best;
     }
     h[i] = e;
 }
@@ -1972,11 +2100,12 @@ static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
 static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
 {
     size_t i;
-    if (s->hsize == s->hcap && !dm__qem_grow(&s->al, (void **)&s->heap, &s->hcap, s->hsize + 1, sizeof(dm__qem_cand)))
+    if (s->hsize == s->hcap &&
+        !dm__qem_grow(&s->al, (void **)&s->heap, &s->hcap, s->hsize + 1, sizeof(dm__qem_cand)))
         return 0;
     i = s->hsize++;
     while (i > 0) {
-        size_t p = (i - 1) / 2;
+        size_t p = (i - 1) / 4;
         if (!dm__qem_cand_less(e, &s->heap[p])) break;
         s->heap[i] = s->heap[p];
         i = p;
@@ -2537,7 +2666,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             s.heap[s.hsize++] = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
         }
     }
-    for (v = s.hsize / 2; v-- > 0;) dm__qem_sift_down(s.heap, s.hsize, v);
+    for (v = s.hsize / 4 + 1; v-- > 0;)
+        if (v < s.hsize) dm__qem_sift_down(s.heap, s.hsize, v);
 
     s.target = opt.target_triangles;
     to_remove = s.live > s.target ? s.live - s.target : 0;
