@@ -156,9 +156,10 @@
           minimiser, so a boundary stays on its edges. One on the boundary: the boundary vertex
           stays where it is. A locked vertex stays where it is; two locked vertices never merge.
           The surviving id is the boundary or locked one, else the lower id.
-       5. Order: the cost Q(x) (area-weighted squared distance to the merged planes), ties by
-          the lower then the higher vertex id, in a 4-ary min-heap with lazy deletion (each
-          entry carries its endpoints' version numbers; a collapse bumps them).
+       5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
+          float), ties by the lower then the higher vertex id, in a 4-ary min-heap with lazy
+          deletion (each entry carries the sum of its endpoints' version numbers; a collapse
+          bumps them).
        6. Checks on each popped candidate, in this order: the link condition (the common
           neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
           on a boundary edge; two boundary vertices joined by an interior edge never merge); no
@@ -197,11 +198,11 @@
      triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
      positions, in no level's mesh. Unreferenced vertices may hold NaN.
 
-     MEMORY. During dm_simplify about 220 bytes per vertex and 40 per triangle, plus the heap (24
-     bytes an entry, about 1.5 entries per triangle at the start, growing by about 6 per
-     collapse). The progressive mesh keeps the positions, the triangles, 56 bytes per split and
-     4 bytes per moved corner or dead triangle (about 6 per split), and 12 bytes per vertex for
-     the merged sets and a scratch array.
+     MEMORY. During dm_simplify about 145 bytes per vertex (the 88-byte quadric among them) and
+     40 per triangle, plus the candidate heap (16 bytes an entry: 3 per triangle reserved at the
+     start; stale entries are dropped once they outnumber the live ones). The progressive mesh
+     keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
+     triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
 
      THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads, but
      dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
@@ -1854,10 +1855,11 @@ typedef struct dm__qem_quadric {
     double a00, a01, a02, a11, a12, a22, b0, b1, b2, c, w;
 } dm__qem_quadric;
 
-/* A heap entry: the edge (a < b) with its cost when its endpoints had versions va and vb. */
+/* A heap entry (16 bytes): the edge (a < b) with its cost when the sum of its endpoints'
+   versions was `stamp` (versions only grow, so any change to either makes the entry stale). */
 typedef struct dm__qem_cand {
-    double key;
-    uint32_t a, b, va, vb;
+    float key;
+    uint32_t a, b, stamp;
 } dm__qem_cand;
 
 /* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
@@ -1888,6 +1890,7 @@ typedef struct dm__qem_simp {
     uint8_t *alive, *flag;
     dm__qem_quadric *q;
     uint32_t *vfirst, *cnext;      /* per vertex a list of its corners (3 triangle + slot) */
+    uint32_t *tcount;              /* per vertex the length of that list (its live triangles) */
     uint32_t *ver, *mark, stamp;   /* candidate versions; visit marks */
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
@@ -2114,6 +2117,21 @@ static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
     return 1;
 }
 
+/* Drops the stale entries and re-heapifies, once they outnumber the live edges (about 1.5 per
+   triangle) two to one: the heap then stays small enough for the cache. */
+static void dm__qem_heap_purge(dm__qem_simp *s)
+{
+    size_t i, n = 0;
+    for (i = 0; i < s->hsize; i++) {
+        const dm__qem_cand *e = &s->heap[i];
+        if (((s->flag[e->a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[e->a] + s->ver[e->b] == e->stamp)
+            s->heap[n++] = *e;
+    }
+    s->hsize = n;
+    for (i = n / 4 + 1; i-- > 0;)
+        if (i < n) dm__qem_sift_down(s->heap, n, i);
+}
+
 static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
 {
     dm__qem_cand top = s->heap[0];
@@ -2142,11 +2160,10 @@ static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
 static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
 {
     dm__qem_cand e;
-    e.key = cost;
+    e.key = (float)cost;
     e.a = a < b ? a : b;
     e.b = a < b ? b : a;
-    e.va = s->ver[e.a];
-    e.vb = s->ver[e.b];
+    e.stamp = s->ver[e.a] + s->ver[e.b];
     return e;
 }
 
@@ -2225,14 +2242,6 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     return m;
 }
 
-static size_t dm__qem_triangle_count_of(const dm__qem_simp *s, uint32_t v)
-{
-    size_t m = 0;
-    uint32_t c;
-    for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) m++;
-    return m;
-}
-
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
    joined to every boundary vertex) and no vertex left with a degenerate fan. */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
@@ -2269,7 +2278,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         return 0;
     }
     for (i = 0; i < shared; i++) {
-        size_t nt = dm__qem_triangle_count_of(s, opp[i]);
+        size_t nt = s->tcount[opp[i]];
         if (nt <= ((s->flag[opp[i]] & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
     }
     return 1;
@@ -2325,7 +2334,12 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     }
     s->vfirst[rem] = DM__QEM_NONE;
     dm__qem_prune(s, keep);
-    for (i = 0; i < nopp; i++) dm__qem_prune(s, opp[i]);
+    for (i = 0; i < nopp; i++) {
+        dm__qem_prune(s, opp[i]);
+        s->tcount[opp[i]]--;
+    }
+    s->tcount[keep] += r.moved - r.dead;
+    s->tcount[rem] = 0;
     for (k = 0; k < 3; k++) s->pos[3 * (size_t)keep + k] = at[k];
     dm__qem_quadric_sum(&s->q[keep], &s->q[keep], &s->q[rem]);
     s->flag[rem] |= DM__QEM_V_REMOVED;
@@ -2468,6 +2482,7 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->q);
     a->free(a->user, s->vfirst);
     a->free(a->user, s->cnext);
+    a->free(a->user, s->tcount);
     a->free(a->user, s->ver);
     a->free(a->user, s->mark);
     a->free(a->user, s->nbr);
@@ -2528,6 +2543,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(q, vertex_count, dm__qem_quadric);
     DM__QEM_ALLOC(vfirst, vertex_count, uint32_t);
     DM__QEM_ALLOC(cnext, 3 * triangle_count, uint32_t);
+    DM__QEM_ALLOC(tcount, vertex_count, uint32_t);
     DM__QEM_ALLOC(ver, vertex_count, uint32_t);
     DM__QEM_ALLOC(mark, vertex_count, uint32_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
@@ -2548,10 +2564,14 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     memset(s->mark, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
-    for (v = 0; v < vertex_count; v++) s->vfirst[v] = DM__QEM_NONE;
+    for (v = 0; v < vertex_count; v++) {
+        s->vfirst[v] = DM__QEM_NONE;
+        s->tcount[v] = 0;
+    }
     for (t = 3 * kept; t-- > 0;) { /* prepend in reverse: lists in increasing corner order */
         s->cnext[t] = s->vfirst[s->idx[t]];
         s->vfirst[s->idx[t]] = (uint32_t)t;
+        s->tcount[s->idx[t]]++;
     }
     for (v = 0; v < 3; v++) {
         s->center[v] = 0.5 * ((double)lo[v] + (double)hi[v]);
@@ -2650,7 +2670,12 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.flag[v] & DM__QEM_V_BOUNDARY)) s.flag[v] |= DM__QEM_V_LOCKED;
         if (s.flag[v] & DM__QEM_V_FROZEN) frozen++;
     }
-    /* every collapsible edge once, from its lower endpoint; then one heapify */
+    /* every collapsible edge once, from its lower endpoint; then one heapify. A closed manifold
+       has 1.5 edges per triangle; the heap starts with room for twice that */
+    if (!dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, 3 * s.t + 64, sizeof(dm__qem_cand))) {
+        r = DM_ERR_OUT_OF_MEMORY;
+        goto done;
+    }
     for (v = 0; v < vertex_count; v++) {
         size_t m, i;
         if (s.flag[v] & DM__QEM_V_FROZEN) continue;
@@ -2681,7 +2706,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         size_t ring_count;
         int k, placed;
         if ((s.flag[e.a] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
-        if (s.ver[e.a] != e.va || s.ver[e.b] != e.vb) continue; /* stale */
+        if (s.ver[e.a] + s.ver[e.b] != e.stamp) continue; /* stale */
         placed = dm__qem_place(&s, e.a, e.b, &keep, &rem, x, &cost, &err);
         if (!placed) continue;
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
@@ -2737,6 +2762,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
+        if (s.hsize > 4096 && s.hsize / 4 > s.live) dm__qem_heap_purge(&s);
         if (err > s.max_error) s.max_error = err;
         if (opt.progress && s.nrec >= next_progress) {
             float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
