@@ -2401,8 +2401,9 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
                 }
                 li[k] = loc[x];
             }
-            cnt[li[0]] += 1u;       /* edge v -> nx */
-            cnt[li[1]] += 1u << 16; /* edge pv -> v */
+            /* edge v -> nx, edge pv -> v; counts saturate at 2 (all that matters is > 1) */
+            if ((cnt[li[0]] & 0xffffu) < 2u) cnt[li[0]] += 1u;
+            if ((cnt[li[1]] >> 16) < 2u) cnt[li[1]] += 1u << 16;
             { /* union the two neighbours: they share an edge of the fan */
                 uint32_t ra = li[0], rb = li[1];
                 while (uf[ra] != ra) ra = uf[ra] = uf[uf[ra]];
@@ -2519,6 +2520,8 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     if (triangle_count == 0) return DM_ERR_NO_TRIANGLES;
     if (vertex_count == 0) return DM_ERR_BAD_INDEX;
     if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u) return DM_ERR_TOO_LARGE;
+    if (vertex_count > (size_t)-1 / (3 * sizeof(uint32_t)) || triangle_count > (size_t)-1 / (3 * sizeof(uint32_t)))
+        return DM_ERR_TOO_LARGE;
     for (t = 0; t < 3 * triangle_count; t++) {
         uint32_t i = indices[t];
         int k;
