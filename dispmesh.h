@@ -151,8 +151,7 @@
        4. Placement for an edge (a, b), Q = Qa + Qb. Both interior: the minimiser of Q, A x = -b,
           solved by the adjugate when det(A) > 1e-7 trace(A)^3 and the solution lies within two
           edge lengths of the midpoint; otherwise (flat or cylindrical regions: A singular or
-          nearly so) the minimiser of Q on the segment a b, which always exists; the better of
-          the two is kept. Both on the boundary (and the edge a boundary edge): the segment's
+          nearly so) the minimiser of Q on the segment a b, which always exists. Both on the boundary (and the edge a boundary edge): the segment's
           minimiser, so a boundary stays on its edges. One on the boundary: the boundary vertex
           stays where it is. A locked vertex stays where it is; two locked vertices never merge.
           The surviving id is the boundary or locked one, else the lower id.
@@ -2002,23 +2001,21 @@ static void dm__qem_segment_min(const dm__qem_quadric *q, const double p0[3], co
 }
 
 /* Optimal placement: solve A x = -b when A is well conditioned (det against trace^3) and the
-   solution stays near the edge; otherwise, and whenever it is better, the best point of the
-   edge. Returns Q at the chosen x. */
+   solution stays within two edge lengths of the midpoint (then it is Q's global minimum);
+   otherwise the best point of the edge, which always exists. Returns Q at the chosen x. */
 static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], const double p1[3], double x[3])
 {
     double c00 = q->a11 * q->a22 - q->a12 * q->a12;
     double c01 = q->a02 * q->a12 - q->a01 * q->a22;
     double c02 = q->a01 * q->a12 - q->a02 * q->a11;
-    double c11 = q->a00 * q->a22 - q->a02 * q->a02;
-    double c12 = q->a01 * q->a02 - q->a00 * q->a12;
-    double c22 = q->a00 * q->a11 - q->a01 * q->a01;
     double det = q->a00 * c00 + q->a01 * c01 + q->a02 * c02;
     double tr = q->a00 + q->a11 + q->a22;
-    double seg[3], es, eo, len2 = 0.0, d2 = 0.0;
+    double len2 = 0.0, d2 = 0.0;
     int k;
-    dm__qem_segment_min(q, p0, p1, seg);
-    es = dm__qem_quadric_eval(q, seg);
     if (tr > 0.0 && det > 1e-7 * tr * tr * tr) {
+        double c11 = q->a00 * q->a22 - q->a02 * q->a02;
+        double c12 = q->a01 * q->a02 - q->a00 * q->a12;
+        double c22 = q->a00 * q->a11 - q->a01 * q->a01;
         double inv = 1.0 / det, o[3];
         o[0] = -(c00 * q->b0 + c01 * q->b1 + c02 * q->b2) * inv;
         o[1] = -(c01 * q->b0 + c11 * q->b1 + c12 * q->b2) * inv;
@@ -2028,16 +2025,13 @@ static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], cons
             len2 += e * e;
             d2 += m * m;
         }
-        if (d2 <= 4.0 * len2) { /* within two edge lengths of the midpoint */
-            eo = dm__qem_quadric_eval(q, o);
-            if (eo < es) {
-                for (k = 0; k < 3; k++) x[k] = o[k];
-                return eo;
-            }
+        if (d2 <= 4.0 * len2) {
+            for (k = 0; k < 3; k++) x[k] = o[k];
+            return dm__qem_quadric_eval(q, x);
         }
     }
-    for (k = 0; k < 3; k++) x[k] = seg[k];
-    return es;
+    dm__qem_segment_min(q, p0, p1, x);
+    return dm__qem_quadric_eval(q, x);
 }
 
 /* Which vertex stays, where it goes (normalised coordinates) and the cost. 0: never collapsible. */
