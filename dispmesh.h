@@ -156,7 +156,8 @@
           stays where it is. A locked vertex stays where it is; two locked vertices never merge.
           The surviving id is the boundary or locked one, else the lower id.
        5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
-          float), ties by the lower then the higher vertex id, in a 4-ary min-heap with lazy
+          float), ties by the lower vertex id (then by heap position, which is as deterministic
+          as the rest), in a 4-ary min-heap with lazy
           deletion (each entry carries the sum of its endpoints' version numbers; a collapse
           bumps them).
        6. Checks on each popped candidate, in this order: the link condition (the common
@@ -1855,11 +1856,15 @@ typedef struct dm__qem_quadric {
 } dm__qem_quadric;
 
 /* A heap entry (16 bytes): the edge (a < b) with its cost when the sum of its endpoints'
-   versions was `stamp` (versions only grow, so any change to either makes the entry stale). */
+   versions was `stamp` (versions only grow, so any change to either makes the entry stale).
+   key = the cost's float bits (a non-negative float orders like its bits) above a, so one
+   integer compare orders by cost, then by the lower vertex id. */
 typedef struct dm__qem_cand {
-    float key;
-    uint32_t a, b, stamp;
+    uint64_t key;
+    uint32_t b, stamp;
 } dm__qem_cand;
+
+#define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
 
 /* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
 typedef struct dm__qem_rec {
@@ -2068,12 +2073,7 @@ static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t
     return fixed ? 2 : 1;
 }
 
-static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y)
-{
-    if (x->key != y->key) return x->key < y->key;
-    if (x->a != y->a) return x->a < y->a;
-    return x->b < y->b;
-}
+static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y) { return x->key < y->key; }
 
 /* A 4-ary min-heap: half the depth of a binary one, and the four children share a cache line
    or two, which is what the pops (the simplifier's hottest loop) wait on. */
@@ -2082,11 +2082,16 @@ static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
     dm__qem_cand e = h[i];
     for (;;) {
         size_t c = 4 * i + 1, best, j, end;
+        uint64_t bk;
         if (c >= n) break;
         best = c;
+        bk = h[c].key;
         end = c + 4 < n ? c + 4 : n;
-        for (j = c + 1; j < end; j++)
-            if (dm__qem_cand_less(&h[j], &h[best])) best = j;
+        for (j = c + 1; j < end; j++) { /* without branches; equal keys keep the leftmost */
+            int lt = h[j].key < bk;
+            best = lt ? j : best;
+            bk = lt ? h[j].key : bk;
+        }
         if (!dm__qem_cand_less(&h[best], &e)) break;
         h[i] = h[best];
         i = best;
@@ -2118,7 +2123,8 @@ static void dm__qem_heap_purge(dm__qem_simp *s)
     size_t i, n = 0;
     for (i = 0; i < s->hsize; i++) {
         const dm__qem_cand *e = &s->heap[i];
-        if (((s->flag[e->a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[e->a] + s->ver[e->b] == e->stamp)
+        uint32_t a = DM__QEM_CAND_A(e);
+        if (((s->flag[a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[a] + s->ver[e->b] == e->stamp)
             s->heap[n++] = *e;
     }
     s->hsize = n;
@@ -2154,10 +2160,12 @@ static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
 static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
 {
     dm__qem_cand e;
-    e.key = (float)cost;
-    e.a = a < b ? a : b;
+    float f = cost < (double)FLT_MAX ? (float)cost : FLT_MAX; /* cost >= 0 */
+    uint32_t bits, lo = a < b ? a : b;
+    memcpy(&bits, &f, sizeof bits);
+    e.key = (uint64_t)bits << 32 | lo;
     e.b = a < b ? b : a;
-    e.stamp = s->ver[e.a] + s->ver[e.b];
+    e.stamp = s->ver[lo] + s->ver[e.b];
     return e;
 }
 
@@ -2697,14 +2705,14 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     while (s.hsize > 0 && (s.target == 0 || s.live > s.target) &&
            (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
         dm__qem_cand e = dm__qem_heap_pop(&s);
-        uint32_t keep, rem;
+        uint32_t ea = DM__QEM_CAND_A(&e), keep, rem;
         double x[3], cost, err;
         float at[3];
         size_t ring_count;
         int k, placed;
-        if ((s.flag[e.a] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
-        if (s.ver[e.a] + s.ver[e.b] != e.stamp) continue; /* stale */
-        placed = dm__qem_place(&s, e.a, e.b, &keep, &rem, x, &cost, &err);
+        if ((s.flag[ea] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
+        if (s.ver[ea] + s.ver[e.b] != e.stamp) continue; /* stale */
+        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost, &err);
         if (!placed) continue;
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
         for (k = 0; k < 3; k++)
@@ -2712,7 +2720,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if (!dm__qem_check_topology(&s, keep, rem) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
-            s.flag[e.a] |= DM__QEM_V_PARKED;
+            s.flag[ea] |= DM__QEM_V_PARKED;
             s.flag[e.b] |= DM__QEM_V_PARKED;
             continue;
         }
@@ -2750,7 +2758,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             }
             if (verdict == DM_COLLAPSE_VETO) {
                 s.vetoed++;
-                s.flag[e.a] |= DM__QEM_V_PARKED;
+                s.flag[ea] |= DM__QEM_V_PARKED;
                 s.flag[e.b] |= DM__QEM_V_PARKED;
                 continue;
             }
