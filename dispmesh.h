@@ -1904,7 +1904,7 @@ typedef struct dm__qem_simp {
     size_t nrec, caprec;
     uint32_t *ops;
     size_t nops, capops;
-    double center[3], scale;
+    double center[3], scale, inv_scale;
     double max_error;
     size_t rejected, vetoed;
 } dm__qem_simp;
@@ -1945,7 +1945,7 @@ static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
 {
     int k;
-    for (k = 0; k < 3; k++) x[k] = ((double)s->pos[3 * (size_t)v + k] - s->center[k]) / s->scale;
+    for (k = 0; k < 3; k++) x[k] = ((double)s->pos[3 * (size_t)v + k] - s->center[k]) * s->inv_scale;
 }
 
 static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
@@ -2132,11 +2132,37 @@ static void dm__qem_heap_purge(dm__qem_simp *s)
         if (i < n) dm__qem_sift_down(s->heap, n, i);
 }
 
+/* Floyd's pop: the hole left by the top goes down to a leaf along the smallest children (no
+   compare against the moved element on the way), then the last element rises from there. */
 static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
 {
-    dm__qem_cand top = s->heap[0];
-    s->heap[0] = s->heap[--s->hsize];
-    if (s->hsize) dm__qem_sift_down(s->heap, s->hsize, 0);
+    dm__qem_cand top = s->heap[0], last;
+    dm__qem_cand *h = s->heap;
+    size_t n = --s->hsize, i = 0;
+    if (n == 0) return top;
+    last = h[n];
+    for (;;) {
+        size_t c = 4 * i + 1, best, j, end;
+        uint64_t bk;
+        if (c >= n) break;
+        best = c;
+        bk = h[c].key;
+        end = c + 4 < n ? c + 4 : n;
+        for (j = c + 1; j < end; j++) {
+            int lt = h[j].key < bk;
+            best = lt ? j : best;
+            bk = lt ? h[j].key : bk;
+        }
+        h[i] = h[best];
+        i = best;
+    }
+    while (i > 0) {
+        size_t p = (i - 1) / 4;
+        if (!(last.key < h[p].key)) break;
+        h[i] = h[p];
+        i = p;
+    }
+    h[i] = last;
     return top;
 }
 
@@ -2583,6 +2609,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
         if ((double)hi[v] - lo[v] > s->scale) s->scale = (double)hi[v] - lo[v];
     }
     if (!(s->scale > 0.0)) s->scale = 1.0;
+    s->inv_scale = 1.0 / s->scale;
     return DM_OK;
 }
 
@@ -2743,7 +2770,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                 for (k = 0; k < 3; k++) {
                     ok &= corrected[k] >= -DM__MAX_COORD && corrected[k] <= DM__MAX_COORD;
                     at[k] = corrected[k];
-                    q[k] = ((double)at[k] - s.center[k]) / s.scale;
+                    q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
                 }
                 if (((s.flag[keep] & DM__QEM_V_LOCKED) || ((s.flag[keep] ^ s.flag[rem]) & DM__QEM_V_BOUNDARY)) &&
                     memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
