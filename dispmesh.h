@@ -200,7 +200,7 @@
 
      MEMORY. During dm_simplify about 145 bytes per vertex (the 88-byte quadric among them) and
      40 per triangle, plus the candidate heap (16 bytes an entry: 3 per triangle reserved at the
-     start; stale entries are dropped once they outnumber the live ones). The progressive mesh
+     start; stale entries are dropped when the heap exceeds 2 per live triangle). The progressive mesh
      keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
      triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
 
@@ -2116,8 +2116,9 @@ static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
     return 1;
 }
 
-/* Drops the stale entries and re-heapifies, once they outnumber the live edges (about 1.5 per
-   triangle) two to one: the heap then stays small enough for the cache. */
+/* Drops the stale entries and re-heapifies, once the heap holds more than two entries per live
+   triangle (there are about 1.5 live edges per triangle): the heap stays near the size of the
+   live mesh, which the 1M-triangle sphere showed to matter (1.6x faster than at four). */
 static void dm__qem_heap_purge(dm__qem_simp *s)
 {
     size_t i, n = 0;
@@ -2794,7 +2795,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
-        if (s.hsize > 4096 && s.hsize / 4 > s.live) dm__qem_heap_purge(&s);
+        if (s.hsize > 4096 && s.hsize / 2 > s.live) dm__qem_heap_purge(&s);
         if (err > s.max_error) s.max_error = err;
         if (opt.progress && s.nrec >= next_progress) {
             float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
