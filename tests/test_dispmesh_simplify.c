@@ -454,6 +454,7 @@ static void open_mesh_checks(void)
                 else if (memcmp(p + 3 * i, in.pos + 3 * i, 3 * sizeof(float)) != 0) moved++;
             }
         T_CHECK_MSG(missing == 0 && moved == 0, "locks: %zu removed, %zu moved", missing, moved);
+        free(present);
         mesh_free(&out);
         free(ids);
         dm_pm_free(pm);
