@@ -29,7 +29,7 @@ FUZZ_TIME ?= 60
 LIBHEADERS = $(wildcard dispmesh.h erosion.h texel.h subdiv4.h deform.h)
 EXHEADERS  = $(wildcard examples/*.h)
 HEADERS    = $(LIBHEADERS) $(EXHEADERS)
-ALLDEPS    = $(HEADERS) $(wildcard tests/*.h bench/*.h) Makefile
+ALLDEPS    = $(HEADERS) $(wildcard tests/*.h tests/*.hpp bench/*.h) Makefile
 
 HAVE_OPENMESH := $(wildcard /usr/include/OpenMesh/Core/IO/MeshIO.hh)
 HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
@@ -38,18 +38,21 @@ HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
+             $(B)/test_subdiv4
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
-             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4)
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT),$(HAVE_OPENMESH)),$(B)/bench_simplify)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -89,6 +92,9 @@ $(B)/ref_openmesh_butterfly: tests/ref_openmesh_butterfly.cpp tests/butterfly_co
 
 $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
+
+$(B)/ref_openmesh_simplify: tests/ref_openmesh_simplify.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshTools -lOpenMeshCore -lembree3 -lm
 
 # Dependencies are installed first; the build is a separate make so that it sees what was installed.
 test:
@@ -130,6 +136,7 @@ BENCH_LIBS_subdiv4 = -lOpenMeshCore
 # picks its best instruction set at run time)
 HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)
 BENCH_FLAGS_bvh = $(if $(HAVE_AVX2),-DDM_USE_AVX2 -mavx2,$(if $(filter x86_64,$(shell uname -m)),-DDM_USE_SSE2))
+BENCH_LIBS_simplify = -lOpenMeshTools -lOpenMeshCore -lembree3 -lmeshoptimizer
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 

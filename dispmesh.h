@@ -1,5 +1,6 @@
 /* dispmesh.h - v0.1 - MIT licence or public domain (see end of file)
-   Displacement-mapped meshes, part 1: a BVH ray caster over a triangle mesh.
+   Displacement-mapped meshes. Part 1: a BVH ray caster over a triangle mesh. Part 2 (see
+   PART 2 below): QEM edge-collapse simplification with progressive-mesh records.
 
    WHAT
      A bounding volume hierarchy over a triangle mesh (float xyz positions, uint32 indices) with
@@ -7,8 +8,8 @@
      [tmin, tmax], any hit (occlusion), the nearest hit along a line in either direction, batches
      of rays, and the closest point on the mesh to a query point. The ray/triangle test is
      watertight: a ray through a shared edge or vertex never slips between the triangles.
-     Later parts of this header (QEM simplification, parameterization, displacement bake) use
-     the same prefix: dm_bvh_* names the ray caster, other dm_* names will follow.
+     Part 2 (dm_simplify, dm_pm_*) is described under PART 2; the parameterization and the
+     displacement bake will follow with the same prefix.
 
    HOW TO USE (in ten lines)
        // in exactly one C or C++ file, #define DM_IMPLEMENTATION before #include "dispmesh.h"
@@ -108,6 +109,123 @@
      in magnitude. The closest-point query
      works in double.
 
+   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*)
+     WHAT. Edge-collapse simplification driven by quadric error metrics (Garland-Heckbert 1997),
+     recorded as a progressive mesh (Hoppe 1996): the base mesh, and one vertex split per
+     collapse, so that any level between the base and the input can be rebuilt exactly, up and
+     down; for every base vertex, the input vertices merged into it. Paper 000 builds its base
+     mesh this way, under constraints that keep the displacement map valid: a constraint hook
+     lets the caller veto or move each candidate collapse.
+
+     HOW TO USE
+       dm_simplify_options opt = {0};
+       opt.target_triangles = triangle_count / 100;            // and/or opt.target_error
+       dm_pm *pm; dm_simplify_report rep;
+       if (dm_simplify(positions, vertex_count, indices, triangle_count, &opt, &pm, &rep) != DM_OK)
+           return 1;
+       size_t nv, nt; dm_pm_counts(pm, &nv, &nt);              // the base mesh (level 0)
+       dm_pm_get_mesh(pm, out_positions, out_indices, out_ids); // compact arrays, caller-sized
+       dm_pm_set_level(pm, dm_pm_split_count(pm) / 2);          // any level; top level = input
+       dm_pm_free(pm);
+
+     OPTIONS (dm_simplify_options, zero = default)
+       target_triangles  stop at or below this count (a collapse removes 2 triangles, 1 on a
+                         boundary). 0: no count target.
+       target_error      no collapse whose error exceeds it is done (mesh units). 0: none. With
+                         neither target the mesh is simplified until no collapse passes the checks
+                         (the paper's "until no edge can be collapsed").
+       flags             DM_SIMPLIFY_LOCK_BOUNDARY: boundary vertices never move, never go.
+       locked            per-vertex bytes: a nonzero vertex never moves and is never removed (a free
+                         neighbour may still merge into it).
+       max_collapses     stop after this many collapses (0: no limit). The first k collapses of a
+                         run are the same whatever the limit: this is how level k is checked.
+       constraint        called for every candidate that passed all the checks below, with the
+                         edge (keep, remove), the proposed position, its error, the current
+                         positions and the triangles of keep's new one-ring. It returns
+                         DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE with a corrected
+                         position, which is checked again for flips and degenerate triangles (and
+                         must equal keep's position when keep is locked or absorbs an interior
+                         vertex from the boundary); if that fails it counts as a veto. A refused
+                         or vetoed edge is retried when a collapse changes its one-ring. When
+                         vetoes stop the simplification above the target, dm_simplify still
+                         returns DM_OK; the report says what was reached (reached_target = 0).
+       allocator, progress, progress_user   as for the BVH; progress gets the fraction of the
+                         triangles to remove that are gone, every 1024 collapses and at the end.
+
+     THE METHOD, step by step
+       1. Input checks (as dm_bvh_build); triangles with a repeated index are dropped (counted in
+          the report, absent from every level, so the top level is the input without them).
+       2. Per vertex, a list of its triangle corners; classification: a vertex is non-manifold
+          when an edge at it has more than two triangles, two triangles the same way round, or
+          its triangles form more than one fan. Non-manifold vertices and every vertex that shares
+          a triangle with one are frozen: their triangles are left exactly as they are.
+       3. Quadrics in a frame centred on the bounding box and scaled by its largest side: each
+          triangle's plane weighted by its area, added to its three vertices; each boundary edge
+          adds the plane through it perpendicular to its triangle, weighted 10 x its squared
+          length (Garland-Heckbert's boundary constraint).
+       4. Placement for an edge (a, b), Q = Qa + Qb. Both interior: the minimiser of Q, A x = -b,
+          solved by the adjugate when det(A) > 1e-7 trace(A)^3 and the solution lies within two
+          edge lengths of the midpoint; otherwise (flat or cylindrical regions: A singular or
+          nearly so) the minimiser of Q on the segment a b, which always exists. Both on the boundary (and the edge a boundary edge): the segment's
+          minimiser, so a boundary stays on its edges. One on the boundary: the boundary vertex
+          stays where it is. A locked vertex stays where it is; two locked vertices never merge.
+          The surviving id is the boundary or locked one, else the lower id.
+       5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
+          float), ties by the lower vertex id (then by heap position, which is as deterministic
+          as the rest), in a 4-ary min-heap with lazy
+          deletion (each entry carries the sum of its endpoints' version numbers; a collapse
+          bumps them).
+       6. Checks on each popped candidate, in this order: the link condition (the common
+          neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
+          on a boundary edge; two boundary vertices joined by an interior edge never merge); no
+          opposite vertex left with a degenerate fan (an interior one needs more than 3
+          triangles, a boundary one more than 1); every surviving triangle of the one-ring keeps
+          its orientation (its normal turns by less than acos(0.2) = 78 degrees) and is not
+          degenerate (2 area > 1e-5 longest edge^2); then the target error; then the constraint.
+       7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
+          the new position and Qa + Qb, and the record stores keep's positions before and after,
+          the dead triangles and the moved corners. New candidates for keep's edges go in the
+          heap; neighbours that had a candidate refused get all theirs again.
+
+     GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
+     a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
+     predecessor; boundaries keep their vertices on boundary edges (a vertex at a boundary corner
+     can slide along one of its edges by what the quadric balances, 1e-7 of the size in the
+     tests); locked and frozen vertices keep their position bit for bit. The output is a pure
+     function of the input and options (no randomness, ties by index).
+
+     ERROR. A collapse's error is sqrt(Q(x) / W) in mesh units, where W is the total area of the
+     planes in Q: the area-weighted RMS distance from the new position to the planes of the
+     triangles merged into it. The report's error is the largest over the collapses done.
+
+     PROGRESSIVE MESH. Level 0 is the base, level dm_pm_split_count() the input; level k is
+     bit for bit the simplifier's mesh after its (split_count - k)-th collapse (positions of
+     every vertex in use, the same triangles in the same order: triangles keep their input
+     order, and dead ones are skipped). dm_pm_set_level walks the records (no allocation);
+     dm_pm_get_vsplit describes one; dm_pm_merged_vertices gives, for a base vertex, the sorted
+     input vertices merged into it (itself included; a partition of all input vertices).
+
+     BAD INPUT. NULL arrays, zero triangles, bad indices, non-finite or huge referenced
+     coordinates, a NaN or negative target_error: an error code, nothing allocated. Duplicate
+     vertices (same position, different ids) are different vertices: a seam between them is two
+     boundaries, each kept as a boundary. Zero-area triangles have no plane; they may be collapsed
+     away, and are never the reason a new degenerate triangle appears. Edges with three or more
+     triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
+     positions, in no level's mesh. Unreferenced vertices may hold NaN.
+
+     MEMORY. During dm_simplify about 145 bytes per vertex (the 88-byte quadric among them) and
+     40 per triangle, plus the candidate heap (16 bytes an entry: 3 per triangle reserved at the
+     start; stale entries are dropped when the heap exceeds 2 per live triangle). The progressive mesh
+     keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
+     triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
+
+     THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads, but
+     dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
+     concurrently with anything else on the same pm.
+
+     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit).
+     Attributes (normals, UVs) are not simplified: the quadrics see positions only.
+
    REFERENCES
      S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
      I. Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007 (binning).
@@ -115,7 +233,14 @@
      C. Ericson, "Real-Time Collision Detection", 2005, 5.1.5 (closest point on a triangle).
      J. Bikker, tinybvh (2024-2025): 32-byte node layout, near-child-first traversal.
      H. Dammertz, J. Hanika, A. Keller, "Shallow Bounding Volume Hierarchies for Fast SIMD Ray
-     Tracing of Incoherent Rays", EGSR 2008 (4-wide nodes collapsed from a binary tree). */
+     Tracing of Incoherent Rays", EGSR 2008 (4-wide nodes collapsed from a binary tree).
+     M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997
+     (quadrics, optimal placement, boundary planes).
+     H. Hoppe, "Progressive Meshes", SIGGRAPH 1996 (vertex split records).
+     T. Dey, H. Edelsbrunner, S. Guha, D. Nekhayev, "Topology Preserving Edge Contraction", Publ.
+     Inst. Math. (Beograd) 66, 1999 (the link condition).
+     P. Lindstrom, G. Turk, "Fast and Memory Efficient Polygonal Simplification", IEEE Vis 1998
+     (constrained placement when the quadric is singular; ours falls back to the edge). */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
@@ -255,6 +380,112 @@ DMDEF int dm_bvh_closest_point(const dm_bvh *bvh, const float point[3], float ma
 
 /* "DM_OK", "DM_ERR_BAD_INDEX", ... (the enum name); "DM_ERR_?" outside the enum. */
 DMDEF const char *dm_result_string(dm_result r);
+
+/* ---- QEM simplification with progressive-mesh records (part 2) ---------------------------- */
+
+/* dm_simplify_options.flags */
+#define DM_SIMPLIFY_LOCK_BOUNDARY 1u /* boundary vertices never move and are never removed */
+
+/* What a constraint returns for a candidate collapse. */
+enum { DM_COLLAPSE_ALLOW = 0, DM_COLLAPSE_VETO = 1, DM_COLLAPSE_MOVE = 2 };
+
+/* A candidate collapse, as the constraint sees it. Vertex ids are the input's. */
+typedef struct dm_collapse {
+    uint32_t keep;             /* the vertex that stays */
+    uint32_t remove;           /* the vertex merged into keep */
+    float position[3];         /* proposed position of keep after the collapse */
+    double error;              /* the collapse's error at that position (mesh units, see PART 2) */
+    const float *positions;    /* current positions, 3 per input vertex; keep's entry is still the old one */
+    const uint32_t *triangles; /* 3 per triangle: keep's one-ring after the collapse (remove replaced by
+                                  keep, keep at `position`, every other vertex at positions[3 * id]) */
+    size_t triangle_count;
+} dm_collapse;
+
+/* Returns DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE after writing a corrected position
+   into corrected[3] (checked again for flips and degenerate triangles; vetoed if it fails). */
+typedef int (*dm_collapse_constraint)(void *user, const dm_collapse *candidate, float corrected[3]);
+
+typedef struct dm_simplify_options {
+    size_t target_triangles;          /* stop at or below this many triangles; 0 = no count target */
+    double target_error;              /* never do a collapse whose error exceeds this (mesh units);
+                                         0 = no error bound */
+    unsigned flags;                   /* DM_SIMPLIFY_LOCK_BOUNDARY */
+    const uint8_t *locked;            /* NULL, or one byte per vertex: nonzero = never moved or removed */
+    size_t max_collapses;             /* 0 = no limit; stop after this many collapses */
+    dm_collapse_constraint constraint; /* NULL, or called for each candidate that passed every check */
+    void *constraint_user;
+    const dm_allocator *allocator;    /* NULL = DM_MALLOC/DM_FREE; kept in the result for dm_pm_free */
+    int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
+    void *progress_user;
+} dm_simplify_options;                /* zero = simplify as far as the checks allow */
+
+typedef struct dm_simplify_report {
+    size_t input_triangles;       /* triangles taken from the input (repeated-index ones dropped) */
+    size_t dropped_triangles;     /* triangles with a repeated index, in no level */
+    size_t triangle_count;        /* triangles reached */
+    size_t vertex_count;          /* vertices the reached triangles use */
+    size_t collapse_count;        /* collapses done = vertex splits recorded */
+    size_t rejected;              /* candidates refused by the link, flip or degeneracy checks */
+    size_t vetoed;                /* candidates vetoed by the constraint */
+    size_t frozen_vertices;       /* vertices left alone because they or a neighbour are non-manifold */
+    double error;                 /* largest error of a collapse done (mesh units), 0 if none */
+    int reached_target;           /* 1 when target_triangles (if set) was reached */
+} dm_simplify_report;
+
+typedef struct dm_pm dm_pm; /* opaque: a progressive mesh */
+
+/* One vertex split (Hoppe 1996), the inverse of one collapse. */
+typedef struct dm_vsplit {
+    uint32_t keep;            /* the vertex that splits */
+    uint32_t remove;          /* the vertex it gives back */
+    float keep_position[3];   /* keep's position after the split (before the collapse) */
+    float merged_position[3]; /* keep's position before the split (after the collapse) */
+    size_t restored_triangles; /* triangles the split brings back (2 inside, 1 on a boundary) */
+    size_t moved_corners;     /* triangle corners that go from keep back to remove */
+} dm_vsplit;
+
+/* Simplifies a triangle mesh by quadric-error edge collapses and records them as a progressive
+   mesh. positions/vertex_count/indices/triangle_count as for dm_bvh_build (not referenced after
+   the call). options NULL or zeroed: no target, simplify until no collapse passes the checks.
+   On DM_OK *out holds the progressive mesh at its base level (the simplified mesh); report (may
+   be NULL) says what was reached. Vetoes or checks that stop above the target still give DM_OK. */
+DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const uint32_t *indices,
+                            size_t triangle_count, const dm_simplify_options *options, dm_pm **out,
+                            dm_simplify_report *report);
+
+/* Frees a progressive mesh (NULL is fine) with the allocator it was made with. */
+DMDEF void dm_pm_free(dm_pm *pm);
+
+/* Number of vertex splits (= collapses done). Levels run from 0 (base) to this (the input). */
+DMDEF size_t dm_pm_split_count(const dm_pm *pm);
+
+/* The current level. */
+DMDEF size_t dm_pm_level(const dm_pm *pm);
+
+/* Moves to a level by applying vertex splits (up) or collapses (down); levels above
+   dm_pm_split_count() are clamped. Level k is exactly the simplifier's mesh after its
+   (split_count - k)-th collapse. Never allocates. */
+DMDEF void dm_pm_set_level(dm_pm *pm, size_t level);
+
+/* Vertex and triangle counts of the current level. */
+DMDEF void dm_pm_counts(const dm_pm *pm, size_t *vertex_count, size_t *triangle_count);
+
+/* Writes the current level as a compact mesh: positions (3 * vertex_count floats), indices
+   (3 * triangle_count) and, if vertex_ids is not NULL, the input id of each vertex. Vertices come
+   in increasing input id, triangles in input order. Sizes from dm_pm_counts. Uses a scratch array
+   inside pm: not concurrently with anything else on the same pm. */
+DMDEF void dm_pm_get_mesh(dm_pm *pm, float *positions, uint32_t *indices, uint32_t *vertex_ids);
+
+/* Current positions by input vertex id (3 floats each; entries of vertices not in the current
+   level hold their last position). */
+DMDEF const float *dm_pm_positions(const dm_pm *pm);
+
+/* The vertex split that takes level `level` to level + 1. Returns 0 if level is out of range. */
+DMDEF int dm_pm_get_vsplit(const dm_pm *pm, size_t level, dm_vsplit *out);
+
+/* The input vertices merged into `vertex` at the base level (itself included), in increasing id.
+   *list points into pm; returns the count (0 for an id out of range or a vertex merged away). */
+DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint32_t **list);
 
 #ifdef __cplusplus
 }
@@ -1940,6 +2171,1091 @@ done:
     out->v = (float)bv;
     out->triangle = best_id;
     return 1;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: QEM simplification (Garland-Heckbert 1997) with progressive-mesh records (Hoppe 1996)
+   --------------------------------------------------------------------------------------------- */
+
+#define DM__QEM_V_BOUNDARY 1u    /* on an open boundary */
+#define DM__QEM_V_LOCKED 2u      /* never moved or removed; a free neighbour may merge into it */
+#define DM__QEM_V_FROZEN 4u      /* non-manifold, or in a triangle with such a vertex: never collapsed */
+#define DM__QEM_V_REMOVED 8u     /* merged into another vertex */
+#define DM__QEM_V_PARKED 16u     /* a candidate of it was refused: retried when its one-ring changes */
+#define DM__QEM_V_NONMANIFOLD 32u
+#define DM__QEM_NONE 0xffffffffu
+#define DM__QEM_BOUNDARY_WEIGHT 10.0 /* boundary planes weigh this times the squared edge length */
+#define DM__QEM_MIN_COS 0.2          /* a triangle's normal may turn by at most acos(0.2) = 78 degrees */
+#define DM__QEM_MIN_SIN 1e-5         /* new triangles: 2 area > DM__QEM_MIN_SIN * longest edge^2 */
+
+/* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. */
+typedef struct dm__qem_quadric {
+    double a00, a01, a02, a11, a12, a22, b0, b1, b2, c, w;
+} dm__qem_quadric;
+
+/* A heap entry (16 bytes): the edge (a < b) with its cost when the sum of its endpoints'
+   versions was `stamp` (versions only grow, so any change to either makes the entry stale).
+   key = the cost's float bits (a non-negative float orders like its bits) above a, so one
+   integer compare orders by cost, then by the lower vertex id. */
+typedef struct dm__qem_cand {
+    uint64_t key;
+    uint32_t b, stamp;
+} dm__qem_cand;
+
+#define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
+
+/* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
+typedef struct dm__qem_rec {
+    size_t first;
+    uint32_t keep, remove, dead, moved;
+    float before[3], after[3];
+} dm__qem_rec;
+
+struct dm_pm {
+    dm_allocator alloc;
+    size_t vertex_count, triangle_count, split_count, level, live_triangles, live_vertices;
+    float *pos;         /* 3 per input vertex */
+    uint32_t *idx;      /* 3 per triangle (input order, repeated-index triangles dropped) */
+    uint8_t *alive;     /* per triangle */
+    dm__qem_rec *rec;       /* collapses in the order done */
+    uint32_t *ops;
+    uint32_t *merge_first, *merge_list; /* base vertex -> input vertices merged into it */
+    uint32_t *scratch;  /* vertex_count, for dm_pm_get_mesh */
+};
+
+typedef struct dm__qem_simp {
+    dm_allocator al;
+    const dm_simplify_options *opt;
+    size_t n, t, live, target;
+    float *pos;
+    uint32_t *idx;
+    uint8_t *alive, *flag;
+    dm__qem_quadric *q;
+    uint32_t *vfirst, *cnext;      /* per vertex a list of its corners (3 triangle + slot) */
+    uint32_t *tcount;              /* per vertex the length of that list (its live triangles) */
+    uint32_t *ver, *mark, stamp;   /* candidate versions; visit marks */
+    uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
+    uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
+    dm__qem_cand *heap;
+    size_t hsize, hcap;
+    dm__qem_rec *rec;
+    size_t nrec, caprec;
+    uint32_t *ops;
+    size_t nops, capops;
+    double center[3], scale, inv_scale;
+    double max_error;
+    size_t rejected, vetoed;
+} dm__qem_simp;
+
+/* grows *p (elements of elem bytes, capacity *cap) to hold at least need; 0 on failure */
+static int dm__qem_grow(const dm_allocator *al, void **p, size_t *cap, size_t need, size_t elem)
+{
+    size_t ncap;
+    void *np;
+    int overflow = 0;
+    if (need <= *cap) return 1;
+    ncap = *cap ? *cap : 256;
+    while (ncap < need) {
+        if (ncap > (size_t)-1 / 2) return 0;
+        ncap *= 2;
+    }
+    np = dm__alloc_array(al, ncap, elem, &overflow);
+    if (!np) return 0;
+    if (*p) {
+        memcpy(np, *p, *cap * elem);
+        al->free(al->user, *p);
+    }
+    *p = np;
+    *cap = ncap;
+    return 1;
+}
+
+static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
+{
+    if (s->stamp >= 0xfffffff0u) { /* wrap: clear the marks once */
+        memset(s->mark, 0, s->n * sizeof(uint32_t));
+        s->stamp = 0;
+    }
+    s->stamp += 2;
+    return s->stamp;
+}
+
+static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) x[k] = ((double)s->pos[3 * (size_t)v + k] - s->center[k]) * s->inv_scale;
+}
+
+static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
+{
+    q->a00 += w * n[0] * n[0];
+    q->a01 += w * n[0] * n[1];
+    q->a02 += w * n[0] * n[2];
+    q->a11 += w * n[1] * n[1];
+    q->a12 += w * n[1] * n[2];
+    q->a22 += w * n[2] * n[2];
+    q->b0 += w * d * n[0];
+    q->b1 += w * d * n[1];
+    q->b2 += w * d * n[2];
+    q->c += w * d * d;
+    q->w += w;
+}
+
+static void dm__qem_quadric_sum(dm__qem_quadric *r, const dm__qem_quadric *a, const dm__qem_quadric *b)
+{
+    r->a00 = a->a00 + b->a00;
+    r->a01 = a->a01 + b->a01;
+    r->a02 = a->a02 + b->a02;
+    r->a11 = a->a11 + b->a11;
+    r->a12 = a->a12 + b->a12;
+    r->a22 = a->a22 + b->a22;
+    r->b0 = a->b0 + b->b0;
+    r->b1 = a->b1 + b->b1;
+    r->b2 = a->b2 + b->b2;
+    r->c = a->c + b->c;
+    r->w = a->w + b->w;
+}
+
+static double dm__qem_quadric_eval(const dm__qem_quadric *q, const double x[3])
+{
+    double ax = q->a00 * x[0] + q->a01 * x[1] + q->a02 * x[2];
+    double ay = q->a01 * x[0] + q->a11 * x[1] + q->a12 * x[2];
+    double az = q->a02 * x[0] + q->a12 * x[1] + q->a22 * x[2];
+    double e = x[0] * (ax + 2.0 * q->b0) + x[1] * (ay + 2.0 * q->b1) + x[2] * (az + 2.0 * q->b2) + q->c;
+    return e > 0.0 ? e : 0.0;
+}
+
+/* The minimiser of Q on the segment p0 p1 (a 1-D quadratic, always well posed). */
+static void dm__qem_segment_min(const dm__qem_quadric *q, const double p0[3], const double p1[3], double x[3])
+{
+    double e[3], ae[3], num, den, t;
+    int k;
+    for (k = 0; k < 3; k++) e[k] = p1[k] - p0[k];
+    ae[0] = q->a00 * e[0] + q->a01 * e[1] + q->a02 * e[2];
+    ae[1] = q->a01 * e[0] + q->a11 * e[1] + q->a12 * e[2];
+    ae[2] = q->a02 * e[0] + q->a12 * e[1] + q->a22 * e[2];
+    den = e[0] * ae[0] + e[1] * ae[1] + e[2] * ae[2];
+    /* dQ/dt at t = 0 is 2 (e^T A p0 + b^T e) */
+    num = -(ae[0] * p0[0] + ae[1] * p0[1] + ae[2] * p0[2] + q->b0 * e[0] + q->b1 * e[1] + q->b2 * e[2]);
+    if (den > 1e-300 && num > 0.0) t = num < den ? num / den : 1.0;
+    else if (den > 1e-300) t = 0.0;
+    else t = dm__qem_quadric_eval(q, p1) < dm__qem_quadric_eval(q, p0) ? 1.0 : 0.0;
+    for (k = 0; k < 3; k++) x[k] = p0[k] + t * e[k];
+}
+
+/* Optimal placement: solve A x = -b when A is well conditioned (det against trace^3) and the
+   solution stays within two edge lengths of the midpoint (then it is Q's global minimum);
+   otherwise the best point of the edge, which always exists. Returns Q at the chosen x. */
+static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], const double p1[3], double x[3])
+{
+    double c00 = q->a11 * q->a22 - q->a12 * q->a12;
+    double c01 = q->a02 * q->a12 - q->a01 * q->a22;
+    double c02 = q->a01 * q->a12 - q->a02 * q->a11;
+    double det = q->a00 * c00 + q->a01 * c01 + q->a02 * c02;
+    double tr = q->a00 + q->a11 + q->a22;
+    double len2 = 0.0, d2 = 0.0;
+    int k;
+    if (tr > 0.0 && det > 1e-7 * tr * tr * tr) {
+        double c11 = q->a00 * q->a22 - q->a02 * q->a02;
+        double c12 = q->a01 * q->a02 - q->a00 * q->a12;
+        double c22 = q->a00 * q->a11 - q->a01 * q->a01;
+        double inv = 1.0 / det, o[3];
+        o[0] = -(c00 * q->b0 + c01 * q->b1 + c02 * q->b2) * inv;
+        o[1] = -(c01 * q->b0 + c11 * q->b1 + c12 * q->b2) * inv;
+        o[2] = -(c02 * q->b0 + c12 * q->b1 + c22 * q->b2) * inv;
+        for (k = 0; k < 3; k++) {
+            double e = p1[k] - p0[k], m = o[k] - 0.5 * (p0[k] + p1[k]);
+            len2 += e * e;
+            d2 += m * m;
+        }
+        if (d2 <= 4.0 * len2) {
+            for (k = 0; k < 3; k++) x[k] = o[k];
+            return dm__qem_quadric_eval(q, x);
+        }
+    }
+    dm__qem_segment_min(q, p0, p1, x);
+    return dm__qem_quadric_eval(q, x);
+}
+
+/* Which vertex stays, where it goes (normalised coordinates) and the cost. 0: never collapsible. */
+static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t *keep, uint32_t *rem, double x[3],
+                     double *cost, double *err)
+{
+    unsigned fa = s->flag[a], fb = s->flag[b];
+    dm__qem_quadric q;
+    double pa[3], pb[3];
+    int fixed = 1;
+    if ((fa | fb) & (DM__QEM_V_FROZEN | DM__QEM_V_REMOVED)) return 0;
+    if ((fa & fb) & DM__QEM_V_LOCKED) return 0;
+    if (fa & DM__QEM_V_LOCKED) *keep = a;
+    else if (fb & DM__QEM_V_LOCKED) *keep = b;
+    else if ((fa ^ fb) & DM__QEM_V_BOUNDARY) *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
+    else {
+        *keep = a < b ? a : b;
+        fixed = 0;
+    }
+    *rem = *keep == a ? b : a;
+    dm__qem_quadric_sum(&q, &s->q[a], &s->q[b]);
+    dm__qem_norm_pos(s, a, pa);
+    dm__qem_norm_pos(s, b, pb);
+    if (fixed) { /* the caller takes keep's float position as it is (no round trip) */
+        dm__qem_norm_pos(s, *keep, x);
+        *cost = dm__qem_quadric_eval(&q, x);
+    } else if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
+        dm__qem_segment_min(&q, pa, pb, x);
+        *cost = dm__qem_quadric_eval(&q, x);
+    } else {
+        *cost = dm__qem_optimal(&q, pa, pb, x);
+    }
+    *err = q.w > 0.0 ? sqrt(*cost / q.w) * s->scale : 0.0;
+    return fixed ? 2 : 1;
+}
+
+static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y) { return x->key < y->key; }
+
+/* A 4-ary min-heap: half the depth of a binary one, and the four children share a cache line
+   or two, which is what the pops (the simplifier's hottest loop) wait on. */
+static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
+{
+    dm__qem_cand e = h[i];
+    for (;;) {
+        size_t c = 4 * i + 1, best, j, end;
+        uint64_t bk;
+        if (c >= n) break;
+        best = c;
+        bk = h[c].key;
+        end = c + 4 < n ? c + 4 : n;
+        for (j = c + 1; j < end; j++) { /* without branches; equal keys keep the leftmost */
+            int lt = h[j].key < bk;
+            best = lt ? j : best;
+            bk = lt ? h[j].key : bk;
+        }
+        if (!dm__qem_cand_less(&h[best], &e)) break;
+        h[i] = h[best];
+        i = best;
+    }
+    h[i] = e;
+}
+
+static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
+{
+    size_t i;
+    if (s->hsize == s->hcap &&
+        !dm__qem_grow(&s->al, (void **)&s->heap, &s->hcap, s->hsize + 1, sizeof(dm__qem_cand)))
+        return 0;
+    i = s->hsize++;
+    while (i > 0) {
+        size_t p = (i - 1) / 4;
+        if (!dm__qem_cand_less(e, &s->heap[p])) break;
+        s->heap[i] = s->heap[p];
+        i = p;
+    }
+    s->heap[i] = *e;
+    return 1;
+}
+
+/* Drops the stale entries and re-heapifies, once the heap holds more than two entries per live
+   triangle (there are about 1.5 live edges per triangle): the heap stays near the size of the
+   live mesh, which the 1M-triangle sphere showed to matter (1.6x faster than at four). */
+static void dm__qem_heap_purge(dm__qem_simp *s)
+{
+    size_t i, n = 0;
+    for (i = 0; i < s->hsize; i++) {
+        const dm__qem_cand *e = &s->heap[i];
+        uint32_t a = DM__QEM_CAND_A(e);
+        if (((s->flag[a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[a] + s->ver[e->b] == e->stamp)
+            s->heap[n++] = *e;
+    }
+    s->hsize = n;
+    for (i = n / 4 + 1; i-- > 0;)
+        if (i < n) dm__qem_sift_down(s->heap, n, i);
+}
+
+/* Floyd's pop: the hole left by the top goes down to a leaf along the smallest children (no
+   compare against the moved element on the way), then the last element rises from there. */
+static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
+{
+    dm__qem_cand top = s->heap[0], last;
+    dm__qem_cand *h = s->heap;
+    size_t n = --s->hsize, i = 0;
+    if (n == 0) return top;
+    last = h[n];
+    for (;;) {
+        size_t c = 4 * i + 1, best, j, end;
+        uint64_t bk;
+        if (c >= n) break;
+        best = c;
+        bk = h[c].key;
+        end = c + 4 < n ? c + 4 : n;
+        for (j = c + 1; j < end; j++) {
+            int lt = h[j].key < bk;
+            best = lt ? j : best;
+            bk = lt ? h[j].key : bk;
+        }
+        h[i] = h[best];
+        i = best;
+    }
+    while (i > 0) {
+        size_t p = (i - 1) / 4;
+        if (!(last.key < h[p].key)) break;
+        h[i] = h[p];
+        i = p;
+    }
+    h[i] = last;
+    return top;
+}
+
+/* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
+static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
+{
+    uint32_t st = dm__qem_new_stamp(s), c;
+    size_t m = 0;
+    for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+        int k;
+        for (k = 0; k < 3; k++)
+            if (t[k] != v && s->mark[t[k]] != st) {
+                s->mark[t[k]] = st;
+                s->nbr[m++] = t[k];
+            }
+    }
+    return m;
+}
+
+static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
+{
+    dm__qem_cand e;
+    float f = cost < (double)FLT_MAX ? (float)cost : FLT_MAX; /* cost >= 0 */
+    uint32_t bits, lo = a < b ? a : b;
+    memcpy(&bits, &f, sizeof bits);
+    e.key = (uint64_t)bits << 32 | lo;
+    e.b = a < b ? b : a;
+    e.stamp = s->ver[lo] + s->ver[e.b];
+    return e;
+}
+
+/* Pushes every collapsible edge (v, x), x != skip. 0 on allocation failure. */
+static int dm__qem_push_edges(dm__qem_simp *s, uint32_t v, uint32_t skip)
+{
+    size_t m = dm__qem_neighbours(s, v), i;
+    for (i = 0; i < m; i++) {
+        uint32_t x = s->nbr[i], keep, rem;
+        double p[3], cost, err;
+        dm__qem_cand e;
+        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost, &err)) continue;
+        e = dm__qem_make_cand(s, v, x, cost);
+        if (!dm__qem_heap_push(s, &e)) return 0;
+    }
+    return 1;
+}
+
+static void dm__qem_cross(const double a[3], const double b[3], double r[3])
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Normal (length = 2 area) of a triangle whose vertex `moved` is at `at` (or NULL: unmoved);
+   *e2 gets its longest squared edge. */
+static void dm__qem_tri_normal(const dm__qem_simp *s, const uint32_t *t, uint32_t moved, const float *at, double nrm[3],
+                           double *e2)
+{
+    double p[3][3], u[3], v[3], w[3], l0, l1, l2;
+    int i, k;
+    for (i = 0; i < 3; i++) {
+        const float *src = (at && t[i] == moved) ? at : s->pos + 3 * (size_t)t[i];
+        for (k = 0; k < 3; k++) p[i][k] = src[k];
+    }
+    for (k = 0; k < 3; k++) {
+        u[k] = p[1][k] - p[0][k];
+        v[k] = p[2][k] - p[0][k];
+        w[k] = p[2][k] - p[1][k];
+    }
+    dm__qem_cross(u, v, nrm);
+    l0 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+    l1 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    l2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    *e2 = l0 > l1 ? (l0 > l2 ? l0 : l2) : (l1 > l2 ? l1 : l2);
+}
+
+/* Geometry: every triangle of keep or rem that survives, with both moved to `at`, keeps its
+   orientation (normal turns by less than acos(DM__QEM_MIN_COS)) and is not degenerate. Writes the
+   new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. */
+static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
+{
+    size_t m = 0;
+    int pass;
+    for (pass = 0; pass < 2; pass++) {
+        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, c;
+        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+            uint32_t tri = c / 3, nt[3];
+            const uint32_t *t = s->idx + 3 * (size_t)tri;
+            double n0[3], n1[3], e2a, e2b, l0, l1, dot;
+            int k;
+            if (t[0] == other || t[1] == other || t[2] == other) continue; /* dies */
+            for (k = 0; k < 3; k++) nt[k] = t[k] == v ? keep : t[k];
+            dm__qem_tri_normal(s, t, v, NULL, n0, &e2a);
+            dm__qem_tri_normal(s, nt, keep, at, n1, &e2b);
+            l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+            if (!(l1 > DM__QEM_MIN_SIN * e2b)) return (size_t)-1;
+            l0 = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
+            dot = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
+            if (l0 > 0.0 && !(dot > DM__QEM_MIN_COS * l0 * l1)) return (size_t)-1;
+            for (k = 0; k < 3; k++) s->ring[3 * m + k] = nt[k];
+            m++;
+        }
+    }
+    return m;
+}
+
+/* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
+   joined to every boundary vertex) and no vertex left with a degenerate fan. */
+static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
+{
+    uint32_t st = dm__qem_new_stamp(s), c, opp[2];
+    size_t common = 0, shared = 0, i;
+    int both_boundary = (s->flag[keep] & s->flag[rem] & DM__QEM_V_BOUNDARY) != 0;
+    for (c = s->vfirst[keep]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+        int k;
+        for (k = 0; k < 3; k++)
+            if (t[k] != keep) s->mark[t[k]] = st;
+    }
+    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+        int k, has_keep = t[0] == keep || t[1] == keep || t[2] == keep;
+        if (has_keep) {
+            if (shared < 2)
+                for (k = 0; k < 3; k++)
+                    if (t[k] != keep && t[k] != rem) opp[shared] = t[k];
+            shared++;
+        }
+        for (k = 0; k < 3; k++)
+            if (t[k] != rem && t[k] != keep && s->mark[t[k]] == st) {
+                s->mark[t[k]] = st + 1;
+                common++;
+            }
+    }
+    if (shared == 1) {
+        if (!both_boundary || common != 1) return 0;
+    } else if (shared == 2) {
+        if (both_boundary || common != 2) return 0;
+    } else {
+        return 0;
+    }
+    for (i = 0; i < shared; i++) {
+        size_t nt = s->tcount[opp[i]];
+        if (nt <= ((s->flag[opp[i]] & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+    }
+    return 1;
+}
+
+/* drops the corners of dead triangles from v's list */
+static void dm__qem_prune(dm__qem_simp *s, uint32_t v)
+{
+    uint32_t *link = &s->vfirst[v];
+    while (*link != DM__QEM_NONE) {
+        if (!s->alive[*link / 3]) *link = s->cnext[*link];
+        else link = &s->cnext[*link];
+    }
+}
+
+/* Does the collapse rem -> keep with keep moved to `at`, and records it. 0 on allocation failure. */
+static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
+{
+    dm__qem_rec r;
+    uint32_t c, next, opp[2];
+    size_t nopp = 0, i, vmax = 0;
+    int k;
+    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) vmax++;
+    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + vmax, sizeof(uint32_t))) return 0;
+    if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, s->nrec + 1, sizeof(dm__qem_rec))) return 0;
+    r.keep = keep;
+    r.remove = rem;
+    r.first = s->nops;
+    r.dead = r.moved = 0;
+    for (k = 0; k < 3; k++) {
+        r.before[k] = s->pos[3 * (size_t)keep + k];
+        r.after[k] = at[k];
+    }
+    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        uint32_t tri = c / 3;
+        const uint32_t *t = s->idx + 3 * (size_t)tri;
+        if (t[0] == keep || t[1] == keep || t[2] == keep) {
+            for (k = 0; k < 3; k++)
+                if (t[k] != keep && t[k] != rem && nopp < 2) opp[nopp++] = t[k];
+            s->alive[tri] = 0;
+            s->ops[s->nops++] = tri;
+            r.dead++;
+        }
+    }
+    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = next) {
+        next = s->cnext[c];
+        if (!s->alive[c / 3]) continue;
+        s->idx[c] = keep;
+        s->ops[s->nops++] = c;
+        r.moved++;
+        s->cnext[c] = s->vfirst[keep];
+        s->vfirst[keep] = c;
+    }
+    s->vfirst[rem] = DM__QEM_NONE;
+    dm__qem_prune(s, keep);
+    for (i = 0; i < nopp; i++) {
+        dm__qem_prune(s, opp[i]);
+        s->tcount[opp[i]]--;
+    }
+    s->tcount[keep] += r.moved - r.dead;
+    s->tcount[rem] = 0;
+    for (k = 0; k < 3; k++) s->pos[3 * (size_t)keep + k] = at[k];
+    dm__qem_quadric_sum(&s->q[keep], &s->q[keep], &s->q[rem]);
+    s->flag[rem] |= DM__QEM_V_REMOVED;
+    s->ver[keep]++;
+    s->ver[rem]++;
+    s->live -= r.dead;
+    s->rec[s->nrec++] = r;
+    return 1;
+}
+
+/* After a collapse: new candidates for keep's edges, and a retry of the refused candidates of
+   its neighbours, whose one-ring just changed. */
+static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
+{
+    size_t m = dm__qem_neighbours(s, keep), i, np = 0;
+    for (i = 0; i < m; i++) { /* the parked neighbours go to the front of nbr */
+        uint32_t x = s->nbr[i];
+        if (s->flag[x] & DM__QEM_V_PARKED) {
+            s->nbr[i] = s->nbr[np];
+            s->nbr[np++] = x;
+        }
+    }
+    s->flag[keep] &= (uint8_t)~DM__QEM_V_PARKED;
+    if (np) { /* nbr is overwritten by the pushes: copy the parked ones to the ring scratch */
+        for (i = 0; i < np; i++) s->ring[i] = s->nbr[i];
+        for (i = 0; i < np; i++) {
+            uint32_t x = s->ring[i];
+            s->flag[x] &= (uint8_t)~DM__QEM_V_PARKED;
+            s->ver[x]++;
+        }
+        for (i = 0; i < np; i++)
+            if (!dm__qem_push_edges(s, s->ring[i], keep)) return 0;
+    }
+    return dm__qem_push_edges(s, keep, DM__QEM_NONE);
+}
+
+/* Non-manifold detection, boundary flags and the initial quadrics (triangle planes weighted by
+   area; boundary edges add a perpendicular plane). tmp holds 3 n uint32. */
+static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
+{
+    uint32_t *loc = tmp, *uf = tmp + s->n, *cnt = tmp + 2 * s->n; /* cnt: out | in << 16 */
+    size_t v, t;
+    for (v = 0; v < s->n; v++) {
+        size_t m = 0, i, fans = 0;
+        int nonmanifold = 0, boundary = 0;
+        uint32_t c;
+        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+            const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
+            uint32_t slot = c % 3, nx = tr[(slot + 1) % 3], pv = tr[(slot + 2) % 3], li[2], x;
+            int k;
+            for (k = 0; k < 2; k++) {
+                x = k ? pv : nx;
+                if (s->mark[x] != s->stamp + 1) {
+                    s->mark[x] = s->stamp + 1;
+                    loc[x] = (uint32_t)m;
+                    uf[m] = (uint32_t)m;
+                    cnt[m] = 0;
+                    s->nbr[m++] = x;
+                }
+                li[k] = loc[x];
+            }
+            /* edge v -> nx, edge pv -> v; counts saturate at 2 (all that matters is > 1) */
+            if ((cnt[li[0]] & 0xffffu) < 2u) cnt[li[0]] += 1u;
+            if ((cnt[li[1]] >> 16) < 2u) cnt[li[1]] += 1u << 16;
+            { /* union the two neighbours: they share an edge of the fan */
+                uint32_t ra = li[0], rb = li[1];
+                while (uf[ra] != ra) ra = uf[ra] = uf[uf[ra]];
+                while (uf[rb] != rb) rb = uf[rb] = uf[uf[rb]];
+                if (ra != rb) uf[ra > rb ? ra : rb] = ra < rb ? ra : rb;
+            }
+        }
+        for (i = 0; i < m; i++) {
+            uint32_t out = cnt[i] & 0xffffu, in = cnt[i] >> 16;
+            if (out > 1 || in > 1) nonmanifold = 1;
+            else if (out + in == 1) boundary = 1;
+            if (uf[i] == i) fans++;
+        }
+        if (fans > 1) nonmanifold = 1;
+        if (nonmanifold) s->flag[v] |= DM__QEM_V_NONMANIFOLD;
+        if (boundary) s->flag[v] |= DM__QEM_V_BOUNDARY;
+        if (boundary && !nonmanifold) { /* boundary planes, from the edge's tail */
+            for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+                const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
+                uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
+                if (cnt[loc[nx]] == 1u) {
+                    double p[3][3], e[3], f[3], nrm[3], pl[3], len, l2;
+                    int k, j;
+                    for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[(slot + (uint32_t)j) % 3], p[j]);
+                    for (k = 0; k < 3; k++) {
+                        e[k] = p[1][k] - p[0][k];
+                        f[k] = p[2][k] - p[0][k];
+                    }
+                    dm__qem_cross(e, f, nrm);
+                    dm__qem_cross(e, nrm, pl);
+                    len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
+                    l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                    if (len > 0.0) {
+                        double d;
+                        for (k = 0; k < 3; k++) pl[k] /= len;
+                        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
+                        dm__qem_quadric_add_plane(&s->q[v], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+                        dm__qem_quadric_add_plane(&s->q[nx], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+                    }
+                }
+            }
+        }
+        s->stamp += 2;
+        if (s->stamp >= 0xfffffff0u) {
+            memset(s->mark, 0, s->n * sizeof(uint32_t));
+            s->stamp = 0;
+        }
+    }
+    for (t = 0; t < s->t; t++) {
+        const uint32_t *tr = s->idx + 3 * t;
+        double p[3][3], e[3], f[3], nrm[3], len, d;
+        int k, j;
+        unsigned any = s->flag[tr[0]] | s->flag[tr[1]] | s->flag[tr[2]];
+        if (any & DM__QEM_V_NONMANIFOLD)
+            for (j = 0; j < 3; j++) s->flag[tr[j]] |= DM__QEM_V_FROZEN;
+        for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[j], p[j]);
+        for (k = 0; k < 3; k++) {
+            e[k] = p[1][k] - p[0][k];
+            f[k] = p[2][k] - p[0][k];
+        }
+        dm__qem_cross(e, f, nrm);
+        len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        if (!(len > 0.0)) continue; /* zero area: no plane */
+        for (k = 0; k < 3; k++) nrm[k] /= len;
+        d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
+        for (j = 0; j < 3; j++) dm__qem_quadric_add_plane(&s->q[tr[j]], nrm, d, 0.5 * len);
+    }
+}
+
+static void dm__qem_simp_free(dm__qem_simp *s)
+{
+    const dm_allocator *a = &s->al;
+    a->free(a->user, s->pos);
+    a->free(a->user, s->idx);
+    a->free(a->user, s->alive);
+    a->free(a->user, s->flag);
+    a->free(a->user, s->q);
+    a->free(a->user, s->vfirst);
+    a->free(a->user, s->cnext);
+    a->free(a->user, s->tcount);
+    a->free(a->user, s->ver);
+    a->free(a->user, s->mark);
+    a->free(a->user, s->nbr);
+    a->free(a->user, s->ring);
+    a->free(a->user, s->heap);
+    a->free(a->user, s->rec);
+    a->free(a->user, s->ops);
+}
+
+DMDEF void dm_pm_free(dm_pm *pm)
+{
+    dm_allocator a;
+    if (!pm) return;
+    a = pm->alloc;
+    a.free(a.user, pm->pos);
+    a.free(a.user, pm->idx);
+    a.free(a.user, pm->alive);
+    a.free(a.user, pm->rec);
+    a.free(a.user, pm->ops);
+    a.free(a.user, pm->merge_first);
+    a.free(a.user, pm->merge_list);
+    a.free(a.user, pm->scratch);
+    a.free(a.user, pm);
+}
+
+/* Input checks and the simplifier's arrays (triangles with a repeated index dropped). */
+static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size_t vertex_count, const uint32_t *indices,
+                               size_t triangle_count, size_t *dropped)
+{
+    size_t v, t, kept = 0;
+    int overflow = 0;
+    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    if (!indices || !positions) return DM_ERR_INVALID_ARGUMENT;
+    if (triangle_count == 0) return DM_ERR_NO_TRIANGLES;
+    if (vertex_count == 0) return DM_ERR_BAD_INDEX;
+    if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u) return DM_ERR_TOO_LARGE;
+    if (vertex_count > (size_t)-1 / (3 * sizeof(uint32_t)) || triangle_count > (size_t)-1 / (3 * sizeof(uint32_t)))
+        return DM_ERR_TOO_LARGE;
+    for (t = 0; t < 3 * triangle_count; t++) {
+        uint32_t i = indices[t];
+        int k;
+        if (i >= vertex_count) return DM_ERR_BAD_INDEX;
+        for (k = 0; k < 3; k++) {
+            float x = positions[3 * (size_t)i + k];
+            if (!(x >= -DM__MAX_COORD && x <= DM__MAX_COORD)) return DM_ERR_BAD_POSITION;
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    }
+    s->n = vertex_count;
+#define DM__QEM_ALLOC(field, count, type)                                                      \
+    do {                                                                                   \
+        s->field = (type *)dm__alloc_array(&s->al, (count), sizeof(type), &overflow);      \
+        if (!s->field) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;          \
+    } while (0)
+    DM__QEM_ALLOC(pos, 3 * vertex_count, float);
+    DM__QEM_ALLOC(idx, 3 * triangle_count, uint32_t);
+    DM__QEM_ALLOC(alive, triangle_count, uint8_t);
+    DM__QEM_ALLOC(flag, vertex_count, uint8_t);
+    DM__QEM_ALLOC(q, vertex_count, dm__qem_quadric);
+    DM__QEM_ALLOC(vfirst, vertex_count, uint32_t);
+    DM__QEM_ALLOC(cnext, 3 * triangle_count, uint32_t);
+    DM__QEM_ALLOC(tcount, vertex_count, uint32_t);
+    DM__QEM_ALLOC(ver, vertex_count, uint32_t);
+    DM__QEM_ALLOC(mark, vertex_count, uint32_t);
+    DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
+    DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
+#undef DM__QEM_ALLOC
+    memcpy(s->pos, positions, 3 * vertex_count * sizeof(float));
+    for (t = 0; t < triangle_count; t++) {
+        const uint32_t *tr = indices + 3 * t;
+        if (tr[0] == tr[1] || tr[1] == tr[2] || tr[0] == tr[2]) continue;
+        memcpy(s->idx + 3 * kept, tr, 3 * sizeof(uint32_t));
+        s->alive[kept++] = 1;
+    }
+    *dropped = triangle_count - kept;
+    s->t = kept;
+    s->live = kept;
+    memset(s->flag, 0, vertex_count);
+    memset(s->q, 0, vertex_count * sizeof(dm__qem_quadric));
+    memset(s->ver, 0, vertex_count * sizeof(uint32_t));
+    memset(s->mark, 0, vertex_count * sizeof(uint32_t));
+    s->stamp = 0;
+    for (v = 0; v < vertex_count; v++) {
+        s->vfirst[v] = DM__QEM_NONE;
+        s->tcount[v] = 0;
+    }
+    for (t = 3 * kept; t-- > 0;) { /* prepend in reverse: lists in increasing corner order */
+        s->cnext[t] = s->vfirst[s->idx[t]];
+        s->vfirst[s->idx[t]] = (uint32_t)t;
+        s->tcount[s->idx[t]]++;
+    }
+    for (v = 0; v < 3; v++) {
+        s->center[v] = 0.5 * ((double)lo[v] + (double)hi[v]);
+        if ((double)hi[v] - lo[v] > s->scale) s->scale = (double)hi[v] - lo[v];
+    }
+    if (!(s->scale > 0.0)) s->scale = 1.0;
+    s->inv_scale = 1.0 / s->scale;
+    return DM_OK;
+}
+
+/* The progressive mesh from the simplifier's final state (arrays moved, not copied). */
+static dm_result dm__qem_make_pm(dm__qem_simp *s, dm_pm **out)
+{
+    dm_pm *pm;
+    int overflow = 0;
+    size_t i, v;
+    uint32_t *root;
+    pm = (dm_pm *)s->al.alloc(s->al.user, sizeof(dm_pm));
+    if (!pm) return DM_ERR_OUT_OF_MEMORY;
+    memset(pm, 0, sizeof *pm);
+    pm->alloc = s->al;
+    pm->merge_first = (uint32_t *)dm__alloc_array(&s->al, s->n + 1, sizeof(uint32_t), &overflow);
+    pm->merge_list = (uint32_t *)dm__alloc_array(&s->al, s->n, sizeof(uint32_t), &overflow);
+    pm->scratch = (uint32_t *)dm__alloc_array(&s->al, s->n, sizeof(uint32_t), &overflow);
+    if (!pm->merge_first || !pm->merge_list || !pm->scratch) {
+        dm_pm_free(pm);
+        return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    }
+    pm->vertex_count = s->n;
+    pm->triangle_count = s->t;
+    pm->split_count = s->nrec;
+    pm->live_triangles = s->live;
+    pm->pos = s->pos;
+    pm->idx = s->idx;
+    pm->alive = s->alive;
+    pm->rec = s->rec;
+    pm->ops = s->ops;
+    s->pos = NULL;
+    s->idx = NULL;
+    s->alive = NULL;
+    s->rec = NULL;
+    s->ops = NULL;
+    /* merged sets: each vertex's representative at the base, found by replaying the collapses
+       from the last; then bucketed by representative in increasing id */
+    root = pm->scratch;
+    for (v = 0; v < s->n; v++) root[v] = (uint32_t)v;
+    for (i = pm->split_count; i-- > 0;) root[pm->rec[i].remove] = root[pm->rec[i].keep];
+    memset(pm->merge_first, 0, (s->n + 1) * sizeof(uint32_t));
+    for (v = 0; v < s->n; v++) pm->merge_first[root[v] + 1]++;
+    for (v = 0; v < s->n; v++) pm->merge_first[v + 1] += pm->merge_first[v];
+    for (v = 0; v < s->n; v++) pm->merge_list[pm->merge_first[root[v]]++] = (uint32_t)v;
+    for (v = s->n; v > 0; v--) pm->merge_first[v] = pm->merge_first[v - 1];
+    pm->merge_first[0] = 0;
+    /* referenced vertices at the base */
+    memset(pm->scratch, 0, s->n * sizeof(uint32_t));
+    for (i = 0; i < pm->triangle_count; i++)
+        if (pm->alive[i])
+            for (v = 0; v < 3; v++) pm->scratch[pm->idx[3 * i + v]] = 1;
+    for (v = 0; v < s->n; v++) pm->live_vertices += pm->scratch[v];
+    *out = pm;
+    return DM_OK;
+}
+
+DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const uint32_t *indices,
+                            size_t triangle_count, const dm_simplify_options *options, dm_pm **out,
+                            dm_simplify_report *report)
+{
+    dm__qem_simp s;
+    dm_simplify_options opt;
+    dm_simplify_report rep;
+    dm_result r;
+    size_t v, dropped = 0, frozen = 0, to_remove, next_progress;
+    uint32_t *tmp = NULL;
+    int overflow = 0;
+    memset(&s, 0, sizeof s);
+    memset(&rep, 0, sizeof rep);
+    if (options) opt = *options;
+    else memset(&opt, 0, sizeof opt);
+    s.al = dm__resolve_allocator(opt.allocator);
+    s.opt = &opt;
+    if (report) *report = rep;
+    if (!out) return DM_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
+    r = dm__qem_simp_init(&s, positions, vertex_count, indices, triangle_count, &dropped);
+    if (r != DM_OK) goto done;
+    tmp = (uint32_t *)dm__alloc_array(&s.al, 3 * vertex_count, sizeof(uint32_t), &overflow);
+    if (!tmp) {
+        r = overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+        goto done;
+    }
+    dm__qem_classify(&s, tmp);
+    s.al.free(s.al.user, tmp);
+    tmp = NULL;
+    for (v = 0; v < vertex_count; v++) {
+        if (opt.locked && opt.locked[v]) s.flag[v] |= DM__QEM_V_LOCKED;
+        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.flag[v] & DM__QEM_V_BOUNDARY)) s.flag[v] |= DM__QEM_V_LOCKED;
+        if (s.flag[v] & DM__QEM_V_FROZEN) frozen++;
+    }
+    /* every collapsible edge once, from its lower endpoint; then one heapify. A closed manifold
+       has 1.5 edges per triangle; the heap starts with room for twice that */
+    if (!dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, 3 * s.t + 64, sizeof(dm__qem_cand))) {
+        r = DM_ERR_OUT_OF_MEMORY;
+        goto done;
+    }
+    for (v = 0; v < vertex_count; v++) {
+        size_t m, i;
+        if (s.flag[v] & DM__QEM_V_FROZEN) continue;
+        m = dm__qem_neighbours(&s, (uint32_t)v);
+        for (i = 0; i < m; i++) {
+            uint32_t x = s.nbr[i], keep, rem;
+            double p[3], cost, err;
+            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost, &err)) continue;
+            if (s.hsize == s.hcap && !dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, s.hsize + 1, sizeof(dm__qem_cand))) {
+                r = DM_ERR_OUT_OF_MEMORY;
+                goto done;
+            }
+            s.heap[s.hsize++] = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
+        }
+    }
+    for (v = s.hsize / 4 + 1; v-- > 0;)
+        if (v < s.hsize) dm__qem_sift_down(s.heap, s.hsize, v);
+
+    s.target = opt.target_triangles;
+    to_remove = s.live > s.target ? s.live - s.target : 0;
+    next_progress = 0;
+    while (s.hsize > 0 && (s.target == 0 || s.live > s.target) &&
+           (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
+        dm__qem_cand e = dm__qem_heap_pop(&s);
+        uint32_t ea = DM__QEM_CAND_A(&e), keep, rem;
+        double x[3], cost, err;
+        float at[3];
+        size_t ring_count;
+        int k, placed;
+        if ((s.flag[ea] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
+        if (s.ver[ea] + s.ver[e.b] != e.stamp) continue; /* stale */
+        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost, &err);
+        if (!placed) continue;
+        if (opt.target_error > 0.0 && err > opt.target_error) continue;
+        for (k = 0; k < 3; k++)
+            at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
+        if (!dm__qem_check_topology(&s, keep, rem) ||
+            (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
+            s.rejected++;
+            s.flag[ea] |= DM__QEM_V_PARKED;
+            s.flag[e.b] |= DM__QEM_V_PARKED;
+            continue;
+        }
+        if (opt.constraint) {
+            dm_collapse cand;
+            float corrected[3];
+            int verdict;
+            cand.keep = keep;
+            cand.remove = rem;
+            for (k = 0; k < 3; k++) cand.position[k] = corrected[k] = at[k];
+            cand.error = err;
+            cand.positions = s.pos;
+            cand.triangles = s.ring;
+            cand.triangle_count = ring_count;
+            verdict = opt.constraint(opt.constraint_user, &cand, corrected);
+            if (verdict == DM_COLLAPSE_MOVE) {
+                double q[3];
+                dm__qem_quadric qs;
+                int ok = 1;
+                for (k = 0; k < 3; k++) {
+                    ok &= corrected[k] >= -DM__MAX_COORD && corrected[k] <= DM__MAX_COORD;
+                    at[k] = corrected[k];
+                    q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
+                }
+                if (((s.flag[keep] & DM__QEM_V_LOCKED) || ((s.flag[keep] ^ s.flag[rem]) & DM__QEM_V_BOUNDARY)) &&
+                    memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
+                    ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
+                if (ok && dm__qem_check_geometry(&s, keep, rem, at) == (size_t)-1) ok = 0;
+                if (!ok) verdict = DM_COLLAPSE_VETO;
+                dm__qem_quadric_sum(&qs, &s.q[keep], &s.q[rem]);
+                cost = dm__qem_quadric_eval(&qs, q);
+                err = qs.w > 0.0 ? sqrt(cost / qs.w) * s.scale : 0.0;
+            } else if (verdict != DM_COLLAPSE_ALLOW) {
+                verdict = DM_COLLAPSE_VETO;
+            }
+            if (verdict == DM_COLLAPSE_VETO) {
+                s.vetoed++;
+                s.flag[ea] |= DM__QEM_V_PARKED;
+                s.flag[e.b] |= DM__QEM_V_PARKED;
+                continue;
+            }
+        }
+        if (!dm__qem_collapse(&s, keep, rem, at) || !dm__qem_refresh(&s, keep)) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
+        if (s.hsize > 4096 && s.hsize / 2 > s.live) dm__qem_heap_purge(&s);
+        if (err > s.max_error) s.max_error = err;
+        if (opt.progress && s.nrec >= next_progress) {
+            float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
+            if (opt.progress(opt.progress_user, done > 1.0f ? 1.0f : done)) {
+                r = DM_CANCELLED;
+                goto done;
+            }
+            next_progress = s.nrec + 1024;
+        }
+    }
+    if (opt.progress && opt.progress(opt.progress_user, 1.0f)) {
+        r = DM_CANCELLED;
+        goto done;
+    }
+    rep.input_triangles = s.t;
+    rep.dropped_triangles = dropped;
+    rep.triangle_count = s.live;
+    rep.collapse_count = s.nrec;
+    rep.rejected = s.rejected;
+    rep.vetoed = s.vetoed;
+    rep.frozen_vertices = frozen;
+    rep.error = s.max_error;
+    rep.reached_target = s.target == 0 || s.live <= s.target;
+    r = dm__qem_make_pm(&s, out);
+    if (r == DM_OK) rep.vertex_count = (*out)->live_vertices;
+done:
+    if (tmp) s.al.free(s.al.user, tmp);
+    dm__qem_simp_free(&s);
+    if (r == DM_OK && report) *report = rep;
+    return r;
+}
+
+DMDEF size_t dm_pm_split_count(const dm_pm *pm) { return pm ? pm->split_count : 0; }
+
+DMDEF size_t dm_pm_level(const dm_pm *pm) { return pm ? pm->level : 0; }
+
+DMDEF void dm_pm_set_level(dm_pm *pm, size_t level)
+{
+    if (!pm) return;
+    if (level > pm->split_count) level = pm->split_count;
+    while (pm->level < level) { /* vertex split: undo collapse split_count - 1 - level */
+        const dm__qem_rec *r = &pm->rec[pm->split_count - 1 - pm->level];
+        const uint32_t *op = pm->ops + r->first;
+        uint32_t i;
+        int k;
+        for (k = 0; k < 3; k++) pm->pos[3 * (size_t)r->keep + k] = r->before[k];
+        for (i = 0; i < r->dead; i++) pm->alive[op[i]] = 1;
+        for (i = 0; i < r->moved; i++) pm->idx[op[r->dead + i]] = r->remove;
+        pm->live_triangles += r->dead;
+        pm->live_vertices++;
+        pm->level++;
+    }
+    while (pm->level > level) { /* edge collapse: redo it */
+        const dm__qem_rec *r = &pm->rec[pm->split_count - pm->level];
+        const uint32_t *op = pm->ops + r->first;
+        uint32_t i;
+        int k;
+        for (k = 0; k < 3; k++) pm->pos[3 * (size_t)r->keep + k] = r->after[k];
+        for (i = 0; i < r->dead; i++) pm->alive[op[i]] = 0;
+        for (i = 0; i < r->moved; i++) pm->idx[op[r->dead + i]] = r->keep;
+        pm->live_triangles -= r->dead;
+        pm->live_vertices--;
+        pm->level--;
+    }
+}
+
+DMDEF void dm_pm_counts(const dm_pm *pm, size_t *vertex_count, size_t *triangle_count)
+{
+    if (vertex_count) *vertex_count = pm ? pm->live_vertices : 0;
+    if (triangle_count) *triangle_count = pm ? pm->live_triangles : 0;
+}
+
+DMDEF void dm_pm_get_mesh(dm_pm *pm, float *positions, uint32_t *indices, uint32_t *vertex_ids)
+{
+    size_t t, v, nv = 0, nt = 0;
+    uint32_t *map;
+    if (!pm) return;
+    map = pm->scratch;
+    for (v = 0; v < pm->vertex_count; v++) map[v] = DM__QEM_NONE;
+    for (t = 0; t < pm->triangle_count; t++)
+        if (pm->alive[t])
+            for (v = 0; v < 3; v++) map[pm->idx[3 * t + v]] = 0;
+    for (v = 0; v < pm->vertex_count; v++) {
+        if (map[v] == DM__QEM_NONE) continue;
+        map[v] = (uint32_t)nv;
+        if (positions) memcpy(positions + 3 * nv, pm->pos + 3 * v, 3 * sizeof(float));
+        if (vertex_ids) vertex_ids[nv] = (uint32_t)v;
+        nv++;
+    }
+    for (t = 0; t < pm->triangle_count; t++) {
+        if (!pm->alive[t]) continue;
+        if (indices)
+            for (v = 0; v < 3; v++) indices[3 * nt + v] = map[pm->idx[3 * t + v]];
+        nt++;
+    }
+}
+
+DMDEF const float *dm_pm_positions(const dm_pm *pm) { return pm ? pm->pos : NULL; }
+
+DMDEF int dm_pm_get_vsplit(const dm_pm *pm, size_t level, dm_vsplit *out)
+{
+    const dm__qem_rec *r;
+    int k;
+    if (!pm || !out || level >= pm->split_count) return 0;
+    r = &pm->rec[pm->split_count - 1 - level];
+    out->keep = r->keep;
+    out->remove = r->remove;
+    for (k = 0; k < 3; k++) {
+        out->keep_position[k] = r->before[k];
+        out->merged_position[k] = r->after[k];
+    }
+    out->restored_triangles = r->dead;
+    out->moved_corners = r->moved;
+    return 1;
+}
+
+DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint32_t **list)
+{
+    if (list) *list = NULL;
+    if (!pm || vertex >= pm->vertex_count) return 0;
+    if (list) *list = pm->merge_list + pm->merge_first[vertex];
+    return pm->merge_first[vertex + 1] - pm->merge_first[vertex];
 }
 
 #ifdef __cplusplus

@@ -1,0 +1,832 @@
+/* test_dispmesh_simplify - unit tests of dispmesh.h's QEM simplifier and progressive meshes.
+
+   - guarantees on a bumpy icosphere and the bunny (skipped with a reason if glmark2-data is
+     missing): the target is reached; the output is a closed, consistently oriented 2-manifold
+     (every edge in exactly two triangles, once each way) with Euler characteristic 2; no
+     degenerate triangle (2 area > 1e-6 longest edge^2); no flipped triangle (its normal against
+     the input's normal at the closest point of its centroid, found with dm_bvh_closest_point);
+     determinism (two runs give the same bytes);
+   - progressive mesh: the simplifier stopped after k collapses (max_collapses) gives exactly
+     level (splits - k) of the full run, positions bit for bit and the same triangles; the top
+     level is the input; levels visited in a scrambled order; every vertex split record is
+     consistent; the merged-vertex sets partition the input vertices;
+   - open meshes: boundary vertices stay on the boundary, within 1e-5 (a wavy unit square sheet); with
+     DM_SIMPLIFY_LOCK_BOUNDARY they do not move and are not removed; per-vertex locks;
+   - target error: no collapse above it, the reported error is at most the bound;
+   - the constraint: veto all (DM_OK, no collapse, target not reached), veto a half space
+     (no vertex of the result came from there... checked through the merged sets), and a
+     corrected position (every vertex stays at its own input position);
+   - bad input: NULL arrays, no triangles, bad index, NaN (referenced: error; unreferenced:
+     fine), NaN target error, duplicate vertices (a seam), zero-area triangles, repeated-index
+     triangles (dropped and counted), an edge with three triangles (its vertices' triangles are
+     left alone), isolated vertices, a lone triangle and a tetrahedron (nothing to collapse);
+   - progress and cancel; allocation-failure injection at every allocation (returns
+     DM_ERR_OUT_OF_MEMORY, leaks nothing). */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+#include "test.h"
+#include "hashrand.h"
+#include "../bench/sphere.h"
+#define DM_IMPLEMENTATION
+#include "dispmesh.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
+
+#define BUNNY "/usr/share/glmark2/models/bunny.obj"
+
+typedef struct mesh {
+    float *pos;
+    size_t nv;
+    uint32_t *idx;
+    size_t nt;
+} mesh;
+
+/* the current level of a progressive mesh, compact */
+static mesh pm_mesh(dm_pm *pm, uint32_t **ids)
+{
+    mesh m;
+    dm_pm_counts(pm, &m.nv, &m.nt);
+    m.pos = (float *)malloc(3 * m.nv * sizeof(float) + 4);
+    m.idx = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t) + 4);
+    *ids = (uint32_t *)malloc(m.nv * sizeof(uint32_t) + 4);
+    dm_pm_get_mesh(pm, m.pos, m.idx, *ids);
+    return m;
+}
+
+static void mesh_free(mesh *m)
+{
+    free(m->pos);
+    free(m->idx);
+}
+
+static double tri_normal(const float *pos, const uint32_t *t, double n[3], double *longest2)
+{
+    double e[3], f[3], g[3], a, b, c;
+    int k;
+    for (k = 0; k < 3; k++) {
+        e[k] = (double)pos[3 * t[1] + k] - pos[3 * t[0] + k];
+        f[k] = (double)pos[3 * t[2] + k] - pos[3 * t[0] + k];
+        g[k] = (double)pos[3 * t[2] + k] - pos[3 * t[1] + k];
+    }
+    n[0] = e[1] * f[2] - e[2] * f[1];
+    n[1] = e[2] * f[0] - e[0] * f[2];
+    n[2] = e[0] * f[1] - e[1] * f[0];
+    a = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    b = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+    c = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    *longest2 = fmax(a, fmax(b, c));
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* edges not in exactly two triangles once each way (bad), boundary edges (in one triangle only,
+   counted apart), degenerate triangles, and V - E + F */
+static void topology(const mesh *m, size_t *bad_edges, size_t *boundary_edges, size_t *degenerate, long *euler)
+{
+    uint64_t *e = (uint64_t *)malloc(3 * m->nt * sizeof(uint64_t) + 8);
+    uint64_t *r = (uint64_t *)malloc(3 * m->nt * sizeof(uint64_t) + 8);
+    size_t i, n = 3 * m->nt, bad = 0, bnd = 0, deg = 0, edges = 0, j;
+    for (i = 0; i < m->nt; i++) {
+        int k;
+        double nn[3], l2;
+        for (k = 0; k < 3; k++) {
+            uint64_t a = m->idx[3 * i + k], b = m->idx[3 * i + (k + 1) % 3];
+            e[3 * i + k] = (a << 32) | b;
+            r[3 * i + k] = (b << 32) | a;
+        }
+        if (!(tri_normal(m->pos, m->idx + 3 * i, nn, &l2) > 1e-6 * l2)) deg++;
+    }
+    qsort(e, n, sizeof(uint64_t), cmp_u64);
+    qsort(r, n, sizeof(uint64_t), cmp_u64);
+    for (i = 0; i < n; i++) {
+        uint64_t key = e[i], rev = (key << 32) | (key >> 32);
+        size_t lo = 0, hi = n, cnt = 0;
+        if (i > 0 && e[i - 1] == key) bad++; /* the same directed edge twice */
+        while (lo < hi) { /* how many reversed copies */
+            size_t mid = (lo + hi) / 2;
+            if (r[mid] < key) lo = mid + 1;
+            else hi = mid;
+        }
+        for (j = lo; j < n && r[j] == key; j++) cnt++;
+        (void)rev;
+        /* r holds reversed edges: r == key means some triangle has the edge the other way */
+        if (cnt == 0) bnd++;
+        else if (cnt > 1) bad++;
+        edges += 1;
+    }
+    /* undirected edges: interior ones were counted twice */
+    *bad_edges = bad;
+    *boundary_edges = bnd;
+    *degenerate = deg;
+    {
+        size_t v, used = 0;
+        char *u = (char *)calloc(m->nv + 1, 1);
+        for (i = 0; i < n; i++) u[m->idx[i]] = 1;
+        for (v = 0; v < m->nv; v++) used += (size_t)u[v];
+        free(u);
+        *euler = (long)used - (long)((edges - bnd) / 2 + bnd) + (long)m->nt;
+    }
+    free(e);
+    free(r);
+}
+
+/* triangles whose normal points against the input's normal at the closest point of the centroid */
+static size_t flipped(const mesh *in, const dm_bvh *bvh, const mesh *out)
+{
+    size_t i, count = 0;
+    for (i = 0; i < out->nt; i++) {
+        double n[3], l2, n0[3];
+        float c[3];
+        dm_closest cl;
+        int k;
+        tri_normal(out->pos, out->idx + 3 * i, n, &l2);
+        for (k = 0; k < 3; k++)
+            c[k] = (out->pos[3 * out->idx[3 * i] + k] + out->pos[3 * out->idx[3 * i + 1] + k] +
+                    out->pos[3 * out->idx[3 * i + 2] + k]) / 3.0f;
+        if (!dm_bvh_closest_point(bvh, c, INFINITY, &cl)) {
+            count++;
+            continue;
+        }
+        tri_normal(in->pos, in->idx + 3 * cl.triangle, n0, &l2);
+        if (n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2] < 0.0) count++;
+    }
+    return count;
+}
+
+static int same_mesh(const mesh *a, const uint32_t *ida, const mesh *b, const uint32_t *idb)
+{
+    if (a->nv != b->nv || a->nt != b->nt) return 0;
+    if (memcmp(ida, idb, a->nv * sizeof(uint32_t)) != 0) return 0;
+    if (memcmp(a->pos, b->pos, 3 * a->nv * sizeof(float)) != 0) return 0;
+    return memcmp(a->idx, b->idx, 3 * a->nt * sizeof(uint32_t)) == 0;
+}
+
+/* ---- guarantees on a closed mesh ------------------------------------------------------------ */
+
+static void closed_mesh_checks(const char *name, const mesh *in, double fraction)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep, rep2;
+    dm_pm *pm = NULL, *pm2 = NULL;
+    dm_bvh *bvh = NULL;
+    mesh out, out2;
+    uint32_t *ids, *ids2;
+    size_t bad, bnd, deg, flips;
+    long euler;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = (size_t)(fraction * (double)in->nt);
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm2, &rep2), DM_OK);
+    if (!pm || !pm2) return;
+    out = pm_mesh(pm, &ids);
+    out2 = pm_mesh(pm2, &ids2);
+    T_CHECK_MSG(rep.triangle_count <= o.target_triangles && rep.triangle_count + 2 > o.target_triangles,
+                "%s: %zu triangles for target %zu", name, rep.triangle_count, o.target_triangles);
+    T_CHECK(rep.reached_target == 1);
+    T_EQ_SIZE(out.nt, rep.triangle_count);
+    T_EQ_SIZE(out.nv, rep.vertex_count);
+    T_EQ_SIZE(rep.collapse_count, dm_pm_split_count(pm));
+    topology(&out, &bad, &bnd, &deg, &euler);
+    T_CHECK_MSG(bad == 0 && bnd == 0, "%s: %zu non-manifold, %zu boundary edges", name, bad, bnd);
+    T_CHECK_MSG(deg == 0, "%s: %zu degenerate triangles", name, deg);
+    T_EQ_INT(euler, 2);
+    T_EQ_INT(dm_bvh_build(in->pos, in->nv, in->idx, in->nt, NULL, &bvh), DM_OK);
+    flips = bvh ? flipped(in, bvh, &out) : out.nt;
+    T_CHECK_MSG(flips == 0, "%s: %zu of %zu triangles face against the input", name, flips, out.nt);
+    dm_bvh_free(bvh);
+    T_CHECK_MSG(same_mesh(&out, ids, &out2, ids2) && memcmp(&rep, &rep2, sizeof rep) == 0, "%s: not deterministic",
+                name);
+    printf("  %s: %zu -> %zu triangles, error %.3g, %zu refused\n", name, in->nt, out.nt, rep.error, rep.rejected);
+    mesh_free(&out);
+    mesh_free(&out2);
+    free(ids);
+    free(ids2);
+    dm_pm_free(pm);
+    dm_pm_free(pm2);
+}
+
+/* ---- progressive mesh ----------------------------------------------------------------------- */
+
+static void pm_checks(const char *name, const mesh *in, size_t target)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    size_t splits, i, cover = 0, bad_sets = 0, bad_levels = 0, bad_records = 0;
+    size_t ks[6];
+    uint32_t *seen;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = target;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    if (!pm) return;
+    splits = dm_pm_split_count(pm);
+    T_CHECK(splits > 10);
+    /* partial runs against the levels of the full one */
+    ks[0] = 1;
+    ks[1] = 2;
+    ks[2] = splits / 3;
+    ks[3] = splits / 2;
+    ks[4] = splits - 1;
+    ks[5] = splits;
+    for (i = 0; i < 6; i++) {
+        dm_pm *part = NULL;
+        mesh a, b;
+        uint32_t *ida, *idb;
+        o.max_collapses = ks[i];
+        if (dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &part, NULL) != DM_OK) {
+            bad_levels++;
+            continue;
+        }
+        dm_pm_set_level(pm, splits - ks[i]);
+        a = pm_mesh(pm, &ida);
+        b = pm_mesh(part, &idb);
+        if (dm_pm_split_count(part) != ks[i] || !same_mesh(&a, ida, &b, idb)) {
+            printf("  level %zu (after %zu collapses) differs\n", splits - ks[i], ks[i]);
+            bad_levels++;
+        }
+        mesh_free(&a);
+        mesh_free(&b);
+        free(ida);
+        free(idb);
+        dm_pm_free(part);
+    }
+    T_CHECK_MSG(bad_levels == 0, "%s: %zu partial runs differ from their level", name, bad_levels);
+    /* the top level is the input */
+    {
+        mesh a;
+        uint32_t *ida;
+        int same;
+        dm_pm_set_level(pm, splits + 5); /* clamped */
+        T_EQ_SIZE(dm_pm_level(pm), splits);
+        a = pm_mesh(pm, &ida);
+        same = a.nt == in->nt && a.nv == in->nv;
+        for (i = 0; same && i < a.nv; i++) same = ida[i] == i;
+        same = same && memcmp(a.pos, in->pos, 3 * in->nv * sizeof(float)) == 0 &&
+               memcmp(a.idx, in->idx, 3 * in->nt * sizeof(uint32_t)) == 0;
+        T_CHECK_MSG(same, "%s: the finest level is not the input", name);
+        mesh_free(&a);
+        free(ida);
+    }
+    /* scrambled walk, then back to the base: the same base */
+    {
+        mesh a, b;
+        uint32_t *ida, *idb;
+        dm_pm *fresh = NULL;
+        for (i = 0; i < 20; i++) dm_pm_set_level(pm, (size_t)(unit_random(i, 7) * (double)(splits + 1)));
+        dm_pm_set_level(pm, 0);
+        o.max_collapses = 0;
+        T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &fresh, NULL), DM_OK);
+        a = pm_mesh(pm, &ida);
+        if (fresh) {
+            b = pm_mesh(fresh, &idb);
+            T_CHECK_MSG(same_mesh(&a, ida, &b, idb), "%s: base after a walk differs", name);
+            mesh_free(&b);
+            free(idb);
+        }
+        dm_pm_free(fresh);
+        mesh_free(&a);
+        free(ida);
+    }
+    /* vertex split records: one more vertex and 1 or 2 more triangles per level */
+    for (i = 0; i + 1 <= splits; i++) {
+        dm_vsplit vs;
+        if (!dm_pm_get_vsplit(pm, i, &vs) || vs.keep == vs.remove || vs.keep >= in->nv || vs.remove >= in->nv ||
+            vs.restored_triangles < 1 || vs.restored_triangles > 2)
+            bad_records++;
+    }
+    {
+        dm_vsplit vs;
+        T_CHECK(!dm_pm_get_vsplit(pm, splits, &vs));
+    }
+    T_CHECK_MSG(bad_records == 0, "%s: %zu bad split records", name, bad_records);
+    {
+        size_t nv0, nt0, nv1, nt1;
+        dm_vsplit vs;
+        dm_pm_set_level(pm, 0);
+        dm_pm_counts(pm, &nv0, &nt0);
+        dm_pm_get_vsplit(pm, 0, &vs);
+        dm_pm_set_level(pm, 1);
+        dm_pm_counts(pm, &nv1, &nt1);
+        T_CHECK(nv1 == nv0 + 1 && nt1 == nt0 + vs.restored_triangles);
+        T_CHECK(memcmp(dm_pm_positions(pm) + 3 * vs.keep, vs.keep_position, sizeof vs.keep_position) == 0);
+        dm_pm_set_level(pm, 0);
+        T_CHECK(memcmp(dm_pm_positions(pm) + 3 * vs.keep, vs.merged_position, sizeof vs.merged_position) == 0);
+    }
+    /* merged sets: a partition of the input vertices, each base vertex in its own set */
+    seen = (uint32_t *)calloc(in->nv, sizeof(uint32_t));
+    {
+        mesh base;
+        uint32_t *ids;
+        dm_pm_set_level(pm, 0);
+        base = pm_mesh(pm, &ids);
+        for (i = 0; i < in->nv; i++) {
+            const uint32_t *list;
+            size_t n = dm_pm_merged_vertices(pm, (uint32_t)i, &list), j;
+            for (j = 0; j < n; j++) {
+                if (list[j] >= in->nv || seen[list[j]]++ || (j && list[j] <= list[j - 1])) bad_sets++;
+            }
+            cover += n;
+        }
+        for (i = 0; i < base.nv; i++) {
+            const uint32_t *list;
+            size_t n = dm_pm_merged_vertices(pm, ids[i], &list), j, self = 0;
+            for (j = 0; j < n; j++) self += list[j] == ids[i];
+            if (self != 1) bad_sets++;
+        }
+        T_EQ_SIZE(cover, in->nv);
+        T_CHECK_MSG(bad_sets == 0, "%s: %zu bad merged sets", name, bad_sets);
+        mesh_free(&base);
+        free(ids);
+    }
+    free(seen);
+    dm_pm_free(pm);
+}
+
+/* ---- open meshes, locks, error bound, constraint -------------------------------------------- */
+
+/* an n x n wavy square sheet over [0,1]^2 */
+static mesh sheet(int n)
+{
+    mesh m;
+    int i, j;
+    m.nv = (size_t)(n + 1) * (size_t)(n + 1);
+    m.nt = 2 * (size_t)n * (size_t)n;
+    m.pos = (float *)malloc(3 * m.nv * sizeof(float));
+    m.idx = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t));
+    for (j = 0; j <= n; j++)
+        for (i = 0; i <= n; i++) {
+            float *p = m.pos + 3 * ((size_t)j * (n + 1) + i);
+            p[0] = (float)i / n;
+            p[1] = (float)j / n;
+            p[2] = 0.05f * sinf(6.0f * p[0]) * cosf(5.0f * p[1]);
+        }
+    for (j = 0; j < n; j++)
+        for (i = 0; i < n; i++) {
+            uint32_t a = (uint32_t)(j * (n + 1) + i), b = a + 1, c = a + (uint32_t)n + 1, d = c + 1;
+            uint32_t *t = m.idx + 6 * ((size_t)j * n + i);
+            t[0] = a; t[1] = b; t[2] = d;
+            t[3] = a; t[4] = d; t[5] = c;
+        }
+    return m;
+}
+
+static int on_square_boundary(const float *p) { return p[0] == 0.0f || p[0] == 1.0f || p[1] == 0.0f || p[1] == 1.0f; }
+
+/* within 1e-5 of an edge of the square: a corner may slide along one edge by the quadric's balance */
+static int near_square_boundary(const float *p)
+{
+    return fabsf(p[0]) < 1e-5f || fabsf(p[0] - 1.0f) < 1e-5f || fabsf(p[1]) < 1e-5f || fabsf(p[1] - 1.0f) < 1e-5f;
+}
+
+static void open_mesh_checks(void)
+{
+    mesh in = sheet(40), out;
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    uint32_t *ids;
+    size_t i, off = 0, moved = 0, missing = 0, bad, bnd, deg;
+    long euler;
+    uint8_t *locked;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = 200;
+    T_EQ_INT(dm_simplify(in.pos, in.nv, in.idx, in.nt, &o, &pm, &rep), DM_OK);
+    if (pm) {
+        out = pm_mesh(pm, &ids);
+        T_CHECK(rep.reached_target);
+        /* boundary vertices of the result stay on the square's edges */
+        topology(&out, &bad, &bnd, &deg, &euler);
+        T_CHECK_MSG(bad == 0 && deg == 0, "sheet: %zu bad edges, %zu degenerate", bad, deg);
+        T_EQ_INT(euler, 1);
+        for (i = 0; i < out.nv; i++)
+            if (on_square_boundary(in.pos + 3 * ids[i]) && !near_square_boundary(out.pos + 3 * i)) off++;
+        T_CHECK_MSG(off == 0, "sheet: %zu boundary vertices left the boundary", off);
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+        pm = NULL;
+    }
+    /* locked boundary: every boundary vertex present, unmoved */
+    o.flags = DM_SIMPLIFY_LOCK_BOUNDARY;
+    T_EQ_INT(dm_simplify(in.pos, in.nv, in.idx, in.nt, &o, &pm, &rep), DM_OK);
+    if (pm) {
+        const float *p = dm_pm_positions(pm);
+        char *present = (char *)calloc(in.nv, 1);
+        out = pm_mesh(pm, &ids);
+        for (i = 0; i < out.nv; i++) present[ids[i]] = 1;
+        for (i = 0; i < in.nv; i++)
+            if (on_square_boundary(in.pos + 3 * i)) {
+                if (!present[i]) missing++;
+                else if (memcmp(p + 3 * i, in.pos + 3 * i, 3 * sizeof(float)) != 0) moved++;
+            }
+        T_CHECK_MSG(missing == 0 && moved == 0, "locked boundary: %zu removed, %zu moved", missing, moved);
+        T_EQ_SIZE(out.nt, 200);
+        free(present);
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+        pm = NULL;
+    }
+    /* per-vertex locks */
+    o.flags = 0;
+    locked = (uint8_t *)calloc(in.nv, 1);
+    for (i = 0; i < in.nv; i++) locked[i] = unit_random(i, 3) < 0.1;
+    o.locked = locked;
+    missing = moved = 0;
+    T_EQ_INT(dm_simplify(in.pos, in.nv, in.idx, in.nt, &o, &pm, &rep), DM_OK);
+    if (pm) {
+        const float *p = dm_pm_positions(pm);
+        char *present = (char *)calloc(in.nv, 1);
+        out = pm_mesh(pm, &ids);
+        for (i = 0; i < out.nv; i++) present[ids[i]] = 1;
+        for (i = 0; i < in.nv; i++)
+            if (locked[i]) {
+                if (!present[i]) missing++;
+                else if (memcmp(p + 3 * i, in.pos + 3 * i, 3 * sizeof(float)) != 0) moved++;
+            }
+        T_CHECK_MSG(missing == 0 && moved == 0, "locks: %zu removed, %zu moved", missing, moved);
+        free(present);
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+        pm = NULL;
+    }
+    free(locked);
+    mesh_free(&in);
+}
+
+static void error_bound_checks(const mesh *in)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep, rep_all;
+    dm_pm *pm = NULL;
+    memset(&o, 0, sizeof o);
+    o.target_error = 0.002;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK_MSG(rep.error <= 0.002 && rep.error > 0.0, "error %g for bound 0.002", rep.error);
+    T_CHECK(rep.triangle_count < in->nt / 2);
+    dm_pm_free(pm);
+    pm = NULL;
+    o.target_error = 0.0; /* no bound, no target: as far as the checks allow */
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep_all), DM_OK);
+    T_CHECK(rep_all.triangle_count < rep.triangle_count && rep_all.error > rep.error);
+    T_CHECK(rep_all.triangle_count >= 4);
+    dm_pm_free(pm);
+}
+
+static int veto_all(void *user, const dm_collapse *c, float corrected[3])
+{
+    (void)corrected;
+    (void)c;
+    (*(size_t *)user)++;
+    return DM_COLLAPSE_VETO;
+}
+
+typedef struct half_state {
+    size_t calls, bad_ring;
+    const float *input;
+} half_state;
+
+/* vetoes every collapse that touches x > 0 (either vertex or the proposed position); checks the ring */
+static int veto_half(void *user, const dm_collapse *c, float corrected[3])
+{
+    half_state *h = (half_state *)user;
+    size_t i, has_keep = 0;
+    (void)corrected;
+    h->calls++;
+    for (i = 0; i < 3 * c->triangle_count; i++) {
+        if (c->triangles[i] == c->remove) h->bad_ring++;
+        has_keep += c->triangles[i] == c->keep;
+    }
+    if (has_keep != c->triangle_count) h->bad_ring++;
+    if (c->position[0] > 0.0f || c->positions[3 * c->remove] > 0.0f || c->positions[3 * c->keep] > 0.0f)
+        return DM_COLLAPSE_VETO;
+    return DM_COLLAPSE_ALLOW;
+}
+
+/* keep stays where it is */
+static int stay(void *user, const dm_collapse *c, float corrected[3])
+{
+    (void)user;
+    memcpy(corrected, c->positions + 3 * c->keep, 3 * sizeof(float));
+    return DM_COLLAPSE_MOVE;
+}
+
+static void constraint_checks(const mesh *in)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    size_t calls = 0, i, bad = 0;
+    half_state h;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = in->nt / 10;
+    o.constraint = veto_all;
+    o.constraint_user = &calls;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK(pm != NULL && rep.collapse_count == 0 && !rep.reached_target && rep.triangle_count == in->nt);
+    T_CHECK(calls > 0 && rep.vetoed == calls);
+    dm_pm_free(pm);
+    pm = NULL;
+    memset(&h, 0, sizeof h);
+    o.constraint = veto_half;
+    o.constraint_user = &h;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK(h.calls > 0 && h.bad_ring == 0);
+    if (pm) { /* every input vertex with x > 0 is still there, unmoved */
+        const float *p = dm_pm_positions(pm);
+        for (i = 0; i < in->nv; i++)
+            if (in->pos[3 * i] > 0.0f) {
+                const uint32_t *list;
+                if (dm_pm_merged_vertices(pm, (uint32_t)i, &list) != 1 || memcmp(p + 3 * i, in->pos + 3 * i, 12) != 0)
+                    bad++;
+            }
+        T_CHECK_MSG(bad == 0, "veto x > 0: %zu vertices there merged or moved", bad);
+        T_CHECK(rep.vetoed > 0 && rep.collapse_count > 0);
+        dm_pm_free(pm);
+        pm = NULL;
+    }
+    o.constraint = stay;
+    o.constraint_user = NULL;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    if (pm) {
+        mesh out;
+        uint32_t *ids;
+        out = pm_mesh(pm, &ids);
+        bad = 0;
+        for (i = 0; i < out.nv; i++)
+            if (memcmp(out.pos + 3 * i, in->pos + 3 * ids[i], 12) != 0) bad++;
+        T_CHECK_MSG(bad == 0 && rep.reached_target, "corrected positions: %zu vertices moved", bad);
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+    }
+}
+
+/* ---- bad input ------------------------------------------------------------------------------ */
+
+static void bad_input_checks(void)
+{
+    float p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    uint32_t tet[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+    uint32_t bad_idx[] = {0, 1, 7};
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = (dm_pm *)&o;
+    memset(&o, 0, sizeof o);
+    T_EQ_INT(dm_simplify(NULL, 4, tet, 4, NULL, &pm, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_CHECK(pm == NULL);
+    T_EQ_INT(dm_simplify(p, 4, NULL, 4, NULL, &pm, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dm_simplify(p, 4, tet, 4, NULL, NULL, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dm_simplify(p, 4, tet, 0, NULL, &pm, NULL), DM_ERR_NO_TRIANGLES);
+    T_EQ_INT(dm_simplify(p, 4, bad_idx, 1, NULL, &pm, NULL), DM_ERR_BAD_INDEX);
+    o.target_error = NAN;
+    T_EQ_INT(dm_simplify(p, 4, tet, 4, &o, &pm, NULL), DM_ERR_INVALID_ARGUMENT);
+    o.target_error = -1.0;
+    T_EQ_INT(dm_simplify(p, 4, tet, 4, &o, &pm, NULL), DM_ERR_INVALID_ARGUMENT);
+    o.target_error = 0.0;
+    {
+        float q[15];
+        memcpy(q, p, sizeof q);
+        q[4] = NAN;
+        T_EQ_INT(dm_simplify(q, 4, tet, 4, NULL, &pm, NULL), DM_ERR_BAD_POSITION);
+        q[4] = 0.0f;
+        q[13] = NAN; /* vertex 4, not referenced */
+        T_EQ_INT(dm_simplify(q, 5, tet, 4, NULL, &pm, &rep), DM_OK);
+        T_CHECK(rep.vertex_count == 4 && rep.triangle_count == 4); /* a tetrahedron cannot shrink */
+        dm_pm_free(pm);
+        pm = NULL;
+        q[13] = INFINITY;
+        q[0] = 1e30f;
+        T_EQ_INT(dm_simplify(q, 5, tet, 4, NULL, &pm, NULL), DM_ERR_BAD_POSITION);
+    }
+    /* a lone triangle, and one with a repeated index */
+    {
+        uint32_t t[] = {0, 1, 2, 1, 1, 2};
+        T_EQ_INT(dm_simplify(p, 3, t, 2, NULL, &pm, &rep), DM_OK);
+        T_CHECK(rep.triangle_count == 1 && rep.dropped_triangles == 1 && rep.input_triangles == 1);
+        dm_pm_free(pm);
+        pm = NULL;
+        T_EQ_INT(dm_simplify(p, 3, t + 3, 1, NULL, &pm, &rep), DM_OK);
+        T_CHECK(rep.triangle_count == 0 && rep.vertex_count == 0);
+        dm_pm_free(pm);
+        pm = NULL;
+    }
+    dm_pm_free(NULL);
+    T_EQ_SIZE(dm_pm_split_count(NULL), 0);
+}
+
+/* A sheet with a seam of duplicate vertices, zero-area triangles, a fin on an interior edge (an
+   edge with three triangles) and isolated vertices. */
+static void messy_checks(void)
+{
+    mesh s = sheet(24), m, out;
+    size_t extra_v = 30, i, n = 24, fin_tri, kept_fin = 0, bad, bnd, deg0 = 0, deg, zero_tris;
+    long euler;
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    uint32_t *ids, a, b;
+    m.nv = s.nv + extra_v;
+    m.nt = s.nt + 3;
+    m.pos = (float *)malloc(3 * m.nv * sizeof(float));
+    m.idx = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t));
+    memcpy(m.pos, s.pos, 3 * s.nv * sizeof(float));
+    memcpy(m.idx, s.idx, 3 * s.nt * sizeof(uint32_t));
+    /* duplicate the column x = 12/24 for the triangles right of it: a seam of twin vertices */
+    for (i = 0; i <= n; i++) {
+        uint32_t v = (uint32_t)(i * (n + 1) + 12), twin = (uint32_t)(s.nv + i);
+        size_t t;
+        memcpy(m.pos + 3 * twin, s.pos + 3 * v, 12);
+        for (t = 0; t < s.nt; t++) {
+            int k, right = 0;
+            for (k = 0; k < 3; k++) right |= (m.idx[3 * t + k] % (n + 1)) > 12 && m.idx[3 * t + k] < s.nv;
+            for (k = 0; k < 3; k++)
+                if (right && m.idx[3 * t + k] == v) m.idx[3 * t + k] = twin;
+        }
+    }
+    /* isolated vertices s.nv + 25 .. s.nv + 29 (one far away) */
+    for (i = s.nv + 25; i < m.nv; i++) {
+        m.pos[3 * i] = 5.0f + (float)i;
+        m.pos[3 * i + 1] = m.pos[3 * i + 2] = 0.0f;
+    }
+    /* zero-area: flatten one quad's triangle onto a line (three collinear points on row 3) */
+    m.pos[3 * (3 * (n + 1) + 5) + 2] = 0.0f;
+    /* a fin on the interior edge (a, b) of row 6: a third triangle with a new apex */
+    a = (uint32_t)(6 * (n + 1) + 4);
+    b = a + 1;
+    m.pos[3 * (s.nv + 25)] = m.pos[3 * a];
+    m.pos[3 * (s.nv + 25) + 1] = m.pos[3 * a + 1] + 0.02f;
+    m.pos[3 * (s.nv + 25) + 2] = 0.3f;
+    fin_tri = s.nt;
+    m.idx[3 * fin_tri] = a;
+    m.idx[3 * fin_tri + 1] = b;
+    m.idx[3 * fin_tri + 2] = (uint32_t)(s.nv + 25);
+    /* a degenerate triangle with three distinct collinear vertices on the seam column */
+    m.idx[3 * (fin_tri + 1)] = (uint32_t)(2 * (n + 1) + 12);
+    m.idx[3 * (fin_tri + 1) + 1] = (uint32_t)(3 * (n + 1) + 12);
+    m.idx[3 * (fin_tri + 1) + 2] = (uint32_t)(4 * (n + 1) + 12);
+    /* and one with a repeated index */
+    m.idx[3 * (fin_tri + 2)] = 7;
+    m.idx[3 * (fin_tri + 2) + 1] = 8;
+    m.idx[3 * (fin_tri + 2) + 2] = 7;
+    {
+        mesh in_view = m;
+        in_view.nt = m.nt - 1;
+        topology(&in_view, &bad, &bnd, &deg0, &euler);
+    }
+    memset(&o, 0, sizeof o);
+    o.target_triangles = 100;
+    T_EQ_INT(dm_simplify(m.pos, m.nv, m.idx, m.nt, &o, &pm, &rep), DM_OK);
+    if (pm) {
+        const uint32_t *idx_all;
+        T_EQ_SIZE(rep.dropped_triangles, 1);
+        T_CHECK(rep.frozen_vertices >= 3);
+        T_CHECK(rep.triangle_count <= 140); /* the frozen fan around the fin stays */
+        out = pm_mesh(pm, &ids);
+        topology(&out, &bad, &bnd, &deg, &euler);
+        zero_tris = deg;
+        T_CHECK_MSG(deg <= deg0, "messy: %zu degenerate triangles out of %zu in", deg, deg0);
+        /* the triangles around the fin's edge are untouched: find the fin, same vertices */
+        for (i = 0; i < out.nt; i++) {
+            uint32_t x = ids[out.idx[3 * i]], y = ids[out.idx[3 * i + 1]], z = ids[out.idx[3 * i + 2]];
+            if (x == a && y == b && z == (uint32_t)(s.nv + 25)) kept_fin++;
+        }
+        T_EQ_SIZE(kept_fin, 1);
+        idx_all = NULL;
+        (void)idx_all;
+        T_CHECK(memcmp(dm_pm_positions(pm) + 3 * a, m.pos + 3 * a, 12) == 0);
+        /* seam twins never merge with each other across the crack: both sides keep a boundary */
+        T_CHECK(bnd > 0 && zero_tris <= 1);
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+    }
+    mesh_free(&s);
+    mesh_free(&m);
+}
+
+/* ---- progress, cancel, allocation failure --------------------------------------------------- */
+
+static int count_progress(void *user, float done)
+{
+    float *last = (float *)user;
+    if (done < last[0] || done > 1.0f) last[1] = 1.0f; /* not monotone */
+    last[0] = done;
+    last[2] += 1.0f;
+    return 0;
+}
+
+static int cancel_now(void *user, float done)
+{
+    (void)user;
+    (void)done;
+    return 1;
+}
+
+typedef struct counting {
+    long allocs, frees, fail_at;
+} counting;
+
+static void *c_alloc(void *user, size_t size)
+{
+    counting *c = (counting *)user;
+    if (c->fail_at >= 0 && c->allocs >= c->fail_at) return NULL;
+    c->allocs++;
+    return malloc(size);
+}
+
+static void c_free(void *user, void *p)
+{
+    counting *c = (counting *)user;
+    if (p) c->frees++;
+    free(p);
+}
+
+static void resource_checks(const mesh *in)
+{
+    dm_simplify_options o;
+    dm_pm *pm = NULL;
+    float state[3] = {0, 0, 0};
+    counting c;
+    dm_allocator al;
+    long k, total, bad = 0;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = in->nt / 20;
+    o.progress = count_progress;
+    o.progress_user = state;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, NULL), DM_OK);
+    T_CHECK(state[2] >= 2.0f && state[1] == 0.0f && state[0] == 1.0f);
+    dm_pm_free(pm);
+    o.progress = cancel_now;
+    pm = (dm_pm *)&o;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, NULL), DM_CANCELLED);
+    T_CHECK(pm == NULL);
+    o.progress = NULL;
+    memset(&c, 0, sizeof c);
+    c.fail_at = -1;
+    al.alloc = c_alloc;
+    al.free = c_free;
+    al.user = &c;
+    o.allocator = &al;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, NULL), DM_OK);
+    dm_pm_free(pm);
+    T_EQ_INT(c.allocs, c.frees);
+    total = c.allocs;
+    for (k = 0; k < total; k++) {
+        dm_result r;
+        c.allocs = c.frees = 0;
+        c.fail_at = k;
+        pm = NULL;
+        r = dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, NULL);
+        if (r != DM_ERR_OUT_OF_MEMORY || pm != NULL || c.allocs != c.frees) bad++;
+    }
+    T_CHECK_MSG(bad == 0 && total > 10, "allocation failure: %ld of %ld runs wrong", bad, total);
+}
+
+int main(int argc, char **argv)
+{
+    gsph_mesh g;
+    mesh sph;
+    mio_mesh bunny;
+    mio_error err;
+    T_BEGIN(argc, argv);
+    T_CHECK(gsph_generate(16, &g) == 0);
+    sph.pos = g.positions;
+    sph.nv = g.vertex_count;
+    sph.idx = g.indices;
+    sph.nt = g.triangle_count;
+    closed_mesh_checks("sphere 5120", &sph, 0.05);
+    closed_mesh_checks("sphere 5120 to 12", &sph, 0.0025);
+    pm_checks("sphere 5120", &sph, 500);
+    open_mesh_checks();
+    error_bound_checks(&sph);
+    constraint_checks(&sph);
+    bad_input_checks();
+    messy_checks();
+    resource_checks(&sph);
+    if (mio_read_file(BUNNY, NULL, &bunny, &err) == MIO_OK) {
+        mesh b;
+        b.pos = bunny.positions;
+        b.nv = bunny.vertex_count;
+        b.idx = bunny.indices;
+        b.nt = bunny.triangle_count;
+        closed_mesh_checks("bunny 1%", &b, 0.01);
+        closed_mesh_checks("bunny 10%", &b, 0.10);
+        pm_checks("bunny", &b, 700);
+        mio_free_mesh(&bunny);
+    } else {
+        T_SKIP_N(28, "bunny checks", BUNNY " missing: apt-get install glmark2-data");
+    }
+    gsph_free(&g);
+    return T_END();
+}
