@@ -1401,37 +1401,50 @@ static int dm__prepare_ray(const float org[3], const float dir[3], float sign, d
 {
     const float d0 = sign * dir[0], d1 = sign * dir[1], d2 = sign * dir[2];
     const float a0 = fabsf(d0), a1 = fabsf(d1), a2 = fabsf(d2);
-    int k, kz;
+    int kx, ky, kz;
+    float dz;
     /* x - x is 0 for finite x and NaN for NaN or an infinity: one test for all six */
     if (!((org[0] - org[0]) + (org[1] - org[1]) + (org[2] - org[2]) + (d0 - d0) + (d1 - d1) + (d2 - d2) == 0.0f))
         return 0;
     kz = a0 >= a1 ? (a0 >= a2 ? 0 : 2) : (a1 >= a2 ? 1 : 2); /* the first of equal maxima */
-    if ((kz == 0 ? a0 : kz == 1 ? a1 : a2) == 0.0f) return 0;
+    dz = kz == 0 ? d0 : kz == 1 ? d1 : d2;
+    if (dz == 0.0f) return 0;
+    r->org[0] = org[0];
+    r->org[1] = org[1];
+    r->org[2] = org[2];
     r->dir[0] = d0;
     r->dir[1] = d1;
     r->dir[2] = d2;
-    for (k = 0; k < 3; k++) {
-        const float d = r->dir[k];
-        r->org[k] = org[k];
-        r->inv[k] = 1.0f / (fabsf(d) < 1e-20f ? (d < 0.0f ? -1e-20f : 1e-20f) : d);
-        /* a wide node is lo[3][W] then hi[3][W]: the near plane is lo when the ray goes up */
-        r->near_off[k] = r->inv[k] >= 0.0f ? DM__W * k : DM__W * (3 + k);
-        r->far_off[k] = r->inv[k] >= 0.0f ? DM__W * (3 + k) : DM__W * k;
+    /* 1/d with tiny components replaced by +-1e-20 (so that 0 * inv is 0, never NaN) */
+    r->inv[0] = 1.0f / (a0 < 1e-20f ? (d0 < 0.0f ? -1e-20f : 1e-20f) : d0);
+    r->inv[1] = 1.0f / (a1 < 1e-20f ? (d1 < 0.0f ? -1e-20f : 1e-20f) : d1);
+    r->inv[2] = 1.0f / (a2 < 1e-20f ? (d2 < 0.0f ? -1e-20f : 1e-20f) : d2);
+    /* a wide node is lo[3][W] then hi[3][W]: the near plane is lo when the ray goes up */
+    r->near_off[0] = r->inv[0] >= 0.0f ? 0 : 3 * DM__W;
+    r->near_off[1] = r->inv[1] >= 0.0f ? DM__W : 4 * DM__W;
+    r->near_off[2] = r->inv[2] >= 0.0f ? 2 * DM__W : 5 * DM__W;
+    r->far_off[0] = 3 * DM__W - r->near_off[0];
+    r->far_off[1] = 5 * DM__W - r->near_off[1];
+    r->far_off[2] = 7 * DM__W - r->near_off[2];
+    kx = kz == 2 ? 0 : kz + 1;
+    ky = kx == 2 ? 0 : kx + 1;
+    if (dz < 0.0f) { /* keep the winding, so that U, V, W keep their signs */
+        int swap = kx;
+        kx = ky;
+        ky = swap;
     }
+    r->kx = kx;
+    r->ky = ky;
     r->kz = kz;
-    r->kx = kz == 2 ? 0 : kz + 1;
-    r->ky = r->kx == 2 ? 0 : r->kx + 1;
-    if (r->dir[kz] < 0.0f) { /* keep the winding, so that U, V, W keep their signs */
-        int swap = r->kx;
-        r->kx = r->ky;
-        r->ky = swap;
-    }
-    r->sx = r->dir[r->kx] / r->dir[kz];
-    r->sy = r->dir[r->ky] / r->dir[kz];
+    r->sx = r->dir[kx] / dz;
+    r->sy = r->dir[ky] / dz;
 #if defined(DM_USE_SSE2) && !defined(DM_USE_AVX2)
-    for (k = 0; k < 3; k++) {
-        r->org4[k] = _mm_set1_ps(r->org[k]);
-        r->inv4[k] = _mm_set1_ps(r->inv[k]);
+    {
+        int k;
+        for (k = 0; k < 3; k++) {
+            r->org4[k] = _mm_set1_ps(r->org[k]);
+            r->inv4[k] = _mm_set1_ps(r->inv[k]);
+        }
     }
 #endif
     return 1;
