@@ -36,16 +36,19 @@ HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
 HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
 HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
+HAVE_CHOLMOD  := $(wildcard /usr/include/suitesparse/cholmod.h)
+HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh
-C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh
+C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_deform_chol
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_CHOLMOD),$(HAVE_EIGEN)),$(B)/bench_chol)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -112,6 +115,10 @@ fuzz: fuzz-build
 BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
+# CHOLMOD and Eigen headers are system headers (their warnings are not ours)
+$(B)/bench_chol: bench/bench_chol.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) -isystem /usr/include/suitesparse -isystem /usr/include/eigen3 -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ -lcholmod -lsuitesparseconfig -lm
+
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
