@@ -225,7 +225,8 @@ typedef struct dfm_chol_options {
     int ordering;                 /* DFM_ORDER_AMD (0), DFM_ORDER_NATURAL or DFM_ORDER_GIVEN */
     const int32_t *perm;          /* DFM_ORDER_GIVEN: a permutation of 0..n-1 */
     size_t block_size;            /* 0/1, or b: order the graph of b x b vertex blocks */
-    const double *coords;         /* reserved (nested dissection); ignored */
+    const double *coords;         /* NULL, or 3 per row (per vertex with block_size b): nested
+                                     dissection is tried too and the smaller fill kept */
     const dfm_allocator *allocator;
     int (*progress)(void *user, float done);
     void *progress_user;
@@ -869,12 +870,17 @@ typedef struct dfm__amd {
     int64_t *hash, *mark;
     int32_t *first, *tail, *follow; /* members of each principal (for the final order) */
     int32_t *order_pivot;           /* pivots in elimination order */
+    const int32_t *cset;            /* NULL, or constraint set of each node: lower sets first */
+    int32_t level;                  /* the set pivots are taken from */
+    unsigned char *inlist;          /* 1 while in a degree list (0: parked, later set) */
     const dfm_allocator *al;
 } dfm__amd;
 
 static void dfm__amd_remove(dfm__amd *s, int32_t i)
 {
     int32_t d = s->degree[i];
+    if (!s->inlist[i]) return;
+    s->inlist[i] = 0;
     if (s->last[i] >= 0) s->next[s->last[i]] = s->next[i];
     else s->head[d] = s->next[i];
     if (s->next[i] >= 0) s->last[s->next[i]] = s->last[i];
@@ -884,6 +890,8 @@ static void dfm__amd_remove(dfm__amd *s, int32_t i)
 static void dfm__amd_insert(dfm__amd *s, int32_t i, int32_t d)
 {
     s->degree[i] = d;
+    if (s->cset && s->cset[i] != s->level) return; /* parked until its set's turn */
+    s->inlist[i] = 1;
     s->last[i] = -1;
     s->next[i] = s->head[d];
     if (s->head[d] >= 0) s->last[s->head[d]] = i;
@@ -960,9 +968,11 @@ static void dfm__amd_join(dfm__amd *s, int32_t i, int32_t j)
 }
 
 /* AMD on the pattern of a symmetric graph given by full adjacency (both directions, no
-   diagonal): adj_start[n+1], adj. perm[k] = node eliminated k-th. */
-static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const dfm_allocator *al,
-                                 int (*progress)(void *, float), void *puser, int32_t *perm)
+   diagonal): adj_start[n+1], adj. perm[k] = node eliminated k-th. With cset (constrained
+   minimum degree, as in CAMD), pivots come from the lowest constraint set that has variables
+   left; supervariables never mix sets. */
+static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const int32_t *cset,
+                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
 {
     dfm__amd S, *s = &S;
     dfm_result err = DFM_OK;
@@ -992,7 +1002,16 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
     s->tail = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
     s->follow = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
     s->order_pivot = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    s->inlist = (unsigned char *)dfm__alloc(al, (size_t)n, 1, &err);
     if (err != DFM_OK) goto done;
+    memset(s->inlist, 0, (size_t)n);
+    s->cset = cset;
+    s->level = 0;
+    if (cset) {
+        s->level = INT32_MAX;
+        for (i = 0; i < n; i++)
+            if (cset[i] < s->level) s->level = cset[i];
+    }
 
     /* dense rows (degree > 10 sqrt(n), at least 16) are taken out and ordered last */
     dense_limit = (int64_t)(10.0 * sqrt((double)n));
@@ -1026,7 +1045,7 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         s->len[i] = (int32_t)(s->pfree - s->pe[i]);
     }
     for (i = 0; i <= n; i++) s->head[i] = -1;
-    for (i = n - 1; i >= 0; i--)
+    for (i = 0; i < n; i++)
         if (s->status[i] == DFM__VAR) dfm__amd_insert(s, i, s->len[i]);
     wflg = 2;
 
@@ -1035,6 +1054,20 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         int64_t need, pme1, pme2, q;
         /* 1. the variable of minimum approximate degree */
         while (mindeg < n && s->head[mindeg] < 0) mindeg++;
+        if (mindeg >= n && cset) {
+            /* this set is done: the next set's variables enter the degree lists */
+            int32_t next_level = INT32_MAX;
+            for (i = 0; i < n; i++)
+                if (s->status[i] == DFM__VAR && s->nv[i] > 0 && cset[i] > s->level && cset[i] < next_level) next_level = cset[i];
+            s->level = next_level;
+            mindeg = n;
+            for (i = 0; i < n; i++)
+                if (s->status[i] == DFM__VAR && s->nv[i] > 0 && cset[i] == next_level) {
+                    dfm__amd_insert(s, i, s->degree[i]);
+                    if (s->degree[i] < mindeg) mindeg = s->degree[i];
+                }
+            continue;
+        }
         p = s->head[mindeg];
         dfm__amd_remove(s, p);
         nvp = s->nv[p];
@@ -1186,7 +1219,8 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
                     for (r = s->pe[a] + 1; r < s->pe[a] + s->len[a]; r++) s->mark[s->iw[r]] = stamp;
                     while (b >= 0) {
                         int32_t bn = s->hnext[b];
-                        int same = s->status[b] == DFM__VAR && s->len[b] == s->len[a] && s->elen[b] == s->elen[a];
+                        int same = s->status[b] == DFM__VAR && s->len[b] == s->len[a] && s->elen[b] == s->elen[a] &&
+                                   (!cset || cset[a] == cset[b]);
                         if (same)
                             for (r = s->pe[b] + 1; r < s->pe[b] + s->len[b]; r++)
                                 if (s->mark[s->iw[r]] != stamp) {
@@ -1270,6 +1304,243 @@ done:
     dfm__free(al, s->tail);
     dfm__free(al, s->follow);
     dfm__free(al, s->order_pivot);
+    dfm__free(al, s->inlist);
+    return err;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: nested dissection by geometric separators
+
+   Recursive coordinate bisection of the graph: a part is split at the median of the coordinate
+   (x, y or z) whose median cut crosses the fewest edges, the part's nodes on one side that touch the other side (the smaller of the two
+   boundaries) form the separator, ordered after both halves (George 1973). Parts below
+   DFM__ND_LEAF nodes are not split further. The order within the dissection comes from
+   constrained minimum degree on the whole graph (as CHOLMOD's nesdis does with CAMD): the
+   leaves first, then the separators from the deepest to the root one, each set ordered by
+   approximate minimum degree, so that leaf nodes next to a separator are eliminated knowing it.
+   The analysis keeps whichever of this and plain AMD gives the smaller nnz(L).
+   --------------------------------------------------------------------------------------------- */
+
+#ifndef DFM__ND_LEAF
+#define DFM__ND_LEAF 128
+#endif
+
+typedef struct dfm__nd_task {
+    size_t lo, hi; /* nodes[lo..hi) are the part */
+    int32_t depth;
+} dfm__nd_task;
+
+/* k-th smallest of ids[0..n) by (key, id): quickselect, deterministic pivots (median of three) */
+static void dfm__select(int32_t *ids, size_t n, size_t k, const double *coords, int axis)
+{
+    size_t lo = 0, hi = n; /* the k-th lies in [lo, hi) */
+#define DFM__KEY_LESS(a, b) (coords[3 * (size_t)(a) + axis] < coords[3 * (size_t)(b) + axis] || \
+    (coords[3 * (size_t)(a) + axis] == coords[3 * (size_t)(b) + axis] && (a) < (b)))
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2, i, store;
+        int32_t a = ids[lo], b = ids[mid], c = ids[hi - 1], pivot, t;
+        /* median of three */
+        if (DFM__KEY_LESS(b, a)) { t = a; a = b; b = t; }
+        if (DFM__KEY_LESS(c, b)) { t = b; b = c; c = t; }
+        if (DFM__KEY_LESS(b, a)) { t = a; a = b; b = t; }
+        pivot = b;
+        /* three-way partition is not needed: keys are distinct with the id tie-break */
+        for (i = lo; i < hi; i++)
+            if (ids[i] == pivot) {
+                ids[i] = ids[hi - 1];
+                ids[hi - 1] = pivot;
+                break;
+            }
+        store = lo;
+        for (i = lo; i + 1 < hi; i++)
+            if (DFM__KEY_LESS(ids[i], pivot)) {
+                t = ids[i];
+                ids[i] = ids[store];
+                ids[store] = t;
+                store++;
+            }
+        ids[hi - 1] = ids[store];
+        ids[store] = pivot;
+        if (store == k) return;
+        if (k < store) hi = store;
+        else lo = store + 1;
+    }
+#undef DFM__KEY_LESS
+}
+
+static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const double *coords,
+                                const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
+{
+    dfm_result err = DFM_OK;
+    int32_t *nodes = NULL, *tag = NULL, *side = NULL, *local = NULL, *cset = NULL, stamp = 0;
+    dfm__nd_task *stack = NULL;
+    size_t top = 0, i, done = 0, cap = 2 * (size_t)n + 2;
+    nodes = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    tag = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    side = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    local = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    stack = (dfm__nd_task *)dfm__alloc(al, cap, sizeof(dfm__nd_task), &err);
+    cset = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
+    if (err != DFM_OK) goto done;
+    for (i = 0; i < (size_t)n; i++) {
+        nodes[i] = (int32_t)i;
+        tag[i] = 0;
+        cset[i] = 0;
+    }
+    stack[top].lo = 0;
+    stack[top].depth = 0;
+    stack[top++].hi = (size_t)n;
+    while (top > 0) {
+        dfm__nd_task tk = stack[--top];
+        size_t m = tk.hi - tk.lo, half, nl = 0, nr = 0, p, k;
+        int32_t *part = nodes + tk.lo;
+        int axis = 0, ax;
+        stamp++;
+        for (i = 0; i < m; i++) tag[part[i]] = stamp;
+        if (m <= DFM__ND_LEAF) {
+            done += m;
+            if (progress && (stamp & 255) == 0 && progress(puser, 0.2f * (float)done / (float)n)) {
+                err = DFM_CANCELLED;
+                goto done;
+            }
+            continue;
+        }
+        half = m / 2;
+        {
+            /* the axis whose median cut crosses the fewest edges */
+            size_t best = (size_t)-1;
+            for (ax = 0; ax < 3; ax++) {
+                size_t cut = 0;
+                dfm__select(part, m, half, coords, ax);
+                for (i = 0; i < m; i++) side[part[i]] = i < half ? 0 : 1;
+                for (i = 0; i < half; i++)
+                    for (p = adj_start[part[i]]; p < adj_start[part[i] + 1]; p++)
+                        cut += tag[adj[p]] == stamp && side[adj[p]] == 1;
+                if (cut < best) {
+                    best = cut;
+                    axis = ax;
+                }
+            }
+        }
+        dfm__select(part, m, half, coords, axis);
+        for (i = 0; i < m; i++) side[part[i]] = i < half ? 0 : 1;
+        /* boundary of each side: nodes with a neighbour on the other side (side 2 + s marks) */
+        for (i = 0; i < m; i++) {
+            int32_t v = part[i];
+            for (p = adj_start[v]; p < adj_start[v + 1]; p++) {
+                int32_t u = adj[p];
+                if (tag[u] == stamp && (side[u] & 1) != (side[v] & 1)) {
+                    if (side[v] < 2) {
+                        if (side[v] == 0) nl++;
+                        else nr++;
+                    }
+                    side[v] |= 2;
+                    break;
+                }
+            }
+        }
+        {
+            /* separator = the smaller boundary; the other boundary's nodes stay in their half */
+            int32_t sep_side = nl <= nr ? 0 : 1;
+            size_t ns = sep_side == 0 ? nl : nr, a = 0, b, s0;
+            int32_t *tmp = local; /* scratch of m entries */
+            /* layout: [side 0 without separator][side 1 without separator][separator] */
+            for (k = 0; k < m; k++) {
+                int32_t v = part[k];
+                int sd = side[v] & 1, bd = side[v] >> 1;
+                if (sd == 0 && !(bd && sep_side == 0)) tmp[a++] = v;
+            }
+            b = a;
+            for (k = 0; k < m; k++) {
+                int32_t v = part[k];
+                int sd = side[v] & 1, bd = side[v] >> 1;
+                if (sd == 1 && !(bd && sep_side == 1)) tmp[b++] = v;
+            }
+            s0 = b;
+            for (k = 0; k < m; k++) {
+                int32_t v = part[k];
+                int sd = side[v] & 1, bd = side[v] >> 1;
+                if (bd && sd == sep_side) tmp[b++] = v;
+            }
+            (void)ns;
+            memcpy(part, tmp, m * sizeof(int32_t));
+            /* the separator comes after both halves and after every deeper separator */
+            for (k = s0; k < m; k++) cset[part[k]] = INT32_MAX / 2 - tk.depth;
+            done += m - s0;
+            if (top + 2 > cap) { /* cannot happen: each task splits into smaller ones */
+                err = DFM_ERR_INVALID_ARGUMENT;
+                goto done;
+            }
+            if (s0 > a) {
+                stack[top].lo = tk.lo + a;
+                stack[top].depth = tk.depth + 1;
+                stack[top++].hi = tk.lo + s0;
+            }
+            if (a > 0) {
+                stack[top].lo = tk.lo;
+                stack[top].depth = tk.depth + 1;
+                stack[top++].hi = tk.lo + a;
+            }
+        }
+    }
+    err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm);
+done:
+    dfm__free(al, nodes);
+    dfm__free(al, tag);
+    dfm__free(al, side);
+    dfm__free(al, local);
+    dfm__free(al, stack);
+    dfm__free(al, cset);
+    return err;
+}
+
+/* nnz(L) of a graph (adjacency without diagonal) under an ordering: elimination tree, then row
+   subtrees. perm[k] = node eliminated k-th. */
+static dfm_result dfm__graph_fill(size_t n, const size_t *adj_start, const int32_t *adj, const int32_t *perm,
+                                  const dfm_allocator *al, double *nnz_out)
+{
+    dfm_result err = DFM_OK;
+    int32_t *ip = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    int32_t *parent = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    int32_t *anc = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    size_t k, p;
+    double total = 0.0;
+    if (err == DFM_OK) {
+        for (k = 0; k < n; k++) ip[perm[k]] = (int32_t)k;
+        for (k = 0; k < n; k++) {
+            int32_t v = perm[k];
+            parent[k] = -1;
+            anc[k] = -1;
+            for (p = adj_start[v]; p < adj_start[v + 1]; p++) {
+                int32_t r = ip[adj[p]];
+                while (r != -1 && r < (int32_t)k) {
+                    int32_t next = anc[r];
+                    anc[r] = (int32_t)k;
+                    if (next == -1) parent[r] = (int32_t)k;
+                    r = next;
+                }
+            }
+        }
+        for (k = 0; k < n; k++) anc[k] = -1;
+        for (k = 0; k < n; k++) {
+            int32_t v = perm[k];
+            anc[k] = (int32_t)k;
+            total += 1.0;
+            for (p = adj_start[v]; p < adj_start[v + 1]; p++) {
+                int32_t x = ip[adj[p]];
+                if (x > (int32_t)k) continue;
+                while (anc[x] != (int32_t)k) {
+                    anc[x] = (int32_t)k;
+                    total += 1.0;
+                    x = parent[x];
+                }
+            }
+        }
+    }
+    dfm__free(al, ip);
+    dfm__free(al, parent);
+    dfm__free(al, anc);
+    *nnz_out = total;
     return err;
 }
 
@@ -1566,8 +1837,23 @@ DFMDEF dfm_result dfm_chol_analyze(const dfm_csc *a, const dfm_chol_options *opt
     } else {
         size_t nb = n / b, k, r;
         err = dfm__adjacency(a, b, &al, &adj_start, &adj);
-        if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, &al, opt.progress, opt.progress_user, post);
+        if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, &al, opt.progress, opt.progress_user, post);
         if (err != DFM_OK) goto fail;
+        if (opt.coords && nb > DFM__ND_LEAF) {
+            /* nested dissection too; keep the ordering with the smaller fill */
+            double fill_amd, fill_nd;
+            size_t v;
+            for (v = 0; v < 3 * nb; v++)
+                if (!dfm__finite(opt.coords[v])) {
+                    err = DFM_ERR_BAD_VALUE;
+                    goto fail;
+                }
+            err = dfm__nd_order((int32_t)nb, adj_start, adj, opt.coords, &al, opt.progress, opt.progress_user, w3);
+            if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, post, &al, &fill_amd);
+            if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, w3, &al, &fill_nd);
+            if (err != DFM_OK) goto fail;
+            if (fill_nd < fill_amd) memcpy(post, w3, nb * sizeof(int32_t));
+        }
         for (k = 0; k < nb; k++)
             for (r = 0; r < b; r++) order[k * b + r] = (int32_t)((size_t)post[k] * b + r);
         dfm__free(&al, adj_start);
@@ -1798,16 +2084,55 @@ fail:
    Section: dense kernels (column-major)
    --------------------------------------------------------------------------------------------- */
 
-/* C (m x k) -= A (m x p) B (k x p)^T, in 4 x 4 register tiles. */
+/* Two-lane double vectors through the GCC/Clang vector extension (SSE2 on x86-64, NEON on
+   arm64); plain C elsewhere or with DFM_NO_VECTOR_EXTENSIONS. Loads and stores go through memcpy,
+   so no alignment is assumed. */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(DFM_NO_VECTOR_EXTENSIONS)
+#define DFM__V2 1
+typedef double dfm__v2 __attribute__((vector_size(16)));
+static inline dfm__v2 dfm__ld2(const double *p)
+{
+    dfm__v2 v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static inline void dfm__st2(double *p, dfm__v2 v) { memcpy(p, &v, sizeof v); }
+#endif
+
+/* C (m x k) -= A (m x p) B (k x p)^T, or C = -A B^T when assign is set (C need not be
+   initialized), in 4 x 4 register tiles. */
 static void dfm__gemm_nt(size_t m, size_t k, size_t p, const double *A, size_t lda, const double *B, size_t ldb,
-                         double *C, size_t ldc)
+                         double *C, size_t ldc, int assign)
 {
     size_t i, j, t;
     for (j = 0; j + 4 <= k; j += 4) {
         for (i = 0; i + 4 <= m; i += 4) {
+            const double *a = A + i, *bb = B + j;
+            double *c0 = C + i + j * ldc, *c1 = c0 + ldc, *c2 = c1 + ldc, *c3 = c2 + ldc;
+#ifdef DFM__V2
+            dfm__v2 z = {0.0, 0.0}, x0 = z, y0 = z, x1 = z, y1 = z, x2 = z, y2 = z, x3 = z, y3 = z;
+            for (t = 0; t < p; t++, a += lda, bb += ldb) {
+                dfm__v2 lo = dfm__ld2(a), hi = dfm__ld2(a + 2);
+                dfm__v2 b0 = {bb[0], bb[0]}, b1 = {bb[1], bb[1]}, b2 = {bb[2], bb[2]}, b3 = {bb[3], bb[3]};
+                x0 += lo * b0; y0 += hi * b0;
+                x1 += lo * b1; y1 += hi * b1;
+                x2 += lo * b2; y2 += hi * b2;
+                x3 += lo * b3; y3 += hi * b3;
+            }
+            if (assign) {
+                dfm__st2(c0, -x0); dfm__st2(c0 + 2, -y0);
+                dfm__st2(c1, -x1); dfm__st2(c1 + 2, -y1);
+                dfm__st2(c2, -x2); dfm__st2(c2 + 2, -y2);
+                dfm__st2(c3, -x3); dfm__st2(c3 + 2, -y3);
+            } else {
+                dfm__st2(c0, dfm__ld2(c0) - x0); dfm__st2(c0 + 2, dfm__ld2(c0 + 2) - y0);
+                dfm__st2(c1, dfm__ld2(c1) - x1); dfm__st2(c1 + 2, dfm__ld2(c1 + 2) - y1);
+                dfm__st2(c2, dfm__ld2(c2) - x2); dfm__st2(c2 + 2, dfm__ld2(c2 + 2) - y2);
+                dfm__st2(c3, dfm__ld2(c3) - x3); dfm__st2(c3 + 2, dfm__ld2(c3 + 2) - y3);
+            }
+#else
             double c00 = 0, c10 = 0, c20 = 0, c30 = 0, c01 = 0, c11 = 0, c21 = 0, c31 = 0;
             double c02 = 0, c12 = 0, c22 = 0, c32 = 0, c03 = 0, c13 = 0, c23 = 0, c33 = 0;
-            const double *a = A + i, *bb = B + j;
             for (t = 0; t < p; t++, a += lda, bb += ldb) {
                 double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3];
                 double b0 = bb[0], b1 = bb[1], b2 = bb[2], b3 = bb[3];
@@ -1816,31 +2141,42 @@ static void dfm__gemm_nt(size_t m, size_t k, size_t p, const double *A, size_t l
                 c02 += a0 * b2; c12 += a1 * b2; c22 += a2 * b2; c32 += a3 * b2;
                 c03 += a0 * b3; c13 += a1 * b3; c23 += a2 * b3; c33 += a3 * b3;
             }
-            {
-                double *c0 = C + i + j * ldc, *c1 = c0 + ldc, *c2 = c1 + ldc, *c3 = c2 + ldc;
-                c0[0] -= c00; c0[1] -= c10; c0[2] -= c20; c0[3] -= c30;
-                c1[0] -= c01; c1[1] -= c11; c1[2] -= c21; c1[3] -= c31;
-                c2[0] -= c02; c2[1] -= c12; c2[2] -= c22; c2[3] -= c32;
-                c3[0] -= c03; c3[1] -= c13; c3[2] -= c23; c3[3] -= c33;
+            if (assign) {
+                c0[0] = c0[1] = c0[2] = c0[3] = c1[0] = c1[1] = c1[2] = c1[3] = 0.0;
+                c2[0] = c2[1] = c2[2] = c2[3] = c3[0] = c3[1] = c3[2] = c3[3] = 0.0;
             }
+            c0[0] -= c00; c0[1] -= c10; c0[2] -= c20; c0[3] -= c30;
+            c1[0] -= c01; c1[1] -= c11; c1[2] -= c21; c1[3] -= c31;
+            c2[0] -= c02; c2[1] -= c12; c2[2] -= c22; c2[3] -= c32;
+            c3[0] -= c03; c3[1] -= c13; c3[2] -= c23; c3[3] -= c33;
+#endif
         }
         for (; i < m; i++) {
-            double c0 = 0, c1 = 0, c2 = 0, c3 = 0;
+            double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
             const double *a = A + i, *bb = B + j;
             for (t = 0; t < p; t++, a += lda, bb += ldb) {
-                c0 += a[0] * bb[0];
-                c1 += a[0] * bb[1];
-                c2 += a[0] * bb[2];
-                c3 += a[0] * bb[3];
+                s0 += a[0] * bb[0];
+                s1 += a[0] * bb[1];
+                s2 += a[0] * bb[2];
+                s3 += a[0] * bb[3];
             }
-            C[i + j * ldc] -= c0;
-            C[i + (j + 1) * ldc] -= c1;
-            C[i + (j + 2) * ldc] -= c2;
-            C[i + (j + 3) * ldc] -= c3;
+            if (assign) {
+                C[i + j * ldc] = -s0;
+                C[i + (j + 1) * ldc] = -s1;
+                C[i + (j + 2) * ldc] = -s2;
+                C[i + (j + 3) * ldc] = -s3;
+            } else {
+                C[i + j * ldc] -= s0;
+                C[i + (j + 1) * ldc] -= s1;
+                C[i + (j + 2) * ldc] -= s2;
+                C[i + (j + 3) * ldc] -= s3;
+            }
         }
     }
     for (; j < k; j++) {
         double *cj = C + j * ldc;
+        if (assign)
+            for (i = 0; i < m; i++) cj[i] = 0.0;
         for (t = 0; t < p; t++) {
             double bj = B[j + t * ldb];
             const double *a = A + t * lda;
@@ -1859,7 +2195,7 @@ static long dfm__panel_chol(size_t nr, size_t nc, double *L, size_t ld)
     size_t j0, c, t, r;
     for (j0 = 0; j0 < nc; j0 += NB) {
         size_t jb = nc - j0 < NB ? nc - j0 : NB;
-        if (j0 > 0) dfm__gemm_nt(nr - j0, jb, j0, L + j0, ld, L + j0, ld, L + j0 + j0 * ld, ld);
+        if (j0 > 0) dfm__gemm_nt(nr - j0, jb, j0, L + j0, ld, L + j0, ld, L + j0 + j0 * ld, ld, 0);
         for (c = j0; c < j0 + jb; c++) {
             double *lc = L + c * ld, d, inv;
             for (t = j0; t < c; t++) {
@@ -1934,10 +2270,9 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
             k = p1 - p0;
             if (m == nr && k == nc && (size_t)rd[p0] == f) {
                 /* the descendant's rows are exactly this supernode's: update in place */
-                dfm__gemm_nt(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr);
+                dfm__gemm_nt(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0);
             } else {
-                memset(upd, 0, m * k * sizeof(double));
-                dfm__gemm_nt(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m);
+                dfm__gemm_nt(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m, 1);
                 for (j = 0; j < k; j++) {
                     double *col = Ls + (size_t)(rd[p0 + j] - (int32_t)f) * nr;
                     const double *u = upd + j * m;
