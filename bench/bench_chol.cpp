@@ -14,7 +14,8 @@
      RESULT chol system=<laplacian|bilaplacian> n=<n> ours_nnzL=<n> cholmod_nnzL=<n>
          ours_analyze_ms=<t> ours_factor_ms=<t> cholmod_factor_ms=<t> eigen_factor_ms=<t>
          ours_solve3_ms=<t> cholmod_solve3_ms=<t> residual=<r> ...
-       ours_analyze_ms: dfm_chol_analyze (AMD, etree, postorder, counts, supernodes).
+       ours_analyze_ms: dfm_chol_analyze with the vertex positions as coordinates (AMD, and
+         nested dissection keeping the smaller fill; etree, postorder, counts, supernodes).
        ours_factor_ms: dfm_chol_factor (numeric only, reusing the analysis).
        cholmod_factor_ms: cholmod_factorize (numeric only) after one cholmod_analyze with the
          default settings (supernodal, AMD then METIS when AMD's fill is high; the ordering it
@@ -96,6 +97,7 @@ static const char *blas_library(void)
 
 struct state {
     const dfm_csc *a = nullptr;
+    dfm_chol_options options = dfm_chol_default_options();
     const std::vector<double> *b = nullptr;
     dfm_chol *chol = nullptr;
     std::vector<double> x;
@@ -111,7 +113,7 @@ struct state {
 static int ours_analyze(void *u)
 {
     state &s = *(state *)u;
-    return dfm_chol_analyze(s.a, nullptr, &s.chol) != DFM_OK;
+    return dfm_chol_analyze(s.a, &s.options, &s.chol) != DFM_OK;
 }
 static void ours_analyze_after(void *u)
 {
@@ -153,7 +155,7 @@ static int eigen_factor(void *u)
     return s.eigen->info() != Eigen::Success;
 }
 
-static void run_system(const char *name, const dfm_csc &a)
+static void run_system(const char *name, const dfm_csc &a, const double *coords)
 {
     size_t n = a.n_cols, nnz = a.col_start[n];
     std::vector<double> b(3 * n);
@@ -161,11 +163,12 @@ static void run_system(const char *name, const dfm_csc &a)
     state s;
     s.a = &a;
     s.b = &b;
+    s.options.coords = coords;
 
     /* ours */
     fprintf(stderr, "bench_chol: %s n=%zu nnz(A lower)=%zu: ours\n", name, n, nnz);
     double ours_analyze_s = bench_median(ours_analyze, ours_analyze_after, &s);
-    if (ours_analyze_s < 0 || dfm_chol_analyze(&a, nullptr, &s.chol) != DFM_OK) {
+    if (ours_analyze_s < 0 || dfm_chol_analyze(&a, &s.options, &s.chol) != DFM_OK) {
         fprintf(stderr, "bench_chol: our analysis failed\n");
         exit(1);
     }
@@ -275,8 +278,10 @@ int main(int argc, char **argv)
     printf("RESULT chol_blas lib=%s\n", blas_library());
     printf("RESULT chol_assembly n=%zu normal_equations_ms=%.2f\n", nv, normal_ms);
     fflush(stdout);
-    run_system("laplacian", lap);
-    if (nv <= 200000) run_system("bilaplacian", bil);
+    std::vector<double> coords(3 * nv);
+    for (size_t i = 0; i < 3 * nv; i++) coords[i] = mesh.positions[i];
+    run_system("laplacian", lap, coords.data());
+    if (nv <= 200000) run_system("bilaplacian", bil, coords.data());
     else fprintf(stderr, "bench_chol: bilaplacian skipped above 200k vertices\n");
     dfm_csc_free(&lap);
     dfm_csc_free(&bil);

@@ -929,6 +929,16 @@ static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, co
     o.allocator = al;
     r = dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, al, &l);
     if (r == DFM_OK) r = dfm_normal_matrix(&l, dg, al, &m);
+    if (r == DFM_OK) {
+        double *co = (double *)malloc(3 * nv * sizeof(double));
+        dfm_chol *cn = NULL;
+        for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+        o.coords = co;
+        r = dfm_chol_analyze(&m, &o, &cn);
+        o.coords = NULL;
+        dfm_chol_free(cn);
+        free(co);
+    }
     if (r == DFM_OK) r = dfm_chol_analyze(&m, &o, &c);
     if (r == DFM_OK) r = dfm_chol_factor(c, &m);
     if (r == DFM_OK) {
@@ -968,8 +978,8 @@ static void test_alloc_failures(void)
     size_t nv, nt;
     long k;
     int all_oom = 1, no_leaks = 1, finished = 0;
-    grid_mesh(9, 8, &pos, &idx, &nv, &nt);
-    for (k = 0; k < 2000 && !finished; k++) {
+    grid_mesh(20, 15, &pos, &idx, &nv, &nt); /* 300 vertices: nested dissection splits */
+    for (k = 0; k < 5000 && !finished; k++) {
         counting cnt = {0, 0, k};
         dfm_allocator al = {counting_alloc, counting_free, &cnt};
         int r = run_pipeline(&al, pos, nv, idx, nt);
@@ -1054,6 +1064,106 @@ static void test_amd_quality(void)
     free(idx);
 }
 
+
+/* nested dissection with vertex coordinates: correct solves, brute-force counts, never more fill
+   than AMD alone, bad coordinates refused, deterministic */
+static void test_nested_dissection(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i;
+    dfm_csc l;
+    double *co, *b, *x;
+    dfm_chol_options o = dfm_chol_default_options();
+    dfm_chol *c = NULL, *ca = NULL, *c2 = NULL;
+    dfm_chol_info info, info_amd;
+    unsigned char *fixed;
+    int counts_ok = 1;
+    /* small: brute-force counts under the dissection ordering */
+    grid_mesh(21, 22, &pos, &idx, &nv, &nt);
+    co = (double *)malloc(3 * nv * sizeof(double));
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    fixed = every_kth(nv, 50);
+    add_diagonal(&l, fixed, 1.0);
+    o.coords = co;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_OK);
+    {
+        size_t *bc = (size_t *)malloc(nv * sizeof(size_t));
+        brute_counts(&l, dfm_chol_permutation(c), bc);
+        for (i = 0; i < nv; i++) counts_ok &= bc[i] == dfm_chol_column_counts(c)[i];
+        free(bc);
+    }
+    T_CHECK(counts_ok);
+    dfm_chol_free(c);
+    free(fixed);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+    free(co);
+    /* larger: fill and solve */
+    grid_mesh(150, 140, &pos, &idx, &nv, &nt);
+    co = (double *)malloc(3 * nv * sizeof(double));
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    fixed = every_kth(nv, 100);
+    add_diagonal(&l, fixed, 1.0);
+    o.coords = co;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_OK);
+    T_EQ_INT(dfm_chol_analyze(&l, NULL, &ca), DFM_OK);
+    dfm_chol_get_info(c, &info);
+    dfm_chol_get_info(ca, &info_amd);
+    T_CHECK_MSG(info.nnz_l <= info_amd.nnz_l, "with coordinates %zu, AMD %zu", info.nnz_l, info_amd.nnz_l);
+    /* the dissection ordering itself: a permutation, with fill close to AMD's on this grid */
+    {
+        dfm_allocator al = dfm__resolve_allocator(NULL);
+        size_t *st;
+        int32_t *adj, *pnd = (int32_t *)malloc(nv * sizeof(int32_t)), *pamd = (int32_t *)malloc(nv * sizeof(int32_t));
+        unsigned char *seen = (unsigned char *)calloc(nv, 1);
+        double fnd = 0, famd = 0;
+        int is_perm = 1;
+        T_EQ_INT(dfm__adjacency(&l, 1, &al, &st, &adj), DFM_OK);
+        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd), DFM_OK);
+        T_EQ_INT(dfm__amd_order((int32_t)nv, st, adj, NULL, &al, NULL, NULL, pamd), DFM_OK);
+        for (i = 0; i < nv; i++) {
+            if (pnd[i] < 0 || (size_t)pnd[i] >= nv || seen[pnd[i]]) is_perm = 0;
+            else seen[pnd[i]] = 1;
+        }
+        T_CHECK(is_perm);
+        dfm__graph_fill(nv, st, adj, pnd, &al, &fnd);
+        dfm__graph_fill(nv, st, adj, pamd, &al, &famd);
+        T_CHECK_MSG(famd == (double)info_amd.nnz_l, "graph fill %.0f vs symbolic %zu", famd, info_amd.nnz_l);
+        T_CHECK_MSG(fnd < 1.3 * famd, "dissection %.0f AMD %.0f", fnd, famd);
+        free(st);
+        free(adj);
+        free(pnd);
+        free(pamd);
+        free(seen);
+    }
+    b = random_vector(3 * nv, 71);
+    x = (double *)malloc(3 * nv * sizeof(double));
+    T_EQ_INT(dfm_chol_factor(c, &l), DFM_OK);
+    memcpy(x, b, 3 * nv * sizeof(double));
+    T_EQ_INT(dfm_chol_solve(c, x, 3), DFM_OK);
+    T_CHECK(residual(&l, x, b, 3) <= 1e-14);
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c2), DFM_OK);
+    T_CHECK(memcmp(dfm_chol_permutation(c), dfm_chol_permutation(c2), nv * sizeof(int32_t)) == 0);
+    dfm_chol_free(c2);
+    c2 = NULL;
+    co[5] = NAN;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c2), DFM_ERR_BAD_VALUE);
+    T_CHECK(c2 == NULL);
+    dfm_chol_free(c);
+    dfm_chol_free(ca);
+    free(b);
+    free(x);
+    free(fixed);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+    free(co);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1072,5 +1182,6 @@ int main(int argc, char **argv)
     test_alloc_failures();
     test_cancel();
     test_amd_quality();
+    test_nested_dissection();
     return T_END();
 }
