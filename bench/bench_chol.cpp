@@ -25,6 +25,8 @@
          a copy of B; cholmod_solve(CHOLMOD_A) returning a new dense X, freed outside the timer).
        nnzL: exact entries of L (ours: the symbolic count; CHOLMOD: Common->lnz of the chosen
          ordering; eigen_nnzL: the nonzeros of Eigen's L).
+       ours_stored / cholmod_stored: entries held (supernodal blocks, amalgamation zeros
+         included; CHOLMOD: L->xsize).
        residual: max over the 3 columns of |b - Ax|inf / (|A|inf |x|inf + |b|inf) for ours;
          cholmod_residual likewise for CHOLMOD's x.
      RESULT chol_blas lib=<path> the BLAS library CHOLMOD's dgemm_ resolved to at run time
@@ -200,6 +202,7 @@ static void run_system(const char *name, const dfm_csc &a, const double *coords)
     s.cf = cholmod_analyze(s.ca, &cc);
     double cholmod_analyze_s = bench_now() - t0;
     double cholmod_lnz = cc.lnz;
+    double cholmod_stored = s.cf ? (double)s.cf->xsize : -1.0;
     int ordering = cc.method[cc.selected].ordering;
     const char *ordering_name = ordering == CHOLMOD_AMD ? "amd" : ordering == CHOLMOD_METIS ? "metis"
                               : ordering == CHOLMOD_NESDIS ? "nesdis" : ordering == CHOLMOD_NATURAL ? "natural"
@@ -237,11 +240,13 @@ static void run_system(const char *name, const dfm_csc &a, const double *coords)
     printf("RESULT chol system=%s n=%zu ours_nnzL=%zu cholmod_nnzL=%.0f ours_analyze_ms=%.2f ours_factor_ms=%.2f "
            "cholmod_factor_ms=%.2f eigen_factor_ms=%.2f ours_solve3_ms=%.3f cholmod_solve3_ms=%.3f residual=%.2e "
            "cholmod_residual=%.2e eigen_nnzL=%lld cholmod_analyze_ms=%.2f cholmod_ordering=%s ours_supernodes=%zu "
-           "nnzL_ratio=%.3f factor_ratio_cholmod=%.3f factor_ratio_eigen=%.3f solve_ratio=%.3f\n",
+           "nnzL_ratio=%.3f factor_ratio_cholmod=%.3f factor_ratio_eigen=%.3f solve_ratio=%.3f ours_stored=%zu "
+           "cholmod_stored=%.0f\n",
            name, n, info.nnz_l, cholmod_lnz, 1e3 * ours_analyze_s, 1e3 * ours_factor_s, 1e3 * cholmod_factor_s,
            1e3 * eigen_factor_s, 1e3 * ours_solve_s, 1e3 * cholmod_solve_s, ours_res, cholmod_res, eigen_nnz,
            1e3 * cholmod_analyze_s, ordering_name, info.supernodes, (double)info.nnz_l / cholmod_lnz,
-           ours_factor_s / cholmod_factor_s, ours_factor_s / eigen_factor_s, ours_solve_s / cholmod_solve_s);
+           ours_factor_s / cholmod_factor_s, ours_factor_s / eigen_factor_s, ours_solve_s / cholmod_solve_s,
+           info.stored_entries, cholmod_stored);
     fflush(stdout);
     dfm_chol_free(s.chol);
 }
