@@ -6,6 +6,8 @@
 
 #include "test.h"
 #include "hashrand.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -829,7 +831,7 @@ static void test_bad_input(void)
     float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     uint32_t idx[] = {0, 1, 2}, bad_idx[] = {0, 1, 3};
     int32_t saved;
-    double x[20];
+    double x[20] = {0};
     T_EQ_INT(dfm_chol_analyze(NULL, NULL, &c), DFM_ERR_INVALID_ARGUMENT);
     T_EQ_INT(dfm_chol_analyze(&a, NULL, NULL), DFM_ERR_INVALID_ARGUMENT);
     /* an upper-triangle entry in a lower matrix */
@@ -1164,6 +1166,68 @@ static void test_nested_dissection(void)
     free(co);
 }
 
+/* the Stanford bunny (glmark2-data): cotangent Laplacian + 1% constraints and the bi-Laplacian,
+   three right-hand sides, with and without coordinates, refactored with new weights */
+static void test_bunny(void)
+{
+    const char *path = "/usr/share/glmark2/models/bunny.obj";
+    mio_mesh mesh;
+    mio_error merr;
+    size_t nv, i, sys;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        T_SKIP_N(18, "bunny checks", "/usr/share/glmark2/models/bunny.obj missing: apt-get install glmark2-data");
+        return;
+    }
+    fclose(f);
+    T_EQ_INT(mio_read_file(path, NULL, &mesh, &merr), MIO_OK);
+    nv = mesh.vertex_count;
+    for (sys = 0; sys < 2; sys++) {
+        dfm_csc l, a;
+        double *dg = (double *)calloc(nv, sizeof(double)), *b = random_vector(3 * nv, 90 + sys);
+        double *x = (double *)malloc(3 * nv * sizeof(double)), *co = (double *)malloc(3 * nv * sizeof(double)), r;
+        dfm_chol_options o = dfm_chol_default_options();
+        dfm_chol *c = NULL;
+        dfm_chol_info info;
+        for (i = 0; i < nv; i += 100) dg[i] = 1.0;
+        for (i = 0; i < 3 * nv; i++) co[i] = mesh.positions[i];
+        T_EQ_INT(dfm_mesh_laplacian(mesh.positions, nv, mesh.indices, mesh.triangle_count, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+        if (sys == 0) {
+            unsigned char *fx = every_kth(nv, 100);
+            add_diagonal(&l, fx, 1.0);
+            free(fx);
+            a = l;
+            memset(&l, 0, sizeof l);
+        } else {
+            T_EQ_INT(dfm_normal_matrix(&l, dg, NULL, &a), DFM_OK);
+        }
+        r = solve_residual(&a, b, 3, x, NULL);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "bunny system %zu residual %.3g", sys, r);
+        o.coords = co;
+        r = solve_residual(&a, b, 3, x, &o);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "bunny system %zu residual with coordinates %.3g", sys, r);
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+        dfm_chol_get_info(c, &info);
+        /* AMD's fill on these systems, as CHOLMOD's AMD reports it (1363788 and 4628409) */
+        T_CHECK_MSG(info.nnz_l < (sys == 0 ? 1400000u : 4750000u), "nnz(L) %zu", info.nnz_l);
+        /* new constraint weights: refactor without a new analysis */
+        for (i = 0; i < nv; i += 100) a.values[a.col_start[i]] += 9.0; /* the diagonal comes first */
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_OK);
+        memcpy(x, b, 3 * nv * sizeof(double));
+        T_EQ_INT(dfm_chol_solve(c, x, 3), DFM_OK);
+        r = residual(&a, x, b, 3);
+        T_CHECK_MSG(r <= 1e-14, "bunny refactor residual %.3g", r);
+        dfm_chol_free(c);
+        dfm_csc_free(&l);
+        dfm_csc_free(&a);
+        free(dg);
+        free(b);
+        free(x);
+        free(co);
+    }
+    mio_free_mesh(&mesh);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1183,5 +1247,6 @@ int main(int argc, char **argv)
     test_cancel();
     test_amd_quality();
     test_nested_dissection();
+    test_bunny();
     return T_END();
 }
