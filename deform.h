@@ -302,7 +302,9 @@ DFMDEF void dfm_chol_free(dfm_chol *chol);
 typedef struct dfm_constrained dfm_constrained; /* opaque */
 
 /* Analyses the free-free block of a SYMMETRIC_LOWER A: fixed[i] != 0 marks unknown i as fixed.
-   At least one unknown must be free. */
+   At least one unknown must be free. options as for dfm_chol_analyze, with coords (3 per row of
+   A) if given; block_size and DFM_ORDER_GIVEN refer to the full system and are replaced by
+   plain AMD on the free block. */
 DFMDEF dfm_result dfm_constrained_analyze(const dfm_csc *a, const unsigned char *fixed,
                                           const dfm_chol_options *options, dfm_constrained **out);
 
@@ -2798,7 +2800,18 @@ DFMDEF dfm_result dfm_constrained_analyze(const dfm_csc *a, const unsigned char 
         }
         if (fj >= 0) c->aff.col_start[fj + 1] = w;
     }
-    err = dfm_chol_analyze(&c->aff, &opt, &c->chol);
+    if (opt.coords) {
+        /* the free block is renumbered: its coordinates are the free rows' */
+        double *fc = (double *)dfm__alloc(&al, c->nfree, 3 * sizeof(double), &err);
+        const double *all = opt.coords;
+        if (!fc) goto fail;
+        for (j = 0; j < c->nfree; j++) memcpy(fc + 3 * j, all + 3 * (size_t)c->free_rows[j], 3 * sizeof(double));
+        opt.coords = fc;
+        err = dfm_chol_analyze(&c->aff, &opt, &c->chol);
+        dfm__free(&al, fc);
+    } else {
+        err = dfm_chol_analyze(&c->aff, &opt, &c->chol);
+    }
     if (err != DFM_OK) goto fail;
     *out = c;
     return DFM_OK;

@@ -673,9 +673,24 @@ static void test_constraints(void)
     fv = random_vector(3 * nv, 52);
     x = (double *)malloc(3 * nv * sizeof(double));
     y = (double *)malloc(3 * nv * sizeof(double));
-    T_EQ_INT(dfm_constrained_analyze(&m, fixed, NULL, &c), DFM_OK);
-    T_EQ_INT(dfm_constrained_factor(c, &m), DFM_OK);
-    T_EQ_INT(dfm_constrained_solve(c, b, fv, x, 3), DFM_OK);
+    {
+        /* with coordinates (nested dissection of the free block) the same solution */
+        dfm_constrained *cc = NULL;
+        dfm_chol_options o = dfm_chol_default_options();
+        double *co = (double *)malloc(3 * nv * sizeof(double)), d = 0;
+        for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+        o.coords = co;
+        T_EQ_INT(dfm_constrained_analyze(&m, fixed, &o, &cc), DFM_OK);
+        T_EQ_INT(dfm_constrained_factor(cc, &m), DFM_OK);
+        T_EQ_INT(dfm_constrained_solve(cc, b, fv, y, 3), DFM_OK);
+        T_EQ_INT(dfm_constrained_analyze(&m, fixed, NULL, &c), DFM_OK);
+        T_EQ_INT(dfm_constrained_factor(c, &m), DFM_OK);
+        T_EQ_INT(dfm_constrained_solve(c, b, fv, x, 3), DFM_OK);
+        for (i = 0; i < 3 * nv; i++) d = fmax(d, fabs(x[i] - y[i]));
+        T_CHECK_MSG(d <= 1e-9, "constrained with and without coordinates %.3g", d);
+        dfm_constrained_free(cc);
+        free(co);
+    }
     dfm_csc_multiply(&m, x, y, 3);
     for (q = 0; q < 3; q++)
         for (i = 0; i < nv; i++) {
@@ -919,7 +934,7 @@ static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, co
     dfm_chol_options o = dfm_chol_default_options();
     dfm_result r;
     double *dg = (double *)calloc(nv, sizeof(double)), *b = (double *)calloc(3 * nv, sizeof(double));
-    double *x = (double *)malloc(3 * nv * sizeof(double));
+    double *x = (double *)malloc(3 * nv * sizeof(double)), *co = (double *)malloc(3 * nv * sizeof(double));
     unsigned char *fixed = every_kth(nv, 10);
     size_t i;
     memset(&l, 0, sizeof l);
@@ -931,15 +946,13 @@ static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, co
     o.allocator = al;
     r = dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, al, &l);
     if (r == DFM_OK) r = dfm_normal_matrix(&l, dg, al, &m);
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
     if (r == DFM_OK) {
-        double *co = (double *)malloc(3 * nv * sizeof(double));
         dfm_chol *cn = NULL;
-        for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
         o.coords = co;
         r = dfm_chol_analyze(&m, &o, &cn);
         o.coords = NULL;
         dfm_chol_free(cn);
-        free(co);
     }
     if (r == DFM_OK) r = dfm_chol_analyze(&m, &o, &c);
     if (r == DFM_OK) r = dfm_chol_factor(c, &m);
@@ -948,7 +961,9 @@ static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, co
         r = dfm_chol_solve(c, x, 3);
     }
     if (r == DFM_OK) r = dfm_chol_solve_refined(c, &m, b, x, 3, 2);
+    o.coords = co;
     if (r == DFM_OK) r = dfm_constrained_analyze(&m, fixed, &o, &k);
+    o.coords = NULL;
     if (r == DFM_OK) r = dfm_constrained_factor(k, &m);
     if (r == DFM_OK) r = dfm_constrained_solve(k, b, b, x, 3);
     if (r == DFM_OK) {
@@ -969,6 +984,7 @@ static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, co
     free(dg);
     free(b);
     free(x);
+    free(co);
     free(fixed);
     return (int)r;
 }
