@@ -89,8 +89,8 @@
      supernode) and the values of L, one dense column-major block per supernode (8 bytes an
      entry, explicit zeros of the amalgamation included; dfm_chol_info.stored_entries). The
      factorization's workspace is O(n) plus the largest descendant update block. AMD uses about
-     2 nnz(A) + 10 n integers during analysis. dfm_chol_solve allocates (n + rows of the tallest
-     supernode) x min(nrhs, 4) doubles per call.
+     2 nnz(A) + 10 n integers during analysis. dfm_chol_solve allocates n x min(nrhs, 4) + 4 x (rows
+     of the tallest supernode) doubles per call.
 
    ERRORS
      Every call returns a dfm_result (DFM_OK = 0); dfm_result_string() names it. On failure the
