@@ -36,10 +36,12 @@ HAVE_EMBREE   := $(wildcard /usr/include/embree3/rtcore.h)
 HAVE_CXX      := $(shell command -v $(CXX) 2>/dev/null)
 HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
+HAVE_CHOLMOD  := $(wildcard /usr/include/suitesparse/cholmod.h)
+HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
-             $(B)/test_subdiv4
+             $(B)/test_subdiv4 $(B)/test_deform_chol
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif
@@ -52,7 +54,8 @@ BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT),$(HAVE_OPENMESH)),$(B)/bench_simplify)
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT),$(HAVE_OPENMESH)),$(B)/bench_simplify) \
+             $(if $(and $(HAVE_CXX),$(HAVE_CHOLMOD),$(HAVE_EIGEN)),$(B)/bench_chol)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -137,6 +140,10 @@ BENCH_LIBS_subdiv4 = -lOpenMeshCore
 HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)
 BENCH_FLAGS_bvh = $(if $(HAVE_AVX2),-DDM_USE_AVX2 -mavx2,$(if $(filter x86_64,$(shell uname -m)),-DDM_USE_SSE2))
 BENCH_LIBS_simplify = -lOpenMeshTools -lOpenMeshCore -lembree3 -lmeshoptimizer
+# CHOLMOD and Eigen headers are system headers (their warnings are not ours)
+$(B)/bench_chol: bench/bench_chol.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) -isystem /usr/include/suitesparse -isystem /usr/include/eigen3 -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL)"' $< -o $@ -lcholmod -lsuitesparseconfig -lm
+
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 

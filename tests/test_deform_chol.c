@@ -1,0 +1,1268 @@
+/* test_deform_chol - deform.h part 1: CSC assembly, AMD, symbolic analysis, supernodal Cholesky,
+   solves, constraints, errors. Cross-checks against a dense Cholesky and brute-force symbolic
+   elimination; real-mesh checks on the Stanford bunny when glmark2-data is installed. */
+#define DFM_IMPLEMENTATION
+#include "deform.h"
+
+#include "test.h"
+#include "hashrand.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+static int sanitize_mode(void) { return getenv("TEST_SANITIZE") != NULL; }
+
+/* ---- a counting allocator that can fail the k-th allocation -------------------------------- */
+typedef struct counting {
+    long allocs, frees, fail_at; /* fail_at < 0: never */
+} counting;
+static void *counting_alloc(void *user, size_t size)
+{
+    counting *c = (counting *)user;
+    if (c->fail_at >= 0 && c->allocs >= c->fail_at) return NULL;
+    c->allocs++;
+    return malloc(size);
+}
+static void counting_free(void *user, void *p)
+{
+    counting *c = (counting *)user;
+    if (p) {
+        c->frees++;
+        free(p);
+    }
+}
+
+/* ---- matrices ---------------------------------------------------------------------------------- */
+
+/* random sparse symmetric positive definite matrix, lower stored: random off-diagonal pattern
+   with density about avg entries per column, diagonal = sum |row| + shift */
+static dfm_csc random_spd(size_t n, double avg, uint64_t seed, double shift)
+{
+    dfm_csc m;
+    size_t j, i, nnz = 0, cap = n * (size_t)(avg * 3 + 4) + n;
+    double *dense_rowsum = (double *)calloc(n, sizeof(double));
+    dfm_csc_alloc(n, n, cap, DFM_CSC_SYMMETRIC_LOWER, NULL, &m);
+    for (j = 0; j < n; j++) {
+        size_t start = nnz;
+        m.row_index[nnz] = (int32_t)j;
+        m.values[nnz++] = 0.0;
+        for (i = j + 1; i < n; i++) {
+            double u = unit_random(seed * 1000003u + j * n + i, 1);
+            if (u < avg / (double)n && nnz < cap) {
+                double v = 2.0 * unit_random(seed * 1000003u + j * n + i, 2) - 1.0;
+                m.row_index[nnz] = (int32_t)i;
+                m.values[nnz++] = v;
+                dense_rowsum[i] += fabs(v);
+                dense_rowsum[j] += fabs(v);
+            }
+        }
+        (void)start;
+        m.col_start[j + 1] = nnz;
+    }
+    for (j = 0; j < n; j++) m.values[m.col_start[j]] = dense_rowsum[j] + shift;
+    free(dense_rowsum);
+    return m;
+}
+
+static double *to_dense(const dfm_csc *a)
+{
+    size_t n = a->n_rows, j, p;
+    double *d = (double *)calloc(n * a->n_cols, sizeof(double));
+    for (j = 0; j < a->n_cols; j++)
+        for (p = a->col_start[j]; p < a->col_start[j + 1]; p++) {
+            size_t i = (size_t)a->row_index[p];
+            d[i + j * n] += a->values[p];
+            if (a->kind == DFM_CSC_SYMMETRIC_LOWER && i != j) d[j + i * n] += a->values[p];
+        }
+    return d;
+}
+
+/* dense Cholesky solve (reference); returns 0 if not positive definite */
+static int dense_solve(size_t n, const double *a, const double *b, double *x)
+{
+    double *l = (double *)malloc(n * n * sizeof(double));
+    size_t i, j, k;
+    memcpy(l, a, n * n * sizeof(double));
+    for (j = 0; j < n; j++) {
+        double d = l[j + j * n];
+        for (k = 0; k < j; k++) d -= l[j + k * n] * l[j + k * n];
+        if (!(d > 0)) {
+            free(l);
+            return 0;
+        }
+        d = sqrt(d);
+        l[j + j * n] = d;
+        for (i = j + 1; i < n; i++) {
+            double s = l[i + j * n];
+            for (k = 0; k < j; k++) s -= l[i + k * n] * l[j + k * n];
+            l[i + j * n] = s / d;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        double s = b[i];
+        for (k = 0; k < i; k++) s -= l[i + k * n] * x[k];
+        x[i] = s / l[i + i * n];
+    }
+    for (i = n; i-- > 0;) {
+        double s = x[i];
+        for (k = i + 1; k < n; k++) s -= l[k + i * n] * x[k];
+        x[i] = s / l[i + i * n];
+    }
+    free(l);
+    return 1;
+}
+
+static double norm_inf_matrix(const dfm_csc *a)
+{
+    size_t n = a->n_cols, j, p;
+    double *rs = (double *)calloc(n, sizeof(double)), m = 0;
+    for (j = 0; j < n; j++)
+        for (p = a->col_start[j]; p < a->col_start[j + 1]; p++) {
+            size_t i = (size_t)a->row_index[p];
+            rs[i] += fabs(a->values[p]);
+            if (i != j) rs[j] += fabs(a->values[p]);
+        }
+    for (j = 0; j < n; j++)
+        if (rs[j] > m) m = rs[j];
+    free(rs);
+    return m;
+}
+
+/* ||b - Ax||inf / (||A||inf ||x||inf + ||b||inf), worst over nrhs */
+static double residual(const dfm_csc *a, const double *x, const double *b, size_t nrhs)
+{
+    size_t n = a->n_cols, q, i;
+    double *y = (double *)malloc(n * nrhs * sizeof(double)), worst = 0, an = norm_inf_matrix(a);
+    dfm_csc_multiply(a, x, y, nrhs);
+    for (q = 0; q < nrhs; q++) {
+        double r = 0, xn = 0, bn = 0, v;
+        for (i = 0; i < n; i++) {
+            r = fmax(r, fabs(b[q * n + i] - y[q * n + i]));
+            xn = fmax(xn, fabs(x[q * n + i]));
+            bn = fmax(bn, fabs(b[q * n + i]));
+        }
+        v = r / (an * xn + bn);
+        if (!(v <= worst)) worst = v;
+    }
+    free(y);
+    return worst;
+}
+
+static double *random_vector(size_t n, uint64_t seed)
+{
+    double *v = (double *)malloc(n * sizeof(double));
+    size_t i;
+    for (i = 0; i < n; i++) v[i] = 2.0 * unit_random(seed * 7919 + i, 3) - 1.0;
+    return v;
+}
+
+/* factor + solve with default options; returns residual, or -1 on failure */
+static double solve_residual(const dfm_csc *a, const double *b, size_t nrhs, double *x, const dfm_chol_options *o)
+{
+    dfm_chol *c = NULL;
+    double r = -1;
+    size_t n = a->n_cols;
+    if (dfm_chol_analyze(a, o, &c) != DFM_OK) return -1;
+    if (dfm_chol_factor(c, a) == DFM_OK) {
+        memcpy(x, b, n * nrhs * sizeof(double));
+        if (dfm_chol_solve(c, x, nrhs) == DFM_OK) r = residual(a, x, b, nrhs);
+    }
+    dfm_chol_free(c);
+    return r;
+}
+
+/* ---- meshes -------------------------------------------------------------------------------- */
+
+/* a w x h grid of vertices over [0,1]^2 with a bumpy z, two triangles per cell, diagonals
+   alternating */
+static void grid_mesh(size_t w, size_t h, float **pos, uint32_t **idx, size_t *nv, size_t *nt)
+{
+    size_t x, y, t = 0;
+    *nv = w * h;
+    *nt = 2 * (w - 1) * (h - 1);
+    *pos = (float *)malloc(*nv * 3 * sizeof(float));
+    *idx = (uint32_t *)malloc(*nt * 3 * sizeof(uint32_t));
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            float *p = *pos + 3 * (y * w + x);
+            p[0] = (float)x / (float)(w - 1) + 0.2f * (float)unit_random(y * w + x, 4) / (float)w;
+            p[1] = (float)y / (float)(h - 1) + 0.2f * (float)unit_random(y * w + x, 5) / (float)h;
+            p[2] = 0.1f * (float)sin(3.0 * p[0]) * (float)cos(2.0 * p[1]);
+        }
+    for (y = 0; y + 1 < h; y++)
+        for (x = 0; x + 1 < w; x++) {
+            uint32_t a = (uint32_t)(y * w + x), b = a + 1, c = a + (uint32_t)w, d = c + 1;
+            uint32_t *f = *idx + 6 * t++;
+            if ((x + y) & 1) {
+                f[0] = a; f[1] = b; f[2] = d; f[3] = a; f[4] = d; f[5] = c;
+            } else {
+                f[0] = a; f[1] = b; f[2] = c; f[3] = b; f[4] = d; f[5] = c;
+            }
+        }
+}
+
+/* adds d to the diagonal entries of the listed rows (every diagonal entry is stored) */
+static void add_diagonal(dfm_csc *a, const unsigned char *which, double d)
+{
+    size_t j, p;
+    for (j = 0; j < a->n_cols; j++)
+        if (which[j])
+            for (p = a->col_start[j]; p < a->col_start[j + 1]; p++)
+                if ((size_t)a->row_index[p] == j) a->values[p] += d;
+}
+
+static unsigned char *every_kth(size_t n, size_t k)
+{
+    unsigned char *m = (unsigned char *)calloc(n, 1);
+    size_t i;
+    for (i = 0; i < n; i += k) m[i] = 1;
+    return m;
+}
+
+/* ---- brute-force symbolic elimination ------------------------------------------------------ */
+static void brute_counts(const dfm_csc *a, const int32_t *perm, size_t *counts)
+{
+    size_t n = a->n_cols, j, p, i, k;
+    unsigned char *s = (unsigned char *)calloc(n * n, 1);
+    int32_t *ip = (int32_t *)malloc(n * sizeof(int32_t));
+    for (k = 0; k < n; k++) ip[perm[k]] = (int32_t)k;
+    for (j = 0; j < n; j++)
+        for (p = a->col_start[j]; p < a->col_start[j + 1]; p++) {
+            size_t I = (size_t)ip[a->row_index[p]], J = (size_t)ip[j];
+            s[I + J * n] = s[J + I * n] = 1;
+        }
+    for (k = 0; k < n; k++) {
+        s[k + k * n] = 1;
+        for (i = k + 1; i < n; i++)
+            if (s[i + k * n])
+                for (j = k + 1; j <= i; j++)
+                    if (s[j + k * n]) s[i + j * n] = s[j + i * n] = 1;
+    }
+    for (k = 0; k < n; k++) {
+        counts[k] = 0;
+        for (i = k; i < n; i++) counts[k] += s[i + k * n];
+    }
+    free(s);
+    free(ip);
+}
+
+/* ---- tests ------------------------------------------------------------------------------------- */
+
+static void test_random_vs_dense(void)
+{
+    static const size_t sizes[] = {1, 2, 3, 7, 30, 100, 250, 500};
+    static const double dens[] = {0.0, 1.0, 3.0, 8.0};
+    size_t si, di, i;
+    int all_ok = 1, counts_ok = 1, nocount = 1;
+    double worst = 0, worst_dx = 0;
+    for (si = 0; si < sizeof sizes / sizeof *sizes; si++)
+        for (di = 0; di < sizeof dens / sizeof *dens; di++) {
+            size_t n = sizes[si];
+            dfm_csc a = random_spd(n, dens[di], si * 10 + di, 0.1);
+            double *b = random_vector(n * 2, si + 100 * di), *x = (double *)malloc(2 * n * sizeof(double));
+            double *d = to_dense(&a), *xd = (double *)malloc(n * sizeof(double)), r, scale = 0;
+            dfm_chol *c = NULL;
+            r = solve_residual(&a, b, 2, x, NULL);
+            if (r < 0) all_ok = 0;
+            if (r > worst) worst = r;
+            if (dense_solve(n, d, b, xd)) {
+                for (i = 0; i < n; i++) scale = fmax(scale, fabs(xd[i]));
+                for (i = 0; i < n; i++) worst_dx = fmax(worst_dx, fabs(x[i] - xd[i]) / scale);
+            } else {
+                all_ok = 0;
+            }
+            /* column counts against brute-force symbolic elimination with the same permutation */
+            if (dfm_chol_analyze(&a, NULL, &c) == DFM_OK) {
+                size_t *bc = (size_t *)malloc(n * sizeof(size_t)), total = 0;
+                dfm_chol_info info;
+                brute_counts(&a, dfm_chol_permutation(c), bc);
+                for (i = 0; i < n; i++) {
+                    if (bc[i] != dfm_chol_column_counts(c)[i]) counts_ok = 0;
+                    total += bc[i];
+                }
+                dfm_chol_get_info(c, &info);
+                if (info.nnz_l != total || info.stored_entries < total) counts_ok = 0;
+                nocount = 0;
+                free(bc);
+            } else {
+                counts_ok = 0;
+            }
+            dfm_chol_free(c);
+            free(b);
+            free(x);
+            free(d);
+            free(xd);
+            dfm_csc_free(&a);
+        }
+    T_CHECK(all_ok);
+    T_CHECK_MSG(worst <= 1e-14, "worst residual %.3g", worst);
+    T_CHECK_MSG(worst_dx <= 1e-10, "worst |x - x_dense| / |x_dense| %.3g", worst_dx);
+    T_CHECK(counts_ok && !nocount);
+}
+
+/* natural order and a given order on the same matrix also match brute force */
+static void test_orderings(void)
+{
+    size_t n = 200, i;
+    dfm_csc a = random_spd(n, 4.0, 77, 0.5);
+    double *b = random_vector(n, 5), *x = (double *)malloc(n * sizeof(double));
+    int32_t *perm = (int32_t *)malloc(n * sizeof(int32_t));
+    dfm_chol_options o = dfm_chol_default_options();
+    dfm_chol *c = NULL;
+    size_t *bc = (size_t *)malloc(n * sizeof(size_t));
+    int ok = 1;
+    for (i = 0; i < n; i++) perm[i] = (int32_t)(n - 1 - i);
+    o.ordering = DFM_ORDER_NATURAL;
+    T_CHECK(solve_residual(&a, b, 1, x, &o) <= 1e-14);
+    T_EQ_INT(dfm_chol_analyze(&a, &o, &c), DFM_OK);
+    brute_counts(&a, dfm_chol_permutation(c), bc);
+    for (i = 0; i < n; i++) ok &= bc[i] == dfm_chol_column_counts(c)[i];
+    T_CHECK(ok);
+    dfm_chol_free(c);
+    o.ordering = DFM_ORDER_GIVEN;
+    o.perm = perm;
+    T_CHECK(solve_residual(&a, b, 1, x, &o) <= 1e-14);
+    perm[3] = perm[4]; /* not a permutation */
+    T_EQ_INT(dfm_chol_analyze(&a, &o, &c), DFM_ERR_BAD_INDEX);
+    T_CHECK(c == NULL);
+    free(bc);
+    free(perm);
+    free(b);
+    free(x);
+    dfm_csc_free(&a);
+}
+
+static void test_not_spd(void)
+{
+    size_t n = 300, cols[] = {0, 17, 150, 299}, k, p;
+    for (k = 0; k < 4; k++) {
+        dfm_csc a = random_spd(n, 3.0, 9 + k, 0.2);
+        dfm_chol *c = NULL;
+        dfm_chol_info info;
+        size_t j = cols[k];
+        for (p = a.col_start[j]; p < a.col_start[j + 1]; p++)
+            if ((size_t)a.row_index[p] == j) a.values[p] = -1.0;
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_ERR_NOT_POSITIVE_DEFINITE);
+        dfm_chol_get_info(c, &info);
+        T_EQ_INT(info.failed_column, (long long)j);
+        T_EQ_INT(info.factored, 0);
+        {
+            double x = 0;
+            T_EQ_INT(dfm_chol_solve(c, &x, 1), DFM_ERR_INVALID_ARGUMENT); /* not factored */
+        }
+        /* fix the value: the same object refactors */
+        for (p = a.col_start[j]; p < a.col_start[j + 1]; p++)
+            if ((size_t)a.row_index[p] == j) a.values[p] = 100.0;
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_OK);
+        dfm_chol_get_info(c, &info);
+        T_EQ_INT(info.failed_column, -1);
+        dfm_chol_free(c);
+        dfm_csc_free(&a);
+    }
+    /* a NaN pivot is reported as not positive definite too (values are checked first: NaN in A
+       is BAD_VALUE) */
+    {
+        dfm_csc a = random_spd(10, 2.0, 3, 0.1);
+        dfm_chol *c = NULL;
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+        a.values[0] = NAN;
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_ERR_BAD_VALUE);
+        a.values[0] = 0.0; /* zero pivot in column 0 (or a later one): not positive definite */
+        a.values[a.col_start[1]] = 0.0;
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_ERR_NOT_POSITIVE_DEFINITE);
+        dfm_chol_free(c);
+        dfm_csc_free(&a);
+    }
+}
+
+/* P A P^T with a random permutation gives the same solution */
+static void test_permutation_invariance(void)
+{
+    size_t n = 400, i, j, p;
+    dfm_csc a = random_spd(n, 5.0, 21, 0.05), pa;
+    int32_t *perm = (int32_t *)malloc(n * sizeof(int32_t)), *ip = (int32_t *)malloc(n * sizeof(int32_t));
+    int32_t *ti = (int32_t *)malloc(a.col_start[n] * sizeof(int32_t)), *tj = (int32_t *)malloc(a.col_start[n] * sizeof(int32_t));
+    double *b = random_vector(3 * n, 8), *pb = (double *)malloc(3 * n * sizeof(double));
+    double *x = (double *)malloc(3 * n * sizeof(double)), *px = (double *)malloc(3 * n * sizeof(double)), diff = 0;
+    size_t cnt = 0, q;
+    for (i = 0; i < n; i++) perm[i] = (int32_t)i;
+    for (i = n; i-- > 1;) {
+        size_t k = (size_t)(unit_random(i, 6) * (double)(i + 1));
+        int32_t t = perm[i];
+        perm[i] = perm[k];
+        perm[k] = t;
+    }
+    for (i = 0; i < n; i++) ip[perm[i]] = (int32_t)i;
+    /* pa(ip[i], ip[j]) = a(i, j), kept lower */
+    for (j = 0; j < n; j++)
+        for (p = a.col_start[j]; p < a.col_start[j + 1]; p++) {
+            int32_t I = ip[a.row_index[p]], J = ip[j];
+            ti[cnt] = I > J ? I : J;
+            tj[cnt++] = I > J ? J : I;
+        }
+    {
+        double *tv = (double *)malloc(cnt * sizeof(double));
+        for (i = 0; i < cnt; i++) tv[i] = a.values[i];
+        dfm_allocator al = dfm__resolve_allocator(NULL);
+        T_EQ_INT(dfm__from_triplets(n, n, cnt, ti, tj, tv, DFM_CSC_SYMMETRIC_LOWER, &al, &pa), DFM_OK);
+        free(tv);
+    }
+    for (q = 0; q < 3; q++)
+        for (i = 0; i < n; i++) pb[q * n + (size_t)ip[i]] = b[q * n + i];
+    T_CHECK(solve_residual(&a, b, 3, x, NULL) <= 1e-14);
+    T_CHECK(solve_residual(&pa, pb, 3, px, NULL) <= 1e-14);
+    for (q = 0; q < 3; q++)
+        for (i = 0; i < n; i++) diff = fmax(diff, fabs(x[q * n + i] - px[q * n + (size_t)ip[i]]));
+    T_CHECK_MSG(diff <= 1e-10, "diff %.3g", diff);
+    free(perm);
+    free(ip);
+    free(ti);
+    free(tj);
+    free(b);
+    free(pb);
+    free(x);
+    free(px);
+    dfm_csc_free(&a);
+    dfm_csc_free(&pa);
+}
+
+/* L^T L + D from dfm_normal_matrix against the explicit product, for all Laplacian kinds */
+static void test_normal_matrix(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, kind, i, j, k, p;
+    grid_mesh(14, 11, &pos, &idx, &nv, &nt);
+    for (kind = 0; kind < 3; kind++) {
+        dfm_csc l, m;
+        double *ld, *md, *dg = random_vector(nv, 12), maxdiff = 0, maxval = 0;
+        int pattern_ok = 1, sym_ok = 1;
+        for (i = 0; i < nv; i++) dg[i] = fabs(dg[i]);
+        T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, (int)kind, NULL, &l), DFM_OK);
+        T_EQ_INT(dfm_normal_matrix(&l, dg, NULL, &m), DFM_OK);
+        T_EQ_INT(m.kind, DFM_CSC_SYMMETRIC_LOWER);
+        ld = to_dense(&l);
+        md = (double *)calloc(nv * nv, sizeof(double));
+        /* explicit product: (L^T L)_jk = sum_i L_ij L_ik */
+        for (j = 0; j < nv; j++)
+            for (k = 0; k < nv; k++) {
+                double s = j == k ? dg[j] : 0.0;
+                for (i = 0; i < nv; i++) s += ld[i + j * nv] * ld[i + k * nv];
+                md[j + k * nv] = s;
+            }
+        for (j = 0; j < nv; j++)
+            for (p = m.col_start[j]; p < m.col_start[j + 1]; p++) {
+                size_t r = (size_t)m.row_index[p];
+                maxdiff = fmax(maxdiff, fabs(m.values[p] - md[r + j * nv]));
+                md[r + j * nv] = 0.0; /* consumed */
+                md[j + r * nv] = 0.0;
+                if (p > m.col_start[j] && m.row_index[p - 1] >= m.row_index[p]) pattern_ok = 0;
+            }
+        /* every nonzero of the explicit product is stored */
+        for (i = 0; i < nv * nv; i++) maxval = fmax(maxval, fabs(md[i]));
+        if (kind != DFM_LAPLACIAN_UNIFORM_NORMALIZED)
+            for (j = 0; j < nv; j++) /* symmetric kinds: L is symmetric, row sums zero */
+                for (p = l.col_start[j]; p < l.col_start[j + 1]; p++)
+                    if (l.row_index[p] < (int32_t)j) sym_ok = 0;
+        T_CHECK_MSG(maxdiff <= 1e-12, "kind %d: |M - L^T L - D| = %.3g", (int)kind, maxdiff);
+        T_CHECK_MSG(maxval <= 1e-12, "kind %d: product entry %.3g missing from the pattern", (int)kind, maxval);
+        T_CHECK(pattern_ok && sym_ok);
+        free(ld);
+        free(md);
+        free(dg);
+        dfm_csc_free(&l);
+        dfm_csc_free(&m);
+    }
+    /* a rectangular general A: A^T A */
+    {
+        size_t r = 40, c = 25, q;
+        dfm_csc a, m;
+        double *ad, maxdiff = 0;
+        dfm_csc_alloc(r, c, r * c, DFM_CSC_GENERAL, NULL, &a);
+        q = 0;
+        for (j = 0; j < c; j++) {
+            for (i = 0; i < r; i++)
+                if (unit_random(i * c + j, 7) < 0.15) {
+                    a.row_index[q] = (int32_t)i;
+                    a.values[q++] = unit_random(i * c + j, 8) - 0.5;
+                }
+            a.col_start[j + 1] = q;
+        }
+        T_EQ_INT(dfm_normal_matrix(&a, NULL, NULL, &m), DFM_OK);
+        ad = to_dense(&a);
+        for (j = 0; j < c; j++)
+            for (k = 0; k < c; k++) {
+                double s = 0, v = 0;
+                for (i = 0; i < r; i++) s += ad[i + j * r] * ad[i + k * r];
+                if (k >= j)
+                    for (p = m.col_start[j]; p < m.col_start[j + 1]; p++)
+                        if ((size_t)m.row_index[p] == k) v = m.values[p];
+                if (k >= j) maxdiff = fmax(maxdiff, fabs(s - v));
+            }
+        T_CHECK(maxdiff <= 1e-14);
+        free(ad);
+        dfm_csc_free(&a);
+        dfm_csc_free(&m);
+    }
+    free(pos);
+    free(idx);
+}
+
+static void test_laplacian_values(void)
+{
+    /* a right isosceles triangle pair (unit square split on the diagonal 0-2): cot 45 = 1 */
+    float pos[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 5, 5, 5};
+    uint32_t idx[] = {0, 1, 2, 0, 2, 3};
+    dfm_csc l;
+    double *d;
+    T_EQ_INT(dfm_mesh_laplacian(pos, 5, idx, 2, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    d = to_dense(&l);
+    T_NEAR(d[0 + 1 * 5], -0.5, 1e-12); /* edge 0-1: opposite angle at 2 is 45 deg: cot/2 */
+    T_NEAR(d[0 + 2 * 5], 0.0, 1e-12);  /* diagonal: both opposite angles 90 deg */
+    T_NEAR(d[0 + 0 * 5], 1.0, 1e-12);
+    T_NEAR(d[4 + 4 * 5], 0.0, 0.0);    /* unused vertex: zero row, diagonal stored */
+    T_EQ_SIZE(l.col_start[5] - l.col_start[4], 1);
+    free(d);
+    dfm_csc_free(&l);
+    T_EQ_INT(dfm_mesh_laplacian(pos, 5, idx, 2, DFM_LAPLACIAN_UNIFORM_NORMALIZED, NULL, &l), DFM_OK);
+    d = to_dense(&l);
+    T_NEAR(d[0 + 0 * 5], 1.0, 0);
+    T_NEAR(d[0 + 1 * 5], -1.0 / 3.0, 1e-15); /* vertex 0 has neighbours 1, 2, 3 */
+    T_NEAR(d[1 + 0 * 5], -0.5, 1e-15);       /* vertex 1 has neighbours 0, 2 */
+    free(d);
+    dfm_csc_free(&l);
+}
+
+/* mesh systems: cotan Laplacian + 1% constraints, bi-Laplacian, against dense */
+static void test_mesh_systems(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i;
+    dfm_csc l, m;
+    unsigned char *fixed;
+    double *b, *x, *xd, *d, r, dx = 0, sc = 0;
+    grid_mesh(20, 21, &pos, &idx, &nv, &nt);
+    fixed = every_kth(nv, 100);
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    add_diagonal(&l, fixed, 1.0);
+    b = random_vector(3 * nv, 31);
+    x = (double *)malloc(3 * nv * sizeof(double));
+    xd = (double *)malloc(nv * sizeof(double));
+    r = solve_residual(&l, b, 3, x, NULL);
+    T_CHECK_MSG(r >= 0 && r <= 1e-14, "laplacian residual %.3g", r);
+    d = to_dense(&l);
+    T_CHECK(dense_solve(nv, d, b, xd));
+    for (i = 0; i < nv; i++) sc = fmax(sc, fabs(xd[i]));
+    for (i = 0; i < nv; i++) dx = fmax(dx, fabs(xd[i] - x[i]) / sc);
+    T_CHECK_MSG(dx <= 1e-10, "laplacian vs dense %.3g", dx);
+    free(d);
+    {
+        double *dg = (double *)calloc(nv, sizeof(double));
+        dfm_csc lu;
+        for (i = 0; i < nv; i++) dg[i] = fixed[i] ? 1.0 : 0.0;
+        T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &lu), DFM_OK);
+        T_EQ_INT(dfm_normal_matrix(&lu, dg, NULL, &m), DFM_OK);
+        r = solve_residual(&m, b, 3, x, NULL);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "bilaplacian residual %.3g", r);
+        d = to_dense(&m);
+        T_CHECK(dense_solve(nv, d, b, xd));
+        sc = 0;
+        dx = 0;
+        for (i = 0; i < nv; i++) sc = fmax(sc, fabs(xd[i]));
+        for (i = 0; i < nv; i++) dx = fmax(dx, fabs(xd[i] - x[i]) / sc);
+        /* the bi-Laplacian is ill-conditioned: the two solutions agree to about cond * eps */
+        T_CHECK_MSG(dx <= 1e-6, "bilaplacian vs dense %.3g", dx);
+        /* iterative refinement does not make the residual worse */
+        {
+            dfm_chol *c = NULL;
+            double *xr = (double *)malloc(3 * nv * sizeof(double)), r0, r1;
+            T_EQ_INT(dfm_chol_analyze(&m, NULL, &c), DFM_OK);
+            T_EQ_INT(dfm_chol_factor(c, &m), DFM_OK);
+            T_EQ_INT(dfm_chol_solve_refined(c, &m, b, xr, 3, 0), DFM_OK);
+            r0 = residual(&m, xr, b, 3);
+            T_EQ_INT(dfm_chol_solve_refined(c, &m, b, xr, 3, 3), DFM_OK);
+            r1 = residual(&m, xr, b, 3);
+            T_CHECK_MSG(r1 <= r0 * 1.0000001 && r1 <= 1e-15, "refined %.3g vs %.3g", r1, r0);
+            free(xr);
+            dfm_chol_free(c);
+        }
+        free(d);
+        free(dg);
+        dfm_csc_free(&lu);
+        dfm_csc_free(&m);
+    }
+    free(b);
+    free(x);
+    free(xd);
+    free(fixed);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+}
+
+/* refactorization with new values, multiple right-hand sides, determinism */
+static void test_refactor_multi_rhs(void)
+{
+    size_t n = 350, q, i;
+    dfm_csc a = random_spd(n, 6.0, 41, 0.3);
+    dfm_chol *c = NULL, *c2 = NULL;
+    double *b = random_vector(7 * n, 2), *x = (double *)malloc(7 * n * sizeof(double)), *x1 = (double *)malloc(n * sizeof(double));
+    double worst = 0;
+    int same = 1;
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+    T_EQ_INT(dfm_chol_factor(c, &a), DFM_OK);
+    memcpy(x, b, 7 * n * sizeof(double));
+    T_EQ_INT(dfm_chol_solve(c, x, 7), DFM_OK);
+    for (q = 0; q < 7; q++) {
+        memcpy(x1, b + q * n, n * sizeof(double));
+        dfm_chol_solve(c, x1, 1);
+        for (i = 0; i < n; i++) worst = fmax(worst, fabs(x1[i] - x[q * n + i]));
+    }
+    T_CHECK_MSG(worst <= 1e-13, "multi-rhs vs single %.3g", worst);
+    T_CHECK(residual(&a, x, b, 7) <= 1e-14);
+    /* new values, same pattern */
+    for (i = 0; i < a.col_start[n]; i++) a.values[i] *= 1.0 + 0.5 * unit_random(i, 9);
+    for (i = 0; i < n; i++) a.values[a.col_start[i]] += 3.0;
+    T_EQ_INT(dfm_chol_factor(c, &a), DFM_OK);
+    memcpy(x, b, 7 * n * sizeof(double));
+    T_EQ_INT(dfm_chol_solve(c, x, 7), DFM_OK);
+    T_CHECK(residual(&a, x, b, 7) <= 1e-14);
+    /* determinism: a second analysis and factorization gives the same bits */
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c2), DFM_OK);
+    T_EQ_INT(dfm_chol_factor(c2, &a), DFM_OK);
+    same &= memcmp(dfm_chol_permutation(c), dfm_chol_permutation(c2), n * sizeof(int32_t)) == 0;
+    memcpy(x1, b, n * sizeof(double));
+    dfm_chol_solve(c2, x1, 1);
+    same &= memcmp(x1, x, n * sizeof(double)) == 0;
+    T_CHECK(same);
+    /* a different pattern is refused */
+    {
+        dfm_csc a2 = random_spd(n, 6.0, 42, 0.3);
+        T_EQ_INT(dfm_chol_factor(c, &a2), DFM_ERR_PATTERN_MISMATCH);
+        dfm_csc_free(&a2);
+    }
+    dfm_chol_free(c);
+    dfm_chol_free(c2);
+    free(b);
+    free(x);
+    free(x1);
+    dfm_csc_free(&a);
+}
+
+/* hard constraints by elimination: the solution satisfies the free rows and the fixed values */
+static void test_constraints(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i, q;
+    dfm_csc l, m;
+    unsigned char *fixed;
+    dfm_constrained *c = NULL;
+    double *b, *fv, *x, *y, worst = 0, fixed_err = 0;
+    grid_mesh(25, 18, &pos, &idx, &nv, &nt);
+    fixed = every_kth(nv, 37);
+    for (i = 0; i < 25; i++) fixed[i] = 1; /* a whole boundary row too */
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    T_EQ_INT(dfm_normal_matrix(&l, NULL, NULL, &m), DFM_OK); /* singular without the constraints */
+    b = random_vector(3 * nv, 51);
+    fv = random_vector(3 * nv, 52);
+    x = (double *)malloc(3 * nv * sizeof(double));
+    y = (double *)malloc(3 * nv * sizeof(double));
+    {
+        /* with coordinates (nested dissection of the free block) the same solution */
+        dfm_constrained *cc = NULL;
+        dfm_chol_options o = dfm_chol_default_options();
+        double *co = (double *)malloc(3 * nv * sizeof(double)), d = 0;
+        for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+        o.coords = co;
+        T_EQ_INT(dfm_constrained_analyze(&m, fixed, &o, &cc), DFM_OK);
+        T_EQ_INT(dfm_constrained_factor(cc, &m), DFM_OK);
+        T_EQ_INT(dfm_constrained_solve(cc, b, fv, y, 3), DFM_OK);
+        T_EQ_INT(dfm_constrained_analyze(&m, fixed, NULL, &c), DFM_OK);
+        T_EQ_INT(dfm_constrained_factor(c, &m), DFM_OK);
+        T_EQ_INT(dfm_constrained_solve(c, b, fv, x, 3), DFM_OK);
+        for (i = 0; i < 3 * nv; i++) d = fmax(d, fabs(x[i] - y[i]));
+        T_CHECK_MSG(d <= 1e-9, "constrained with and without coordinates %.3g", d);
+        dfm_constrained_free(cc);
+        free(co);
+    }
+    dfm_csc_multiply(&m, x, y, 3);
+    for (q = 0; q < 3; q++)
+        for (i = 0; i < nv; i++) {
+            if (fixed[i]) fixed_err = fmax(fixed_err, fabs(x[q * nv + i] - fv[q * nv + i]));
+            else worst = fmax(worst, fabs(y[q * nv + i] - b[q * nv + i]));
+        }
+    T_NEAR(fixed_err, 0.0, 0.0);
+    T_CHECK_MSG(worst <= 1e-9, "free rows residual %.3g", worst);
+    /* new weights, same pattern: refactor; the failing column is reported in input numbering */
+    {
+        size_t j, p, bad = 0;
+        for (j = 0; j < nv && !bad; j++)
+            if (!fixed[j]) bad = j + 200 < nv && !fixed[j + 200] ? j + 200 : 0;
+        for (p = m.col_start[bad]; p < m.col_start[bad + 1]; p++)
+            if ((size_t)m.row_index[p] == bad) m.values[p] = -5.0;
+        T_EQ_INT(dfm_constrained_factor(c, &m), DFM_ERR_NOT_POSITIVE_DEFINITE);
+        T_EQ_INT(dfm_constrained_chol(c) ? 1 : 0, 1);
+        {
+            dfm_chol_info info;
+            dfm_chol_get_info(dfm_constrained_chol(c), &info);
+            T_EQ_INT(info.failed_column, (long long)bad);
+        }
+    }
+    /* fixed everything: refused */
+    {
+        unsigned char *all = (unsigned char *)malloc(nv);
+        dfm_constrained *c2 = NULL;
+        memset(all, 1, nv);
+        T_EQ_INT(dfm_constrained_analyze(&m, all, NULL, &c2), DFM_ERR_INVALID_ARGUMENT);
+        T_CHECK(c2 == NULL);
+        free(all);
+    }
+    dfm_constrained_free(c);
+    free(b);
+    free(fv);
+    free(x);
+    free(y);
+    free(fixed);
+    dfm_csc_free(&l);
+    dfm_csc_free(&m);
+    free(pos);
+    free(idx);
+}
+
+/* 3x3 blocks: identity blocks give three independent solves; random SPD blocks match dense */
+static void test_blocks(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i, q, p;
+    dfm_csc l, m, e, e2;
+    unsigned char *fixed;
+    double *b, *x, *x3, diff = 0, r;
+    dfm_chol_options o = dfm_chol_default_options();
+    grid_mesh(12, 13, &pos, &idx, &nv, &nt);
+    fixed = every_kth(nv, 20);
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_UNIFORM, NULL, &l), DFM_OK);
+    T_EQ_INT(dfm_normal_matrix(&l, NULL, NULL, &m), DFM_OK);
+    add_diagonal(&m, fixed, 2.0);
+    T_EQ_INT(dfm_block_expand(&m, 3, NULL, NULL, &e), DFM_OK);
+    T_EQ_SIZE(e.n_cols, 3 * nv);
+    b = random_vector(3 * nv, 61);
+    x = (double *)malloc(3 * nv * sizeof(double));
+    x3 = (double *)malloc(3 * nv * sizeof(double));
+    T_CHECK(solve_residual(&m, b, 3, x, NULL) <= 1e-14);
+    {
+        /* b interleaved: unknown r of vertex i is row 3i + r */
+        double *bi = (double *)malloc(3 * nv * sizeof(double));
+        for (q = 0; q < 3; q++)
+            for (i = 0; i < nv; i++) bi[3 * i + q] = b[q * nv + i];
+        o.block_size = 3;
+        r = solve_residual(&e, bi, 1, x3, &o);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "block residual %.3g", r);
+        for (q = 0; q < 3; q++)
+            for (i = 0; i < nv; i++) diff = fmax(diff, fabs(x3[3 * i + q] - x[q * nv + i]));
+        T_CHECK_MSG(diff <= 1e-9, "block vs scalar %.3g", diff);
+        free(bi);
+    }
+    /* random coupled blocks: diagonal blocks m_ii I + s S_i (S_i symmetric), off-diagonal m_ij R */
+    {
+        size_t nnz = m.col_start[nv], j;
+        double *blk = (double *)malloc(nnz * 9 * sizeof(double)), *d, *xd = (double *)malloc(3 * nv * sizeof(double)), sc = 0;
+        for (j = 0; j < nv; j++)
+            for (p = m.col_start[j]; p < m.col_start[j + 1]; p++) {
+                double *B = blk + 9 * p;
+                size_t r2, c2;
+                for (r2 = 0; r2 < 3; r2++)
+                    for (c2 = 0; c2 < 3; c2++) B[r2 * 3 + c2] = m.values[p] * (r2 == c2 ? 1.0 : 0.0);
+                if ((size_t)m.row_index[p] == j) {
+                    double s = 0.1 * fabs(m.values[p]);
+                    B[1] = B[3] = s * unit_random(p, 10);
+                    B[2] = B[6] = s * unit_random(p, 11);
+                    B[5] = B[7] = s * unit_random(p, 12);
+                } else {
+                    for (r2 = 0; r2 < 9; r2++) B[r2] += 0.05 * m.values[p] * (unit_random(p * 9 + r2, 13) - 0.5);
+                }
+            }
+        /* make it safely SPD: add to the diagonal blocks */
+        for (j = 0; j < nv; j++) {
+            double *B = blk + 9 * m.col_start[j];
+            B[0] += 5;
+            B[4] += 5;
+            B[8] += 5;
+        }
+        T_EQ_INT(dfm_block_expand(&m, 3, blk, NULL, &e2), DFM_OK);
+        r = solve_residual(&e2, b, 1, x3, &o);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "coupled block residual %.3g", r);
+        d = to_dense(&e2);
+        T_CHECK(dense_solve(3 * nv, d, b, xd));
+        diff = 0;
+        for (i = 0; i < 3 * nv; i++) sc = fmax(sc, fabs(xd[i]));
+        for (i = 0; i < 3 * nv; i++) diff = fmax(diff, fabs(xd[i] - x3[i]) / sc);
+        T_CHECK_MSG(diff <= 1e-10, "coupled block vs dense %.3g", diff);
+        /* block ordering keeps a vertex's three unknowns together */
+        {
+            dfm_chol *c = NULL;
+            int together = 1;
+            T_EQ_INT(dfm_chol_analyze(&e2, &o, &c), DFM_OK);
+            for (i = 0; i < 3 * nv; i += 3) {
+                const int32_t *pm = dfm_chol_permutation(c);
+                together &= pm[i] % 3 == 0 && pm[i + 1] == pm[i] + 1 && pm[i + 2] == pm[i] + 2;
+            }
+            T_CHECK(together);
+            dfm_chol_free(c);
+        }
+        o.block_size = 4; /* 3 nv is not a multiple of 4 (nv = 156: it is; use 5) */
+        o.block_size = 5;
+        {
+            dfm_chol *c = NULL;
+            T_EQ_INT(dfm_chol_analyze(&e2, &o, &c), (3 * nv) % 5 ? DFM_ERR_INVALID_ARGUMENT : DFM_OK);
+            dfm_chol_free(c);
+        }
+        free(blk);
+        free(d);
+        free(xd);
+        dfm_csc_free(&e2);
+    }
+    free(b);
+    free(x);
+    free(x3);
+    free(fixed);
+    dfm_csc_free(&l);
+    dfm_csc_free(&m);
+    dfm_csc_free(&e);
+    free(pos);
+    free(idx);
+}
+
+static void test_bad_input(void)
+{
+    dfm_csc a = random_spd(20, 3.0, 5, 0.1), m;
+    dfm_chol *c = NULL;
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    uint32_t idx[] = {0, 1, 2}, bad_idx[] = {0, 1, 3};
+    int32_t saved;
+    double x[20] = {0};
+    T_EQ_INT(dfm_chol_analyze(NULL, NULL, &c), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, NULL), DFM_ERR_INVALID_ARGUMENT);
+    /* an upper-triangle entry in a lower matrix */
+    saved = a.row_index[a.col_start[5]];
+    a.row_index[a.col_start[5]] = 2;
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_ERR_BAD_INDEX);
+    a.row_index[a.col_start[5]] = 99;
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_ERR_BAD_INDEX);
+    a.row_index[a.col_start[5]] = -1;
+    T_EQ_INT(dfm_csc_validate(&a), DFM_ERR_BAD_INDEX);
+    a.row_index[a.col_start[5]] = saved;
+    T_EQ_INT(dfm_csc_validate(&a), DFM_OK);
+    /* missing diagonal: structurally singular */
+    {
+        dfm_csc b2 = random_spd(20, 3.0, 5, 0.1);
+        b2.row_index[b2.col_start[7]] = b2.col_start[8] - b2.col_start[7] > 1 ? b2.row_index[b2.col_start[7] + 1] : 19;
+        T_EQ_INT(dfm_chol_analyze(&b2, NULL, &c), DFM_ERR_STRUCTURALLY_SINGULAR);
+        T_CHECK(c == NULL);
+        dfm_csc_free(&b2);
+    }
+    /* a general matrix is not accepted by the factorization */
+    a.kind = DFM_CSC_GENERAL;
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_ERR_INVALID_ARGUMENT);
+    a.kind = DFM_CSC_SYMMETRIC_LOWER;
+    /* decreasing column starts */
+    {
+        size_t s = a.col_start[3];
+        a.col_start[3] = a.col_start[4] + 1;
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_ERR_INVALID_ARGUMENT);
+        a.col_start[3] = s;
+    }
+    /* NaN values */
+    T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+    a.values[4] = INFINITY;
+    T_EQ_INT(dfm_chol_factor(c, &a), DFM_ERR_BAD_VALUE);
+    T_EQ_INT(dfm_csc_multiply(&a, x, x, 1), DFM_ERR_BAD_VALUE);
+    a.values[4] = 0.25;
+    T_EQ_INT(dfm_chol_solve(NULL, x, 1), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_chol_factor(NULL, &a), DFM_ERR_INVALID_ARGUMENT);
+    dfm_chol_free(c);
+    dfm_chol_free(NULL);
+    dfm_constrained_free(NULL);
+    dfm_csc_free(NULL);
+    /* meshes */
+    T_EQ_INT(dfm_mesh_laplacian(pos, 3, bad_idx, 1, DFM_LAPLACIAN_COTAN, NULL, &m), DFM_ERR_BAD_INDEX);
+    T_CHECK(m.col_start == NULL);
+    T_EQ_INT(dfm_mesh_laplacian(pos, 0, idx, 1, DFM_LAPLACIAN_COTAN, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_mesh_laplacian(pos, 3, idx, 1, 7, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_mesh_laplacian(NULL, 3, idx, 1, 0, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    pos[4] = NAN;
+    T_EQ_INT(dfm_mesh_laplacian(pos, 3, idx, 1, DFM_LAPLACIAN_COTAN, NULL, &m), DFM_ERR_BAD_VALUE);
+    pos[4] = 0;
+    /* degenerate triangles give finite weights */
+    {
+        float flat[] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+        uint32_t dup[] = {0, 1, 2, 0, 0, 1};
+        size_t p;
+        int finite = 1;
+        T_EQ_INT(dfm_mesh_laplacian(flat, 3, dup, 2, DFM_LAPLACIAN_COTAN, NULL, &m), DFM_OK);
+        for (p = 0; p < m.col_start[3]; p++) finite &= isfinite(m.values[p]) != 0;
+        T_CHECK(finite);
+        dfm_csc_free(&m);
+    }
+    T_EQ_INT(dfm_normal_matrix(NULL, NULL, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    {
+        double dg[20];
+        size_t i;
+        for (i = 0; i < 20; i++) dg[i] = i == 3 ? NAN : 1.0;
+        T_EQ_INT(dfm_normal_matrix(&a, dg, NULL, &m), DFM_ERR_BAD_VALUE);
+    }
+    T_EQ_INT(dfm_block_expand(&a, 0, NULL, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_csc_alloc(3, 4, 1, DFM_CSC_SYMMETRIC_LOWER, NULL, &m), DFM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dfm_csc_alloc((size_t)1 << 40, 4, 1, DFM_CSC_GENERAL, NULL, &m), DFM_ERR_TOO_LARGE);
+    T_EQ_STR(dfm_result_string(DFM_ERR_NOT_POSITIVE_DEFINITE), "DFM_ERR_NOT_POSITIVE_DEFINITE");
+    T_EQ_STR(dfm_result_string((dfm_result)99), "DFM_ERR_?");
+    dfm_csc_free(&a);
+}
+
+/* every allocation failure is reported as OUT_OF_MEMORY and leaks nothing */
+static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, const uint32_t *idx, size_t nt)
+{
+    dfm_csc l, m;
+    dfm_chol *c = NULL;
+    dfm_constrained *k = NULL;
+    dfm_chol_options o = dfm_chol_default_options();
+    dfm_result r;
+    double *dg = (double *)calloc(nv, sizeof(double)), *b = (double *)calloc(3 * nv, sizeof(double));
+    double *x = (double *)malloc(3 * nv * sizeof(double)), *co = (double *)malloc(3 * nv * sizeof(double));
+    unsigned char *fixed = every_kth(nv, 10);
+    size_t i;
+    memset(&l, 0, sizeof l);
+    memset(&m, 0, sizeof m);
+    for (i = 0; i < nv; i++) {
+        dg[i] = fixed[i] ? 1.0 : 0.0;
+        b[i] = 1.0;
+    }
+    o.allocator = al;
+    r = dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, al, &l);
+    if (r == DFM_OK) r = dfm_normal_matrix(&l, dg, al, &m);
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    if (r == DFM_OK) {
+        dfm_chol *cn = NULL;
+        o.coords = co;
+        r = dfm_chol_analyze(&m, &o, &cn);
+        o.coords = NULL;
+        dfm_chol_free(cn);
+    }
+    if (r == DFM_OK) r = dfm_chol_analyze(&m, &o, &c);
+    if (r == DFM_OK) r = dfm_chol_factor(c, &m);
+    if (r == DFM_OK) {
+        memcpy(x, b, 3 * nv * sizeof(double));
+        r = dfm_chol_solve(c, x, 3);
+    }
+    if (r == DFM_OK) r = dfm_chol_solve_refined(c, &m, b, x, 3, 2);
+    o.coords = co;
+    if (r == DFM_OK) r = dfm_constrained_analyze(&m, fixed, &o, &k);
+    o.coords = NULL;
+    if (r == DFM_OK) r = dfm_constrained_factor(k, &m);
+    if (r == DFM_OK) r = dfm_constrained_solve(k, b, b, x, 3);
+    if (r == DFM_OK) {
+        dfm_csc e;
+        o.block_size = 3;
+        r = dfm_block_expand(&m, 3, NULL, al, &e);
+        if (r == DFM_OK) {
+            dfm_chol *c3 = NULL;
+            r = dfm_chol_analyze(&e, &o, &c3);
+            dfm_chol_free(c3);
+            dfm_csc_free(&e);
+        }
+    }
+    dfm_constrained_free(k);
+    dfm_chol_free(c);
+    dfm_csc_free(&l);
+    dfm_csc_free(&m);
+    free(dg);
+    free(b);
+    free(x);
+    free(co);
+    free(fixed);
+    return (int)r;
+}
+
+static void test_alloc_failures(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt;
+    long k;
+    int all_oom = 1, no_leaks = 1, finished = 0;
+    grid_mesh(20, 15, &pos, &idx, &nv, &nt); /* 300 vertices: nested dissection splits */
+    for (k = 0; k < 5000 && !finished; k++) {
+        counting cnt = {0, 0, k};
+        dfm_allocator al = {counting_alloc, counting_free, &cnt};
+        int r = run_pipeline(&al, pos, nv, idx, nt);
+        if (r == DFM_OK) finished = 1;
+        else if (r != DFM_ERR_OUT_OF_MEMORY) all_oom = 0;
+        if (cnt.allocs != cnt.frees) no_leaks = 0;
+    }
+    T_CHECK(finished);
+    T_CHECK(all_oom);
+    T_CHECK(no_leaks);
+    T_CHECK_MSG(k > 20, "%ld allocation points", k);
+    free(pos);
+    free(idx);
+}
+
+static int cancel_after(void *user, float done)
+{
+    int *calls = (int *)user;
+    (void)done;
+    return ++*calls >= 2;
+}
+
+static void test_cancel(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt;
+    dfm_csc l;
+    dfm_chol *c = NULL;
+    int calls = 0;
+    counting cnt = {0, 0, -1};
+    dfm_allocator al = {counting_alloc, counting_free, &cnt};
+    dfm_chol_options o = dfm_chol_default_options();
+    grid_mesh(60, 60, &pos, &idx, &nv, &nt);
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_UNIFORM, NULL, &l), DFM_OK);
+    l.values[0] += 1.0;
+    o.allocator = &al;
+    o.progress = cancel_after;
+    o.progress_user = &calls;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_CANCELLED);
+    T_CHECK(c == NULL);
+    T_EQ_INT(cnt.allocs, cnt.frees);
+    o.progress = NULL;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_OK);
+    c->progress = cancel_after;
+    c->progress_user = &calls;
+    calls = 0;
+    T_EQ_INT(dfm_chol_factor(c, &l), DFM_CANCELLED);
+    dfm_chol_free(c);
+    T_EQ_INT(cnt.allocs, cnt.frees);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+}
+
+/* AMD quality: on a 2D grid Laplacian, fill within a sane factor of nested-dissection theory
+   and much below the natural order's band */
+static void test_amd_quality(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt;
+    dfm_csc l;
+    dfm_chol *c = NULL, *cn = NULL;
+    dfm_chol_options o = dfm_chol_default_options();
+    dfm_chol_info ia, in;
+    grid_mesh(100, 100, &pos, &idx, &nv, &nt);
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_UNIFORM, NULL, &l), DFM_OK);
+    l.values[0] += 1.0;
+    T_EQ_INT(dfm_chol_analyze(&l, NULL, &c), DFM_OK);
+    o.ordering = DFM_ORDER_NATURAL;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &cn), DFM_OK);
+    dfm_chol_get_info(c, &ia);
+    dfm_chol_get_info(cn, &in);
+    T_CHECK_MSG(ia.nnz_l * 3 < in.nnz_l, "amd %zu natural %zu", ia.nnz_l, in.nnz_l);
+    T_CHECK_MSG(ia.nnz_l < 30 * nv, "amd nnz(L) %zu for n %zu", ia.nnz_l, nv);
+    T_EQ_INT(dfm_chol_factor(c, &l), DFM_OK);
+    dfm_chol_free(c);
+    dfm_chol_free(cn);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+}
+
+
+/* nested dissection with vertex coordinates: correct solves, brute-force counts, never more fill
+   than AMD alone, bad coordinates refused, deterministic */
+static void test_nested_dissection(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i;
+    dfm_csc l;
+    double *co, *b, *x;
+    dfm_chol_options o = dfm_chol_default_options();
+    dfm_chol *c = NULL, *ca = NULL, *c2 = NULL;
+    dfm_chol_info info, info_amd;
+    unsigned char *fixed;
+    int counts_ok = 1;
+    /* small: brute-force counts under the dissection ordering */
+    grid_mesh(21, 22, &pos, &idx, &nv, &nt);
+    co = (double *)malloc(3 * nv * sizeof(double));
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    fixed = every_kth(nv, 50);
+    add_diagonal(&l, fixed, 1.0);
+    o.coords = co;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_OK);
+    {
+        size_t *bc = (size_t *)malloc(nv * sizeof(size_t));
+        brute_counts(&l, dfm_chol_permutation(c), bc);
+        for (i = 0; i < nv; i++) counts_ok &= bc[i] == dfm_chol_column_counts(c)[i];
+        free(bc);
+    }
+    T_CHECK(counts_ok);
+    dfm_chol_free(c);
+    free(fixed);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+    free(co);
+    /* larger: fill and solve */
+    grid_mesh(150, 140, &pos, &idx, &nv, &nt);
+    co = (double *)malloc(3 * nv * sizeof(double));
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+    fixed = every_kth(nv, 100);
+    add_diagonal(&l, fixed, 1.0);
+    o.coords = co;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c), DFM_OK);
+    T_EQ_INT(dfm_chol_analyze(&l, NULL, &ca), DFM_OK);
+    dfm_chol_get_info(c, &info);
+    dfm_chol_get_info(ca, &info_amd);
+    T_CHECK_MSG(info.nnz_l <= info_amd.nnz_l, "with coordinates %zu, AMD %zu", info.nnz_l, info_amd.nnz_l);
+    /* the dissection ordering itself: a permutation, with fill close to AMD's on this grid */
+    {
+        dfm_allocator al = dfm__resolve_allocator(NULL);
+        size_t *st;
+        int32_t *adj, *pnd = (int32_t *)malloc(nv * sizeof(int32_t)), *pamd = (int32_t *)malloc(nv * sizeof(int32_t));
+        unsigned char *seen = (unsigned char *)calloc(nv, 1);
+        double fnd = 0, famd = 0;
+        int is_perm = 1;
+        T_EQ_INT(dfm__adjacency(&l, 1, &al, &st, &adj), DFM_OK);
+        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd), DFM_OK);
+        T_EQ_INT(dfm__amd_order((int32_t)nv, st, adj, NULL, &al, NULL, NULL, pamd), DFM_OK);
+        for (i = 0; i < nv; i++) {
+            if (pnd[i] < 0 || (size_t)pnd[i] >= nv || seen[pnd[i]]) is_perm = 0;
+            else seen[pnd[i]] = 1;
+        }
+        T_CHECK(is_perm);
+        dfm__graph_fill(nv, st, adj, pnd, &al, &fnd);
+        dfm__graph_fill(nv, st, adj, pamd, &al, &famd);
+        T_CHECK_MSG(famd == (double)info_amd.nnz_l, "graph fill %.0f vs symbolic %zu", famd, info_amd.nnz_l);
+        T_CHECK_MSG(fnd < 1.3 * famd, "dissection %.0f AMD %.0f", fnd, famd);
+        free(st);
+        free(adj);
+        free(pnd);
+        free(pamd);
+        free(seen);
+    }
+    b = random_vector(3 * nv, 71);
+    x = (double *)malloc(3 * nv * sizeof(double));
+    T_EQ_INT(dfm_chol_factor(c, &l), DFM_OK);
+    memcpy(x, b, 3 * nv * sizeof(double));
+    T_EQ_INT(dfm_chol_solve(c, x, 3), DFM_OK);
+    T_CHECK(residual(&l, x, b, 3) <= 1e-14);
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c2), DFM_OK);
+    T_CHECK(memcmp(dfm_chol_permutation(c), dfm_chol_permutation(c2), nv * sizeof(int32_t)) == 0);
+    dfm_chol_free(c2);
+    c2 = NULL;
+    co[5] = NAN;
+    T_EQ_INT(dfm_chol_analyze(&l, &o, &c2), DFM_ERR_BAD_VALUE);
+    T_CHECK(c2 == NULL);
+    dfm_chol_free(c);
+    dfm_chol_free(ca);
+    free(b);
+    free(x);
+    free(fixed);
+    dfm_csc_free(&l);
+    free(pos);
+    free(idx);
+    free(co);
+}
+
+/* the Stanford bunny (glmark2-data): cotangent Laplacian + 1% constraints and the bi-Laplacian,
+   three right-hand sides, with and without coordinates, refactored with new weights */
+static void test_bunny(void)
+{
+    const char *path = "/usr/share/glmark2/models/bunny.obj";
+    mio_mesh mesh;
+    mio_error merr;
+    size_t nv, i, sys;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        T_SKIP_N(18, "bunny checks", "/usr/share/glmark2/models/bunny.obj missing: apt-get install glmark2-data");
+        return;
+    }
+    fclose(f);
+    T_EQ_INT(mio_read_file(path, NULL, &mesh, &merr), MIO_OK);
+    nv = mesh.vertex_count;
+    for (sys = 0; sys < 2; sys++) {
+        dfm_csc l, a;
+        double *dg = (double *)calloc(nv, sizeof(double)), *b = random_vector(3 * nv, 90 + sys);
+        double *x = (double *)malloc(3 * nv * sizeof(double)), *co = (double *)malloc(3 * nv * sizeof(double)), r;
+        dfm_chol_options o = dfm_chol_default_options();
+        dfm_chol *c = NULL;
+        dfm_chol_info info;
+        for (i = 0; i < nv; i += 100) dg[i] = 1.0;
+        for (i = 0; i < 3 * nv; i++) co[i] = mesh.positions[i];
+        T_EQ_INT(dfm_mesh_laplacian(mesh.positions, nv, mesh.indices, mesh.triangle_count, DFM_LAPLACIAN_COTAN, NULL, &l), DFM_OK);
+        if (sys == 0) {
+            unsigned char *fx = every_kth(nv, 100);
+            add_diagonal(&l, fx, 1.0);
+            free(fx);
+            a = l;
+            memset(&l, 0, sizeof l);
+        } else {
+            T_EQ_INT(dfm_normal_matrix(&l, dg, NULL, &a), DFM_OK);
+        }
+        r = solve_residual(&a, b, 3, x, NULL);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "bunny system %zu residual %.3g", sys, r);
+        o.coords = co;
+        r = solve_residual(&a, b, 3, x, &o);
+        T_CHECK_MSG(r >= 0 && r <= 1e-14, "bunny system %zu residual with coordinates %.3g", sys, r);
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+        dfm_chol_get_info(c, &info);
+        /* AMD's fill on these systems, as CHOLMOD's AMD reports it (1363788 and 4628409) */
+        T_CHECK_MSG(info.nnz_l < (sys == 0 ? 1400000u : 4750000u), "nnz(L) %zu", info.nnz_l);
+        /* new constraint weights: refactor without a new analysis */
+        for (i = 0; i < nv; i += 100) a.values[a.col_start[i]] += 9.0; /* the diagonal comes first */
+        T_EQ_INT(dfm_chol_factor(c, &a), DFM_OK);
+        memcpy(x, b, 3 * nv * sizeof(double));
+        T_EQ_INT(dfm_chol_solve(c, x, 3), DFM_OK);
+        r = residual(&a, x, b, 3);
+        T_CHECK_MSG(r <= 1e-14, "bunny refactor residual %.3g", r);
+        dfm_chol_free(c);
+        dfm_csc_free(&l);
+        dfm_csc_free(&a);
+        free(dg);
+        free(b);
+        free(x);
+        free(co);
+    }
+    mio_free_mesh(&mesh);
+}
+
+int main(int argc, char **argv)
+{
+    T_BEGIN(argc, argv);
+    (void)sanitize_mode;
+    test_laplacian_values();
+    test_random_vs_dense();
+    test_orderings();
+    test_not_spd();
+    test_permutation_invariance();
+    test_normal_matrix();
+    test_mesh_systems();
+    test_refactor_multi_rhs();
+    test_constraints();
+    test_blocks();
+    test_bad_input();
+    test_alloc_failures();
+    test_cancel();
+    test_amd_quality();
+    test_nested_dissection();
+    test_bunny();
+    return T_END();
+}
