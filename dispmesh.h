@@ -46,6 +46,12 @@
                       always split; 8 built 12-20% faster than 4 and traced as fast or faster
                       on the bench meshes (bunny, 1M-triangle sphere).
        allocator      NULL = DM_MALLOC/DM_FREE; a copy is kept in the BVH and used to free it
+                      Recommended on Linux for large meshes: an allocator that backs blocks of
+                      1 MiB and more with transparent huge pages (aligned_alloc to 2 MiB, size
+                      rounded up, then madvise(MADV_HUGEPAGE); bench/bench.h has one in 20
+                      lines), as Embree's own allocator does. The build touches fewer pages
+                      (on the 1M-triangle sphere it took 0.55 of the time with malloc) and
+                      rays miss the TLB less often.
        progress       NULL, or called during the build with done in [0, 1]; returning nonzero
                       cancels the build (DM_CANCELLED, everything freed). progress_user is
                       passed back.
