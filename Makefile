@@ -39,6 +39,7 @@ HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_subdiv4
+C_TESTS   += $(B)/test_dispmesh_param
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif
