@@ -51,6 +51,7 @@ BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4)
+BENCHES   += $(if $(and $(HAVE_CXX),$(HAVE_MESHOPT)),$(B)/bench_dispmesh)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -127,10 +128,12 @@ BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
 BENCH_LIBS_subdiv4 = -lOpenMeshCore
+BENCH_LIBS_dispmesh = -lmeshoptimizer
 # and the flags it is built with: dispmesh.h's SIMD path as its docs recommend for this machine (Embree
 # picks its best instruction set at run time)
 HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)
 BENCH_FLAGS_bvh = $(if $(HAVE_AVX2),-DDM_USE_AVX2 -mavx2,$(if $(filter x86_64,$(shell uname -m)),-DDM_USE_SSE2))
+BENCH_FLAGS_dispmesh = $(BENCH_FLAGS_bvh)
 $(B)/bench_%: bench/bench_%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*) -DBENCH_FLAGS='"$(CXX) $(CXXFLAGS_ALL) $(BENCH_FLAGS_$*)"' $< -o $@ $(BENCH_LIBS_$*) -lm
 
