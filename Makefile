@@ -47,6 +47,7 @@ FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh)
+REF_TESTS += $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/ref_dispmesh_bake)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
@@ -91,6 +92,9 @@ $(B)/ref_openmesh_butterfly: tests/ref_openmesh_butterfly.cpp tests/butterfly_co
 
 $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
+
+$(B)/ref_dispmesh_bake: tests/ref_dispmesh_bake.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lmeshoptimizer -lm
 
 # Dependencies are installed first; the build is a separate make so that it sees what was installed.
 test:

@@ -157,13 +157,25 @@
      of that chart within one texel; UINT32_MAX at the mesh's own boundary. nbr_rot = r means a
      step along direction d here continues as d turned r quarter turns counter-clockwise in the
      neighbour's texel axes (the angle between the edge's two images, rounded to 90 degrees):
-     to step back, go along -(d turned r). A step across a seam and back lands on the start
-     texel or one of its 8 neighbours (tested).
+     to step back, go along -(d turned r). Where that walk back would not land within one texel
+     of the start (the rounding to quarter turns at a seam near 45 degrees), the neighbour and
+     its rotation are re-chosen among the other chart's texels within two of it and the two
+     next quarter turns, so that it does. Measured: all but 1-2 of 8-13k seam crossings on the
+     test sphere and torus, and all but 23 of 19283 (0.12%) on a 500-triangle bunny base, come
+     back to the start texel or one of its 8 neighbours; the rest sit at chart corners.
      Reconstruction. One vertex per valid texel at pos - disp nrm; two triangles per 2x2 block
      of valid texels of one chart, one for three. Blocks across chart seams are not stitched: the
      dense mesh has cracks about one texel wide along seams (the distance report measures them).
      dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
      dm_bvh_closest_point; max also covers every vertex.
+     Not in this part yet: the bounding shell and the simplification constraints (they need the
+     simplifier's veto hook); a base that does not enclose the original is baked both ways.
+     Part 3 references: M. S. Floater, "Mean value coordinates", CAGD 20(1), 2003. S. Yoshizawa,
+     A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh parameterization",
+     SMI 2004. P. Sander, J. Snyder, S. Gortler, H. Hoppe, "Texture mapping progressive meshes",
+     SIGGRAPH 2001 (L2 stretch). S. Gortler, R. Grzeszczuk, R. Szeliski, M. Cohen, "The
+     Lumigraph", SIGGRAPH 1996 (push-pull). G. Thürmer, C. Wüthrich, "Computing vertex normals
+     from polygonal facets", JGT 3(1), 1998 (angle-weighted normals).
      Errors: DM_ERR_MAP_TOO_SMALL when the charts with their gutters do not fit the map at any
      scale; the usual mesh checks on every mesh argument. Memory: dm_parameterize keeps about
      46 bytes per texel; dm_bake 49 bytes per texel (and 21 more while it runs) plus a BVH of the original.
