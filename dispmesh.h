@@ -174,7 +174,7 @@
      A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh parameterization",
      SMI 2004. P. Sander, J. Snyder, S. Gortler, H. Hoppe, "Texture mapping progressive meshes",
      SIGGRAPH 2001 (L2 stretch). S. Gortler, R. Grzeszczuk, R. Szeliski, M. Cohen, "The
-     Lumigraph", SIGGRAPH 1996 (push-pull). G. Thürmer, C. Wüthrich, "Computing vertex normals
+     Lumigraph", SIGGRAPH 1996 (push-pull). G. Thurmer, C. Wüthrich, "Computing vertex normals
      from polygonal facets", JGT 3(1), 1998 (angle-weighted normals).
      Errors: DM_ERR_MAP_TOO_SMALL when the charts with their gutters do not fit the map at any
      scale; the usual mesh checks on every mesh argument. Memory: dm_parameterize keeps about
@@ -2249,7 +2249,7 @@ static void dm__pz_face_normal(const float *pos, const uint32_t *idx, size_t t, 
     dm__pz_cross(e1, e2, n);
 }
 
-/* Angle-weighted vertex normals (Thürmer and Wüthrich 1998), unit or zero, into nrm[3 nv]. */
+/* Angle-weighted vertex normals (Thurmer and Wüthrich 1998), unit or zero, into nrm[3 nv]. */
 static void dm__pz_vertex_normals(const float *pos, size_t nv, const uint32_t *idx, size_t nt, double *acc,
                                   float *nrm)
 {
