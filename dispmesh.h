@@ -177,8 +177,9 @@
      Lumigraph", SIGGRAPH 1996 (push-pull). G. Thurmer, C. Wüthrich, "Computing vertex normals
      from polygonal facets", JGT 3(1), 1998 (angle-weighted normals).
      Errors: DM_ERR_MAP_TOO_SMALL when the charts with their gutters do not fit the map at any
-     scale; the usual mesh checks on every mesh argument. Memory: dm_parameterize keeps about
-     46 bytes per texel; dm_bake 49 bytes per texel (and 21 more while it runs) plus a BVH of the original.
+     scale; the usual mesh checks on every mesh argument. Memory: dm_parameterize keeps
+     32 bytes per texel (plus 24 per base triangle); dm_bake 46 bytes per texel (and about 22 more
+     while it runs) plus a BVH of the original.
 
    REFERENCES
      S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
