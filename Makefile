@@ -41,7 +41,7 @@ HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
-             $(B)/test_subdiv4 $(B)/test_deform_chol
+             $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif
@@ -49,13 +49,15 @@ FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh) \
-             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify)
+             $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/ref_dispmesh_bake)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT),$(HAVE_OPENMESH)),$(B)/bench_simplify) \
-             $(if $(and $(HAVE_CXX),$(HAVE_CHOLMOD),$(HAVE_EIGEN)),$(B)/bench_chol)
+             $(if $(and $(HAVE_CXX),$(HAVE_CHOLMOD),$(HAVE_EIGEN)),$(B)/bench_chol) \
+             $(if $(and $(HAVE_CXX),$(HAVE_MESHOPT)),$(B)/bench_dispmesh)
 TOOLS      = $(B)/gen_sphere
 
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
@@ -98,6 +100,8 @@ $(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 
 $(B)/ref_openmesh_simplify: tests/ref_openmesh_simplify.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshTools -lOpenMeshCore -lembree3 -lm
+$(B)/ref_dispmesh_bake: tests/ref_dispmesh_bake.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lmeshoptimizer -lm
 
 # Dependencies are installed first; the build is a separate make so that it sees what was installed.
 test:
@@ -135,10 +139,12 @@ BENCH_LIBS_meshio = -lOpenMeshCore
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
 BENCH_LIBS_subdiv4 = -lOpenMeshCore
+BENCH_LIBS_dispmesh = -lmeshoptimizer
 # and the flags it is built with: dispmesh.h's SIMD path as its docs recommend for this machine (Embree
 # picks its best instruction set at run time)
 HAVE_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo 1)
 BENCH_FLAGS_bvh = $(if $(HAVE_AVX2),-DDM_USE_AVX2 -mavx2,$(if $(filter x86_64,$(shell uname -m)),-DDM_USE_SSE2))
+BENCH_FLAGS_dispmesh = $(BENCH_FLAGS_bvh)
 BENCH_LIBS_simplify = -lOpenMeshTools -lOpenMeshCore -lembree3 -lmeshoptimizer
 # CHOLMOD and Eigen headers are system headers (their warnings are not ours)
 $(B)/bench_chol: bench/bench_chol.cpp $(ALLDEPS) | $(B)

@@ -7,8 +7,8 @@
 #   tests/deps.sh bench    the above plus the benchmark peers
 #   tests/deps.sh --list test|bench   print the package names only
 set -u
-test_pkgs="locales python3 pngcheck g++ clang libclang-rt-dev libopenmesh-dev libembree-dev glmark2-data assimp-testmodels assimp-utils"
-bench_pkgs="$test_pkgs libosmesa6-dev libmeshoptimizer-dev libsuitesparse-dev libopenblas0-serial libeigen3-dev"
+test_pkgs="locales python3 pngcheck g++ clang libclang-rt-dev libopenmesh-dev libembree-dev libmeshoptimizer-dev glmark2-data assimp-testmodels assimp-utils"
+bench_pkgs="$test_pkgs libosmesa6-dev libsuitesparse-dev libopenblas0-serial libeigen3-dev"
 
 list=0
 [ "${1:-}" = --list ] && { list=1; shift; }

@@ -1,0 +1,489 @@
+/* test_dispmesh_param.c - dispmesh.h part 3: parameterization, bake, sample grid, reconstruction.
+   Generated meshes only: a bumpy sphere (closed, genus 0) over a coarse enclosing sphere, a bumpy
+   torus (genus 1) over a coarse torus, an open bumpy sheet with a hole over a flat sheet. */
+#define DM_IMPLEMENTATION
+#include "dispmesh.h"
+#include "test.h"
+#include "hashrand.h"
+#include <stdlib.h>
+#include <math.h>
+
+typedef struct mesh {
+    float *p;
+    uint32_t *t;
+    size_t nv, nt;
+} mesh;
+
+static void mesh_free(mesh *m) { free(m->p); free(m->t); m->p = NULL; m->t = NULL; }
+
+static double bump_sphere(const double d[3], double amp)
+{
+    return 1.0 + amp * sin(5.0 * d[0]) * sin(5.0 * d[1]) * sin(5.0 * d[2]);
+}
+
+/* cube-sphere: n x n quads per cube face, projected to radius(dir) */
+static mesh make_sphere(int n, double amp, double scale)
+{
+    mesh m;
+    int N = n + 1, i, j, k, f;
+    size_t cells = (size_t)N * N * N;
+    uint32_t *id = (uint32_t *)malloc(cells * sizeof(uint32_t));
+    m.p = (float *)malloc(cells * 3 * sizeof(float));
+    m.t = (uint32_t *)malloc((size_t)12 * n * n * 3 * sizeof(uint32_t));
+    m.nv = 0;
+    m.nt = 0;
+    for (i = 0; i < N; i++)
+        for (j = 0; j < N; j++)
+            for (k = 0; k < N; k++) {
+                size_t c = ((size_t)i * N + j) * N + k;
+                id[c] = 0xffffffffu;
+                if (i == 0 || j == 0 || k == 0 || i == n || j == n || k == n) {
+                    double d[3] = {2.0 * i / n - 1.0, 2.0 * j / n - 1.0, 2.0 * k / n - 1.0}, l, r;
+                    l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                    d[0] /= l; d[1] /= l; d[2] /= l;
+                    r = scale * bump_sphere(d, amp);
+                    m.p[3 * m.nv] = (float)(r * d[0]);
+                    m.p[3 * m.nv + 1] = (float)(r * d[1]);
+                    m.p[3 * m.nv + 2] = (float)(r * d[2]);
+                    id[c] = (uint32_t)m.nv++;
+                }
+            }
+    /* each face: axis a fixed at 0 or n; (u, v) over the other two, oriented outward */
+    for (f = 0; f < 6; f++) {
+        int a = f / 2, hi = f % 2, u, v, ua = (a + 1) % 3, va = (a + 2) % 3;
+        for (u = 0; u < n; u++)
+            for (v = 0; v < n; v++) {
+                uint32_t q[4];
+                int c, co[3];
+                for (c = 0; c < 4; c++) {
+                    co[a] = hi ? n : 0;
+                    co[ua] = u + (c == 1 || c == 2);
+                    co[va] = v + (c == 2 || c == 3);
+                    q[c] = id[((size_t)co[0] * N + co[1]) * N + co[2]];
+                }
+                if (hi) {
+                    uint32_t *o = m.t + 3 * m.nt;
+                    o[0] = q[0]; o[1] = q[1]; o[2] = q[2]; o[3] = q[0]; o[4] = q[2]; o[5] = q[3];
+                } else {
+                    uint32_t *o = m.t + 3 * m.nt;
+                    o[0] = q[0]; o[1] = q[2]; o[2] = q[1]; o[3] = q[0]; o[4] = q[3]; o[5] = q[2];
+                }
+                m.nt += 2;
+            }
+    }
+    free(id);
+    return m;
+}
+
+/* torus R = 1, tube radius r(angle) = r0 (1 + amp bumps), U x V quads */
+static mesh make_torus(int U, int V, double r0, double amp)
+{
+    mesh m;
+    int i, j;
+    m.nv = (size_t)U * V;
+    m.nt = 2 * m.nv;
+    m.p = (float *)malloc(m.nv * 3 * sizeof(float));
+    m.t = (uint32_t *)malloc(m.nt * 3 * sizeof(uint32_t));
+    for (i = 0; i < U; i++)
+        for (j = 0; j < V; j++) {
+            double a = 6.283185307179586 * i / U, b = 6.283185307179586 * j / V;
+            double r = r0 * (1.0 + amp * sin(7.0 * a) * sin(3.0 * b));
+            float *p = m.p + 3 * ((size_t)i * V + j);
+            p[0] = (float)((1.0 + r * cos(b)) * cos(a));
+            p[1] = (float)((1.0 + r * cos(b)) * sin(a));
+            p[2] = (float)(r * sin(b));
+        }
+    for (i = 0; i < U; i++)
+        for (j = 0; j < V; j++) {
+            uint32_t q0 = (uint32_t)(i * V + j), q1 = (uint32_t)(((i + 1) % U) * V + j);
+            uint32_t q2 = (uint32_t)(((i + 1) % U) * V + (j + 1) % V), q3 = (uint32_t)(i * V + (j + 1) % V);
+            uint32_t *o = m.t + 6 * ((size_t)i * V + j);
+            o[0] = q0; o[1] = q1; o[2] = q2; o[3] = q0; o[4] = q2; o[5] = q3;
+        }
+    return m;
+}
+
+/* sheet over [-1,1]^2 at height z0 + amp bumps, n x n quads; hole: drop quads within radius */
+static mesh make_sheet(int n, double z0, double amp, double hole)
+{
+    mesh m;
+    int i, j;
+    m.nv = (size_t)(n + 1) * (n + 1);
+    m.p = (float *)malloc(m.nv * 3 * sizeof(float));
+    m.t = (uint32_t *)malloc((size_t)n * n * 6 * sizeof(uint32_t));
+    m.nt = 0;
+    for (i = 0; i <= n; i++)
+        for (j = 0; j <= n; j++) {
+            double x = 2.0 * i / n - 1.0, y = 2.0 * j / n - 1.0;
+            float *p = m.p + 3 * ((size_t)i * (n + 1) + j);
+            p[0] = (float)x;
+            p[1] = (float)y;
+            p[2] = (float)(z0 + amp * sin(4.0 * x) * cos(3.0 * y));
+        }
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++) {
+            double cx = 2.0 * (i + 0.5) / n - 1.0, cy = 2.0 * (j + 0.5) / n - 1.0;
+            uint32_t q0 = (uint32_t)(i * (n + 1) + j), q1 = q0 + (uint32_t)(n + 1), q2 = q1 + 1, q3 = q0 + 1;
+            uint32_t *o = m.t + 3 * m.nt;
+            if (sqrt(cx * cx + cy * cy) < hole) continue;
+            o[0] = q0; o[1] = q1; o[2] = q2; o[3] = q0; o[4] = q2; o[5] = q3;
+            m.nt += 2;
+        }
+    return m;
+}
+
+static double uv_area(const dm_param *pm, size_t t)
+{
+    const float *u = pm->uv + 6 * t;
+    return 0.5 * (((double)u[2] - u[0]) * ((double)u[5] - u[1]) - ((double)u[4] - u[0]) * ((double)u[3] - u[1]));
+}
+
+static double tri_area(const mesh *m, size_t t)
+{
+    const float *a = m->p + 3 * m->t[3 * t], *b = m->p + 3 * m->t[3 * t + 1], *c = m->p + 3 * m->t[3 * t + 2];
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+/* The parameterization properties of issue 8: no flipped UV triangle, UVs inside the map, 95% of
+   the area ratios (map area / weight, over the mean) in [0.8, 1.25], seam walks come back. */
+static void check_param(const char *what, const mesh *base, const dm_param *pm, const float *weight)
+{
+    size_t t, flipped = 0, outside = 0, ok = 0, n = (size_t)pm->width * pm->height, i, walks = 0, back = 0, across = 0;
+    double su = 0.0, sw = 0.0;
+    int dir;
+    for (t = 0; t < base->nt; t++) {
+        int c;
+        if (!(uv_area(pm, t) > 0.0)) flipped++;
+        for (c = 0; c < 6; c++)
+            if (!(pm->uv[6 * t + c] >= 0.0f && pm->uv[6 * t + c] <= 1.0f)) outside++;
+        su += uv_area(pm, t);
+        sw += weight ? weight[t] : tri_area(base, t);
+    }
+    for (t = 0; t < base->nt; t++) {
+        double r = uv_area(pm, t) / (weight ? weight[t] : tri_area(base, t)) / (su / sw);
+        ok += r >= 0.8 && r <= 1.25;
+    }
+    T_CHECK_MSG(flipped == 0, "%s: %zu flipped UV triangles", what, flipped);
+    T_CHECK_MSG(outside == 0, "%s: %zu UVs outside [0,1]", what, outside);
+    T_CHECK_MSG(ok >= 0.95 * base->nt, "%s: %zu of %zu area ratios in [0.8,1.25]", what, ok, base->nt);
+    T_NEAR(pm->area_ratio_ok, (double)ok / base->nt, 1e-6);
+    T_CHECK_MSG(pm->utilization > 0.25f, "%s: utilization %.3f", what, pm->utilization);
+    /* seam walks: step across, then step back the opposite way in the neighbour's axes */
+    for (i = 0; i < n; i++) {
+        if (pm->texel_triangle[i] == DM_NO_HIT) continue;
+        for (dir = 0; dir < 4; dir++) {
+            static const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+            uint32_t j = pm->nbr[4 * i + dir], k;
+            int r, ex, ey, bx, by, bd, xi, yi, xk, yk;
+            if (j == UINT32_MAX) continue;
+            if (pm->chart[pm->texel_triangle[j]] == pm->chart[pm->texel_triangle[i]] && pm->nbr_rot[4 * i + dir] == 0) {
+                /* inside one chart: plain neighbours, both ways */
+                int back_dir = dir ^ 1;
+                walks++;
+                back += pm->nbr[4 * (size_t)j + back_dir] == i;
+                continue;
+            }
+            across++;
+            r = pm->nbr_rot[4 * i + dir];
+            ex = dx[dir]; ey = dy[dir];
+            for (; r > 0; r--) { int tmp = ex; ex = -ey; ey = tmp; }
+            bx = -ex; by = -ey;
+            bd = bx == 1 ? 0 : bx == -1 ? 1 : by == 1 ? 2 : 3;
+            k = pm->nbr[4 * (size_t)j + bd];
+            walks++;
+            if (k == UINT32_MAX) continue;
+            xi = (int)(i % pm->width); yi = (int)(i / pm->width);
+            xk = (int)(k % pm->width); yk = (int)(k / pm->width);
+            back += abs(xi - xk) <= 1 && abs(yi - yk) <= 1;
+        }
+    }
+    T_CHECK_MSG(across > 0, "%s: no seam crossings", what);
+    /* all but a handful: at a few seams near 45 degrees no quarter turn walks back (see the doc) */
+    T_CHECK_MSG(walks - back <= across / 1000, "%s: %zu of %zu walks came back (%zu across seams)", what, back,
+                walks, across);
+    printf("  note: %s: %zu charts, utilization %.3f, stretch L2 %.3f max %.3f, area ratios ok %.3f, "
+           "%zu seam crossings, %zu of them not walking back\n", what, pm->chart_count, pm->utilization,
+           pm->stretch_l2, pm->stretch_max, pm->area_ratio_ok, across, walks - back);
+}
+
+static int cancel_at;
+static int cancel_progress(void *user, float done)
+{
+    int *calls = (int *)user;
+    (void)done;
+    return ++*calls >= cancel_at;
+}
+
+/* an allocator that fails from the fail_at-th call on and counts what is outstanding */
+typedef struct counting { long calls, fail_at, live; } counting;
+static void *c_alloc(void *u, size_t s)
+{
+    counting *c = (counting *)u;
+    void *p;
+    if (c->calls++ >= c->fail_at) return NULL;
+    p = malloc(s);
+    if (p) c->live++;
+    return p;
+}
+static void c_free(void *u, void *p)
+{
+    counting *c = (counting *)u;
+    if (p) { c->live--; free(p); }
+}
+
+int main(int argc, char **argv)
+{
+    int san = getenv("TEST_SANITIZE") != NULL;
+    mesh orig = make_sphere(san ? 32 : 64, 0.03, 1.0), base = make_sphere(6, 0.0, 1.06);
+    dm_param_options po;
+    dm_param *pm = NULL, *pm2 = NULL;
+    dm_dispmap *map = NULL, *map2 = NULL;
+    dm_trimesh *rec = NULL;
+    dm_result r;
+    int res = san ? 256 : 512;
+    T_BEGIN(argc, argv);
+
+    /* ---- sphere: parameterization */
+    memset(&po, 0, sizeof po);
+    po.width = po.height = res;
+    r = dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &pm);
+    T_EQ_INT(r, DM_OK);
+    if (r == DM_OK) check_param("sphere", &base, pm, NULL);
+
+    /* ---- sphere: bake, grid, reconstruction */
+    if (pm) {
+        dm_distance_report rep, base_rep;
+        size_t i, n = (size_t)res * res, bad = 0, covered = 0;
+        double area = 0.0, base_area = 0.0;
+        r = dm_bake(pm, base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, &map);
+        T_EQ_INT(r, DM_OK);
+        if (map) {
+            T_EQ_SIZE(map->miss_count, 0);
+            for (i = 0; i < n; i++) {
+                covered += pm->texel_triangle[i] != DM_NO_HIT;
+                area += map->area[i];
+                if (map->valid[i]) {
+                    double q[3], l, d[3];
+                    int k;
+                    for (k = 0; k < 3; k++) q[k] = map->pos[3 * i + k] - map->disp[i] * map->nrm[3 * i + k];
+                    l = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+                    for (k = 0; k < 3; k++) d[k] = q[k] / l;
+                    /* the hit lies on the bumpy sphere (up to its tessellation), the depth is inward */
+                    if (fabs(l - bump_sphere(d, 0.03)) > 2e-3 || !(map->disp[i] > 0.0f)) bad++;
+                }
+            }
+            T_EQ_SIZE(map->hit_count, covered);
+            T_CHECK_MSG(bad == 0, "%zu texels off the original or not inward", bad);
+            for (i = 0; i < base.nt; i++) base_area += tri_area(&base, i);
+            T_CHECK_MSG(fabs(area / base_area - 1.0) < 0.02, "texel areas sum to %.4f of the base area", area / base_area);
+            /* bit-identical rerun */
+            r = dm_bake(pm, base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, &map2);
+            T_EQ_INT(r, DM_OK);
+            if (map2) {
+                T_CHECK(memcmp(map->disp, map2->disp, n * sizeof(float)) == 0);
+                T_CHECK(memcmp(map->normal, map2->normal, 3 * n * sizeof(float)) == 0);
+                T_CHECK(memcmp(map->pos, map2->pos, 3 * n * sizeof(float)) == 0);
+                dm_dispmap_free(map2);
+                map2 = NULL;
+            }
+            r = dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &pm2);
+            T_EQ_INT(r, DM_OK);
+            if (pm2) {
+                T_CHECK(memcmp(pm->uv, pm2->uv, 6 * base.nt * sizeof(float)) == 0);
+                T_CHECK(memcmp(pm->nbr, pm2->nbr, 4 * n * sizeof(uint32_t)) == 0);
+                dm_param_free(pm2);
+                pm2 = NULL;
+            }
+            r = dm_reconstruct(map, pm, NULL, &rec);
+            T_EQ_INT(r, DM_OK);
+            if (rec) {
+                r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, rec->positions, rec->vertex_count,
+                                        rec->indices, rec->triangle_count, 20000, NULL, &rep);
+                T_EQ_INT(r, DM_OK);
+                r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, base.p, base.nv, base.t, base.nt, 20000,
+                                        NULL, &base_rep);
+                T_EQ_INT(r, DM_OK);
+                T_CHECK_MSG(rep.rms <= 0.1 * base_rep.rms, "recon rms %.3g vs base-only %.3g", rep.rms, base_rep.rms);
+                T_CHECK_MSG(rep.max <= 0.25 * base_rep.max, "recon max %.3g vs base-only %.3g", rep.max, base_rep.max);
+                printf("  note: sphere %dx%d: recon %zu tris rms %.2e max %.2e; base only rms %.2e max %.2e\n", res, res,
+                       rec->triangle_count, rep.rms, rep.max, base_rep.rms, base_rep.max);
+                dm_trimesh_free(rec);
+                rec = NULL;
+            }
+        }
+    }
+
+    /* ---- sphere with caller weights: map area follows them */
+    {
+        float *w = (float *)malloc(base.nt * sizeof(float));
+        size_t t;
+        dm_param *pw = NULL;
+        for (t = 0; t < base.nt; t++) w[t] = (float)(tri_area(&base, t) * (1.0 + 0.6 * unit_random(t / 2, 3)));
+        r = dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &pw);
+        T_EQ_INT(r, DM_OK);
+        dm_param_free(pw);
+        pw = NULL;
+        po.triangle_weight = w;
+        r = dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &pw);
+        T_EQ_INT(r, DM_OK);
+        if (pw) check_param("sphere, weighted", &base, pw, w);
+        po.triangle_weight = NULL;
+        dm_param_free(pw);
+        free(w);
+    }
+
+    /* ---- torus (genus 1) */
+    {
+        mesh tb = make_torus(24, 10, 0.36, 0.0), to = make_torus(san ? 120 : 240, san ? 48 : 96, 0.3, 0.08);
+        dm_param *pt = NULL;
+        dm_dispmap *mt = NULL;
+        r = dm_parameterize(tb.p, tb.nv, tb.t, tb.nt, &po, &pt);
+        T_EQ_INT(r, DM_OK);
+        if (pt) {
+            check_param("torus", &tb, pt, NULL);
+            r = dm_bake(pt, tb.p, tb.nv, tb.t, tb.nt, to.p, to.nv, to.t, to.nt, NULL, &mt);
+            T_EQ_INT(r, DM_OK);
+            if (mt) {
+                dm_distance_report rep, base_rep;
+                T_EQ_SIZE(mt->miss_count, 0);
+                r = dm_reconstruct(mt, pt, NULL, &rec);
+                T_EQ_INT(r, DM_OK);
+                if (rec) {
+                    dm_surface_distance(to.p, to.nv, to.t, to.nt, rec->positions, rec->vertex_count, rec->indices,
+                                        rec->triangle_count, 20000, NULL, &rep);
+                    dm_surface_distance(to.p, to.nv, to.t, to.nt, tb.p, tb.nv, tb.t, tb.nt, 20000, NULL, &base_rep);
+                    T_CHECK_MSG(rep.rms <= 0.1 * base_rep.rms, "torus recon rms %.3g vs base-only %.3g", rep.rms, base_rep.rms);
+                    printf("  note: torus: recon rms %.2e max %.2e; base only rms %.2e max %.2e\n", rep.rms, rep.max,
+                           base_rep.rms, base_rep.max);
+                    dm_trimesh_free(rec);
+                    rec = NULL;
+                }
+                dm_dispmap_free(mt);
+            }
+            dm_param_free(pt);
+        }
+        mesh_free(&tb);
+        mesh_free(&to);
+    }
+
+    /* ---- open original with a hole: texels over the hole miss, are flagged and filled */
+    {
+        mesh sb = make_sheet(4, 0.2, 0.0, 0.0), so = make_sheet(80, 0.0, 0.05, 0.3);
+        dm_param *ps = NULL;
+        dm_dispmap *ms = NULL;
+        dm_param_options sp = po;
+        dm_bake_options bo;
+        memset(&bo, 0, sizeof bo);
+        bo.max_distance = 0.5f;
+        sp.width = sp.height = 128;
+        r = dm_parameterize(sb.p, sb.nv, sb.t, sb.nt, &sp, &ps);
+        T_EQ_INT(r, DM_OK);
+        if (ps) {
+            T_EQ_SIZE(ps->chart_count, 1);
+            r = dm_bake(ps, sb.p, sb.nv, sb.t, sb.nt, so.p, so.nv, so.t, so.nt, &bo, &ms);
+            T_EQ_INT(r, DM_OK);
+            if (ms) {
+                size_t i, wrong = 0, finite = 0, misses = 0;
+                for (i = 0; i < (size_t)128 * 128; i++) {
+                    double x = ms->pos[3 * i], y = ms->pos[3 * i + 1], rr = sqrt(x * x + y * y);
+                    if (ms->status[i] == DM_TEXEL_EMPTY) continue;
+                    if (ms->status[i] == DM_TEXEL_MISS) { misses++; if (rr > 0.35) wrong++; }
+                    else if (rr < 0.25) wrong++;
+                    finite += isfinite(ms->disp[i]) && isfinite(ms->normal[3 * i]);
+                }
+                T_CHECK(misses > 0);
+                T_EQ_SIZE(misses, ms->miss_count);
+                T_CHECK_MSG(wrong == 0, "%zu texels flagged where the original is, or hit over the hole", wrong);
+                T_EQ_SIZE(finite, ms->hit_count + ms->miss_count);
+                r = dm_reconstruct(ms, ps, NULL, &rec);
+                T_EQ_INT(r, DM_OK);
+                if (rec) { T_EQ_SIZE(rec->vertex_count, ms->hit_count); dm_trimesh_free(rec); rec = NULL; }
+                dm_dispmap_free(ms);
+            }
+            dm_param_free(ps);
+        }
+        mesh_free(&sb);
+        mesh_free(&so);
+    }
+
+    /* ---- cancel, bad input, allocation failure */
+    {
+        int calls = 0;
+        dm_param *px = NULL;
+        dm_dispmap *mx = NULL;
+        dm_bake_options bo;
+        uint32_t badidx[3] = {0, 1, 999};
+        float nanp[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        dm_param_options tiny = po;
+        counting cnt;
+        dm_allocator al;
+        long k;
+        int oom_ok = 1, leak = 0;
+        cancel_at = 2;
+        po.progress = cancel_progress;
+        po.progress_user = &calls;
+        T_EQ_INT(dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &px), DM_CANCELLED);
+        T_CHECK(px == NULL);
+        po.progress = NULL;
+        memset(&bo, 0, sizeof bo);
+        bo.progress = cancel_progress;
+        bo.progress_user = &calls;
+        calls = 0;
+        if (pm) {
+            T_EQ_INT(dm_bake(pm, base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, &bo, &mx), DM_CANCELLED);
+            T_CHECK(mx == NULL);
+        }
+        T_EQ_INT(dm_parameterize(NULL, 3, base.t, 1, NULL, &px), DM_ERR_INVALID_ARGUMENT);
+        T_EQ_INT(dm_parameterize(base.p, base.nv, base.t, 0, NULL, &px), DM_ERR_NO_TRIANGLES);
+        T_EQ_INT(dm_parameterize(nanp, 3, badidx, 1, NULL, &px), DM_ERR_BAD_INDEX);
+        nanp[4] = NAN;
+        badidx[2] = 2;
+        T_EQ_INT(dm_parameterize(nanp, 3, badidx, 1, NULL, &px), DM_ERR_BAD_POSITION);
+        tiny.width = tiny.height = 4;
+        T_EQ_INT(dm_parameterize(base.p, base.nv, base.t, base.nt, &tiny, &px), DM_ERR_MAP_TOO_SMALL);
+        T_CHECK(px == NULL);
+        T_EQ_STR(dm_result_string(DM_ERR_MAP_TOO_SMALL), "DM_ERR_MAP_TOO_SMALL");
+        if (pm) T_EQ_INT(dm_bake(pm, base.p, base.nv, base.t, base.nt - 1, orig.p, orig.nv, orig.t, orig.nt, NULL, &mx),
+                         DM_ERR_INVALID_ARGUMENT);
+        /* every allocation failing in turn: an error, nothing leaked */
+        al.alloc = c_alloc;
+        al.free = c_free;
+        al.user = &cnt;
+        tiny.width = tiny.height = 64;
+        tiny.allocator = &al;
+        for (k = 0;; k++) {
+            cnt.calls = 0; cnt.fail_at = k; cnt.live = 0;
+            r = dm_parameterize(base.p, base.nv, base.t, base.nt, &tiny, &px);
+            if (r == DM_OK) { dm_param_free(px); px = NULL; leak |= cnt.live != 0; break; }
+            oom_ok &= r == DM_ERR_OUT_OF_MEMORY && px == NULL;
+            leak |= cnt.live != 0;
+        }
+        T_CHECK_MSG(oom_ok && !leak && k > 5, "parameterize: %ld failure points, oom_ok %d leak %d", k, oom_ok, leak);
+        tiny.allocator = NULL;
+        r = dm_parameterize(base.p, base.nv, base.t, base.nt, &tiny, &px);
+        T_EQ_INT(r, DM_OK);
+        if (px) {
+            bo.progress = NULL;
+            bo.allocator = &al;
+            oom_ok = 1;
+            leak = 0;
+            for (k = 0;; k++) {
+                cnt.calls = 0; cnt.fail_at = k; cnt.live = 0;
+                r = dm_bake(px, base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, &bo, &mx);
+                if (r == DM_OK) { dm_dispmap_free(mx); mx = NULL; leak |= cnt.live != 0; break; }
+                oom_ok &= r == DM_ERR_OUT_OF_MEMORY && mx == NULL;
+                leak |= cnt.live != 0;
+            }
+            T_CHECK_MSG(oom_ok && !leak && k > 5, "bake: %ld failure points, oom_ok %d leak %d", k, oom_ok, leak);
+            dm_param_free(px);
+        }
+    }
+
+    dm_dispmap_free(map);
+    dm_param_free(pm);
+    mesh_free(&orig);
+    mesh_free(&base);
+    return T_END();
+}
