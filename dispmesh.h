@@ -2774,7 +2774,7 @@ static int dm__qem_push_edges(dm__qem_simp *s, uint32_t v, uint32_t skip)
     return 1;
 }
 
-static void dm__qem_cross(const double a[3], const double b[3], double r[3])
+static void dm__cross3(const double a[3], const double b[3], double r[3])
 {
     r[0] = a[1] * b[2] - a[2] * b[1];
     r[1] = a[2] * b[0] - a[0] * b[2];
@@ -2797,7 +2797,7 @@ static void dm__qem_tri_normal(const dm__qem_simp *s, const uint32_t *t, uint32_
         v[k] = p[2][k] - p[0][k];
         w[k] = p[2][k] - p[1][k];
     }
-    dm__qem_cross(u, v, nrm);
+    dm__cross3(u, v, nrm);
     l0 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
     l1 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
     l2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
@@ -3024,8 +3024,8 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
                         e[k] = p[1][k] - p[0][k];
                         f[k] = p[2][k] - p[0][k];
                     }
-                    dm__qem_cross(e, f, nrm);
-                    dm__qem_cross(e, nrm, pl);
+                    dm__cross3(e, f, nrm);
+                    dm__cross3(e, nrm, pl);
                     len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
                     l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
                     if (len > 0.0) {
@@ -3056,7 +3056,7 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
             e[k] = p[1][k] - p[0][k];
             f[k] = p[2][k] - p[0][k];
         }
-        dm__qem_cross(e, f, nrm);
+        dm__cross3(e, f, nrm);
         len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
@@ -3544,15 +3544,8 @@ static void dm__pz_sub(const double a[3], const double b[3], double r[3])
     r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
 }
 
-static void dm__pz_cross(const double a[3], const double b[3], double r[3])
-{
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
 
-static double dm__pz_dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static double dm__pz_len(const double a[3]) { return sqrt(dm__pz_dot(a, a)); }
+static double dm__pz_len(const double a[3]) { return sqrt(dm__dot3(a, a)); }
 
 /* twice the area normal of triangle t */
 static void dm__pz_face_normal(const float *pos, const uint32_t *idx, size_t t, double n[3])
@@ -3563,7 +3556,7 @@ static void dm__pz_face_normal(const float *pos, const uint32_t *idx, size_t t, 
     dm__pz_load(pos, idx[3 * t + 2], p2);
     dm__pz_sub(p1, p0, e1);
     dm__pz_sub(p2, p0, e2);
-    dm__pz_cross(e1, e2, n);
+    dm__cross3(e1, e2, n);
 }
 
 /* Angle-weighted vertex normals (Thurmer and Wüthrich 1998), unit or zero, into nrm[3 nv]. */
@@ -3586,7 +3579,7 @@ static void dm__pz_vertex_normals(const float *pos, size_t nv, const uint32_t *i
             la = dm__pz_len(a);
             lb = dm__pz_len(b);
             if (!(la > 0.0 && lb > 0.0)) continue;
-            ang = dm__pz_dot(a, b) / (la * lb);
+            ang = dm__dot3(a, b) / (la * lb);
             ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
             for (k = 0; k < 3; k++) acc[3 * (size_t)idx[3 * t + (size_t)c] + (size_t)k] += ang * n[k] / len;
         }
@@ -3689,7 +3682,7 @@ static size_t dm__pz_grow_charts(const float *pos, const uint32_t *idx, size_t n
             dm__pz_face_normal(pos, idx, q, n);
             ln = dm__pz_len(n);
             ls = dm__pz_len(nsum);
-            if (ln > 0.0 && ls > 0.0 && dm__pz_dot(n, nsum) < cos_max * ln * ls) continue;
+            if (ln > 0.0 && ls > 0.0 && dm__dot3(n, nsum) < cos_max * ln * ls) continue;
             chart[q] = cid;
             size++;
             nsum[0] += n[0]; nsum[1] += n[1]; nsum[2] += n[2];
@@ -3818,7 +3811,7 @@ static double dm__pz_stretch(const dm__pz_chart *ch, double *sig_t)
         int k;
         dm__pz_sub(q2, q1, a3);
         dm__pz_sub(q3, q1, b3);
-        dm__pz_cross(a3, b3, c3);
+        dm__cross3(a3, b3, c3);
         area3 = 0.5 * dm__pz_len(c3);
         if (!(a2 > 0.0) || !(area3 > 0.0) || !(ch->target[t] > 0.0)) { sig_t[t] = 1.0; continue; }
         for (k = 0; k < 3; k++) {
@@ -3826,7 +3819,7 @@ static double dm__pz_stretch(const dm__pz_chart *ch, double *sig_t)
             st[k] = (q1[k] * (s3 - s2) + q2[k] * (s1 - s3) + q3[k] * (s2 - s1)) / a2;
         }
         k2 = ch->target[t] / area3; /* squared scale that takes the 3D triangle to its target */
-        sg = sqrt(0.5 * (dm__pz_dot(ss, ss) + dm__pz_dot(st, st)) * k2) * scale;
+        sg = sqrt(0.5 * (dm__dot3(ss, ss) + dm__dot3(st, st)) * k2) * scale;
         sig_t[t] = sg;
         acc += ch->target[t] * sg * sg;
     }
@@ -3847,10 +3840,10 @@ static void dm__pz_mean_value_weights(dm__pz_chart *ch)
             double a[3], b[3], ab[3], la, lb, den, tn;
             dm__pz_sub(xj, xi, a);
             dm__pz_sub(xk, xi, b);
-            dm__pz_cross(a, b, ab);
+            dm__cross3(a, b, ab);
             la = dm__pz_len(a);
             lb = dm__pz_len(b);
-            den = la * lb + dm__pz_dot(a, b);
+            den = la * lb + dm__dot3(a, b);
             tn = den > 1e-300 ? dm__pz_len(ab) / den : 1e6;
             if (tn > 1e6) tn = 1e6;
             if (tn < 1e-12) tn = 1e-12;
@@ -3888,12 +3881,12 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
         double l = dm__pz_len(e1);
         e1[0] /= l; e1[1] /= l; e1[2] /= l;
     }
-    dm__pz_cross(nrm, e1, e2);
+    dm__cross3(nrm, e1, e2);
     v = (uint32_t)start;
     do {
         if (mode == 0) {
-            ch->uv[2 * v] = dm__pz_dot(ch->x + 3 * v, e1);
-            ch->uv[2 * v + 1] = dm__pz_dot(ch->x + 3 * v, e2);
+            ch->uv[2 * v] = dm__dot3(ch->x + 3 * v, e1);
+            ch->uv[2 * v + 1] = dm__dot3(ch->x + 3 * v, e2);
         } else {
             double ang = total > 0.0 ? 6.283185307179586 * run / total : 0.0, d[3];
             ch->uv[2 * v] = cos(ang);
@@ -3990,13 +3983,13 @@ static void dm__pz_single(const float *pos, const uint32_t *idx, size_t t, doubl
     dm__pz_load(pos, idx[3 * t + 2], p2);
     dm__pz_sub(p1, p0, e1);
     dm__pz_sub(p2, p0, e2);
-    dm__pz_cross(e1, e2, n);
+    dm__cross3(e1, e2, n);
     l1 = dm__pz_len(e1);
     h = dm__pz_len(n);
     cuv[0] = 0.0; cuv[1] = 0.0;
     if (l1 > 0.0 && h > 0.0 && h / (l1 * l1) > 1e-9) {
         cuv[2] = l1; cuv[3] = 0.0;
-        cuv[4] = dm__pz_dot(e2, e1) / l1; cuv[5] = h / l1;
+        cuv[4] = dm__dot3(e2, e1) / l1; cuv[5] = h / l1;
     } else {
         cuv[2] = 1.0; cuv[3] = 0.0; cuv[4] = 0.5; cuv[5] = 0.8660254037844386;
     }
@@ -4807,7 +4800,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
             }
             dm__pz_sub(p[1], p[0], e1);
             dm__pz_sub(p[2], p[0], e2);
-            dm__pz_cross(e1, e2, fnv);
+            dm__cross3(e1, e2, fnv);
             len = dm__pz_len(nv);
             if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__pz_len(nv); }
             for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
