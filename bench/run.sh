@@ -28,7 +28,8 @@ done
   echo
   echo "Written by \`make bench\` on $(date -u '+%Y-%m-%d %H:%M UTC'); machine: $(nproc) cores,"
   echo "$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //')."
-  echo "Every figure is the median of 5 runs after a warm-up, both sides in one process, one thread each;"
+  echo "Every figure is the median of 5 runs after a warm-up, both sides in one process, one thread each,
+timed in the process's CPU time (bench/README.md says why);"
   echo "the timed regions are described in bench/README.md. Ratios are ours / peer: for times (\`_ms\`)"
   echo "below 1 means we are faster, for throughputs (\`_mrays\`) above 1 means we are faster."
   echo
