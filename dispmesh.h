@@ -3490,18 +3490,13 @@ DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint3
 static dm_result dm__pz_check_mesh(const float *pos, size_t nv, const uint32_t *idx, size_t nt)
 {
     size_t i;
-    int k;
-    if (!pos || !idx) return DM_ERR_INVALID_ARGUMENT;
-    if (nt == 0) return DM_ERR_NO_TRIANGLES;
-    if (nt > 0x3fffffffu || nv > 0xfffffffeu) return DM_ERR_TOO_LARGE;
-    for (i = 0; i < 3 * nt; i++) {
-        if (idx[i] >= nv) return DM_ERR_BAD_INDEX;
-        for (k = 0; k < 3; k++) {
-            float x = pos[3 * (size_t)idx[i] + (size_t)k];
-            if (!(x == x) || x > 1e18f || x < -1e18f) return DM_ERR_BAD_POSITION;
-        }
+    dm_result r = dm__check_sizes(pos, nv, idx, nt); /* the BVH's checks, as for every mesh argument */
+    if (r == DM_OK && !pos) r = DM_ERR_INVALID_ARGUMENT;
+    for (i = 0; r == DM_OK && i < nt; i++) {
+        float p[9];
+        r = dm__fetch_triangle(pos, nv, idx, i, p);
     }
-    return DM_OK;
+    return r;
 }
 
 /* Temporaries of one call, all freed together on every exit path. */
