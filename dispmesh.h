@@ -240,6 +240,8 @@
      caller (however it was made); these calls lay it out, bake, and rebuild:
        dm_param *pm;  dm_dispmap *map;  dm_trimesh *dense;
        dm_param_options po = {0};  po.width = po.height = 1024;
+       dm_coverage_weights(base..., orig..., NULL, NULL, NULL, weights);  // optional: texels where
+       po.triangle_weight = weights;             // the original's area is (one float a triangle)
        dm_parameterize(base_pos, base_nv, base_idx, base_nt, &po, &pm);  // charts + layout + packing
        dm_bake(pm, base_pos, base_nv, base_idx, base_nt, orig_pos, orig_nv, orig_idx, orig_nt,
                NULL, &map);                      // map->disp, map->normal, the sample grid
@@ -257,7 +259,8 @@
      w_ij <- w_ij / sigma_j, sigma_j the area-weighted L2 stretch (Sander et al. 2001) around
      vertex j, where the stretch is measured against each triangle's target: the 3D triangle
      scaled to the map area it should get (area-proportional: triangle_weight, default its own
-     area, e.g. the original area it covers). A round is kept only when the chart's stretch
+     area; dm_coverage_weights gives the original's area over each base triangle, each original
+     triangle counted for the base triangle closest to its centroid). A round is kept only when the chart's stretch
      drops and nothing flips; a chart with no flip-free layout is split into lone triangles.
      Charts are scaled to their targets, turned to the smallest box of 12 angles, and packed in
      shelves (tallest first) with `gutter` texels between boxes; a bisection finds the largest
@@ -588,6 +591,19 @@ DMDEF dm_result dm_surface_distance(const float *a_positions, size_t a_vertex_co
                                     const uint32_t *b_indices, size_t b_triangle_count,
                                     size_t samples_per_side, const dm_allocator *allocator,
                                     dm_distance_report *out);
+
+/* Area-proportional weights for dm_param_options.triangle_weight: per base triangle, the area of
+   the original that lies over it (each original triangle's area goes to the base triangle
+   closest to its centroid), so that the map spends its texels where the original's surface
+   is. A base triangle with almost nothing over it still gets 5% of the mean weight, so that
+   every base triangle keeps texels. weights: base_triangle_count floats, written on success.
+   progress as elsewhere (NULL = none). */
+DMDEF dm_result dm_coverage_weights(const float *base_positions, size_t base_vertex_count,
+                                    const uint32_t *base_indices, size_t base_triangle_count,
+                                    const float *orig_positions, size_t orig_vertex_count,
+                                    const uint32_t *orig_indices, size_t orig_triangle_count,
+                                    const dm_allocator *allocator, int (*progress)(void *user, float done),
+                                    void *progress_user, float *weights);
 
 /* "DM_OK", "DM_ERR_BAD_INDEX", ... (the enum name); "DM_ERR_?" outside the enum. */
 DMDEF const char *dm_result_string(dm_result r);
@@ -5071,6 +5087,59 @@ done:
     dm_bvh_free(bb);
     dm__pz_release(&sc);
     return res;
+}
+
+DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t *bi, size_t bnt, const float *op,
+                                    size_t onv, const uint32_t *oi, size_t ont, const dm_allocator *allocator,
+                                    int (*progress)(void *user, float done), void *progress_user, float *weights)
+{
+    dm_bvh_options bo;
+    dm_bvh *bvh = NULL;
+    dm_allocator a = dm__resolve_allocator(allocator);
+    double *sum, total = 0.0, floor_w;
+    int overflow = 0;
+    size_t t;
+    dm_result r;
+    if (!weights) return DM_ERR_INVALID_ARGUMENT;
+    r = dm__pz_check_mesh(bp, bnv, bi, bnt);
+    if (r == DM_OK) r = dm__pz_check_mesh(op, onv, oi, ont);
+    if (r != DM_OK) return r;
+    sum = (double *)dm__alloc_array(&a, bnt, sizeof(double), &overflow);
+    if (!sum) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    memset(&bo, 0, sizeof bo);
+    bo.allocator = allocator;
+    r = dm_bvh_build(bp, bnv, bi, bnt, &bo, &bvh);
+    if (r != DM_OK) {
+        a.free(a.user, sum);
+        return r;
+    }
+    for (t = 0; t < bnt; t++) sum[t] = 0.0;
+    for (t = 0; t < ont; t++) {
+        double p[3][3], e1[3], e2[3], n[3], area;
+        float c[3];
+        dm_closest cl;
+        int k;
+        for (k = 0; k < 3; k++) dm__pz_load(op, oi[3 * t + (size_t)k], p[k]);
+        for (k = 0; k < 3; k++) {
+            e1[k] = p[1][k] - p[0][k];
+            e2[k] = p[2][k] - p[0][k];
+            c[k] = (float)((p[0][k] + p[1][k] + p[2][k]) / 3.0);
+        }
+        dm__cross3(e1, e2, n);
+        area = 0.5 * sqrt(dm__dot3(n, n));
+        if (dm_bvh_closest_point(bvh, c, INFINITY, &cl)) sum[cl.triangle] += area;
+        if (progress && (t & 65535) == 65535 && progress(progress_user, (float)((double)t / (double)ont))) {
+            dm_bvh_free(bvh);
+            a.free(a.user, sum);
+            return DM_CANCELLED;
+        }
+    }
+    for (t = 0; t < bnt; t++) total += sum[t];
+    floor_w = 0.05 * total / (double)bnt;
+    for (t = 0; t < bnt; t++) weights[t] = (float)(sum[t] > floor_w ? sum[t] : floor_w);
+    dm_bvh_free(bvh);
+    a.free(a.user, sum);
+    return DM_OK;
 }
 
 #ifdef __cplusplus

@@ -114,6 +114,47 @@ int main(int argc, char **argv)
                 "%zu seam crossings, %zu not walking back\n", bt, res, res, pm->chart_count, pm->utilization,
                 pm->stretch_l2, pm->stretch_max, pm->area_ratio_ok, across, failed);
 
+    /* area-proportional to the original's area over each base triangle (dm_coverage_weights) */
+    {
+        std::vector<float> w(bt);
+        double orig_area = 0.0, wsum = 0.0;
+        for (size_t t = 0; t < nt; t++) {
+            const float *p0 = pos + 3 * idx[3 * t], *p1 = pos + 3 * idx[3 * t + 1], *p2 = pos + 3 * idx[3 * t + 2];
+            double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+            double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+            orig_area += 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+        }
+        T_EQ_INT(dm_coverage_weights(pos, nv, base.data(), bt, pos, nv, idx, nt, NULL, NULL, NULL, w.data()), DM_OK);
+        for (size_t t = 0; t < bt; t++) wsum += w[t];
+        /* every original triangle counted once; the 5% floor may add up to 5% */
+        T_CHECK_MSG(wsum >= orig_area * (1.0 - 1e-4) && wsum <= 1.05 * orig_area, "weights add to %.5f, bunny area %.5f",
+                    wsum, orig_area);
+        dm_param_options pw = po;
+        pw.triangle_weight = w.data();
+        dm_param *pmw = NULL;
+        T_EQ_INT(dm_parameterize(pos, nv, base.data(), bt, &pw, &pmw), DM_OK);
+        if (pmw) {
+            size_t wflipped = 0, wok = 0;
+            double wu = 0.0;
+            std::vector<double> wa(bt);
+            for (size_t t = 0; t < bt; t++) {
+                const float *u = pmw->uv + 6 * t;
+                wa[t] = 0.5 * (((double)u[2] - u[0]) * ((double)u[5] - u[1]) - ((double)u[4] - u[0]) * ((double)u[3] - u[1]));
+                wflipped += !(wa[t] > 0.0);
+                wu += wa[t];
+            }
+            for (size_t t = 0; t < bt; t++) {
+                double r = wa[t] / w[t] / (wu / wsum);
+                wok += r >= 0.8 && r <= 1.25;
+            }
+            T_CHECK_MSG(wflipped == 0 && wok >= 0.95 * bt, "coverage weights: %zu flipped, %zu of %zu area ratios in [0.8, 1.25]",
+                        wflipped, wok, bt);
+            std::printf("  note: coverage weights: %zu of %zu area ratios in [0.8, 1.25], utilization %.3f\n", wok, bt,
+                        pmw->utilization);
+            dm_param_free(pmw);
+        }
+    }
+
     /* bake, against Embree */
     dm_dispmap *map = NULL;
     T_EQ_INT(dm_bake(pm, pos, nv, base.data(), bt, pos, nv, idx, nt, NULL, &map), DM_OK);

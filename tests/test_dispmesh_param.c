@@ -233,6 +233,69 @@ static void c_free(void *u, void *p)
     if (p) { c->live--; free(p); }
 }
 
+/* dm_coverage_weights: the original's area over each base triangle */
+static void test_coverage_weights(void)
+{
+    mesh base = make_sphere(6, 0.0, 1.06), orig = make_sphere(48, 0.03, 1.0);
+    mesh sheet = make_sheet(4, 0.0, 0.0, 0.0), holed = make_sheet(40, 0.0, 0.05, 0.5);
+    float *w = (float *)malloc(base.nt * sizeof(float)), *ws = (float *)malloc(sheet.nt * sizeof(float));
+    double total = 0.0, sum = 0.0, worst = 0.0, mean, wmin = 1e30;
+    size_t t, low = 0;
+    dm_param_options po;
+    dm_param *pm = NULL;
+    if (!w || !ws) {
+        T_SKIP_N(7, "coverage weights", "out of memory");
+        free(w);
+        free(ws);
+        return;
+    }
+    /* every original triangle lands somewhere: the weights add up to the original's area */
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
+                                 NULL, w), DM_OK);
+    for (t = 0; t < orig.nt; t++) total += tri_area(&orig, t);
+    for (t = 0; t < base.nt; t++) sum += w[t];
+    T_CHECK_MSG(fabs(sum - total) <= 1e-4 * total, "weights add to %.6f, the original's area is %.6f", sum, total);
+    /* the map made with them meets the area targets */
+    memset(&po, 0, sizeof po);
+    po.width = po.height = 256;
+    po.triangle_weight = w;
+    T_EQ_INT(dm_parameterize(base.p, base.nv, base.t, base.nt, &po, &pm), DM_OK);
+    if (pm) check_param("sphere, coverage weights", &base, pm, w);
+    dm_param_free(pm);
+    /* a mesh over itself: each triangle's own area */
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, base.p, base.nv, base.t, base.nt, NULL, NULL,
+                                 NULL, w), DM_OK);
+    for (t = 0; t < base.nt; t++) {
+        double a = tri_area(&base, t), e = fabs(w[t] - a) / a;
+        if (e > worst) worst = e;
+    }
+    T_CHECK_MSG(worst <= 1e-5, "a mesh over itself: weight differs from the area by %.3g (relative)", worst);
+    /* a sheet with a hole over a flat sheet: the triangles under the hole get the floor */
+    T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, NULL,
+                                 NULL, NULL, ws), DM_OK);
+    sum = 0.0;
+    for (t = 0; t < sheet.nt; t++) {
+        sum += ws[t];
+        if (ws[t] < wmin) wmin = ws[t];
+    }
+    mean = sum / (double)sheet.nt;
+    for (t = 0; t < sheet.nt; t++) low += ws[t] < 0.5 * mean;
+    T_CHECK_MSG(wmin >= 0.049 * mean && low > 0, "floor: smallest weight %.4g of mean %.4g, %zu below half the mean",
+                wmin, mean, low);
+    /* bad input */
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
+                                 NULL, NULL), DM_ERR_INVALID_ARGUMENT);
+    orig.t[5] = (uint32_t)orig.nv;
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
+                                 NULL, w), DM_ERR_BAD_INDEX);
+    free(w);
+    free(ws);
+    mesh_free(&base);
+    mesh_free(&orig);
+    mesh_free(&sheet);
+    mesh_free(&holed);
+}
+
 int main(int argc, char **argv)
 {
     int san = getenv("TEST_SANITIZE") != NULL;
@@ -485,5 +548,6 @@ int main(int argc, char **argv)
     dm_param_free(pm);
     mesh_free(&orig);
     mesh_free(&base);
+    test_coverage_weights();
     return T_END();
 }
