@@ -1678,6 +1678,25 @@ static int dm__prepare_ray(const float org[3], const float dir[3], float sign, d
     return 1;
 }
 
+/* The edge functions decide hit or miss; the distance comes from the plane equation in double,
+   t = n.(p0 - o) / n.d, rounded to float: the sheared T / det loses digits at grazing angles.
+   Coordinate k of corner c is p[(3 c + k) stride] (stride 1: 9 floats; 4: a lane of a block). */
+DM__INLINE float dm__plane_t(const dm__ray_pre *r, const float *p, size_t stride)
+{
+    double e1[3], e2[3], s[3], n0, n1, n2;
+    size_t k;
+    for (k = 0; k < 3; k++) {
+        const double a = p[k * stride], b = p[(3 + k) * stride], c = p[(6 + k) * stride];
+        e1[k] = b - a;
+        e2[k] = c - a;
+        s[k] = a - (double)r->org[k];
+    }
+    n0 = e1[1] * e2[2] - e1[2] * e2[1];
+    n1 = e1[2] * e2[0] - e1[0] * e2[2];
+    n2 = e1[0] * e2[1] - e1[1] * e2[0];
+    return (float)((n0 * s[0] + n1 * s[1] + n2 * s[2]) / (n0 * r->dir[0] + n1 * r->dir[1] + n2 * r->dir[2]));
+}
+
 /* Hit of triangle p (9 floats) with t in [tmin, tmax]: 1 and t, u, v, else 0. The scaled
    barycentrics U, V, W are 2D edge functions of the sheared corners; a shared edge gives the
    same value with opposite sign in both triangles, so a ray cannot pass between them. Exact
@@ -1700,22 +1719,7 @@ DM__INLINE int dm__triangle(const dm__ray_pre *r, const float *p, float tmin, fl
     det = U + V + W;
     if (det == 0.0f) return 0; /* degenerate triangle, or the ray lies in its plane */
     rcp = 1.0f / det;
-    /* The edge functions decide hit or miss; the distance comes from the plane equation in
-       double, t = n.(p0 - o) / n.d: the sheared T / det loses digits at grazing angles. */
-    {
-        double e1[3], e2[3], s[3], n0, n1, n2, td;
-        int k;
-        for (k = 0; k < 3; k++) {
-            e1[k] = (double)p[3 + k] - (double)p[k];
-            e2[k] = (double)p[6 + k] - (double)p[k];
-            s[k] = (double)p[k] - (double)r->org[k];
-        }
-        n0 = e1[1] * e2[2] - e1[2] * e2[1];
-        n1 = e1[2] * e2[0] - e1[0] * e2[2];
-        n2 = e1[0] * e2[1] - e1[1] * e2[0];
-        td = (n0 * s[0] + n1 * s[1] + n2 * s[2]) / (n0 * r->dir[0] + n1 * r->dir[1] + n2 * r->dir[2]);
-        t = (float)td;
-    }
+    t = dm__plane_t(r, p, 1);
     if (!(t >= tmin && t <= tmax && t <= FLT_MAX)) return 0; /* NaN and inf fail too */
     *t_out = t;
     *u_out = V * rcp;
@@ -1793,19 +1797,7 @@ DM__INLINE int dm__finish(const dm__ray_pre *r, const dm__tri4 *q, int i, float 
                           float tmax, float *t_out, float *u_out, float *v_out)
 {
     const float rcp = 1.0f / (U + V + W);
-    double e1[3], e2[3], s[3], n0, n1, n2, td;
-    float t;
-    int k;
-    for (k = 0; k < 3; k++) {
-        e1[k] = (double)q->v[3 + k][i] - (double)q->v[k][i];
-        e2[k] = (double)q->v[6 + k][i] - (double)q->v[k][i];
-        s[k] = (double)q->v[k][i] - (double)r->org[k];
-    }
-    n0 = e1[1] * e2[2] - e1[2] * e2[1];
-    n1 = e1[2] * e2[0] - e1[0] * e2[2];
-    n2 = e1[0] * e2[1] - e1[1] * e2[0];
-    td = (n0 * s[0] + n1 * s[1] + n2 * s[2]) / (n0 * r->dir[0] + n1 * r->dir[1] + n2 * r->dir[2]);
-    t = (float)td;
+    const float t = dm__plane_t(r, &q->v[0][i], 4);
     if (!(t >= tmin && t <= tmax && t <= FLT_MAX)) return 0;
     *t_out = t;
     *u_out = V * rcp;
