@@ -626,6 +626,9 @@ typedef struct dm_collapse {
     const uint32_t *triangles; /* 3 per triangle: keep's one-ring after the collapse (remove replaced by
                                   keep, keep at `position`, every other vertex at positions[3 * id]) */
     size_t triangle_count;
+    const uint32_t *old_triangles; /* 3 per triangle: the triangles of keep and remove before the
+                                      collapse (the dying ones included), at `positions` */
+    size_t old_triangle_count;
 } dm_collapse;
 
 /* Returns DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE after writing a corrected position
@@ -713,6 +716,47 @@ DMDEF int dm_pm_get_vsplit(const dm_pm *pm, size_t level, dm_vsplit *out);
 /* The input vertices merged into `vertex` at the base level (itself included), in increasing id.
    *list points into pm; returns the count (0 for an id out of range or a vertex merged away). */
 DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint32_t **list);
+
+/* ---- Part 3 (continued): the bounding shell ---------------------------------------------- */
+
+/* The bounding shell of paper 000 and its two simplification constraints (see "BOUNDING SHELL"
+   under PART 3). */
+typedef struct dm_shell_options {
+    float thickness;           /* the shell's largest offset from the original, world units;
+                                  0 = 2% of the original's bounding-box diagonal */
+    int steps;                 /* growth steps (each thickness / steps); 0 = 8 */
+    int overlap_samples;       /* points per candidate triangle for the overlap check; 0 = 6 */
+    const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_shell */
+    int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
+    void *progress_user;
+} dm_shell_options;            /* zero = defaults */
+
+/* An offset surface grown outward from the original: same connectivity, vertex v at
+   orig[v] + offset[v] * normal[v]. It also holds a BVH of the original and the counters of
+   dm_shell_constraint. */
+typedef struct dm_shell {
+    dm_allocator allocator;
+    size_t vertex_count, triangle_count;
+    float *positions;          /* 3 per original vertex: the shell surface */
+    float *normals;            /* 3 per original vertex: the original's angle-weighted normal */
+    float *offset;             /* per original vertex: how far it grew (0 .. thickness) */
+    float thickness;           /* the limit used, world units */
+    float diagonal;            /* the original's bounding-box diagonal */
+    size_t stopped_vertices;   /* vertices stopped before the full thickness */
+    size_t moved, vetoed_enclose, vetoed_shell, vetoed_overlap; /* dm_shell_constraint's verdicts */
+    void *internal;            /* private: the original's BVH and a copy of its mesh */
+} dm_shell;
+
+/* Grows the bounding shell of a (dense) mesh (as dm_bvh_build's arguments). */
+DMDEF dm_result dm_shell_grow(const float *positions, size_t vertex_count, const uint32_t *indices,
+                              size_t triangle_count, const dm_shell_options *options, dm_shell **out);
+DMDEF void dm_shell_free(dm_shell *shell);
+
+/* A dm_collapse_constraint for dm_simplify on the same mesh, user = the dm_shell: keeps the
+   simplified mesh enclosing the original (a corrected position outside every plane of the
+   collapse's old triangles), inside the shell, and free of height-field overlap along its
+   interpolated normals. Not for two dm_simplify calls at once on one shell. */
+DMDEF int dm_shell_constraint(void *shell, const dm_collapse *candidate, float corrected[3]);
 
 #ifdef __cplusplus
 }
