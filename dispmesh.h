@@ -5666,8 +5666,9 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
         np = 0;
         yv = pl;
     }
-    /* (2) Inside the shell: keep, the middle of each new edge at keep, and each new triangle's
-       centroid lie within the offset grown at their closest point of the original. */
+    /* (2) Inside the shell: keep and a barycentric grid of each new triangle (the points with
+       coordinates in quarters, the old rim excepted) lie within the offset grown at their
+       closest point of the original. */
     if (!dm__sh_in_shell(sh, in, x)) {
         sh->vetoed_shell++;
         return DM_COLLAPSE_VETO;
@@ -5675,20 +5676,23 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
         double p[3][3], y[3];
+        int gi, gj, kc;
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
-        for (k = 0; k < 3; k++) y[k] = (p[0][k] + p[1][k] + p[2][k]) / 3.0;
-        if (!dm__sh_in_shell(sh, in, y)) {
-            sh->vetoed_shell++;
-            return DM_COLLAPSE_VETO;
-        }
-        for (j = 0; j < 3; j++) {
-            if (t[j] != c->keep) continue;
-            for (k = 0; k < 3; k++) y[k] = 0.5 * (p[j][k] + p[(j + 1) % 3][k]);
-            if (!dm__sh_in_shell(sh, in, y)) {
-                sh->vetoed_shell++;
-                return DM_COLLAPSE_VETO;
+        for (kc = 0; kc < 3 && t[kc] != c->keep; kc++) {}
+        for (gi = 0; gi <= 4; gi++)
+            for (gj = 0; gi + gj <= 4; gj++) {
+                double w[3];
+                w[0] = (4 - gi - gj) / 4.0;
+                w[1] = gi / 4.0;
+                w[2] = gj / 4.0;
+                if (kc < 3 && w[kc] == 0.0) continue; /* on the old rim edge, or keep itself */
+                if (kc < 3 && w[kc] == 1.0) continue;
+                for (k = 0; k < 3; k++) y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
+                if (!dm__sh_in_shell(sh, in, y)) {
+                    sh->vetoed_shell++;
+                    return DM_COLLAPSE_VETO;
+                }
             }
-        }
     }
     /* (3) No height-field overlap: rays from points of each new triangle along the inverted
        interpolated normal meet the original's front side first, within twice the shell's
@@ -5723,9 +5727,6 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             }
         }
     }
-#ifdef DM__SH_NO_OVERLAP
-    nr = 0;
-#endif
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
         double p[3][3];
