@@ -290,10 +290,13 @@
      neighbour's texel axes (the angle between the edge's two images, rounded to 90 degrees):
      to step back, go along -(d turned r). Where that walk back would not land within one texel
      of the start (the rounding to quarter turns at a seam near 45 degrees), the neighbour and
-     its rotation are re-chosen among the other chart's texels within two of it and the two
-     next quarter turns, so that it does. Measured: all but 1-2 of 8-13k seam crossings on the
-     test sphere and torus, and all but 23 of 19283 (0.12%) on a 500-triangle bunny base, come
-     back to the start texel or one of its 8 neighbours; the rest sit at chart corners.
+     its rotation are re-chosen among the other chart's texels within three of it and all four
+     quarter turns, so that it does; failing that, the neighbour's own step back (when it crosses
+     a seam) is pointed at the start texel, kept only when fewer walks around both texels fail.
+     Measured: all but 0-1 of 4-13k seam crossings on the test sphere and torus, and all but 10
+     of 19283 (0.05%) on a 500-triangle bunny base, come back to the start texel or one of its 8
+     neighbours; the rest sit at chart corners, where one texel's step back cannot serve the
+     texels of two charts that both step into it.
      Reconstruction. One vertex per valid texel at pos - disp nrm; two triangles per 2x2 block
      of valid texels of one chart, one for three. Blocks across chart seams are not stitched: the
      dense mesh has cracks about one texel wide along seams (the distance report measures them).
@@ -4262,7 +4265,7 @@ static void dm__pz_fix_walk(dm_param *pm, size_t i, int dir)
     uint32_t j = pm->nbr[4 * i + (size_t)dir], cj;
     int rot = pm->nbr_rot[4 * i + (size_t)dir], ring, dx, dy, turn;
     long W = pm->width, H = pm->height, jx, jy;
-    static const int turns[3] = {0, 1, 3};
+    static const int turns[4] = {0, 1, 3, 2};
     if (j == UINT32_MAX) return;
     cj = pm->chart[pm->texel_triangle[j]];
     if (cj == pm->chart[pm->texel_triangle[i]] && rot == 0) return;
@@ -4270,9 +4273,9 @@ static void dm__pz_fix_walk(dm_param *pm, size_t i, int dir)
     jx = (long)(j % (uint32_t)W);
     jy = (long)(j / (uint32_t)W);
     /* the rounded rotation first, then the two next quarter turns (a seam near 45 degrees) */
-    for (turn = 0; turn < 3; turn++) {
+    for (turn = 0; turn < 4; turn++) {
         int rr = (rot + turns[turn]) % 4;
-        for (ring = 0; ring <= 2; ring++)
+        for (ring = 0; ring <= 3; ring++)
             for (dy = -ring; dy <= ring; dy++)
                 for (dx = -ring; dx <= ring; dx++) {
                     long x = jx + dx, y = jy + dy;
@@ -4288,6 +4291,68 @@ static void dm__pz_fix_walk(dm_param *pm, size_t i, int dir)
                         return;
                     }
                 }
+    }
+}
+
+/* 1 when the link (i, dir) is sound: none, a plain in-chart neighbour that links back, or a
+   seam crossing whose step back lands within one texel of i */
+static int dm__pz_link_ok(const dm_param *pm, size_t i, int dir)
+{
+    uint32_t j = pm->nbr[4 * i + (size_t)dir];
+    int rot = pm->nbr_rot[4 * i + (size_t)dir];
+    if (j == UINT32_MAX) return 1;
+    if (rot == 0 && pm->chart[pm->texel_triangle[j]] == pm->chart[pm->texel_triangle[i]])
+        return pm->nbr[4 * (size_t)j + (size_t)(dir ^ 1)] == i;
+    return dm__pz_walk_back(pm, i, dir, j, rot);
+}
+
+/* unsound links of the texels within r of texel c */
+static size_t dm__pz_window_fails(const dm_param *pm, uint32_t c, long r)
+{
+    long W = pm->width, H = pm->height, cx = (long)(c % (uint32_t)W), cy = (long)(c / (uint32_t)W), x, y;
+    size_t fails = 0;
+    int dir;
+    for (y = cy - r; y <= cy + r; y++)
+        for (x = cx - r; x <= cx + r; x++) {
+            size_t id;
+            if (x < 0 || y < 0 || x >= W || y >= H) continue;
+            id = (size_t)y * (size_t)W + (size_t)x;
+            if (pm->texel_triangle[id] == DM_NO_HIT) continue;
+            for (dir = 0; dir < 4; dir++) fails += !dm__pz_link_ok(pm, id, dir);
+        }
+    return fails;
+}
+
+/* Last resort for a seam walk from i that does not come back (at chart corners, and where a
+   lone-triangle chart meets a seam at an angle far from a quarter turn): point the neighbour's
+   step back at i itself, with the inverse rotation. The rounded rotation first, then the other
+   quarter turns; a turn whose step back is a plain in-chart link is skipped (others rely on
+   it). Kept only when the texels around i and around the old target then fail less often. */
+static void dm__pz_relink_back(dm_param *pm, size_t i, int dir)
+{
+    static const int turns[4] = {0, 1, 3, 2};
+    uint32_t j = pm->nbr[4 * i + (size_t)dir], old;
+    int rot0 = pm->nbr_rot[4 * i + (size_t)dir], r, bd, oldrot, turn;
+    size_t before, after;
+    if (j == UINT32_MAX || dm__pz_link_ok(pm, i, dir)) return;
+    for (turn = 0; turn < 4; turn++) {
+        int rot = (rot0 + turns[turn]) % 4;
+        long ex = dir == 0 ? 1 : dir == 1 ? -1 : 0, ey = dir == 2 ? 1 : dir == 3 ? -1 : 0, tmp;
+        for (r = rot; r > 0; r--) { tmp = ex; ex = -ey; ey = tmp; }
+        bd = ex == -1 ? 0 : ex == 1 ? 1 : ey == -1 ? 2 : 3;
+        old = pm->nbr[4 * (size_t)j + (size_t)bd];
+        oldrot = pm->nbr_rot[4 * (size_t)j + (size_t)bd];
+        if (old != UINT32_MAX && oldrot == 0 && pm->chart[pm->texel_triangle[old]] == pm->chart[pm->texel_triangle[j]])
+            continue;
+        before = dm__pz_window_fails(pm, (uint32_t)i, 3) + (old != UINT32_MAX ? dm__pz_window_fails(pm, old, 3) : 0);
+        pm->nbr[4 * (size_t)j + (size_t)bd] = (uint32_t)i;
+        pm->nbr_rot[4 * (size_t)j + (size_t)bd] = (uint8_t)((4 - rot) % 4);
+        pm->nbr_rot[4 * i + (size_t)dir] = (uint8_t)rot;
+        after = dm__pz_window_fails(pm, (uint32_t)i, 3) + (old != UINT32_MAX ? dm__pz_window_fails(pm, old, 3) : 0);
+        if (after < before) return;
+        pm->nbr[4 * (size_t)j + (size_t)bd] = old;
+        pm->nbr_rot[4 * (size_t)j + (size_t)bd] = (uint8_t)oldrot;
+        pm->nbr_rot[4 * i + (size_t)dir] = (uint8_t)rot0;
     }
 }
 
@@ -4678,6 +4743,12 @@ DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, con
         if (pm->texel_triangle[id] == DM_NO_HIT) continue;
         for (dir = 0; dir < 4; dir++)
             dm__pz_fix_walk(pm, id, dir);
+    }
+    for (i = 0; i < n; i++) {
+        int dir;
+        if (pm->texel_triangle[i] == DM_NO_HIT) continue;
+        for (dir = 0; dir < 4; dir++)
+            dm__pz_relink_back(pm, i, dir);
     }
 
     /* 8. statistics: utilization, stretch and area ratios against the targets */
