@@ -272,7 +272,9 @@
      shared edge): the base point p, the interpolated angle-weighted base vertex normal n
      (renormalised); dm_bvh_intersect_line along p - t n for |t| <= max_distance (default 5% of
      the original's diagonal) gives the nearest crossing either way (the paper casts inward only;
-     outward too because the base need not enclose the original without a bounding shell);
+     outward too because the base need not enclose the original without a bounding shell; with
+     one, dm_bake_options.inward takes the paper's rule: the first hit along -n, so that another
+     part of the original just outside the base never wins);
      disp = t (world units, positive inward) and normal = the original's interpolated
      angle-weighted vertex normal at the hit. A texel with no crossing (over a hole of an open
      original, say) is DM_TEXEL_MISS, valid = 0. Gutter texels are DM_TEXEL_EMPTY. Both get disp
@@ -550,6 +552,9 @@ typedef struct dm_param {
 typedef struct dm_bake_options {
     float max_distance;        /* search both ways along the line up to this far; 0 = 5% of the
                                   original's bounding-box diagonal */
+    int inward;                /* nonzero: the paper's rule, the first hit along -n only (t from
+                                  -1e-5 of the diagonal up to max_distance), for a base that
+                                  encloses the original (dm_shell_constraint); 0: both ways */
     const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_dispmap */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -4986,9 +4991,9 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
                 ray.org[k] = m->pos[3 * id + (size_t)k];
                 ray.dir[k] = -m->nrm[3 * id + (size_t)k];
             }
-            ray.tmin = -maxd;
+            ray.tmin = o.inward ? (float)(-1e-5 * diag) : -maxd;
             ray.tmax = maxd;
-            if (len > 0.0 && dm_bvh_intersect_line(bvh, &ray, &hit)) {
+            if (len > 0.0 && (o.inward ? dm_bvh_intersect(bvh, &ray, &hit) : dm_bvh_intersect_line(bvh, &ray, &hit))) {
                 const uint32_t *oi = orig_indices + 3 * (size_t)hit.triangle;
                 double hn[3], hl, w0 = 1.0 - (double)hit.u - (double)hit.v;
                 for (k = 0; k < 3; k++)
