@@ -48,7 +48,7 @@ endif
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
 REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref_openmesh_butterfly) \
-             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh) \
+             $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh $(B)/ref_dispmesh_base) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/ref_dispmesh_bake)
 BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
@@ -95,7 +95,7 @@ $(B)/ref_openmesh: tests/ref_openmesh.cpp $(ALLDEPS) | $(B)
 $(B)/ref_openmesh_butterfly: tests/ref_openmesh_butterfly.cpp tests/butterfly_compare.hpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lOpenMeshCore -lm
 
-$(B)/ref_embree $(B)/ref_embree_bvh: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
+$(B)/ref_embree $(B)/ref_embree_bvh $(B)/ref_dispmesh_base: $(B)/%: tests/%.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lm
 
 $(B)/ref_openmesh_simplify: tests/ref_openmesh_simplify.cpp $(ALLDEPS) | $(B)
