@@ -8,7 +8,10 @@
    Timed (median of 5 after a warm-up, one thread): dm_parameterize alone; dm_bake alone (its BVH
    build over the original included); dm_reconstruct alone. Both with bench.h's huge-page
    allocator (as dispmesh.h recommends on Linux; a bake touches ~70 MB of fresh memory at 1024^2);
-     RESULT dispmesh_bake_malloc res=<r> ms=<t>   the bake with plain malloc (NULL allocator). The distances (dm_surface_distance,
+     RESULT dispmesh_bake_malloc res=<r> ms=<t>   the bake with plain malloc (NULL allocator).
+     RESULT dispmesh_base faces=<n> shell_ms=<t> constrained_ms=<t> unconstrained_ms=<t> base_only_rms=<e> unconstrained_rms=<e> ...
+                  paper 000's base (bounding shell + constrained simplification to 500 faces), one run,
+                  for meshes up to 200k triangles. The distances (dm_surface_distance,
    200k samples a side, fraction of the diagonal) are computed once, outside the timer. There is
    no peer library for the bake as a whole; bench_bvh compares the bake rays with Embree. */
 #include "bench.h"
@@ -128,6 +131,49 @@ int main(int argc, char **argv)
     free_recon(&s);
     free_bake(&s);
     free_param(&s);
+
+    /* paper 000's own base: the bounding shell and dm_simplify under dm_shell_constraint to 500
+       faces (one run each: seconds, and no peer to compare with), against our unconstrained
+       simplification to the same count; meshes up to 200k triangles */
+    if (s.nt <= 200000) {
+        dm_shell *sh = NULL;
+        double t0 = bench_now();
+        if (dm_shell_grow(s.pos, s.nv, s.idx, s.nt, NULL, &sh) != DM_OK) { fprintf(stderr, "dm_shell_grow failed\n"); return 1; }
+        double t_shell = bench_now() - t0;
+        dm_simplify_options so;
+        memset(&so, 0, sizeof so);
+        so.target_triangles = 500;
+        so.constraint = dm_shell_constraint;
+        so.constraint_user = sh;
+        dm_pm *pm = NULL, *pu = NULL;
+        dm_simplify_report rep_c;
+        t0 = bench_now();
+        if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pm, &rep_c) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }
+        double t_con = bench_now() - t0;
+        so.constraint = NULL;
+        so.target_triangles = rep_c.triangle_count;
+        t0 = bench_now();
+        if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pu, NULL) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }
+        double t_unc = bench_now() - t0;
+        dm_distance_report rc, ru;
+        size_t bnv, bnt;
+        dm_pm *both[2] = {pm, pu};
+        dm_distance_report *reps[2] = {&rc, &ru};
+        for (int k = 0; k < 2; k++) {
+            dm_pm_counts(both[k], &bnv, &bnt);
+            std::vector<float> bp(3 * bnv);
+            std::vector<uint32_t> bi(3 * bnt);
+            dm_pm_get_mesh(both[k], bp.data(), bi.data(), NULL);
+            dm_surface_distance(s.pos, s.nv, s.idx, s.nt, bp.data(), bnv, bi.data(), bnt, 200000, NULL, reps[k]);
+        }
+        printf("RESULT dispmesh_base faces=%zu shell_ms=%.1f constrained_ms=%.1f unconstrained_ms=%.1f base_only_rms=%.3g "
+               "unconstrained_rms=%.3g ratio=%.2f moved=%zu vetoed=%zu\n",
+               rep_c.triangle_count, 1e3 * t_shell, 1e3 * t_con, 1e3 * t_unc, rc.rms, ru.rms, rc.rms / ru.rms, sh->moved,
+               rep_c.vetoed);
+        dm_pm_free(pm);
+        dm_pm_free(pu);
+        dm_shell_free(sh);
+    }
     mio_free_mesh(&mesh);
     return 0;
 }
