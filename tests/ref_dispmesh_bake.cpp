@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "test.h"
+#include "embree_mesh.hpp"
 
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
@@ -164,18 +165,9 @@ int main(int argc, char **argv)
     dm_dispmap *map = NULL;
     T_EQ_INT(dm_bake(pm, pos, nv, base.data(), bt, pos, nv, idx, nt, NULL, &map), DM_OK);
     if (map) {
-        RTCDevice device = rtcNewDevice("threads=1");
-        RTCScene scene = rtcNewScene(device);
-        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-        std::vector<float> padded(3 * nv + 1, 0.0f);
-        std::memcpy(padded.data(), pos, 3 * nv * sizeof(float));
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, padded.data(), 0, 3 * sizeof(float), nv);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0, 3 * sizeof(uint32_t), nt);
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene);
+        em_scene em;
+        em_open(em, pos, nv, idx, nt);
+        RTCScene scene = em.scene;
         size_t checked = 0, mismatched = 0, under = 0, flagged = 0;
         double tol = 1e-5 * 0.25; /* the bunny's diagonal is about 0.25 */
         for (size_t i = 0; i < n; i++) {
@@ -195,8 +187,7 @@ int main(int argc, char **argv)
         T_CHECK_MSG(flagged <= under / 100, "%zu of %zu texels under the base flagged", flagged, under);
         std::printf("  note: bake: %zu texels under the base, %zu flagged, %zu checked against Embree, %zu differ\n",
                     under, flagged, checked, mismatched);
-        rtcReleaseScene(scene);
-        rtcReleaseDevice(device);
+        em_close(em);
 
         dm_trimesh *rec = NULL;
         T_EQ_INT(dm_reconstruct(map, pm, NULL, &rec), DM_OK);

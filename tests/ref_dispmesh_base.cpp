@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "test.h"
+#include "embree_mesh.hpp"
 #include "surface_distance.hpp"
 
 #define DM_IMPLEMENTATION
@@ -100,18 +101,9 @@ int main(int argc, char **argv)
         T_CHECK_MSG(0, "parameterize / bake / reconstruct failed");
     } else {
         /* flagged texels, and the bake rays against Embree */
-        RTCDevice device = rtcNewDevice("threads=1");
-        RTCScene scene = rtcNewScene(device);
-        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-        std::vector<float> padded(3 * nv + 1, 0.0f);
-        std::memcpy(padded.data(), pos, 3 * nv * sizeof(float));
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, padded.data(), 0, 3 * sizeof(float), nv);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0, 3 * sizeof(uint32_t), nt);
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene);
+        em_scene em;
+        em_open(em, pos, nv, idx, nt);
+        RTCScene scene = em.scene;
         size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0;
         double lift = 0.25 * sh->thickness, tol = 1e-5 * sh->diagonal;
         for (size_t i = 0; i < n; i++) {
@@ -141,8 +133,7 @@ int main(int argc, char **argv)
             if (!(ng[0] * nn[0] + ng[1] * nn[1] + ng[2] * nn[2] > 0.0)) back++;
             if (!(std::fabs((rh.ray.tfar - lift) - map->disp[i]) <= tol + 1e-6 * rh.ray.tfar)) differ++;
         }
-        rtcReleaseScene(scene);
-        rtcReleaseDevice(device);
+        em_close(em);
         T_CHECK_MSG(flagged <= under / 100, "%zu of %zu texels under the base flagged", flagged, under);
         T_CHECK_MSG(back == 0, "%zu of %zu bake rays meet a back face (or nothing) first", back, rays);
         T_CHECK_MSG(differ <= rays / 1000, "%zu of %zu baked depths differ from Embree's first hit", differ, rays);

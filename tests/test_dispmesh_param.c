@@ -99,22 +99,6 @@ static int cancel_progress(void *user, float done)
     return ++*calls >= cancel_at;
 }
 
-/* an allocator that fails from the fail_at-th call on and counts what is outstanding */
-typedef struct counting { long calls, fail_at, live; } counting;
-static void *c_alloc(void *u, size_t s)
-{
-    counting *c = (counting *)u;
-    void *p;
-    if (c->calls++ >= c->fail_at) return NULL;
-    p = malloc(s);
-    if (p) c->live++;
-    return p;
-}
-static void c_free(void *u, void *p)
-{
-    counting *c = (counting *)u;
-    if (p) { c->live--; free(p); }
-}
 
 /* dm_coverage_weights: the original's area over each base triangle */
 static void test_coverage_weights(void)

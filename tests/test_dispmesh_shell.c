@@ -334,21 +334,6 @@ static void test_bad_input(const mesh *m)
     dm_shell_free(NULL);
 }
 
-typedef struct counting { long calls, fail_at, live; } counting;
-static void *c_alloc(void *u, size_t s)
-{
-    counting *c = (counting *)u;
-    void *p;
-    if (c->calls++ >= c->fail_at) return NULL;
-    p = malloc(s);
-    if (p) c->live++;
-    return p;
-}
-static void c_free(void *u, void *p)
-{
-    counting *c = (counting *)u;
-    if (p) { c->live--; free(p); }
-}
 
 /* allocation failure at every point of dm_shell_grow; then a shell whose allocator fails inside
    the constraint: every candidate is vetoed, nothing leaks */

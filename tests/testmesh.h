@@ -1,5 +1,6 @@
 /* testmesh.h - generated test meshes shared by the dispmesh tests (C99): a bumpy cube-sphere
-   (closed, genus 0), a bumpy torus (genus 1), an open bumpy sheet with an optional hole. */
+   (closed, genus 0), a bumpy torus (genus 1), an open bumpy sheet with an optional hole; and a
+   counting allocator that fails on request. */
 #ifndef TESTMESH_H
 #define TESTMESH_H
 #include <math.h>
@@ -128,6 +129,23 @@ static inline mesh make_sheet(int n, double z0, double amp, double hole)
             m.nt += 2;
         }
     return m;
+}
+
+/* an allocator that fails from the fail_at-th call on and counts what is outstanding */
+typedef struct counting { long calls, fail_at, live; } counting;
+static inline void *c_alloc(void *u, size_t s)
+{
+    counting *c = (counting *)u;
+    void *p;
+    if (c->calls++ >= c->fail_at) return NULL;
+    p = malloc(s);
+    if (p) c->live++;
+    return p;
+}
+static inline void c_free(void *u, void *p)
+{
+    counting *c = (counting *)u;
+    if (p) { c->live--; free(p); }
 }
 
 #endif
