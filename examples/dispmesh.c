@@ -261,6 +261,27 @@ static char *path_with(const char *prefix, const char *suffix)
     return s;
 }
 
+/* 1 when PREFIX_base.obj can be created (a file made by the probe is removed again). */
+static int probe_writable(const char *prefix)
+{
+    char *path = path_with(prefix, "_base.obj");
+    struct stat st;
+    int existed;
+    FILE *f;
+    if (!path) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
+    existed = stat(path, &st) == 0;
+    f = fopen(path, "a");
+    if (!f) {
+        fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, strerror(errno));
+        free(path);
+        return 0;
+    }
+    fclose(f);
+    if (!existed) remove(path);
+    free(path);
+    return 1;
+}
+
 /* ---- the base mesh's map coordinates: distinct (vertex, u, v) corners ------------------------- */
 
 typedef struct uvkey {
@@ -312,12 +333,12 @@ static int write_base_obj(const char *path, const mesh *base, const dm_param *pa
     size_t n = 0, i;
     FILE *f = NULL;
     int ok = 0;
-    if (!cuv || !uv) { fprintf(stderr, "dispmesh: out of memory\n"); goto done; }
+    if (!cuv || !uv) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     n = distinct_uvs(base, param, cuv, uv);
-    if (n == 0) { fprintf(stderr, "dispmesh: out of memory\n"); goto done; }
+    if (n == 0) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     *uv_count = n;
     f = fopen(path, "w");
-    if (!f) { fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, strerror(errno)); goto done; }
+    if (!f) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, strerror(errno)); goto done; }
     fprintf(f, "# dispmesh base mesh: %zu vertices, %zu triangles, %zu map coordinates (%d x %d map)\n",
             base->nv, base->nt, n, param->width, param->height);
     for (i = 0; i < base->nv; i++)
@@ -328,7 +349,7 @@ static int write_base_obj(const char *path, const mesh *base, const dm_param *pa
                 cuv[3 * i + 1] + 1, base->t[3 * i + 2] + 1, cuv[3 * i + 2] + 1);
     ok = !ferror(f);
     if (fclose(f) != 0) ok = 0;
-    if (!ok) fprintf(stderr, "dispmesh: error writing %s\n", path);
+    if (!ok) fprintf(stderr, "\ndispmesh: error writing %s\n", path);
 done:
     free(cuv);
     free(uv);
@@ -341,7 +362,7 @@ static int write_normal_png(const char *path, const dm_dispmap *map)
     uint8_t *px = (uint8_t *)malloc(n * 3 + 1);
     sr_result r;
     int c;
-    if (!px) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
+    if (!px) { fprintf(stderr, "\ndispmesh: out of memory\n"); return 0; }
     for (i = 0; i < n; i++)
         for (c = 0; c < 3; c++) {
             float x = map->normal[3 * i + (size_t)c] * 0.5f + 0.5f;
@@ -350,7 +371,7 @@ static int write_normal_png(const char *path, const dm_dispmap *map)
         }
     r = sr_write_png(path, px, map->width, map->height, 3, 1); /* row 0 (v = 0) at the bottom */
     free(px);
-    if (r != SR_OK) fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, sr_result_string(r));
+    if (r != SR_OK) fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r));
     return r == SR_OK;
 }
 
@@ -455,14 +476,14 @@ static int write_views(const char *path, const run *R, int size, int smooth, dou
     if (r == SR_OK)
         r = view_render(&vw, R->dense->positions, R->dense->vertex_count, R->dense->indices, R->dense->triangle_count, smooth,
                         0, warm, &img[2]);
-    if (r != SR_OK) { fprintf(stderr, "dispmesh: render: %s\n", sr_result_string(r)); goto done; }
+    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: render: %s\n", sr_result_string(r)); goto done; }
     snprintf(cap[0], sizeof cap[0], "ORIGINAL %zu TRIANGLES", R->orig.nt);
     snprintf(cap[1], sizeof cap[1], "BASE %zu TRIANGLES", R->base.nt);
     snprintf(cap[2], sizeof cap[2], "BASE + %dX%d MAP RMS %.3f%%", R->map->width, R->map->height, 100.0 * rms);
     for (i = 0; i < 3; i++) caps[i] = cap[i];
     r = sr_contact_sheet(img, caps, 3, 3, NULL, &sheet);
     if (r == SR_OK) r = sr_write_png(path, sheet.pixels, sheet.width, sheet.height, 3, 0);
-    if (r != SR_OK) { fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, sr_result_string(r)); goto done; }
+    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r)); goto done; }
     ok = 1;
 done:
     for (i = 0; i < 3; i++) free(img[i].pixels);
@@ -536,6 +557,10 @@ int main(int argc, char **argv)
         usage(stderr);
         return 1;
     }
+
+    /* the output location, before any work */
+    make_parent_dir(prefix);
+    if (!probe_writable(prefix)) return 1;
 
     /* 1. the original */
     if (brick) {
@@ -617,7 +642,8 @@ int main(int argc, char **argv)
     r = dm_parameterize(R.base.p, R.base.nv, R.base.t, R.base.nt, &po, &R.param);
     if (r != DM_OK) {
         stage_fail(&st, "dm_parameterize", r);
-        if (r == DM_ERR_MAP_TOO_SMALL) fprintf(stderr, "dispmesh: --res %ld is too small for %zu charts\n", res, R.base.nt);
+        if (r == DM_ERR_MAP_TOO_SMALL)
+            fprintf(stderr, "dispmesh: --res %ld is too small for the charts of %zu base triangles\n", res, R.base.nt);
         status = r == DM_ERR_MAP_TOO_SMALL ? 1 : 2;
         goto done;
     }
@@ -716,7 +742,6 @@ int main(int argc, char **argv)
 
     /* 7. files */
     stage_begin(&st, "write files");
-    make_parent_dir(prefix);
     {
         size_t uvs_written = 0;
         mio_error err;
