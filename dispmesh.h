@@ -2513,6 +2513,7 @@ typedef struct dm__qem_simp {
     uint32_t *ver, *mark, stamp;   /* candidate versions; visit marks */
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
+    uint32_t *oring;               /* scratch, 3 t: the old triangles of keep and remove (constraint only) */
     dm__qem_cand *heap;
     size_t hsize, hcap;
     dm__qem_rec *rec;
@@ -2886,6 +2887,22 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     return m;
 }
 
+/* The triangles of keep and rem before the collapse (each once) into s->oring; returns the count. */
+static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
+{
+    size_t m = 0;
+    uint32_t c;
+    for (c = s->vfirst[keep]; c != DM__QEM_NONE; c = s->cnext[c], m++)
+        memcpy(s->oring + 3 * m, s->idx + 3 * (size_t)(c / 3), 3 * sizeof(uint32_t));
+    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+        if (t[0] == keep || t[1] == keep || t[2] == keep) continue; /* listed with keep */
+        memcpy(s->oring + 3 * m, t, 3 * sizeof(uint32_t));
+        m++;
+    }
+    return m;
+}
+
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
    joined to every boundary vertex) and no vertex left with a degenerate fan. */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
@@ -3132,6 +3149,7 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->mark);
     a->free(a->user, s->nbr);
     a->free(a->user, s->ring);
+    a->free(a->user, s->oring);
     a->free(a->user, s->heap);
     a->free(a->user, s->rec);
     a->free(a->user, s->ops);
@@ -3195,6 +3213,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(mark, vertex_count, uint32_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
+    if (s->opt->constraint) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
 #undef DM__QEM_ALLOC
     memcpy(s->pos, positions, 3 * vertex_count * sizeof(float));
     for (t = 0; t < triangle_count; t++) {
@@ -3378,6 +3397,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             cand.positions = s.pos;
             cand.triangles = s.ring;
             cand.triangle_count = ring_count;
+            cand.old_triangles = s.oring;
+            cand.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
             verdict = opt.constraint(opt.constraint_user, &cand, corrected);
             if (verdict == DM_COLLAPSE_MOVE) {
                 double q[3];
@@ -5176,6 +5197,579 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
     dm_bvh_free(bvh);
     a.free(a.user, sum);
     return DM_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: the bounding shell and paper 000's two simplification constraints
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct dm__sh_internal {
+    dm_bvh *bvh;         /* the original */
+    float *pos;          /* the original's positions and indices (copies) */
+    uint32_t *idx;
+    size_t nv, nt;
+    int open;            /* the original has an edge without a (consistently oriented) twin */
+    int samples;         /* overlap samples per triangle */
+    double margin;       /* how far outside a plane counts as outside (world units) */
+    double *scratch;     /* planes, Dykstra's corrections and one-ring normals of one candidate */
+    size_t scratch_cap;  /* in doubles */
+    uint32_t *pts;       /* original vertices near one candidate */
+    size_t pts_cap;
+    /* a uniform grid of the original's (referenced) vertices */
+    double lo[3], cell;
+    int dim[3];
+    uint32_t *cell_first, *cell_vert;
+} dm__sh_internal;
+
+DMDEF void dm_shell_free(dm_shell *shell)
+{
+    dm_allocator a;
+    dm__sh_internal *in;
+    if (!shell) return;
+    a = shell->allocator;
+    in = (dm__sh_internal *)shell->internal;
+    if (in) {
+        dm_bvh_free(in->bvh);
+        a.free(a.user, in->pos);
+        a.free(a.user, in->idx);
+        a.free(a.user, in->scratch);
+        a.free(a.user, in->pts);
+        a.free(a.user, in->cell_first);
+        a.free(a.user, in->cell_vert);
+        a.free(a.user, in);
+    }
+    a.free(a.user, shell->positions);
+    a.free(a.user, shell->normals);
+    a.free(a.user, shell->offset);
+    a.free(a.user, shell);
+}
+
+static int dm__sh_coord(const dm__sh_internal *in, double x, int k)
+{
+    double c = floor((x - in->lo[k]) / in->cell);
+    return c < 0.0 ? 0 : c >= (double)in->dim[k] ? in->dim[k] - 1 : (int)c;
+}
+
+static size_t dm__sh_cell_of(const dm__sh_internal *in, const float *p)
+{
+    return ((size_t)dm__sh_coord(in, p[2], 2) * (size_t)in->dim[1] + (size_t)dm__sh_coord(in, p[1], 1)) *
+               (size_t)in->dim[0] + (size_t)dm__sh_coord(in, p[0], 0);
+}
+
+DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, size_t nt,
+                              const dm_shell_options *options, dm_shell **out)
+{
+    dm_shell_options opt;
+    dm_allocator a;
+    dm_shell *sh = NULL;
+    dm__sh_internal *in = NULL;
+    dm__pz_scratch sc;
+    dm_bvh_options bo;
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, diag, *acc;
+    dm__pz_edge *e;
+    uint32_t *twin, *twin_he;
+    uint8_t *stopped;
+    size_t i, v;
+    int k, step;
+    dm_result r;
+    if (!out) return DM_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (options) opt = *options;
+    else memset(&opt, 0, sizeof opt);
+    if (!(opt.thickness >= 0.0f) || opt.thickness > 1e18f || opt.steps < 0 || opt.overlap_samples < 0)
+        return DM_ERR_INVALID_ARGUMENT;
+    r = dm__pz_check_mesh(pos, nv, idx, nt);
+    if (r != DM_OK) return r;
+    a = dm__resolve_allocator(opt.allocator);
+    memset(&sc, 0, sizeof sc);
+    sc.a = a;
+    for (i = 0; i < 3 * nt; i++)
+        for (k = 0; k < 3; k++) {
+            double x = pos[3 * (size_t)idx[i] + (size_t)k];
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    sh = (dm_shell *)a.alloc(a.user, sizeof *sh);
+    if (!sh) return DM_ERR_OUT_OF_MEMORY;
+    memset(sh, 0, sizeof *sh);
+    sh->allocator = a;
+    in = (dm__sh_internal *)a.alloc(a.user, sizeof *in);
+    if (!in) goto oom;
+    memset(in, 0, sizeof *in);
+    sh->internal = in;
+    sh->vertex_count = in->nv = nv;
+    sh->triangle_count = in->nt = nt;
+    sh->diagonal = (float)diag;
+    sh->thickness = opt.thickness > 0.0f ? opt.thickness : (float)(0.02 * diag);
+    in->samples = opt.overlap_samples == 0 ? 4 : opt.overlap_samples > 7 ? 7 : opt.overlap_samples;
+    in->margin = 1e-6 * diag;
+    sh->positions = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
+    sh->normals = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
+    sh->offset = (float *)dm__alloc_array(&a, nv, sizeof(float), &sc.overflow);
+    in->pos = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
+    in->idx = (uint32_t *)dm__alloc_array(&a, 3 * nt, sizeof(uint32_t), &sc.overflow);
+    if (!sh->positions || !sh->normals || !sh->offset || !in->pos || !in->idx) goto oom;
+    memcpy(in->pos, pos, 3 * nv * sizeof(float));
+    memcpy(in->idx, idx, 3 * nt * sizeof(uint32_t));
+    memset(&bo, 0, sizeof bo);
+    bo.allocator = opt.allocator;
+    r = dm_bvh_build(pos, nv, idx, nt, &bo, &in->bvh);
+    if (r != DM_OK) goto fail;
+    acc = (double *)dm__pz_take(&sc, 3 * nv, sizeof(double));
+    e = (dm__pz_edge *)dm__pz_take(&sc, 3 * nt, sizeof(dm__pz_edge));
+    twin = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
+    twin_he = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
+    stopped = (uint8_t *)dm__pz_take(&sc, nv, 1);
+    if (!acc || !e || !twin || !twin_he || !stopped) goto oom;
+    dm__pz_vertex_normals(pos, nv, idx, nt, acc, sh->normals);
+    dm__pz_twins(idx, nt, e, twin, twin_he);
+    for (i = 0; i < 3 * nt && !in->open; i++) in->open = twin[i] == DM_NO_HIT;
+    { /* the vertex grid: about two referenced vertices per cell */
+        double ext = 0.0, vol = 1.0;
+        size_t ncell, nref = 0;
+        uint32_t *cnt;
+        for (k = 0; k < 3; k++) if (hi[k] - lo[k] > ext) ext = hi[k] - lo[k];
+        for (v = 0; v < nv; v++) stopped[v] = 0;
+        for (i = 0; i < 3 * nt; i++) stopped[idx[i]] = 1;
+        for (v = 0; v < nv; v++) nref += stopped[v];
+        for (k = 0; k < 3; k++) vol *= (hi[k] - lo[k]) > 1e-3 * ext ? (hi[k] - lo[k]) : 1e-3 * ext;
+        in->cell = ext > 0.0 ? cbrt(2.0 * vol / (double)nref) : 1.0;
+        if (!(in->cell > 0.0)) in->cell = 1.0;
+        ncell = 1;
+        for (k = 0; k < 3; k++) {
+            double d = floor((hi[k] - lo[k]) / in->cell) + 1.0;
+            in->dim[k] = d > 1024.0 ? 1024 : (int)d;
+            in->lo[k] = lo[k];
+            ncell *= (size_t)in->dim[k];
+        }
+        if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
+        in->cell_first = (uint32_t *)dm__alloc_array(&a, ncell + 1, sizeof(uint32_t), &sc.overflow);
+        in->cell_vert = (uint32_t *)dm__alloc_array(&a, nref ? nref : 1, sizeof(uint32_t), &sc.overflow);
+        cnt = (uint32_t *)dm__pz_take(&sc, ncell + 1, sizeof(uint32_t));
+        if (!in->cell_first || !in->cell_vert || !cnt) goto oom;
+        memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
+        for (v = 0; v < nv; v++)
+            if (stopped[v]) cnt[dm__sh_cell_of(in, pos + 3 * v)]++;
+        in->cell_first[0] = 0;
+        for (i = 0; i < ncell; i++) in->cell_first[i + 1] = in->cell_first[i] + cnt[i];
+        for (i = 0; i < ncell; i++) cnt[i] = in->cell_first[i];
+        for (v = 0; v < nv; v++)
+            if (stopped[v]) in->cell_vert[cnt[dm__sh_cell_of(in, pos + 3 * v)]++] = (uint32_t)v;
+    }
+    /* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
+       normal; a vertex whose next offset point comes closer to another part of the original than
+       90% of its offset would make the offset surface run into itself, and stops. */
+    for (v = 0; v < nv; v++) {
+        sh->offset[v] = 0.0f;
+        stopped[v] = sh->normals[3 * v] == 0.0f && sh->normals[3 * v + 1] == 0.0f && sh->normals[3 * v + 2] == 0.0f;
+    }
+    {
+        int steps = opt.steps == 0 ? 8 : opt.steps > 256 ? 256 : opt.steps;
+        for (step = 1; step <= steps; step++) {
+            float h = sh->thickness * (float)step / (float)steps;
+            for (v = 0; v < nv; v++) {
+                float q[3];
+                dm_closest cl;
+                if (stopped[v]) continue;
+                for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
+                if (dm_bvh_closest_point(in->bvh, q, h, &cl) && cl.distance < 0.9f * h) {
+                    stopped[v] = 1;
+                    sh->stopped_vertices++;
+                } else {
+                    sh->offset[v] = h;
+                }
+            }
+            if (opt.progress && opt.progress(opt.progress_user, (float)step / (float)steps)) {
+                r = DM_CANCELLED;
+                goto fail;
+            }
+        }
+    }
+    for (v = 0; v < nv; v++)
+        for (k = 0; k < 3; k++) sh->positions[3 * v + (size_t)k] = pos[3 * v + (size_t)k] + sh->offset[v] * sh->normals[3 * v + (size_t)k];
+    dm__pz_release(&sc);
+    *out = sh;
+    return DM_OK;
+oom:
+    r = dm__pz_fail(&sc);
+fail:
+    dm__pz_release(&sc);
+    dm_shell_free(sh);
+    return r;
+}
+
+/* unit normal of triangle (p0, p1, p2); 0 if degenerate */
+static int dm__sh_plane(const double *p0, const double *p1, const double *p2, double n[3])
+{
+    double e1[3], e2[3], len;
+    dm__pz_sub(p1, p0, e1);
+    dm__pz_sub(p2, p0, e2);
+    dm__cross3(e1, e2, n);
+    len = dm__pz_len(n);
+    if (!(len > 0.0)) return 0;
+    n[0] /= len; n[1] /= len; n[2] /= len;
+    return 1;
+}
+
+/* the position of vertex v during a candidate: keep at x, the rest at positions */
+static void dm__sh_at(const dm_collapse *c, uint32_t v, const double x[3], double out[3])
+{
+    if (v == c->keep) {
+        out[0] = x[0]; out[1] = x[1]; out[2] = x[2];
+    } else {
+        dm__pz_load(c->positions, v, out);
+    }
+}
+
+static int dm__sh_grow_scratch(dm_shell *sh, dm__sh_internal *in, size_t need)
+{
+    double *p;
+    int overflow = 0;
+    if (need <= in->scratch_cap) return 1;
+    p = (double *)dm__alloc_array(&sh->allocator, 2 * need, sizeof(double), &overflow);
+    if (!p) return 0;
+    sh->allocator.free(sh->allocator.user, in->scratch);
+    in->scratch = p;
+    in->scratch_cap = 2 * need;
+    return 1;
+}
+
+/* Sample points of the overlap check, barycentric: the centroid, then towards each corner. */
+static const double dm__sh_bary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {4.0 / 6, 1.0 / 6, 1.0 / 6},
+                                         {1.0 / 6, 4.0 / 6, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 4.0 / 6},
+                                         {1.0 / 6, 5.0 / 12, 5.0 / 12}, {5.0 / 12, 1.0 / 6, 5.0 / 12},
+                                         {5.0 / 12, 5.0 / 12, 1.0 / 6}};
+
+/* Is point y inside the shell: within the offset grown at its closest point of the original? */
+static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const double y[3])
+{
+    float q[3];
+    dm_closest cl;
+    const uint32_t *t;
+    double h;
+    q[0] = (float)y[0]; q[1] = (float)y[1]; q[2] = (float)y[2];
+    if (!dm_bvh_closest_point(in->bvh, q, sh->thickness * 1.0001f + (float)in->margin, &cl)) return 0;
+    t = in->idx + 3 * (size_t)cl.triangle;
+    h = (1.0 - cl.u - cl.v) * sh->offset[t[0]] + cl.u * sh->offset[t[1]] + cl.v * sh->offset[t[2]];
+    return cl.distance <= h + in->margin;
+}
+
+/* Signed distance from p to a set of one-ring triangles (keep at x), with the angle-weighted
+   pseudonormal (Baerentzen and Aanaes 2005) at the closest feature, computed from these
+   triangles only. *inner: the feature touches keep (or, when with_remove, remove). *dist: the
+   unsigned distance; *tri (may be NULL): the closest triangle, (size_t)-1 if none. */
+static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3],
+                            const double p[3], int with_remove, int *inner, double *dist, size_t *tri)
+{
+    double best = DBL_MAX, bu = 0.0, bv = 0.0, q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
+    size_t i, bt = (size_t)-1;
+    uint32_t fv[3];
+    int k, j, nf = 0;
+    for (i = 0; i < n; i++) {
+        float f[9];
+        double u, v, d2;
+        for (j = 0; j < 3; j++) {
+            dm__sh_at(c, tris[3 * i + (size_t)j], x, pt[j]);
+            for (k = 0; k < 3; k++) f[3 * j + k] = (float)pt[j][k];
+        }
+        d2 = dm__triangle_d2(p, f, &u, &v);
+        if (d2 < best) {
+            best = d2;
+            bt = i;
+            bu = u;
+            bv = v;
+        }
+    }
+    *inner = 0;
+    *dist = bt == (size_t)-1 ? DBL_MAX : sqrt(best);
+    if (tri) *tri = bt;
+    if (bt == (size_t)-1) return -DBL_MAX;
+    w[0] = 1.0 - bu - bv;
+    w[1] = bu;
+    w[2] = bv;
+    for (j = 0; j < 3; j++) dm__sh_at(c, tris[3 * bt + (size_t)j], x, pt[j]);
+    for (k = 0; k < 3; k++) q[k] = w[0] * pt[0][k] + w[1] * pt[1][k] + w[2] * pt[2][k];
+    for (j = 0; j < 3; j++)
+        if (w[j] > 1e-7) {
+            fv[nf++] = tris[3 * bt + (size_t)j];
+            if (fv[nf - 1] == c->keep || (with_remove && fv[nf - 1] == c->remove)) *inner = 1;
+        }
+    for (i = 0; i < n; i++) {
+        const uint32_t *t = tris + 3 * i;
+        double fn[3], ang = 1.0;
+        int has = 0, corner = -1;
+        for (j = 0; j < nf; j++)
+            for (k = 0; k < 3; k++)
+                if (t[k] == fv[j]) {
+                    has++;
+                    corner = k;
+                }
+        if (has < nf) continue;
+        for (j = 0; j < 3; j++) dm__sh_at(c, t[j], x, pt[j]);
+        if (!dm__sh_plane(pt[0], pt[1], pt[2], fn)) continue;
+        if (nf == 1) { /* vertex: weight by the corner angle */
+            double ea[3], eb[3], la, lb, cs;
+            dm__pz_sub(pt[(corner + 1) % 3], pt[corner], ea);
+            dm__pz_sub(pt[(corner + 2) % 3], pt[corner], eb);
+            la = dm__pz_len(ea);
+            lb = dm__pz_len(eb);
+            if (!(la > 0.0 && lb > 0.0)) continue;
+            cs = dm__dot3(ea, eb) / (la * lb);
+            ang = acos(cs < -1.0 ? -1.0 : cs > 1.0 ? 1.0 : cs);
+        }
+        for (k = 0; k < 3; k++) N[k] += ang * fn[k];
+        if (nf == 3) break;
+    }
+    dm__pz_sub(p, q, d);
+    return dm__dot3(d, N) > 0.0 ? *dist : -*dist;
+}
+
+DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[3])
+{
+    dm_shell *sh = (dm_shell *)user;
+    dm__sh_internal *in;
+    double x0[3], x[3], *pl, *yv, *vn;
+    size_t i, j, no, nr, np = 0;
+    int k, iter, moved = 0;
+    if (!sh || !c || !corrected || !sh->internal || !c->positions || !c->triangles || !c->old_triangles)
+        return DM_COLLAPSE_VETO;
+    in = (dm__sh_internal *)sh->internal;
+    no = c->old_triangle_count;
+    nr = c->triangle_count;
+    /* (1) Enclosure: the original's vertices near the collapse whose closest feature of the
+       old triangles is at keep or remove (not on the ring's rim, which belongs to the rest of
+       the mesh) must stay on the inner side of the new one-ring: their signed distance, taken
+       with the angle-weighted pseudonormal at the closest feature, must not become positive.
+       Each such vertex p, nearest to new triangle (keep, u, w), asks keep to lie on the outer
+       side of the plane through p, u, w (an exact, linear condition on keep's position); the
+       position is the point nearest the proposed one that meets all of them (Dykstra's
+       alternating projections), then everything is checked again at the rounded position. */
+    {
+        double lo[3], hi[3], reach = 1.5 * (double)sh->thickness;
+        int cl[3], ch[3], cx, cy, cz;
+        size_t npts = 0;
+        for (k = 0; k < 3; k++) {
+            lo[k] = hi[k] = c->position[k];
+            x0[k] = x[k] = c->position[k];
+        }
+        for (i = 0; i < 3 * no; i++)
+            for (k = 0; k < 3; k++) {
+                double q = c->positions[3 * (size_t)c->old_triangles[i] + (size_t)k];
+                if (q < lo[k]) lo[k] = q;
+                if (q > hi[k]) hi[k] = q;
+            }
+        for (k = 0; k < 3; k++) {
+            cl[k] = dm__sh_coord(in, lo[k] - reach, k);
+            ch[k] = dm__sh_coord(in, hi[k] + reach, k);
+        }
+        /* gather the candidates and keep the relevant ones, with their old signed distance */
+        for (cz = cl[2]; cz <= ch[2]; cz++)
+            for (cy = cl[1]; cy <= ch[1]; cy++)
+                for (cx = cl[0]; cx <= ch[0]; cx++) {
+                    size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
+                    for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
+                        uint32_t v = in->cell_vert[q];
+                        double pp[3], sd, dist;
+                        int feat;
+                        dm__pz_load(in->pos, v, pp);
+                        if (pp[0] < lo[0] - reach || pp[0] > hi[0] + reach || pp[1] < lo[1] - reach ||
+                            pp[1] > hi[1] + reach || pp[2] < lo[2] - reach || pp[2] > hi[2] + reach)
+                            continue;
+                        sd = dm__sh_signed(c, c->old_triangles, no, x0, pp, 1, &feat, &dist, NULL);
+                        if (!feat || dist > reach) continue;
+                        if (npts >= in->pts_cap) {
+                            uint32_t *np2;
+                            int of = 0;
+                            size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
+                            np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
+                            if (!np2) return DM_COLLAPSE_VETO;
+                            if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
+                            sh->allocator.free(sh->allocator.user, in->pts);
+                            in->pts = np2;
+                            in->pts_cap = cap;
+                        }
+                        {
+                            float f = (float)sd;
+                            uint32_t bits;
+                            memcpy(&bits, &f, sizeof bits);
+                            in->pts[2 * npts] = v;
+                            in->pts[2 * npts + 1] = bits;
+                        }
+                        npts++;
+                    }
+                }
+        if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * nr + 16)) return DM_COLLAPSE_VETO;
+        pl = in->scratch;
+        /* one plane per relevant vertex, from its nearest new triangle at the proposed position */
+        for (i = 0; i < npts; i++) {
+            double pp[3], pu[3], pw[3], dist, A[3], len;
+            size_t t;
+            int feat, j;
+            const uint32_t *tr;
+            dm__pz_load(in->pos, in->pts[2 * i], pp);
+            dm__sh_signed(c, c->triangles, nr, x0, pp, 0, &feat, &dist, &t);
+            if (t == (size_t)-1) continue;
+            tr = c->triangles + 3 * t;
+            for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
+            if (j == 3) continue;
+            dm__pz_load(c->positions, tr[(j + 1) % 3], pu);
+            dm__pz_load(c->positions, tr[(j + 2) % 3], pw);
+            dm__pz_sub(pu, pp, pu);
+            dm__pz_sub(pw, pp, pw);
+            dm__cross3(pu, pw, A);
+            len = dm__pz_len(A);
+            if (!(len > 0.0)) continue;
+            for (k = 0; k < 3; k++) pl[4 * np + (size_t)k] = A[k] / len;
+            pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
+            np++;
+        }
+        yv = pl + 4 * np; /* Dykstra's corrections, 3 per plane */
+        for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
+        for (iter = 0; iter < 200 && np; iter++) {
+            double worst = 0.0;
+            for (i = 0; i < np; i++) {
+                const double *n = pl + 4 * i;
+                double z[3], sdist;
+                for (k = 0; k < 3; k++) z[k] = x[k] + yv[3 * i + (size_t)k];
+                sdist = pl[4 * i + 3] - dm__dot3(n, z);
+                for (k = 0; k < 3; k++) {
+                    double nx = sdist > 0.0 ? z[k] + sdist * n[k] : z[k];
+                    yv[3 * i + (size_t)k] = z[k] - nx;
+                    x[k] = nx;
+                }
+            }
+            for (i = 0; i < np; i++) {
+                double sdist = pl[4 * i + 3] - dm__dot3(pl + 4 * i, x);
+                if (sdist > worst) worst = sdist;
+            }
+            if (worst <= 0.5 * in->margin) break;
+        }
+        for (k = 0; k < 3; k++) {
+            corrected[k] = (float)x[k];
+            x[k] = corrected[k];
+            if (corrected[k] != c->position[k]) moved = 1;
+        }
+        /* the check at the rounded position: no relevant vertex ends outside */
+        for (i = 0; i < npts; i++) {
+            double pp[3], dist, sd;
+            float f;
+            int feat;
+            memcpy(&f, &in->pts[2 * i + 1], sizeof f);
+            dm__pz_load(in->pos, in->pts[2 * i], pp);
+            sd = dm__sh_signed(c, c->triangles, nr, x, pp, 0, &feat, &dist, NULL);
+            if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
+                sh->vetoed_enclose++;
+                return DM_COLLAPSE_VETO;
+            }
+        }
+        np = 0;
+        yv = pl;
+    }
+    /* (2) Inside the shell: keep, the middle of each new edge at keep, and each new triangle's
+       centroid lie within the offset grown at their closest point of the original. */
+    if (!dm__sh_in_shell(sh, in, x)) {
+        sh->vetoed_shell++;
+        return DM_COLLAPSE_VETO;
+    }
+    for (i = 0; i < nr; i++) {
+        const uint32_t *t = c->triangles + 3 * i;
+        double p[3][3], y[3];
+        for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
+        for (k = 0; k < 3; k++) y[k] = (p[0][k] + p[1][k] + p[2][k]) / 3.0;
+        if (!dm__sh_in_shell(sh, in, y)) {
+            sh->vetoed_shell++;
+            return DM_COLLAPSE_VETO;
+        }
+        for (j = 0; j < 3; j++) {
+            if (t[j] != c->keep) continue;
+            for (k = 0; k < 3; k++) y[k] = 0.5 * (p[j][k] + p[(j + 1) % 3][k]);
+            if (!dm__sh_in_shell(sh, in, y)) {
+                sh->vetoed_shell++;
+                return DM_COLLAPSE_VETO;
+            }
+        }
+    }
+    /* (3) No height-field overlap: rays from points of each new triangle along the inverted
+       interpolated normal meet the original's front side first, within twice the shell's
+       thickness (a miss is allowed only when the original is open). Vertex normals: keep's from
+       its whole new one-ring, a neighbour's from the one-ring triangles it is in. */
+    vn = yv + 3 * np; /* 9 per ring triangle: its corners' normals */
+    for (i = 0; i < 9 * nr; i++) vn[i] = 0.0;
+    for (i = 0; i < nr; i++) {
+        const uint32_t *t = c->triangles + 3 * i;
+        double p[3][3], n[3];
+        for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
+        if (!dm__sh_plane(p[0], p[1], p[2], n)) continue;
+        for (j = 0; j < 3; j++) {
+            double ea[3], eb[3], la, lb, ang;
+            dm__pz_sub(p[(j + 1) % 3], p[j], ea);
+            dm__pz_sub(p[(j + 2) % 3], p[j], eb);
+            la = dm__pz_len(ea);
+            lb = dm__pz_len(eb);
+            if (!(la > 0.0 && lb > 0.0)) continue;
+            ang = dm__dot3(ea, eb) / (la * lb);
+            ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+            /* add to every ring triangle's corner at this vertex (all of them contain keep) */
+            {
+                size_t m;
+                for (m = 0; m < nr; m++) {
+                    const uint32_t *u = c->triangles + 3 * m;
+                    int q;
+                    for (q = 0; q < 3; q++)
+                        if (u[q] == t[j])
+                            for (k = 0; k < 3; k++) vn[9 * m + 3 * (size_t)q + (size_t)k] += ang * n[k];
+                }
+            }
+        }
+    }
+#ifdef DM__SH_NO_OVERLAP
+    nr = 0;
+#endif
+    for (i = 0; i < nr; i++) {
+        const uint32_t *t = c->triangles + 3 * i;
+        double p[3][3];
+        int s;
+        for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
+        for (s = 0; s < in->samples; s++) {
+            double y[3], n[3], len, fn[3], q[3][3];
+            dm_ray ray;
+            dm_hit hit;
+            const uint32_t *ot;
+            for (k = 0; k < 3; k++) {
+                y[k] = dm__sh_bary[s][0] * p[0][k] + dm__sh_bary[s][1] * p[1][k] + dm__sh_bary[s][2] * p[2][k];
+                n[k] = dm__sh_bary[s][0] * vn[9 * i + (size_t)k] + dm__sh_bary[s][1] * vn[9 * i + 3 + (size_t)k] +
+                       dm__sh_bary[s][2] * vn[9 * i + 6 + (size_t)k];
+            }
+            len = dm__pz_len(n);
+            if (!(len > 0.0)) {
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+            for (k = 0; k < 3; k++) { /* from a little outside: the triangle may graze a bump */
+                ray.dir[k] = (float)(-n[k] / len);
+                ray.org[k] = (float)(y[k] + 0.25 * sh->thickness * n[k] / len);
+            }
+            ray.tmin = 0.0f;
+            ray.tmax = 2.25f * sh->thickness;
+            if (!dm_bvh_intersect(in->bvh, &ray, &hit)) {
+                if (in->open) continue;
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+            ot = in->idx + 3 * (size_t)hit.triangle;
+            for (k = 0; k < 3; k++) dm__pz_load(in->pos, ot[k], q[k]);
+            if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+        }
+    }
+    if (moved) {
+        sh->moved++;
+        return DM_COLLAPSE_MOVE;
+    }
+    return DM_COLLAPSE_ALLOW;
 }
 
 #ifdef __cplusplus
