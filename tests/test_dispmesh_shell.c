@@ -1,0 +1,480 @@
+/* test_dispmesh_shell.c - dispmesh.h part 3: the bounding shell and paper 000's simplification
+   constraints (dm_shell_grow, dm_shell_constraint). Generated meshes (a bumpy sphere, a fat
+   torus with a narrow hole) and, when glmark2-data is installed, the bunny at 500 faces.
+   Checked by brute force, independently of the constraint's own bookkeeping:
+   - the shell: offsets within [0, thickness], shell point = vertex + offset * unit normal, no
+     shell point closer to the original than 85% of its offset (the offset surface does not run
+     into the original), vertices stopped where the torus's hole closes;
+   - the constrained base: every original vertex on the inner side of the base (signed distance
+     with the angle-weighted pseudonormal at its closest base feature <= 1e-4 of the diagonal;
+     vertices whose closest feature is on a boundary are excluded and counted), every sampled
+     base point inside the shell, the bake rays' first hits front-facing; the face count reached;
+   - bad input, allocation failure at every point, cancel, determinism. */
+#define DM_IMPLEMENTATION
+#include "dispmesh.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
+#include "test.h"
+#include "testmesh.h"
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void load(const float *p, uint32_t v, double o[3]) { o[0] = p[3 * v]; o[1] = p[3 * v + 1]; o[2] = p[3 * v + 2]; }
+static void unit_normal(const float *p, const uint32_t *t, double n[3])
+{
+    double a[3], b[3], c[3], e1[3], e2[3], l;
+    int k;
+    load(p, t[0], a); load(p, t[1], b); load(p, t[2], c);
+    for (k = 0; k < 3; k++) { e1[k] = b[k] - a[k]; e2[k] = c[k] - a[k]; }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    l = sqrt(dot3(n, n));
+    if (l > 0) { n[0] /= l; n[1] /= l; n[2] /= l; }
+}
+
+/* closest point on triangle (Ericson 5.1.5, written again here so the test does not lean on the
+   header's): returns d^2, barycentrics of b and c */
+static double tri_closest(const double p[3], const double a[3], const double b[3], const double c[3], double *u, double *v)
+{
+    double ab[3], ac[3], ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, q[3], r = 0;
+    int k;
+    for (k = 0; k < 3; k++) { ab[k] = b[k] - a[k]; ac[k] = c[k] - a[k]; ap[k] = p[k] - a[k]; bp[k] = p[k] - b[k]; cp[k] = p[k] - c[k]; }
+    d1 = dot3(ab, ap); d2 = dot3(ac, ap); d3 = dot3(ab, bp); d4 = dot3(ac, bp); d5 = dot3(ab, cp); d6 = dot3(ac, cp);
+    vc = d1 * d4 - d3 * d2; vb = d5 * d2 - d1 * d6; va = d3 * d6 - d5 * d4;
+    if (d1 <= 0 && d2 <= 0) { *u = 0; *v = 0; }
+    else if (d3 >= 0 && d4 <= d3) { *u = 1; *v = 0; }
+    else if (vc <= 0 && d1 >= 0 && d3 <= 0) { *u = d1 / (d1 - d3); *v = 0; }
+    else if (d6 >= 0 && d5 <= d6) { *u = 0; *v = 1; }
+    else if (vb <= 0 && d2 >= 0 && d6 <= 0) { *u = 0; *v = d2 / (d2 - d6); }
+    else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) { *v = (d4 - d3) / ((d4 - d3) + (d5 - d6)); *u = 1 - *v; }
+    else { double s = va + vb + vc; *u = vb / s; *v = vc / s; }
+    for (k = 0; k < 3; k++) { q[k] = a[k] + *u * ab[k] + *v * ac[k]; r += (p[k] - q[k]) * (p[k] - q[k]); }
+    return r;
+}
+
+/* Inner-side check of every original vertex against the base, by brute force over the base. */
+typedef struct side_report { size_t outside, boundary, checked; double worst; } side_report;
+static side_report inner_side(const mesh *orig, const float *bp, const uint32_t *bi, size_t bnt, double diag)
+{
+    side_report r = {0, 0, 0, -1e300};
+    size_t v, t, s;
+    unsigned char *bvert;
+    uint32_t maxv = 0;
+    for (t = 0; t < 3 * bnt; t++) if (bi[t] > maxv) maxv = bi[t];
+    bvert = (unsigned char *)calloc((size_t)maxv + 1, 1);
+    for (t = 0; t < bnt; t++) /* boundary vertices: an edge of theirs with one triangle */
+        for (s = 0; s < 3; s++) {
+            uint32_t a = bi[3 * t + s], b = bi[3 * t + (s + 1) % 3];
+            size_t u, cnt = 0;
+            for (u = 0; u < bnt; u++) {
+                int ha = 0, hb = 0, k;
+                for (k = 0; k < 3; k++) { ha |= bi[3 * u + k] == a; hb |= bi[3 * u + k] == b; }
+                cnt += ha && hb;
+            }
+            if (cnt == 1) bvert[a] = bvert[b] = 1;
+        }
+    for (v = 0; v < orig->nv; v++) {
+        double p[3], best = 1e300, bu = 0, bv = 0, w[3], q[3] = {0, 0, 0}, N[3] = {0, 0, 0}, d[3], sd;
+        size_t bt = 0;
+        uint32_t fv[3];
+        int nf = 0, j, k, faces = 0;
+        load(orig->p, (uint32_t)v, p);
+        for (t = 0; t < bnt; t++) {
+            double a[3], b[3], c[3], u, vv, d2;
+            load(bp, bi[3 * t], a); load(bp, bi[3 * t + 1], b); load(bp, bi[3 * t + 2], c);
+            d2 = tri_closest(p, a, b, c, &u, &vv);
+            if (d2 < best) { best = d2; bt = t; bu = u; bv = vv; }
+        }
+        w[0] = 1 - bu - bv; w[1] = bu; w[2] = bv;
+        for (j = 0; j < 3; j++) {
+            double c[3];
+            load(bp, bi[3 * bt + j], c);
+            for (k = 0; k < 3; k++) q[k] += w[j] * c[k];
+            if (w[j] > 1e-7) fv[nf++] = bi[3 * bt + j];
+        }
+        for (s = 0; s < bnt; s++) { /* pseudonormal of the feature: faces that contain it */
+            const uint32_t *tr = bi + 3 * s;
+            int has = 0, corner = 0;
+            double n[3], ang = 1;
+            for (j = 0; j < nf; j++)
+                for (k = 0; k < 3; k++)
+                    if (tr[k] == fv[j]) { has++; corner = k; }
+            if (has < nf) continue;
+            faces++;
+            unit_normal(bp, tr, n);
+            if (nf == 1) {
+                double a[3], b[3], c[3], e1[3], e2[3], cs;
+                load(bp, tr[corner], a); load(bp, tr[(corner + 1) % 3], b); load(bp, tr[(corner + 2) % 3], c);
+                for (k = 0; k < 3; k++) { e1[k] = b[k] - a[k]; e2[k] = c[k] - a[k]; }
+                cs = dot3(e1, e2) / sqrt(dot3(e1, e1) * dot3(e2, e2));
+                ang = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
+            }
+            for (k = 0; k < 3; k++) N[k] += ang * n[k];
+        }
+        if ((nf == 2 && faces < 2) || (nf == 1 && bvert[fv[0]])) { r.boundary++; continue; } /* on a boundary */
+        for (k = 0; k < 3; k++) d[k] = p[k] - q[k];
+        sd = dot3(d, N) > 0 ? sqrt(best) : -sqrt(best);
+        r.checked++;
+        if (sd > 1e-4 * diag) r.outside++;
+        if (sd / diag > r.worst) r.worst = sd / diag;
+    }
+    free(bvert);
+    return r;
+}
+
+static double diagonal(const mesh *m)
+{
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, d = 0;
+    size_t v;
+    int k;
+    for (v = 0; v < m->nv; v++)
+        for (k = 0; k < 3; k++) {
+            if (m->p[3 * v + k] < lo[k]) lo[k] = m->p[3 * v + k];
+            if (m->p[3 * v + k] > hi[k]) hi[k] = m->p[3 * v + k];
+        }
+    for (k = 0; k < 3; k++) d += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    return sqrt(d);
+}
+
+/* the shell's own properties; returns the number of stopped vertices seen */
+static void check_shell(const char *what, const mesh *m, const dm_shell *sh, const dm_bvh *bvh)
+{
+    size_t v, bad_range = 0, bad_pos = 0, bad_norm = 0, collide = 0, full = 0;
+    for (v = 0; v < m->nv; v++) {
+        const float *n = sh->normals + 3 * v, *p = m->p + 3 * v, *s = sh->positions + 3 * v;
+        double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+        float o = sh->offset[v];
+        int k;
+        dm_closest cl;
+        if (!(o >= 0.0f && o <= sh->thickness)) bad_range++;
+        if (fabs(len - 1.0) > 1e-5) bad_norm++;
+        for (k = 0; k < 3; k++)
+            if (s[k] != p[k] + o * n[k]) bad_pos++;
+        if (o == sh->thickness) full++;
+        if (o > 0.0f && dm_bvh_closest_point(bvh, s, INFINITY, &cl) && cl.distance < 0.85f * o) collide++;
+    }
+    T_CHECK_MSG(bad_range == 0 && bad_pos == 0 && bad_norm == 0, "%s: %zu offsets out of range, %zu positions, %zu normals", what,
+                bad_range, bad_pos, bad_norm);
+    T_CHECK_MSG(collide == 0, "%s: %zu shell points closer to the original than 85%% of their offset", what, collide);
+    T_CHECK_MSG(full + sh->stopped_vertices == m->nv, "%s: %zu at full thickness + %zu stopped != %zu", what, full,
+                sh->stopped_vertices, m->nv);
+}
+
+/* angle-weighted vertex normals of a mesh (test's own) */
+static void vertex_normals(const float *p, size_t nv, const uint32_t *t, size_t nt, double *vn)
+{
+    size_t i;
+    memset(vn, 0, 3 * nv * sizeof(double));
+    for (i = 0; i < nt; i++) {
+        double n[3];
+        int c, k;
+        unit_normal(p, t + 3 * i, n);
+        for (c = 0; c < 3; c++) {
+            double a[3], b[3], d[3], e1[3], e2[3], cs;
+            load(p, t[3 * i + c], a); load(p, t[3 * i + (c + 1) % 3], b); load(p, t[3 * i + (c + 2) % 3], d);
+            for (k = 0; k < 3; k++) { e1[k] = b[k] - a[k]; e2[k] = d[k] - a[k]; }
+            cs = dot3(e1, e2) / sqrt(dot3(e1, e1) * dot3(e2, e2));
+            cs = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
+            for (k = 0; k < 3; k++) vn[3 * t[3 * i + c] + k] += cs * n[k];
+        }
+    }
+    for (i = 0; i < nv; i++) {
+        double l = sqrt(dot3(vn + 3 * i, vn + 3 * i));
+        if (l > 0) { vn[3 * i] /= l; vn[3 * i + 1] /= l; vn[3 * i + 2] /= l; }
+    }
+}
+
+/* Base points (a barycentric grid of 15 per triangle): how many lie outside the shell (farther
+   from the original than the thickness), and how many bake rays (along the inverted interpolated
+   normal, from a quarter thickness outside, up to 2.25 thicknesses) first meet a back face or
+   nothing. */
+typedef struct base_report { size_t samples, outside_shell, back_first, missed; } base_report;
+static base_report check_base(const dm_shell *sh, const dm_bvh *orig_bvh, const mesh *orig, const float *bp, size_t bnv,
+                              const uint32_t *bi, size_t bnt)
+{
+    base_report r = {0, 0, 0, 0};
+    double *vn = (double *)malloc(3 * bnv * sizeof(double));
+    size_t t;
+    int i, j, k;
+    vertex_normals(bp, bnv, bi, bnt, vn);
+    for (t = 0; t < bnt; t++)
+        for (i = 0; i <= 4; i++)
+            for (j = 0; i + j <= 4; j++) {
+                double w[3] = {(4 - i - j) / 4.0, i / 4.0, j / 4.0}, y[3] = {0, 0, 0}, n[3] = {0, 0, 0}, l, fn[3];
+                float q[3];
+                dm_closest cl;
+                dm_ray ray;
+                dm_hit hit;
+                int c;
+                for (c = 0; c < 3; c++)
+                    for (k = 0; k < 3; k++) {
+                        y[k] += w[c] * bp[3 * bi[3 * t + c] + k];
+                        n[k] += w[c] * vn[3 * bi[3 * t + c] + k];
+                    }
+                for (k = 0; k < 3; k++) q[k] = (float)y[k];
+                r.samples++;
+                if (!dm_bvh_closest_point(orig_bvh, q, INFINITY, &cl) || cl.distance > sh->thickness * 1.001f + 1e-6f * sh->diagonal)
+                    r.outside_shell++;
+                l = sqrt(dot3(n, n));
+                for (k = 0; k < 3; k++) {
+                    ray.dir[k] = (float)(-n[k] / l);
+                    ray.org[k] = (float)(y[k] + 0.25 * sh->thickness * n[k] / l);
+                }
+                ray.tmin = 0.0f;
+                ray.tmax = 2.25f * sh->thickness;
+                if (!dm_bvh_intersect(orig_bvh, &ray, &hit)) { r.missed++; continue; }
+                unit_normal(orig->p, orig->t + 3 * hit.triangle, fn);
+                if (dot3(fn, n) <= 0) r.back_first++;
+            }
+    free(vn);
+    return r;
+}
+
+typedef struct run { dm_pm *pm; dm_simplify_report rep; float *bp; uint32_t *bi; size_t bnv, bnt; } run;
+static dm_result simplify(const mesh *m, dm_shell *sh, size_t target, run *r)
+{
+    dm_simplify_options o;
+    dm_result res;
+    memset(&o, 0, sizeof o);
+    memset(r, 0, sizeof *r);
+    o.target_triangles = target;
+    if (sh) {
+        o.constraint = dm_shell_constraint;
+        o.constraint_user = sh;
+    }
+    res = dm_simplify(m->p, m->nv, m->t, m->nt, &o, &r->pm, &r->rep);
+    if (res != DM_OK) return res;
+    dm_pm_counts(r->pm, &r->bnv, &r->bnt);
+    r->bp = (float *)malloc(3 * r->bnv * sizeof(float) + 1);
+    r->bi = (uint32_t *)malloc(3 * r->bnt * sizeof(uint32_t) + 1);
+    dm_pm_get_mesh(r->pm, r->bp, r->bi, NULL);
+    return DM_OK;
+}
+static void run_free(run *r) { dm_pm_free(r->pm); free(r->bp); free(r->bi); memset(r, 0, sizeof *r); }
+
+/* the whole chain on one mesh: shell, constrained and unconstrained bases, checks */
+static void check_mesh(const char *what, const mesh *m, size_t target, size_t max_faces, int closed)
+{
+    dm_shell *sh = NULL;
+    dm_bvh *bvh = NULL;
+    run con, unc;
+    double diag = diagonal(m);
+    dm_distance_report dc, du;
+    side_report sr;
+    base_report br;
+    T_CHECK(dm_bvh_build(m->p, m->nv, m->t, m->nt, NULL, &bvh) == DM_OK);
+    T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &sh) == DM_OK);
+    if (!sh || !bvh) { dm_bvh_free(bvh); dm_shell_free(sh); return; }
+    T_NEAR(sh->thickness, 0.02 * diag, 1e-6 * diag);
+    check_shell(what, m, sh, bvh);
+    T_CHECK(simplify(m, sh, target, &con) == DM_OK);
+    T_CHECK(simplify(m, NULL, con.bnt, &unc) == DM_OK);
+    T_CHECK_MSG(con.bnt <= max_faces, "%s: %zu faces reached (target %zu)", what, con.bnt, target);
+    sr = inner_side(m, con.bp, con.bi, con.bnt, diag);
+    T_CHECK_MSG(sr.outside == 0, "%s: %zu of %zu original vertices outside the base (worst %.3g of the diagonal)", what,
+                sr.outside, sr.checked, sr.worst);
+    if (closed) T_EQ_SIZE(sr.boundary, 0);
+    br = check_base(sh, bvh, m, con.bp, con.bnv, con.bi, con.bnt);
+    T_CHECK_MSG(br.outside_shell == 0, "%s: %zu of %zu base samples outside the shell", what, br.outside_shell, br.samples);
+    T_CHECK_MSG(br.back_first == 0, "%s: %zu of %zu bake rays meet a back face first", what, br.back_first, br.samples);
+    if (closed) T_CHECK_MSG(br.missed == 0, "%s: %zu of %zu bake rays miss a closed original", what, br.missed, br.samples);
+    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, con.bp, con.bnv, con.bi, con.bnt, 100000, NULL, &dc) == DM_OK);
+    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, unc.bp, unc.bnv, unc.bi, unc.bnt, 100000, NULL, &du) == DM_OK);
+    printf("  %s: %zu -> %zu faces (unconstrained %zu); rms %.3e (unconstrained %.3e, ratio %.2f), max %.3e; "
+           "%zu vertices checked, %zu on a boundary, worst side %.2e; shell: %zu stopped; constraint: %zu moved, "
+           "%zu/%zu/%zu vetoed (enclose/shell/overlap); rays missed %zu of %zu\n",
+           what, m->nt, con.bnt, unc.bnt, dc.rms, du.rms, dc.rms / du.rms, dc.max, sr.checked, sr.boundary, sr.worst,
+           sh->stopped_vertices, sh->moved, sh->vetoed_enclose, sh->vetoed_shell, sh->vetoed_overlap, br.missed, br.samples);
+    run_free(&con);
+    run_free(&unc);
+    dm_bvh_free(bvh);
+    dm_shell_free(sh);
+}
+
+static void test_bad_input(const mesh *m)
+{
+    dm_shell *sh = (dm_shell *)1;
+    dm_shell_options so;
+    float bad[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    uint32_t tri[3] = {0, 1, 2}, badtri[3] = {0, 1, 3};
+    dm_collapse c;
+    float corr[3];
+    memset(&so, 0, sizeof so);
+    T_EQ_INT(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dm_shell_grow(NULL, 3, tri, 1, NULL, &sh), DM_ERR_INVALID_ARGUMENT);
+    T_CHECK(sh == NULL);
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 0, NULL, &sh), DM_ERR_NO_TRIANGLES);
+    T_EQ_INT(dm_shell_grow(bad, 3, badtri, 1, NULL, &sh), DM_ERR_BAD_INDEX);
+    bad[4] = NAN;
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 1, NULL, &sh), DM_ERR_BAD_POSITION);
+    bad[4] = 0.0f;
+    so.thickness = NAN;
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 1, &so, &sh), DM_ERR_INVALID_ARGUMENT);
+    so.thickness = -1.0f;
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 1, &so, &sh), DM_ERR_INVALID_ARGUMENT);
+    so.thickness = 0.0f;
+    so.steps = -2;
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 1, &so, &sh), DM_ERR_INVALID_ARGUMENT);
+    so.steps = 0;
+    /* one triangle: an open mesh; the shell still grows (along the normal, full thickness) */
+    T_EQ_INT(dm_shell_grow(bad, 3, tri, 1, &so, &sh), DM_OK);
+    if (sh) {
+        T_EQ_SIZE(sh->stopped_vertices, 0);
+        T_NEAR(sh->positions[2], sh->thickness, 1e-7);
+    }
+    memset(&c, 0, sizeof c);
+    T_EQ_INT(dm_shell_constraint(NULL, &c, corr), DM_COLLAPSE_VETO);
+    T_EQ_INT(dm_shell_constraint(sh, NULL, corr), DM_COLLAPSE_VETO);
+    T_EQ_INT(dm_shell_constraint(sh, &c, corr), DM_COLLAPSE_VETO); /* no arrays */
+    dm_shell_free(sh);
+    dm_shell_free(NULL);
+}
+
+typedef struct counting { long calls, fail_at, live; } counting;
+static void *c_alloc(void *u, size_t s)
+{
+    counting *c = (counting *)u;
+    void *p;
+    if (c->calls++ >= c->fail_at) return NULL;
+    p = malloc(s);
+    if (p) c->live++;
+    return p;
+}
+static void c_free(void *u, void *p)
+{
+    counting *c = (counting *)u;
+    if (p) { c->live--; free(p); }
+}
+
+/* allocation failure at every point of dm_shell_grow; then a shell whose allocator fails inside
+   the constraint: every candidate is vetoed, nothing leaks */
+static void test_alloc_fail(void)
+{
+    mesh m = make_sphere(6, 0.05, 1.0);
+    counting cnt;
+    dm_allocator al = {c_alloc, c_free, &cnt};
+    dm_shell_options so;
+    long k, total = 0, bad = 0;
+    memset(&so, 0, sizeof so);
+    so.allocator = &al;
+    for (k = 0;; k++) {
+        dm_shell *sh = NULL;
+        dm_result r;
+        cnt.calls = 0;
+        cnt.fail_at = k;
+        cnt.live = 0;
+        r = dm_shell_grow(m.p, m.nv, m.t, m.nt, &so, &sh);
+        if (r == DM_OK) {
+            total = k;
+            dm_shell_free(sh);
+            if (cnt.live != 0) bad++;
+            break;
+        }
+        if (r != DM_ERR_OUT_OF_MEMORY || sh != NULL || cnt.live != 0) bad++;
+    }
+    T_CHECK_MSG(bad == 0 && total > 5, "%ld failures mishandled over %ld allocation points", bad, total);
+    {
+        dm_shell *sh = NULL;
+        run r;
+        cnt.calls = 0;
+        cnt.fail_at = 1L << 40;
+        cnt.live = 0;
+        T_CHECK(dm_shell_grow(m.p, m.nv, m.t, m.nt, &so, &sh) == DM_OK);
+        cnt.fail_at = cnt.calls; /* from now on the constraint's scratch cannot grow */
+        if (sh && simplify(&m, sh, 20, &r) == DM_OK) {
+            T_EQ_SIZE(r.rep.collapse_count, 0);
+            T_CHECK(r.rep.vetoed > 0);
+            run_free(&r);
+        }
+        dm_shell_free(sh);
+        T_EQ_INT(cnt.live, 0);
+    }
+    mesh_free(&m);
+}
+
+static int cancel_now(void *u, float done) { (void)done; return ++*(int *)u >= 2; }
+
+static void test_cancel_and_determinism(const mesh *m)
+{
+    dm_shell_options so;
+    dm_shell *a = NULL, *b = NULL;
+    int calls = 0;
+    run ra, rb;
+    memset(&so, 0, sizeof so);
+    so.progress = cancel_now;
+    so.progress_user = &calls;
+    T_EQ_INT(dm_shell_grow(m->p, m->nv, m->t, m->nt, &so, &a), DM_CANCELLED);
+    T_CHECK(a == NULL);
+    T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &a) == DM_OK);
+    T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &b) == DM_OK);
+    if (!a || !b) { dm_shell_free(a); dm_shell_free(b); return; }
+    T_CHECK(memcmp(a->positions, b->positions, 3 * m->nv * sizeof(float)) == 0);
+    T_CHECK(simplify(m, a, 300, &ra) == DM_OK);
+    T_CHECK(simplify(m, b, 300, &rb) == DM_OK);
+    T_CHECK(ra.bnv == rb.bnv && ra.bnt == rb.bnt && ra.bp && rb.bp &&
+            memcmp(ra.bp, rb.bp, 3 * ra.bnv * sizeof(float)) == 0 && memcmp(ra.bi, rb.bi, 3 * ra.bnt * sizeof(uint32_t)) == 0);
+    run_free(&ra);
+    run_free(&rb);
+    dm_shell_free(a);
+    dm_shell_free(b);
+}
+
+int main(int argc, char **argv)
+{
+    mesh sphere, torus;
+    T_BEGIN(argc, argv);
+    sphere = make_sphere(24, 0.08, 1.0);
+    check_mesh("bumpy sphere", &sphere, 200, 200, 1);
+    torus = make_torus(96, 48, 0.9, 0.05);
+    {
+        dm_shell *sh = NULL;
+        dm_bvh *bvh = NULL;
+        dm_shell_options so;
+        memset(&so, 0, sizeof so);
+        so.thickness = 0.3f; /* the hole is about 0.2 wide: the inner side must stop */
+        T_CHECK(dm_bvh_build(torus.p, torus.nv, torus.t, torus.nt, NULL, &bvh) == DM_OK);
+        T_CHECK(dm_shell_grow(torus.p, torus.nv, torus.t, torus.nt, &so, &sh) == DM_OK);
+        if (sh && bvh) {
+            check_shell("torus, thick shell", &torus, sh, bvh);
+            T_CHECK_MSG(sh->stopped_vertices > torus.nv / 10, "%zu stopped", sh->stopped_vertices);
+        }
+        dm_shell_free(sh);
+        dm_bvh_free(bvh);
+    }
+    check_mesh("fat torus", &torus, 400, 400, 1);
+    test_bad_input(&sphere);
+    test_alloc_fail();
+    test_cancel_and_determinism(&sphere);
+    {
+        const char *bunny = "/usr/share/glmark2/models/bunny.obj";
+        mio_mesh mm;
+        mio_error err;
+        FILE *f = fopen(bunny, "rb");
+        if (!f) {
+            T_SKIP_N(7, "bunny", "glmark2-data is not installed");
+        } else if (getenv("TEST_SANITIZE")) {
+            fclose(f);
+            T_SKIP_N(7, "bunny", "70k triangles under the sanitizers: about a minute");
+        } else {
+            fclose(f);
+            if (mio_read_file(bunny, NULL, &mm, &err) == MIO_OK) {
+                mesh b;
+                b.p = mm.positions;
+                b.t = mm.indices;
+                b.nv = mm.vertex_count;
+                b.nt = mm.triangle_count;
+                check_mesh("bunny", &b, 500, 510, 0);
+                mio_free_mesh(&mm);
+            } else {
+                T_CHECK_MSG(0, "bunny: %s", err.message);
+            }
+        }
+    }
+    mesh_free(&sphere);
+    mesh_free(&torus);
+    return T_END();
+}
