@@ -39,7 +39,7 @@ HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 HAVE_CHOLMOD  := $(wildcard /usr/include/suitesparse/cholmod.h)
 HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
 
-EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain
+EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain $(B)/dispmesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
              $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param $(B)/test_dispmesh_shell
 ifeq ($(shell uname -m),x86_64)

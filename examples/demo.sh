@@ -19,6 +19,16 @@ if [ -f "$bunny" ]; then
 else
   echo "demo: $bunny not found (apt-get install glmark2-data): bunny scenes skipped"
 fi
+# dispmesh.h: paper 000's base mesh + displacement map (its Figs 5.1.x): the generated brick down to its
+# 12-face box, and the bunny down to 500 faces (each: _base.obj _disp.pfm _normal.png _recon.obj _views.png)
+"$B/dispmesh" --brick --faces 12 --res 256 -o "$OUT/dispmesh_brick"
+rendered=$((rendered + 1))
+if [ -f "$bunny" ]; then
+  "$B/dispmesh" "$bunny" --faces 500 --res 512 -o "$OUT/dispmesh_bunny"
+  rendered=$((rendered + 1))
+else
+  echo "demo: $bunny not found (apt-get install glmark2-data): dispmesh bunny skipped"
+fi
 # subdiv4.h: paper 001's four terrain scenes (its Figs 3-6)
 for scene in desert vegetation mountain5 mountain6; do
   "$B/terrain" --preset "$scene" -o "$OUT/terrain_$scene.png" && rendered=$((rendered + 1))

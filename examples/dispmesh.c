@@ -1,0 +1,792 @@
+/* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
+
+   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--inward]
+     IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
+     --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
+                 Fig 5.1.1), 496 triangles, closed and oriented outward; --faces 12 gives its box
+     --faces N   base mesh triangles to aim for (default 500)
+     --res R     displacement map R x R texels (default 512, 8..16384)
+     -o PREFIX   output prefix (default out/dispmesh); the prefix's directory is created if missing
+     --no-views  skip the rendering of PREFIX_views.png
+     --size S    size in pixels of each of the three views (default 400)
+     --inward    bake with the paper's rule, the first hit along -normal only (dm_bake_options.inward);
+                 the default looks both ways, which forgives a base that pokes into the original
+   The pipeline (dispmesh.h): dm_shell_grow (the bounding shell of the original), dm_simplify with
+   dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
+   R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
+   mesh) and dm_surface_distance (200000 samples a side) against the original.
+   Writes
+     PREFIX_base.obj     the base mesh with its map coordinates (v, vt, f v/vt; vt v = 0 is the
+                         map's row 0, which is the bottom row of the PFM and of the PNG)
+     PREFIX_disp.pfm     the displacement, 1 channel, world units along -normal (positive inward)
+     PREFIX_normal.png   the original's normals at the hits, n * 0.5 + 0.5 (gutter texels black)
+     PREFIX_recon.obj    the reconstruction (positions only)
+     PREFIX_views.png    original | base with wireframe | reconstruction, one camera, captions
+   Progress goes to stderr; the last line on stdout is
+     RESULT dispmesh faces= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
+            equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
+   with distances as fractions of the original's bounding-box diagonal (see print_result).
+   Exit status 0 on success, 1 on bad arguments or unreadable input, 2 when a stage fails. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
+#define SR_IMPLEMENTATION
+#include "render.h"
+#define DM_IMPLEMENTATION
+#include "dispmesh.h"
+
+/* A mesh this program owns (malloc) or borrows. */
+typedef struct mesh {
+    float *p;
+    size_t nv;
+    uint32_t *t;
+    size_t nt;
+} mesh;
+
+/* Everything allocated by one run, freed by run_free on every path. */
+typedef struct run {
+    mio_mesh loaded;
+    mesh orig;                 /* = loaded's arrays, or the generated brick (owned) */
+    int orig_owned;
+    dm_shell *shell;
+    dm_pm *pm, *pm_free;       /* constrained (the base), unconstrained (same count, then equal bytes) */
+    mesh base, free_same, free_bytes;
+    float *weights;
+    dm_param *param;
+    dm_dispmap *map;
+    dm_trimesh *dense;
+} run;
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* ---- progress on stderr: "dispmesh: stage ... 10% 20% ... 100% (12 ms)" ---------------------- */
+
+typedef struct stage {
+    const char *name;
+    int tenths;                /* last tenth printed */
+    double start;
+} stage;
+
+static void stage_begin(stage *s, const char *name)
+{
+    s->name = name;
+    s->tenths = -1;
+    s->start = now_ms();
+    fprintf(stderr, "dispmesh: %-26s", name);
+    fflush(stderr);
+}
+
+static int stage_progress(void *user, float done)
+{
+    stage *s = (stage *)user;
+    int k = done >= 1.0f ? 10 : done > 0.0f ? (int)(done * 10.0f) : 0;
+    if (k > s->tenths) {
+        s->tenths = k;
+        fprintf(stderr, " %d%%", 10 * k);
+        fflush(stderr);
+    }
+    return 0;
+}
+
+static void stage_end(stage *s, const char *note)
+{
+    if (s->tenths < 10) stage_progress(s, 1.0f);
+    fprintf(stderr, "  (%.0f ms)%s%s\n", now_ms() - s->start, note && *note ? "  " : "", note ? note : "");
+}
+
+static void stage_fail(stage *s, const char *what, dm_result r)
+{
+    fprintf(stderr, "\ndispmesh: %s failed: %s\n", what ? what : s->name, dm_result_string(r));
+}
+
+/* ---- the generated brick ----------------------------------------------------------------------
+   A 2 x 1 x 1 box whose surface is a grid on three sets of axis lines (so that the faces share
+   their edges), with V grooves pressed inward: rings around the brick at x = 2/3 and 4/3 and a ring
+   at y = 1/2 around the ends and the long sides. A vertex on a groove's centre line moves inward
+   by the groove depth along the normal of every box face it lies on, so the box encloses it all.
+   Faces are counter-clockwise seen from outside. 11 x 7 x 5 axis lines: 4 (10*6 + 10*4 + 6*4) =
+   496 triangles. The grooves are 0.24 wide and 0.03 deep: with the default shell (2% of the
+   diagonal, 0.049) the constrained simplifier reaches the 12-face box. Deeper or narrower V
+   grooves (0.05 deep and 0.09 wide stopped it at 130 faces) stop the growth of the shell at their
+   bottom, and the box over the groove then lies outside the shell. */
+static int make_brick(mesh *m)
+{
+    static const float xs[] = {0.0f, 0.3f, 0.5467f, 0.6667f, 0.7867f, 1.0f, 1.2133f, 1.3333f, 1.4533f, 1.7f, 2.0f};
+    static const float ys[] = {0.0f, 0.22f, 0.38f, 0.5f, 0.62f, 0.78f, 1.0f};
+    static const float zs[] = {0.0f, 0.25f, 0.5f, 0.75f, 1.0f};
+    const int n[3] = {11, 7, 5};
+    const float depth = 0.03f;
+    int *id, i, j, k, a, nv = 0, nt = 0;
+    size_t cells = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
+    memset(m, 0, sizeof *m);
+    id = (int *)malloc(cells * sizeof(int));
+    m->p = (float *)malloc(cells * 3 * sizeof(float));
+    /* 2 sides x 2 triangles a cell x 3 indices, over the three face pairs */
+    m->t = (uint32_t *)malloc((size_t)12 * (size_t)((n[0] - 1) * (n[1] - 1) + (n[1] - 1) * (n[2] - 1) + (n[2] - 1) * (n[0] - 1)) *
+                              sizeof(uint32_t));
+    if (!id || !m->p || !m->t) { free(id); free(m->p); free(m->t); memset(m, 0, sizeof *m); return 0; }
+    for (i = 0; i < n[0]; i++)
+        for (j = 0; j < n[1]; j++)
+            for (k = 0; k < n[2]; k++) {
+                int g[3], on_face = 0, groove;
+                float *p;
+                g[0] = i; g[1] = j; g[2] = k;
+                for (a = 0; a < 3; a++) on_face |= (g[a] == 0 || g[a] == n[a] - 1);
+                id[((size_t)i * (size_t)n[1] + (size_t)j) * (size_t)n[2] + (size_t)k] = on_face ? nv : -1;
+                if (!on_face) continue;
+                p = m->p + 3 * (size_t)nv++;
+                p[0] = xs[i]; p[1] = ys[j]; p[2] = zs[k];
+                groove = (i == 3 || i == 7 || j == 3);
+                if (!groove) continue;
+                for (a = 0; a < 3; a++) {
+                    if (g[a] == 0) p[a] += depth;
+                    else if (g[a] == n[a] - 1) p[a] -= depth;
+                }
+            }
+    /* faces: normal +-e_a, in-plane axes b, c with e_b x e_c = e_a */
+    for (a = 0; a < 3; a++) {
+        int b = (a + 1) % 3, c = (a + 2) % 3, side;
+        for (side = 0; side < 2; side++) {
+            int u, v;
+            for (u = 0; u + 1 < n[b]; u++)
+                for (v = 0; v + 1 < n[c]; v++) {
+                    int q[4], corner, g[3];
+                    static const int du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+                    for (corner = 0; corner < 4; corner++) {
+                        g[a] = side ? n[a] - 1 : 0;
+                        g[b] = u + du[corner];
+                        g[c] = v + dv[corner];
+                        q[corner] = id[((size_t)g[0] * (size_t)n[1] + (size_t)g[1]) * (size_t)n[2] + (size_t)g[2]];
+                    }
+                    if (side) { /* +e_a: counter-clockwise in (b, c) */
+                        uint32_t *t = m->t + 3 * (size_t)nt;
+                        t[0] = (uint32_t)q[0]; t[1] = (uint32_t)q[1]; t[2] = (uint32_t)q[2];
+                        t[3] = (uint32_t)q[0]; t[4] = (uint32_t)q[2]; t[5] = (uint32_t)q[3];
+                    } else {
+                        uint32_t *t = m->t + 3 * (size_t)nt;
+                        t[0] = (uint32_t)q[0]; t[1] = (uint32_t)q[2]; t[2] = (uint32_t)q[1];
+                        t[3] = (uint32_t)q[0]; t[4] = (uint32_t)q[3]; t[5] = (uint32_t)q[2];
+                    }
+                    nt += 2;
+                }
+        }
+    }
+    free(id);
+    m->nv = (size_t)nv;
+    m->nt = (size_t)nt;
+    return 1;
+}
+
+/* ---- small helpers ---------------------------------------------------------------------------- */
+
+static void mesh_free(mesh *m)
+{
+    free(m->p);
+    free(m->t);
+    memset(m, 0, sizeof *m);
+}
+
+static double bbox_diagonal(const mesh *m, float lo[3], float hi[3])
+{
+    size_t v;
+    int i;
+    for (i = 0; i < 3; i++) { lo[i] = INFINITY; hi[i] = -INFINITY; }
+    for (v = 0; v < m->nt * 3; v++) {
+        const float *p = m->p + 3 * (size_t)m->t[v];
+        for (i = 0; i < 3; i++) {
+            if (p[i] < lo[i]) lo[i] = p[i];
+            if (p[i] > hi[i]) hi[i] = p[i];
+        }
+    }
+    return sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) + (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+/* The current level of a progressive mesh as an owned mesh. */
+static int pm_to_mesh(dm_pm *pm, mesh *m)
+{
+    dm_pm_counts(pm, &m->nv, &m->nt);
+    m->p = (float *)malloc(m->nv * 3 * sizeof(float) + 1);
+    m->t = (uint32_t *)malloc(m->nt * 3 * sizeof(uint32_t) + 1);
+    if (!m->p || !m->t) { mesh_free(m); return 0; }
+    dm_pm_get_mesh(pm, m->p, m->t, NULL);
+    return 1;
+}
+
+/* A strict integer option in [lo, hi]. */
+static int parse_int(const char *opt, const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) {
+        fprintf(stderr, "dispmesh: bad %s '%s' (an integer in %ld..%ld)\n", opt, s, lo, hi);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+/* Creates the directory part of a prefix when it does not exist (one level). */
+static void make_parent_dir(const char *prefix)
+{
+    char dir[4096];
+    const char *slash = strrchr(prefix, '/');
+    size_t n;
+    struct stat st;
+    if (!slash || slash == prefix) return;
+    n = (size_t)(slash - prefix);
+    if (n >= sizeof dir) return;
+    memcpy(dir, prefix, n);
+    dir[n] = '\0';
+    if (stat(dir, &st) != 0) mkdir(dir, 0777); /* a failure shows up when the files are written */
+}
+
+static char *path_with(const char *prefix, const char *suffix)
+{
+    size_t a = strlen(prefix), b = strlen(suffix);
+    char *s = (char *)malloc(a + b + 1);
+    if (!s) return NULL;
+    memcpy(s, prefix, a);
+    memcpy(s + a, suffix, b + 1);
+    return s;
+}
+
+/* 1 when PREFIX_base.obj can be created (a file made by the probe is removed again). */
+static int probe_writable(const char *prefix)
+{
+    char *path = path_with(prefix, "_base.obj");
+    struct stat st;
+    int existed;
+    FILE *f;
+    if (!path) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
+    existed = stat(path, &st) == 0;
+    f = fopen(path, "a");
+    if (!f) {
+        fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, strerror(errno));
+        free(path);
+        return 0;
+    }
+    fclose(f);
+    if (!existed) remove(path);
+    free(path);
+    return 1;
+}
+
+/* ---- the base mesh's map coordinates: distinct (vertex, u, v) corners ------------------------- */
+
+typedef struct uvkey {
+    uint32_t vertex;
+    float u, v;
+    uint32_t corner;
+} uvkey;
+
+static int uvkey_cmp(const void *pa, const void *pb)
+{
+    const uvkey *a = (const uvkey *)pa, *b = (const uvkey *)pb;
+    if (a->vertex != b->vertex) return a->vertex < b->vertex ? -1 : 1;
+    if (a->u != b->u) return a->u < b->u ? -1 : 1;
+    if (a->v != b->v) return a->v < b->v ? -1 : 1;
+    return a->corner < b->corner ? -1 : a->corner > b->corner;
+}
+
+/* corner_uv[c] receives the index of corner c's distinct UV; returns the count (0 on failure). */
+static size_t distinct_uvs(const mesh *base, const dm_param *param, uint32_t *corner_uv, float *uv_out)
+{
+    size_t n = base->nt * 3, c, count = 0;
+    uvkey *k = (uvkey *)malloc(n * sizeof(uvkey) + 1);
+    if (!k) return 0;
+    for (c = 0; c < n; c++) {
+        k[c].vertex = base->t[c];
+        k[c].u = param->uv[2 * c];
+        k[c].v = param->uv[2 * c + 1];
+        k[c].corner = (uint32_t)c;
+    }
+    qsort(k, n, sizeof *k, uvkey_cmp);
+    for (c = 0; c < n; c++) {
+        if (c == 0 || k[c].vertex != k[c - 1].vertex || k[c].u != k[c - 1].u || k[c].v != k[c - 1].v) {
+            if (uv_out) { uv_out[2 * count] = k[c].u; uv_out[2 * count + 1] = k[c].v; }
+            count++;
+        }
+        corner_uv[k[c].corner] = (uint32_t)(count - 1);
+    }
+    free(k);
+    return count;
+}
+
+/* ---- writers ---------------------------------------------------------------------------------- */
+
+/* The base as OBJ with its map coordinates (meshio.h writes positions only). */
+static int write_base_obj(const char *path, const mesh *base, const dm_param *param, size_t *uv_count)
+{
+    uint32_t *cuv = (uint32_t *)malloc(base->nt * 3 * sizeof(uint32_t) + 1);
+    float *uv = (float *)malloc(base->nt * 6 * sizeof(float) + 1);
+    size_t n = 0, i;
+    FILE *f = NULL;
+    int ok = 0;
+    if (!cuv || !uv) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+    n = distinct_uvs(base, param, cuv, uv);
+    if (n == 0) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+    *uv_count = n;
+    f = fopen(path, "w");
+    if (!f) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, strerror(errno)); goto done; }
+    fprintf(f, "# dispmesh base mesh: %zu vertices, %zu triangles, %zu map coordinates (%d x %d map)\n",
+            base->nv, base->nt, n, param->width, param->height);
+    for (i = 0; i < base->nv; i++)
+        fprintf(f, "v %.9g %.9g %.9g\n", base->p[3 * i], base->p[3 * i + 1], base->p[3 * i + 2]);
+    for (i = 0; i < n; i++) fprintf(f, "vt %.9g %.9g\n", uv[2 * i], uv[2 * i + 1]);
+    for (i = 0; i < base->nt; i++)
+        fprintf(f, "f %u/%u %u/%u %u/%u\n", base->t[3 * i] + 1, cuv[3 * i] + 1, base->t[3 * i + 1] + 1,
+                cuv[3 * i + 1] + 1, base->t[3 * i + 2] + 1, cuv[3 * i + 2] + 1);
+    ok = !ferror(f);
+    if (fclose(f) != 0) ok = 0;
+    if (!ok) fprintf(stderr, "\ndispmesh: error writing %s\n", path);
+done:
+    free(cuv);
+    free(uv);
+    return ok;
+}
+
+static int write_normal_png(const char *path, const dm_dispmap *map)
+{
+    size_t n = (size_t)map->width * (size_t)map->height, i;
+    uint8_t *px = (uint8_t *)malloc(n * 3 + 1);
+    sr_result r;
+    int c;
+    if (!px) { fprintf(stderr, "\ndispmesh: out of memory\n"); return 0; }
+    for (i = 0; i < n; i++)
+        for (c = 0; c < 3; c++) {
+            float x = map->normal[3 * i + (size_t)c] * 0.5f + 0.5f;
+            if (map->status[i] == DM_TEXEL_EMPTY || !(x == x)) x = 0.0f;
+            px[3 * i + (size_t)c] = (uint8_t)(x <= 0.0f ? 0 : x >= 1.0f ? 255 : (int)(x * 255.0f + 0.5f));
+        }
+    r = sr_write_png(path, px, map->width, map->height, 3, 1); /* row 0 (v = 0) at the bottom */
+    free(px);
+    if (r != SR_OK) fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r));
+    return r == SR_OK;
+}
+
+/* ---- views ------------------------------------------------------------------------------------ */
+
+typedef struct view {
+    sr_camera cam;
+    sr_light lights[2];
+    int size;
+} view;
+
+/* One iso camera framing the original's bounding sphere, as render_mesh does. */
+static void view_setup(view *vw, const mesh *orig, int size)
+{
+    float lo[3], hi[3], c[3], radius = 0.0f, eye[3], dir[3], key[3], fill[3], dist;
+    const float az = 35.0f * 0.0174533f, el = 25.0f * 0.0174533f, fov = 35.0f;
+    size_t v;
+    int i;
+    bbox_diagonal(orig, lo, hi);
+    for (i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
+    for (v = 0; v < orig->nt * 3; v++) {
+        const float *p = orig->p + 3 * (size_t)orig->t[v];
+        float dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2], r = sqrtf(dx * dx + dy * dy + dz * dz);
+        if (r > radius) radius = r;
+    }
+    if (!(radius > 0.0f)) radius = 1.0f;
+    dir[0] = cosf(el) * sinf(az);
+    dir[1] = sinf(el);
+    dir[2] = cosf(el) * cosf(az);
+    dist = radius / sinf(0.5f * fov * 0.0174533f) * 1.05f;
+    for (i = 0; i < 3; i++) eye[i] = c[i] + dir[i] * dist;
+    sr_camera_look_at(&vw->cam, eye, c, NULL, fov, 1.0f, (dist - radius * 1.1f) > dist * 0.01f ? dist - radius * 1.1f : dist * 0.01f,
+                      dist + radius * 1.1f);
+    for (i = 0; i < 3; i++) {
+        key[i] = -vw->cam.forward[i] + 0.6f * vw->cam.up[i] - 0.5f * vw->cam.right[i];
+        fill[i] = -vw->cam.forward[i] + 0.8f * vw->cam.right[i] - 0.3f * vw->cam.up[i];
+    }
+    sr_light_default(&vw->lights[0], key);
+    sr_light_default(&vw->lights[1], fill);
+    for (i = 0; i < 3; i++) {
+        vw->lights[0].diffuse[i] = 0.85f; vw->lights[0].specular[i] = 0.5f;
+        vw->lights[1].diffuse[i] = 0.3f; vw->lights[1].specular[i] = 0.0f; vw->lights[1].ambient[i] = 0.0f;
+    }
+    vw->size = size;
+}
+
+/* Renders a mesh into img (RGB, allocated here). smooth: area-weighted vertex normals, else face
+   normals; wire: wireframe overlay. */
+static sr_result view_render(const view *vw, const float *p, size_t nv, const uint32_t *t, size_t nt, int smooth,
+                             int wire, const float rgb[3], sr_image8 *img)
+{
+    sr_framebuffer fb;
+    sr_draw_desc d;
+    float bg[4] = {0.93f, 0.94f, 0.96f, 1.0f}, *normals = NULL;
+    sr_result r;
+    int i;
+    memset(img, 0, sizeof *img);
+    if (smooth) {
+        normals = (float *)malloc(nv * 3 * sizeof(float) + 1);
+        if (!normals) return SR_ERR_OUT_OF_MEMORY;
+        if ((r = sr_compute_vertex_normals(p, nv, t, nt, normals)) != SR_OK) { free(normals); return r; }
+    }
+    if ((r = sr_framebuffer_create(&fb, vw->size, vw->size, NULL)) != SR_OK) { free(normals); return r; }
+    sr_framebuffer_clear(&fb, bg, 1.0f);
+    sr_draw_desc_default(&d);
+    d.positions = p; d.vertex_count = nv; d.indices = t; d.triangle_count = nt;
+    d.normals = normals;
+    d.lights = vw->lights; d.light_count = 2;
+    for (i = 0; i < 3; i++) { d.material.diffuse[i] = rgb[i]; d.material.ambient[i] = rgb[i]; }
+    d.wireframe = wire;
+    d.wire_color[0] = 0.1f; d.wire_color[1] = 0.1f; d.wire_color[2] = 0.15f;
+    d.wire_width = 1.5f;
+    r = sr_draw_mesh(&fb, &vw->cam, &d);
+    if (r == SR_OK) {
+        img->pixels = (uint8_t *)malloc((size_t)vw->size * (size_t)vw->size * 3);
+        if (!img->pixels) r = SR_ERR_OUT_OF_MEMORY;
+        else {
+            img->width = img->height = vw->size;
+            img->channels = 3;
+            sr_framebuffer_to_rgb8(&fb, img->pixels, 3);
+        }
+    }
+    sr_framebuffer_free(&fb);
+    free(normals);
+    return r;
+}
+
+static int write_views(const char *path, const run *R, int size, int smooth, double rms)
+{
+    static const float grey[3] = {0.75f, 0.72f, 0.68f}, blue[3] = {0.55f, 0.65f, 0.80f}, warm[3] = {0.80f, 0.68f, 0.55f};
+    view vw;
+    sr_image8 img[3], sheet;
+    char cap[3][96];
+    const char *caps[3];
+    sr_result r;
+    int i, ok = 0;
+    memset(img, 0, sizeof img);
+    memset(&sheet, 0, sizeof sheet);
+    view_setup(&vw, &R->orig, size);
+    r = view_render(&vw, R->orig.p, R->orig.nv, R->orig.t, R->orig.nt, smooth, 0, grey, &img[0]);
+    if (r == SR_OK) r = view_render(&vw, R->base.p, R->base.nv, R->base.t, R->base.nt, 0, 1, blue, &img[1]);
+    if (r == SR_OK)
+        r = view_render(&vw, R->dense->positions, R->dense->vertex_count, R->dense->indices, R->dense->triangle_count, smooth,
+                        0, warm, &img[2]);
+    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: render: %s\n", sr_result_string(r)); goto done; }
+    snprintf(cap[0], sizeof cap[0], "ORIGINAL %zu TRIANGLES", R->orig.nt);
+    snprintf(cap[1], sizeof cap[1], "BASE %zu TRIANGLES", R->base.nt);
+    snprintf(cap[2], sizeof cap[2], "BASE + %dX%d MAP RMS %.3f%%", R->map->width, R->map->height, 100.0 * rms);
+    for (i = 0; i < 3; i++) caps[i] = cap[i];
+    r = sr_contact_sheet(img, caps, 3, 3, NULL, &sheet);
+    if (r == SR_OK) r = sr_write_png(path, sheet.pixels, sheet.width, sheet.height, 3, 0);
+    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r)); goto done; }
+    ok = 1;
+done:
+    for (i = 0; i < 3; i++) free(img[i].pixels);
+    sr_free(NULL, sheet.pixels);
+    return ok;
+}
+
+/* ---- the pipeline ----------------------------------------------------------------------------- */
+
+static void run_free(run *R)
+{
+    dm_trimesh_free(R->dense);
+    dm_dispmap_free(R->map); /* before the dm_param: it shares its neighbour arrays */
+    dm_param_free(R->param);
+    free(R->weights);
+    mesh_free(&R->base);
+    mesh_free(&R->free_same);
+    mesh_free(&R->free_bytes);
+    dm_pm_free(R->pm);
+    dm_pm_free(R->pm_free);
+    dm_shell_free(R->shell);
+    if (R->orig_owned) mesh_free(&R->orig);
+    mio_free_mesh(&R->loaded);
+    memset(R, 0, sizeof *R);
+}
+
+static void usage(FILE *to)
+{
+    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--inward]\n"
+                "  writes PREFIX_base.obj PREFIX_disp.pfm PREFIX_normal.png PREFIX_recon.obj PREFIX_views.png\n"
+                "  and prints one RESULT line (defaults: --faces 500 --res 512 -o out/dispmesh --size 400)\n");
+}
+
+int main(int argc, char **argv)
+{
+    const char *in = NULL, *prefix = "out/dispmesh";
+    long faces = 500, res = 512, size = 400;
+    int brick = 0, views = 1, inward = 0, i, status = 2;
+    run R;
+    stage st;
+    dm_result r;
+    dm_simplify_options so;
+    dm_simplify_report srep;
+    dm_param_options po;
+    dm_bake_options bo;
+    dm_distance_report d_recon, d_base, d_same, d_bytes;
+    double t0 = now_ms(), diag, bake_ms = 0.0, flagged = 0.0;
+    float lo[3], hi[3];
+    size_t uv_count = 0, inside = 0, missed = 0, k, bytes_base = 0, bytes_free = 0;
+    char *path = NULL;
+
+    memset(&R, 0, sizeof R);
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--brick") == 0) brick = 1;
+        else if (strcmp(a, "--no-views") == 0) views = 0;
+        else if (strcmp(a, "--inward") == 0) inward = 1;
+        else if (strcmp(a, "--faces") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 1, 1000000000L, &faces)) return 1; }
+        else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
+        else if (strcmp(a, "--size") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 16, 4096, &size)) return 1; }
+        else if (strcmp(a, "-o") == 0 && i + 1 < argc) {
+            prefix = argv[++i];
+            if (!*prefix) { fprintf(stderr, "dispmesh: empty -o prefix\n"); return 1; }
+        } else if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) { usage(stdout); return 0; }
+        else if (a[0] != '-' && !in) in = a;
+        else { fprintf(stderr, "dispmesh: unexpected argument '%s'\n", a); usage(stderr); return 1; }
+    }
+    if ((in != NULL) == (brick != 0)) {
+        fprintf(stderr, "dispmesh: give exactly one of IN or --brick\n");
+        usage(stderr);
+        return 1;
+    }
+
+    /* the output location, before any work */
+    make_parent_dir(prefix);
+    if (!probe_writable(prefix)) return 1;
+
+    /* 1. the original */
+    if (brick) {
+        if (!make_brick(&R.orig)) { fprintf(stderr, "dispmesh: out of memory\n"); return 2; }
+        R.orig_owned = 1;
+        fprintf(stderr, "dispmesh: generated brick: %zu vertices, %zu triangles\n", R.orig.nv, R.orig.nt);
+    } else {
+        mio_error err;
+        if (mio_read_file(in, NULL, &R.loaded, &err) != MIO_OK) {
+            fprintf(stderr, "dispmesh: %s: %s\n", in, err.message);
+            return 1;
+        }
+        R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
+        R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
+        fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
+    }
+    diag = bbox_diagonal(&R.orig, lo, hi);
+    if (!(diag > 0.0) || !isfinite(diag)) {
+        fprintf(stderr, "dispmesh: %s: the mesh has no extent (bounding-box diagonal %g)\n", brick ? "brick" : in, diag);
+        status = 1;
+        goto done;
+    }
+
+    /* 2. the bounding shell */
+    {
+        dm_shell_options sho;
+        memset(&sho, 0, sizeof sho);
+        stage_begin(&st, "bounding shell");
+        sho.progress = stage_progress; sho.progress_user = &st;
+        r = dm_shell_grow(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &sho, &R.shell);
+        if (r != DM_OK) { stage_fail(&st, "dm_shell_grow", r); status = r == DM_ERR_OUT_OF_MEMORY ? 2 : 1; goto done; }
+        {
+            char note[128];
+            snprintf(note, sizeof note, "thickness %.3g, %zu of %zu vertices stopped early", (double)R.shell->thickness,
+                     R.shell->stopped_vertices, R.shell->vertex_count);
+            stage_end(&st, note);
+        }
+    }
+
+    /* 3. the base: constrained simplification */
+    memset(&so, 0, sizeof so);
+    so.target_triangles = (size_t)faces;
+    so.constraint = dm_shell_constraint;
+    so.constraint_user = R.shell;
+    stage_begin(&st, "simplify (shell-constrained)");
+    so.progress = stage_progress; so.progress_user = &st;
+    r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm, &srep);
+    if (r != DM_OK) { stage_fail(&st, "dm_simplify", r); status = r == DM_ERR_OUT_OF_MEMORY ? 2 : 1; goto done; }
+    dm_pm_set_level(R.pm, 0);
+    if (!pm_to_mesh(R.pm, &R.base)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+    {
+        char note[160];
+        snprintf(note, sizeof note, "%zu -> %zu triangles%s, %zu vetoed", srep.input_triangles, R.base.nt,
+                 srep.reached_target ? "" : " (target not reached)", srep.vetoed);
+        stage_end(&st, note);
+    }
+    if (!srep.reached_target)
+        fprintf(stderr, "dispmesh: note: the constrained simplifier stopped at %zu triangles, above --faces %ld\n", R.base.nt, faces);
+
+    /* 4. the map's layout, texels where the original's area is */
+    R.weights = (float *)malloc(R.base.nt * sizeof(float) + 1);
+    if (!R.weights) { fprintf(stderr, "dispmesh: out of memory\n"); goto done; }
+    stage_begin(&st, "coverage weights");
+    r = dm_coverage_weights(R.base.p, R.base.nv, R.base.t, R.base.nt, R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, NULL,
+                            stage_progress, &st, R.weights);
+    if (r != DM_OK) { stage_fail(&st, "dm_coverage_weights", r); goto done; }
+    stage_end(&st, NULL);
+    memset(&po, 0, sizeof po);
+    po.width = po.height = (int)res;
+    po.triangle_weight = R.weights;
+    stage_begin(&st, "parameterize");
+    po.progress = stage_progress; po.progress_user = &st;
+    r = dm_parameterize(R.base.p, R.base.nv, R.base.t, R.base.nt, &po, &R.param);
+    if (r != DM_OK) {
+        stage_fail(&st, "dm_parameterize", r);
+        if (r == DM_ERR_MAP_TOO_SMALL)
+            fprintf(stderr, "dispmesh: --res %ld is too small for the charts of %zu base triangles\n", res, R.base.nt);
+        status = r == DM_ERR_MAP_TOO_SMALL ? 1 : 2;
+        goto done;
+    }
+    {
+        char note[160];
+        snprintf(note, sizeof note, "%zu charts, utilization %.3f, stretch L2 %.3f", R.param->chart_count,
+                 (double)R.param->utilization, (double)R.param->stretch_l2);
+        stage_end(&st, note);
+    }
+
+    /* 5. the bake */
+    memset(&bo, 0, sizeof bo);
+    bo.inward = inward;
+    stage_begin(&st, inward ? "bake (inward)" : "bake");
+    bo.progress = stage_progress; bo.progress_user = &st;
+    bake_ms = now_ms();
+    r = dm_bake(R.param, R.base.p, R.base.nv, R.base.t, R.base.nt, R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &bo, &R.map);
+    bake_ms = now_ms() - bake_ms;
+    if (r != DM_OK) { stage_fail(&st, "dm_bake", r); goto done; }
+    for (k = 0; k < (size_t)R.map->width * (size_t)R.map->height; k++) {
+        if (R.map->status[k] == DM_TEXEL_EMPTY) continue;
+        inside++;
+        if (R.map->status[k] == DM_TEXEL_MISS) missed++;
+    }
+    flagged = inside ? (double)missed / (double)inside : 0.0;
+    {
+        char note[160];
+        snprintf(note, sizeof note, "%zu texels in charts, %zu missed", inside, missed);
+        stage_end(&st, note);
+    }
+
+    /* 6. the reconstruction and the distances */
+    stage_begin(&st, "reconstruct");
+    r = dm_reconstruct(R.map, R.param, NULL, &R.dense);
+    if (r != DM_OK) { stage_fail(&st, "dm_reconstruct", r); goto done; }
+    {
+        char note[96];
+        snprintf(note, sizeof note, "%zu triangles", R.dense->triangle_count);
+        stage_end(&st, note);
+    }
+    if (R.dense->triangle_count == 0) { fprintf(stderr, "dispmesh: the reconstruction is empty (no texel hit the original)\n"); goto done; }
+
+    /* the unconstrained simplifier at the base's triangle count; its progressive mesh then gives the
+       equal-bytes mesh */
+    memset(&so, 0, sizeof so);
+    so.target_triangles = R.base.nt;
+    stage_begin(&st, "simplify (unconstrained)");
+    so.progress = stage_progress; so.progress_user = &st;
+    r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm_free, NULL);
+    if (r != DM_OK) { stage_fail(&st, "dm_simplify", r); goto done; }
+    dm_pm_set_level(R.pm_free, 0);
+    if (!pm_to_mesh(R.pm_free, &R.free_same)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+    {
+        /* base bytes: 12 V + 12 F + 8 per map coordinate + 2 per texel (16-bit displacement) */
+        uint32_t *cuv = (uint32_t *)malloc(R.base.nt * 3 * sizeof(uint32_t) + 1);
+        size_t lo_l = 0, hi_l = dm_pm_split_count(R.pm_free), nv, nt;
+        char note[160];
+        if (!cuv) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        uv_count = distinct_uvs(&R.base, R.param, cuv, NULL);
+        free(cuv);
+        if (uv_count == 0) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        bytes_base = 12 * R.base.nv + 12 * R.base.nt + 8 * uv_count + 2 * (size_t)res * (size_t)res;
+        /* the finest level whose 12 V + 12 F fits the budget (counts grow with the level) */
+        while (lo_l < hi_l) {
+            size_t mid = lo_l + (hi_l - lo_l + 1) / 2;
+            dm_pm_set_level(R.pm_free, mid);
+            dm_pm_counts(R.pm_free, &nv, &nt);
+            if (12 * nv + 12 * nt <= bytes_base) lo_l = mid;
+            else hi_l = mid - 1;
+        }
+        dm_pm_set_level(R.pm_free, lo_l);
+        if (!pm_to_mesh(R.pm_free, &R.free_bytes)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        bytes_free = 12 * R.free_bytes.nv + 12 * R.free_bytes.nt;
+        snprintf(note, sizeof note, "%zu triangles; equal bytes (%zu): %zu triangles (%zu bytes)%s", R.free_same.nt,
+                 bytes_base, R.free_bytes.nt, bytes_free,
+                 lo_l == dm_pm_split_count(R.pm_free) ? " = the original" : "");
+        stage_end(&st, note);
+    }
+
+    stage_begin(&st, "surface distances");
+    r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.dense->positions, R.dense->vertex_count,
+                            R.dense->indices, R.dense->triangle_count, 0, NULL, &d_recon);
+    stage_progress(&st, 0.25f);
+    if (r == DM_OK)
+        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.base.p, R.base.nv, R.base.t, R.base.nt, 0, NULL,
+                                &d_base);
+    stage_progress(&st, 0.5f);
+    if (r == DM_OK)
+        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_same.p, R.free_same.nv, R.free_same.t,
+                                R.free_same.nt, 0, NULL, &d_same);
+    stage_progress(&st, 0.75f);
+    if (r == DM_OK)
+        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_bytes.p, R.free_bytes.nv, R.free_bytes.t,
+                                R.free_bytes.nt, 0, NULL, &d_bytes);
+    if (r != DM_OK) { stage_fail(&st, "dm_surface_distance", r); goto done; }
+    stage_end(&st, NULL);
+
+    /* 7. files */
+    stage_begin(&st, "write files");
+    {
+        size_t uvs_written = 0;
+        mio_error err;
+        mio_result mr;
+        sr_result wr;
+        if (!(path = path_with(prefix, "_base.obj"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        if (!write_base_obj(path, &R.base, R.param, &uvs_written)) goto done;
+        free(path);
+        stage_progress(&st, 0.2f);
+        if (!(path = path_with(prefix, "_disp.pfm"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        if ((wr = sr_write_pfm(path, R.map->disp, R.map->width, R.map->height, 1)) != SR_OK) {
+            fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(wr));
+            goto done;
+        }
+        free(path);
+        stage_progress(&st, 0.4f);
+        if (!(path = path_with(prefix, "_normal.png"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        if (!write_normal_png(path, R.map)) goto done;
+        free(path);
+        stage_progress(&st, 0.6f);
+        if (!(path = path_with(prefix, "_recon.obj"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+        mr = mio_write_obj(path, R.dense->positions, R.dense->vertex_count, R.dense->indices, R.dense->triangle_count, &err);
+        if (mr != MIO_OK) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, err.message); goto done; }
+        free(path);
+        stage_progress(&st, 0.7f);
+        if (views) {
+            if (!(path = path_with(prefix, "_views.png"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+            if (!write_views(path, &R, (int)size, !brick, d_recon.rms)) goto done;
+            free(path);
+        }
+        path = NULL;
+        stage_end(&st, views ? NULL : "(views skipped)");
+    }
+    fprintf(stderr, "dispmesh: wrote %s_{base.obj,disp.pfm,normal.png,recon.obj%s}\n", prefix, views ? ",views.png" : "");
+    fprintf(stderr, "dispmesh: base %zu vertices %zu triangles %zu map coordinates; bytes: base+map %zu, equal-bytes mesh %zu "
+                    "(%zu triangles)\n", R.base.nv, R.base.nt, uv_count, bytes_base, bytes_free, R.free_bytes.nt);
+
+    /* 8. the result */
+    printf("RESULT dispmesh faces=%zu res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
+           "unconstrained_rms=%.4e equal_bytes_rms=%.4e equal_bytes_max=%.4e flagged=%.5f bake_ms=%.1f total_ms=%.1f\n",
+           R.base.nt, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
+           bake_ms, now_ms() - t0);
+    fflush(stdout);
+    status = ferror(stdout) ? 2 : 0;
+done:
+    free(path);
+    run_free(&R);
+    return status;
+}
