@@ -1,6 +1,6 @@
 /* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
 
-   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--inward]
+   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways]
      IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
      --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
                  Fig 5.1.1), 496 triangles, closed and oriented outward; --faces 12 gives its box
@@ -9,8 +9,9 @@
      -o PREFIX   output prefix (default out/dispmesh); the prefix's directory is created if missing
      --no-views  skip the rendering of PREFIX_views.png
      --size S    size in pixels of each of the three views (default 400)
-     --inward    bake with the paper's rule, the first hit along -normal only (dm_bake_options.inward);
-                 the default looks both ways, which forgives a base that pokes into the original
+     --both-ways bake with the nearest hit either way along the normal; the default is the paper's
+                 rule, the first hit along -normal (dm_bake_options.inward), right for a base that
+                 encloses the original, as the shell constraint makes it
    The pipeline (dispmesh.h): dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
@@ -517,7 +518,7 @@ static void run_free(run *R)
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--inward]\n"
+    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways]\n"
                 "  writes PREFIX_base.obj PREFIX_disp.pfm PREFIX_normal.png PREFIX_recon.obj PREFIX_views.png\n"
                 "  and prints one RESULT line (defaults: --faces 500 --res 512 -o out/dispmesh --size 400)\n");
 }
@@ -526,7 +527,7 @@ int main(int argc, char **argv)
 {
     const char *in = NULL, *prefix = "out/dispmesh";
     long faces = 500, res = 512, size = 400;
-    int brick = 0, views = 1, inward = 0, i, status = 2;
+    int brick = 0, views = 1, inward = 1, i, status = 2;
     run R;
     stage st;
     dm_result r;
@@ -545,7 +546,7 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--brick") == 0) brick = 1;
         else if (strcmp(a, "--no-views") == 0) views = 0;
-        else if (strcmp(a, "--inward") == 0) inward = 1;
+        else if (strcmp(a, "--both-ways") == 0) inward = 0;
         else if (strcmp(a, "--faces") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 1, 1000000000L, &faces)) return 1; }
         else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
         else if (strcmp(a, "--size") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 16, 4096, &size)) return 1; }
@@ -655,7 +656,7 @@ int main(int argc, char **argv)
     /* 5. the bake */
     memset(&bo, 0, sizeof bo);
     bo.inward = inward;
-    stage_begin(&st, inward ? "bake (inward)" : "bake");
+    stage_begin(&st, inward ? "bake (inward)" : "bake (both ways)");
     bo.progress = stage_progress; bo.progress_user = &st;
     bake_ms = now_ms();
     r = dm_bake(R.param, R.base.p, R.base.nv, R.base.t, R.base.nt, R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &bo, &R.map);

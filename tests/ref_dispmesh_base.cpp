@@ -6,7 +6,8 @@
    side): rms <= 0.1 x base-only rms and max <= 0.25 x base-only max; at most 1% of the texels
    under the base flagged (the bunny is closed: no holes); no overlap along the bake rays: for every
    7th valid texel, Embree's first hit along the texel's ray (from a quarter shell thickness
-   outside) is front-facing and is the baked depth. Reported, not required (see dispmesh.h,
+   outside) is front-facing and is the baked depth, and the ray does not go out and in again
+   within 2.25 shell thicknesses (a fold: three depths for one texel). Reported, not required (see dispmesh.h,
    BOUNDING SHELL): base-only rms over our unconstrained simplification's at the same face count.
    The inner-side check of every original vertex is in test_dispmesh_shell. Skips without
    glmark2-data, and under the sanitizers (the constrained simplification of 70k triangles). */
@@ -56,7 +57,7 @@ static bool simplify(const mio_mesh &m, dm_shell *sh, size_t target, base_mesh *
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
-    const int checks = 9;
+    const int checks = 11;
     if (getenv("TEST_SANITIZE")) {
         T_SKIP_N(checks, "bunny base + map", "70k-triangle constrained simplification under the sanitizers");
         return T_END();
@@ -104,7 +105,7 @@ int main(int argc, char **argv)
         em_scene em;
         em_open(em, pos, nv, idx, nt);
         RTCScene scene = em.scene;
-        size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0;
+        size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0, folds = 0;
         double lift = 0.25 * sh->thickness, tol = 1e-5 * sh->diagonal;
         for (size_t i = 0; i < n; i++) {
             if (map->status[i] == DM_TEXEL_EMPTY) continue;
@@ -132,11 +133,25 @@ int main(int argc, char **argv)
             double ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
             if (!(ng[0] * nn[0] + ng[1] * nn[1] + ng[2] * nn[2] > 0.0)) back++;
             if (!(std::fabs((rh.ray.tfar - lift) - map->disp[i]) <= tol + 1e-6 * rh.ray.tfar)) differ++;
+            /* then out and in again within the shell's depth (2.25 thicknesses from the start):
+               a fold, where one texel would have three depths */
+            float t = rh.ray.tfar, tend = (float)(2.25 * sh->thickness);
+            for (int crossing = 0; crossing < 8; crossing++) {
+                rh.ray.tnear = t + (float)(1e-6 * sh->diagonal);
+                rh.ray.tfar = tend;
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                if (!(rh.ray.tnear < tend)) break;
+                rtcIntersect1(scene, &context, &rh);
+                if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+                if (rh.hit.Ng_x * nn[0] + rh.hit.Ng_y * nn[1] + rh.hit.Ng_z * nn[2] > 0.0f) { folds++; break; }
+                t = rh.ray.tfar;
+            }
         }
         em_close(em);
         T_CHECK_MSG(flagged <= under / 100, "%zu of %zu texels under the base flagged", flagged, under);
         T_CHECK_MSG(back == 0, "%zu of %zu bake rays meet a back face (or nothing) first", back, rays);
         T_CHECK_MSG(differ <= rays / 1000, "%zu of %zu baked depths differ from Embree's first hit", differ, rays);
+        T_CHECK_MSG(folds == 0, "%zu of %zu bake rays go out and in again within the shell", folds, rays);
 
         sd_mesh o = {pos, nv, idx, nt};
         sd_mesh r = {rec->positions, rec->vertex_count, rec->indices, rec->triangle_count};
@@ -148,9 +163,9 @@ int main(int argc, char **argv)
         T_CHECK_MSG(dr.max <= 0.25 * db.max, "reconstruction max %.3g, base-only %.3g", dr.max, db.max);
         std::printf("  note: directions: original to reconstruction rms %.3e max %.3e, back rms %.3e max %.3e\n", dr.rms_ab, dr.max_ab, dr.rms_ba, dr.max_ba);
         std::printf("RESULT ref_dispmesh_base faces=%zu res=%d rms=%.3e max=%.3e base_only_rms=%.3e base_only_max=%.3e "
-                    "unconstrained_rms=%.3e base_over_unconstrained=%.2f flagged=%.5f rays=%zu back=%zu\n",
+                    "unconstrained_rms=%.3e base_over_unconstrained=%.2f flagged=%.5f rays=%zu back=%zu folds=%zu\n",
                     base.nt, res, dr.rms, dr.max, db.rms, db.max, du.rms, db.rms / du.rms,
-                    under ? (double)flagged / (double)under : 0.0, rays, back);
+                    under ? (double)flagged / (double)under : 0.0, rays, back, folds);
     }
     dm_trimesh_free(rec);
     dm_dispmap_free(map);
