@@ -1,6 +1,6 @@
 /* test_dispmesh_shell.c - dispmesh.h part 3: the bounding shell and paper 000's simplification
    constraints (dm_shell_grow, dm_shell_constraint). Generated meshes (a bumpy sphere, a fat
-   torus with a narrow hole) and, when glmark2-data is installed, the bunny at 500 faces.
+   torus with a narrow hole, a box with grooves) and, when glmark2-data is installed, the bunny at 500 faces.
    Checked by brute force, independently of the constraint's own bookkeeping:
    - the shell: offsets within [0, thickness], shell point = vertex + offset * unit normal, no
      shell point closer to the original than 85% of its offset (the offset surface does not run
@@ -431,6 +431,15 @@ int main(int argc, char **argv)
         dm_bvh_free(bvh);
     }
     check_mesh("fat torus", &torus, 400, 400, 1);
+    {   /* sharp edges and narrow grooves: the QEM position of an edge collapse lands far from
+           keep, which the enclosure's old triangles must not follow */
+        mesh box = make_grooved_box(12, 0.03);
+        check_mesh("grooved box", &box, 12, 12, 1);
+        mesh_free(&box);
+        box = make_grooved_box(4, 0.03); /* left 3 vertices out by 2e-3 of the diagonal before */
+        check_mesh("coarse grooved box", &box, 12, 40, 1);
+        mesh_free(&box);
+    }
     test_bad_input(&sphere);
     test_alloc_fail();
     test_cancel_and_determinism(&sphere);

@@ -20,8 +20,13 @@ static inline double bump_sphere(const double d[3], double amp)
     return 1.0 + amp * sin(5.0 * d[0]) * sin(5.0 * d[1]) * sin(5.0 * d[2]);
 }
 
-/* cube-sphere: n x n quads per cube face, projected to radius(dir) */
-static inline mesh make_sphere(int n, double amp, double scale)
+/* cube-sphere: n x n quads per cube face, projected to radius(dir); or, when groove > 0, the
+   cube [-1,1]^3 itself (scale ignored) with grooves pressed in by `groove` along every face normal
+   at the grid lines through the middle (n even): a box with sharp edges and narrow channels. */
+static inline mesh make_cube_grid(int n, double amp, double scale, double groove);
+static inline mesh make_sphere(int n, double amp, double scale) { return make_cube_grid(n, amp, scale, 0.0); }
+static inline mesh make_grooved_box(int n, double groove) { return make_cube_grid(n, 0.0, 1.0, groove); }
+static inline mesh make_cube_grid(int n, double amp, double scale, double groove)
 {
     mesh m;
     int N = n + 1, i, j, k, f;
@@ -38,9 +43,20 @@ static inline mesh make_sphere(int n, double amp, double scale)
                 id[c] = 0xffffffffu;
                 if (i == 0 || j == 0 || k == 0 || i == n || j == n || k == n) {
                     double d[3] = {2.0 * i / n - 1.0, 2.0 * j / n - 1.0, 2.0 * k / n - 1.0}, l, r;
-                    l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                    d[0] /= l; d[1] /= l; d[2] /= l;
-                    r = scale * bump_sphere(d, amp);
+                    if (groove > 0.0) {
+                        int g[3] = {i, j, k}, a;
+                        if (i == n / 2 || j == n / 2 || k == n / 2)
+                            for (a = 0; a < 3; a++) {
+                                if (g[a] == 0) d[a] += groove;
+                                if (g[a] == n) d[a] -= groove;
+                            }
+                        l = 1.0;
+                        r = 1.0;
+                    } else {
+                        l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                        d[0] /= l; d[1] /= l; d[2] /= l;
+                        r = scale * bump_sphere(d, amp);
+                    }
                     m.p[3 * m.nv] = (float)(r * d[0]);
                     m.p[3 * m.nv + 1] = (float)(r * d[1]);
                     m.p[3 * m.nv + 2] = (float)(r * d[2]);
