@@ -2610,38 +2610,45 @@ static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], cons
     return dm__qem_quadric_eval(q, x);
 }
 
-/* Which vertex stays, where it goes (normalised coordinates) and the cost. 0: never collapsible. */
+/* Which vertex stays, where it goes (normalised coordinates) and the cost Q(x). Returns 0 when the
+   edge is never collapsible, 2 when keep stays where it is (x = keep's position), else 1. */
 static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t *keep, uint32_t *rem, double x[3],
-                     double *cost, double *err)
+                         double *cost)
 {
     unsigned fa = s->flag[a], fb = s->flag[b];
     dm__qem_quadric q;
     double pa[3], pb[3];
-    int fixed = 1;
     if ((fa | fb) & (DM__QEM_V_FROZEN | DM__QEM_V_REMOVED)) return 0;
     if ((fa & fb) & DM__QEM_V_LOCKED) return 0;
-    if (fa & DM__QEM_V_LOCKED) *keep = a;
-    else if (fb & DM__QEM_V_LOCKED) *keep = b;
-    else if ((fa ^ fb) & DM__QEM_V_BOUNDARY) *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
-    else {
-        *keep = a < b ? a : b;
-        fixed = 0;
-    }
-    *rem = *keep == a ? b : a;
     dm__qem_quadric_sum(&q, &s->q[a], &s->q[b]);
-    dm__qem_norm_pos(s, a, pa);
-    dm__qem_norm_pos(s, b, pb);
-    if (fixed) { /* the caller takes keep's float position as it is (no round trip) */
+    if ((fa | fb) & DM__QEM_V_LOCKED || ((fa ^ fb) & DM__QEM_V_BOUNDARY)) {
+        /* the caller takes keep's float position as it is (no round trip) */
+        if (fa & DM__QEM_V_LOCKED) *keep = a;
+        else if (fb & DM__QEM_V_LOCKED) *keep = b;
+        else *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
+        *rem = *keep == a ? b : a;
         dm__qem_norm_pos(s, *keep, x);
         *cost = dm__qem_quadric_eval(&q, x);
-    } else if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
+        return 2;
+    }
+    *keep = a < b ? a : b;
+    *rem = a < b ? b : a;
+    dm__qem_norm_pos(s, a, pa);
+    dm__qem_norm_pos(s, b, pb);
+    if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
         dm__qem_segment_min(&q, pa, pb, x);
         *cost = dm__qem_quadric_eval(&q, x);
     } else {
         *cost = dm__qem_optimal(&q, pa, pb, x);
     }
-    *err = q.w > 0.0 ? sqrt(*cost / q.w) * s->scale : 0.0;
-    return fixed ? 2 : 1;
+    return 1;
+}
+
+/* A collapse's error in mesh units: sqrt(Q(x) / W), W the planes' total weight. */
+static double dm__qem_error(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
+{
+    double w = s->q[a].w + s->q[b].w;
+    return w > 0.0 ? sqrt(cost / w) * s->scale : 0.0;
 }
 
 static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y) { return x->key < y->key; }
@@ -2767,15 +2774,15 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     return e;
 }
 
-/* Pushes every collapsible edge (v, x), x != skip. 0 on allocation failure. */
-static int dm__qem_push_edges(dm__qem_simp *s, uint32_t v, uint32_t skip)
+/* Pushes every collapsible edge (v, x) for x in nbr[0..m), x != skip. 0 on allocation failure. */
+static int dm__qem_push_list(dm__qem_simp *s, uint32_t v, const uint32_t *nbr, size_t m, uint32_t skip)
 {
-    size_t m = dm__qem_neighbours(s, v), i;
+    size_t i;
     for (i = 0; i < m; i++) {
-        uint32_t x = s->nbr[i], keep, rem;
-        double p[3], cost, err;
+        uint32_t x = nbr[i], keep, rem;
+        double p[3], cost;
         dm__qem_cand e;
-        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost, &err)) continue;
+        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost)) continue;
         e = dm__qem_make_cand(s, v, x, cost);
         if (!dm__qem_heap_push(s, &e)) return 0;
     }
@@ -2789,53 +2796,55 @@ static void dm__cross3(const double a[3], const double b[3], double r[3])
     r[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* Normal (length = 2 area) of a triangle whose vertex `moved` is at `at` (or NULL: unmoved);
-   *e2 gets its longest squared edge. */
-static void dm__qem_tri_normal(const dm__qem_simp *s, const uint32_t *t, uint32_t moved, const float *at, double nrm[3],
-                           double *e2)
-{
-    double p[3][3], u[3], v[3], w[3], l0, l1, l2;
-    int i, k;
-    for (i = 0; i < 3; i++) {
-        const float *src = (at && t[i] == moved) ? at : s->pos + 3 * (size_t)t[i];
-        for (k = 0; k < 3; k++) p[i][k] = src[k];
-    }
-    for (k = 0; k < 3; k++) {
-        u[k] = p[1][k] - p[0][k];
-        v[k] = p[2][k] - p[0][k];
-        w[k] = p[2][k] - p[1][k];
-    }
-    dm__cross3(u, v, nrm);
-    l0 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-    l1 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    l2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-    *e2 = l0 > l1 ? (l0 > l2 ? l0 : l2) : (l1 > l2 ? l1 : l2);
-}
-
 /* Geometry: every triangle of keep or rem that survives, with both moved to `at`, keeps its
    orientation (normal turns by less than acos(DM__QEM_MIN_COS)) and is not degenerate. Writes the
-   new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. */
+   new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. Each triangle
+   is (v, p1, p2) from v's corner on: old normal (p1 - v) x (p2 - v), new one with v at `at`;
+   the tests compare squares, so no square root. */
 static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     size_t m = 0;
-    int pass;
+    double pa[3];
+    int pass, k;
+    const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
+    for (k = 0; k < 3; k++) pa[k] = at[k];
     for (pass = 0; pass < 2; pass++) {
         uint32_t v = pass ? rem : keep, other = pass ? keep : rem, c;
+        const float *fv = s->pos + 3 * (size_t)v;
+        double pv[3];
+        for (k = 0; k < 3; k++) pv[k] = fv[k];
         for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-            uint32_t tri = c / 3, nt[3];
+            uint32_t tri = c / 3, slot = c - 3 * tri, i1, i2;
             const uint32_t *t = s->idx + 3 * (size_t)tri;
-            double n0[3], n1[3], e2a, e2b, l0, l1, dot;
-            int k;
-            if (t[0] == other || t[1] == other || t[2] == other) continue; /* dies */
-            for (k = 0; k < 3; k++) nt[k] = t[k] == v ? keep : t[k];
-            dm__qem_tri_normal(s, t, v, NULL, n0, &e2a);
-            dm__qem_tri_normal(s, nt, keep, at, n1, &e2b);
-            l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
-            if (!(l1 > DM__QEM_MIN_SIN * e2b)) return (size_t)-1;
-            l0 = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
+            const float *f1, *f2;
+            double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
+            i1 = t[slot == 2 ? 0 : slot + 1];
+            i2 = t[slot == 0 ? 2 : slot - 1];
+            if (i1 == other || i2 == other) continue; /* dies */
+            f1 = s->pos + 3 * (size_t)i1;
+            f2 = s->pos + 3 * (size_t)i2;
+            for (k = 0; k < 3; k++) {
+                double x1 = f1[k], x2 = f2[k];
+                u0[k] = x1 - pv[k];
+                v0[k] = x2 - pv[k];
+                u1[k] = x1 - pa[k];
+                v1[k] = x2 - pa[k];
+                w[k] = x2 - x1;
+            }
+            dm__cross3(u1, v1, n1);
+            lu = u1[0] * u1[0] + u1[1] * u1[1] + u1[2] * u1[2];
+            lv = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2];
+            lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+            e2 = lu > lv ? (lu > lw ? lu : lw) : (lv > lw ? lv : lw);
+            l1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
+            if (!(l1 > min_sin2 * e2 * e2)) return (size_t)-1;
+            dm__cross3(u0, v0, n0);
+            l0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2];
             dot = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-            if (l0 > 0.0 && !(dot > DM__QEM_MIN_COS * l0 * l1)) return (size_t)-1;
-            for (k = 0; k < 3; k++) s->ring[3 * m + k] = nt[k];
+            if (l0 > 0.0 && !(dot > 0.0 && dot * dot > min_cos2 * l0 * l1)) return (size_t)-1;
+            s->ring[3 * m + slot] = keep;
+            s->ring[3 * m + (slot == 2 ? 0 : slot + 1)] = i1;
+            s->ring[3 * m + (slot == 0 ? 2 : slot - 1)] = i2;
             m++;
         }
     }
@@ -2955,25 +2964,21 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 {
     size_t m = dm__qem_neighbours(s, keep), i, np = 0;
-    for (i = 0; i < m; i++) { /* the parked neighbours go to the front of nbr */
+    s->flag[keep] &= (uint8_t)~DM__QEM_V_PARKED;
+    for (i = 0; i < m; i++) { /* the parked neighbours: to the ring scratch, new versions */
         uint32_t x = s->nbr[i];
         if (s->flag[x] & DM__QEM_V_PARKED) {
-            s->nbr[i] = s->nbr[np];
-            s->nbr[np++] = x;
-        }
-    }
-    s->flag[keep] &= (uint8_t)~DM__QEM_V_PARKED;
-    if (np) { /* nbr is overwritten by the pushes: copy the parked ones to the ring scratch */
-        for (i = 0; i < np; i++) s->ring[i] = s->nbr[i];
-        for (i = 0; i < np; i++) {
-            uint32_t x = s->ring[i];
             s->flag[x] &= (uint8_t)~DM__QEM_V_PARKED;
             s->ver[x]++;
+            s->ring[np++] = x;
         }
-        for (i = 0; i < np; i++)
-            if (!dm__qem_push_edges(s, s->ring[i], keep)) return 0;
     }
-    return dm__qem_push_edges(s, keep, DM__QEM_NONE);
+    if (!dm__qem_push_list(s, keep, s->nbr, m, DM__QEM_NONE)) return 0;
+    for (i = 0; i < np; i++) { /* nbr is reused: the parked ones are in ring */
+        size_t mx = dm__qem_neighbours(s, s->ring[i]);
+        if (!dm__qem_push_list(s, s->ring[i], s->nbr, mx, keep)) return 0;
+    }
+    return 1;
 }
 
 /* Non-manifold detection, boundary flags and the initial quadrics (triangle planes weighted by
@@ -3286,8 +3291,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         m = dm__qem_neighbours(&s, (uint32_t)v);
         for (i = 0; i < m; i++) {
             uint32_t x = s.nbr[i], keep, rem;
-            double p[3], cost, err;
-            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost, &err)) continue;
+            double p[3], cost;
+            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost)) continue;
             if (s.hsize == s.hcap && !dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, s.hsize + 1, sizeof(dm__qem_cand))) {
                 r = DM_ERR_OUT_OF_MEMORY;
                 goto done;
@@ -3300,6 +3305,17 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
 
     s.target = opt.target_triangles;
     to_remove = s.live > s.target ? s.live - s.target : 0;
+    { /* the records for the collapses to come (one per 2 triangles, about 6 ops each): grown
+         by doubling they would be copied several times */
+        size_t expect = to_remove / 2 + 16;
+        if (opt.max_collapses && expect > opt.max_collapses) expect = opt.max_collapses;
+        if (expect > vertex_count) expect = vertex_count;
+        if (!dm__qem_grow(&s.al, (void **)&s.rec, &s.caprec, expect, sizeof(dm__qem_rec)) ||
+            !dm__qem_grow(&s.al, (void **)&s.ops, &s.capops, 7 * expect, sizeof(uint32_t))) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
+    }
     next_progress = 0;
     while (s.hsize > 0 && (s.target == 0 || s.live > s.target) &&
            (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
@@ -3311,8 +3327,9 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         int k, placed;
         if ((s.flag[ea] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
         if (s.ver[ea] + s.ver[e.b] != e.stamp) continue; /* stale */
-        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost, &err);
+        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
+        err = dm__qem_error(&s, ea, e.b, cost);
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
         for (k = 0; k < 3; k++)
             at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
