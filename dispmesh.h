@@ -2420,6 +2420,7 @@ done:
 #define DM__QEM_BOUNDARY_WEIGHT 10.0 /* boundary planes weigh this times the squared edge length */
 #define DM__QEM_MIN_COS 0.2          /* a triangle's normal may turn by at most acos(0.2) = 78 degrees */
 #define DM__QEM_MIN_SIN 1e-5         /* new triangles: 2 area > DM__QEM_MIN_SIN * longest edge^2 */
+#define DM__QEM_ADJ_MAX 0xfffffff0u  /* the corner pool's offsets are 32-bit */
 
 /* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. */
 typedef struct dm__qem_quadric {
@@ -2456,17 +2457,32 @@ struct dm_pm {
     uint32_t *scratch;  /* vertex_count, for dm_pm_get_mesh */
 };
 
+/* Everything the simplifier reads about one vertex, in one 128-byte record (two cache lines when
+   the array is 64-byte aligned): a collapse visits a few dozen vertices at random places of the
+   mesh, and one record costs two cache misses where separate arrays cost seven. */
+typedef struct dm__qem_vert {
+    dm__qem_quadric q;     /* 88 bytes */
+    float p[3];            /* the position (the same bits as pos) */
+    uint32_t first, count; /* its live corners: adj[first .. first + count) */
+    uint32_t ver;          /* candidate version: bumped when its edges change */
+    uint32_t mark;         /* visit stamp */
+    uint32_t flag;         /* DM__QEM_V_* */
+    uint32_t pad[2];
+} dm__qem_vert;
+
 typedef struct dm__qem_simp {
     dm_allocator al;
     const dm_simplify_options *opt;
     size_t n, t, live, target;
     float *pos;
     uint32_t *idx;
-    uint8_t *alive, *flag;
-    dm__qem_quadric *q;
-    uint32_t *vfirst, *cnext;      /* per vertex a list of its corners (3 triangle + slot) */
-    uint32_t *tcount;              /* per vertex the length of that list (its live triangles) */
-    uint32_t *ver, *mark, stamp;   /* candidate versions; visit marks */
+    uint8_t *alive;
+    dm__qem_vert *vx;              /* n records, 64-byte aligned inside vraw */
+    void *vraw;
+    uint32_t *adj;                 /* corner lists (3 triangle + slot), each after a 2-word header
+                                      (owner, length); a collapse appends keep's new list */
+    size_t adjend, adjcap;
+    uint32_t stamp;
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
     dm__qem_cand *heap;
@@ -2506,7 +2522,8 @@ static int dm__qem_grow(const dm_allocator *al, void **p, size_t *cap, size_t ne
 static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 {
     if (s->stamp >= 0xfffffff0u) { /* wrap: clear the marks once */
-        memset(s->mark, 0, s->n * sizeof(uint32_t));
+        size_t v;
+        for (v = 0; v < s->n; v++) s->vx[v].mark = 0;
         s->stamp = 0;
     }
     s->stamp += 2;
@@ -2515,8 +2532,9 @@ static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 
 static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
 {
+    const float *p = s->vx[v].p;
     int k;
-    for (k = 0; k < 3; k++) x[k] = ((double)s->pos[3 * (size_t)v + k] - s->center[k]) * s->inv_scale;
+    for (k = 0; k < 3; k++) x[k] = ((double)p[k] - s->center[k]) * s->inv_scale;
 }
 
 static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
@@ -2615,12 +2633,12 @@ static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], cons
 static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t *keep, uint32_t *rem, double x[3],
                          double *cost)
 {
-    unsigned fa = s->flag[a], fb = s->flag[b];
+    unsigned fa = s->vx[a].flag, fb = s->vx[b].flag;
     dm__qem_quadric q;
     double pa[3], pb[3];
     if ((fa | fb) & (DM__QEM_V_FROZEN | DM__QEM_V_REMOVED)) return 0;
     if ((fa & fb) & DM__QEM_V_LOCKED) return 0;
-    dm__qem_quadric_sum(&q, &s->q[a], &s->q[b]);
+    dm__qem_quadric_sum(&q, &s->vx[a].q, &s->vx[b].q);
     if ((fa | fb) & DM__QEM_V_LOCKED || ((fa ^ fb) & DM__QEM_V_BOUNDARY)) {
         /* the caller takes keep's float position as it is (no round trip) */
         if (fa & DM__QEM_V_LOCKED) *keep = a;
@@ -2647,7 +2665,7 @@ static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t
 /* A collapse's error in mesh units: sqrt(Q(x) / W), W the planes' total weight. */
 static double dm__qem_error(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
 {
-    double w = s->q[a].w + s->q[b].w;
+    double w = s->vx[a].q.w + s->vx[b].q.w;
     return w > 0.0 ? sqrt(cost / w) * s->scale : 0.0;
 }
 
@@ -2703,7 +2721,7 @@ static void dm__qem_heap_purge(dm__qem_simp *s)
     for (i = 0; i < s->hsize; i++) {
         const dm__qem_cand *e = &s->heap[i];
         uint32_t a = DM__QEM_CAND_A(e);
-        if (((s->flag[a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[a] + s->ver[e->b] == e->stamp)
+        if (((s->vx[a].flag | s->vx[e->b].flag) & DM__QEM_V_REMOVED) == 0 && s->vx[a].ver + s->vx[e->b].ver == e->stamp)
             s->heap[n++] = *e;
     }
     s->hsize = n;
@@ -2748,14 +2766,15 @@ static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
 /* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
 static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
 {
-    uint32_t st = dm__qem_new_stamp(s), c;
+    uint32_t st = dm__qem_new_stamp(s), i, nc = s->vx[v].count;
+    const uint32_t *cl = s->adj + s->vx[v].first;
     size_t m = 0;
-    for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    for (i = 0; i < nc; i++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(cl[i] / 3);
         int k;
         for (k = 0; k < 3; k++)
-            if (t[k] != v && s->mark[t[k]] != st) {
-                s->mark[t[k]] = st;
+            if (t[k] != v && s->vx[t[k]].mark != st) {
+                s->vx[t[k]].mark = st;
                 s->nbr[m++] = t[k];
             }
     }
@@ -2770,7 +2789,7 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     memcpy(&bits, &f, sizeof bits);
     e.key = (uint64_t)bits << 32 | lo;
     e.b = a < b ? b : a;
-    e.stamp = s->ver[lo] + s->ver[e.b];
+    e.stamp = s->vx[lo].ver + s->vx[e.b].ver;
     return e;
 }
 
@@ -2809,20 +2828,21 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
     for (k = 0; k < 3; k++) pa[k] = at[k];
     for (pass = 0; pass < 2; pass++) {
-        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, c;
-        const float *fv = s->pos + 3 * (size_t)v;
+        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, j, nc = s->vx[v].count;
+        const uint32_t *cl = s->adj + s->vx[v].first;
+        const float *fv = s->vx[v].p;
         double pv[3];
         for (k = 0; k < 3; k++) pv[k] = fv[k];
-        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-            uint32_t tri = c / 3, slot = c - 3 * tri, i1, i2;
+        for (j = 0; j < nc; j++) {
+            uint32_t c = cl[j], tri = c / 3, slot = c - 3 * tri, i1, i2;
             const uint32_t *t = s->idx + 3 * (size_t)tri;
             const float *f1, *f2;
             double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
             i1 = t[slot == 2 ? 0 : slot + 1];
             i2 = t[slot == 0 ? 2 : slot - 1];
             if (i1 == other || i2 == other) continue; /* dies */
-            f1 = s->pos + 3 * (size_t)i1;
-            f2 = s->pos + 3 * (size_t)i2;
+            f1 = s->vx[i1].p;
+            f2 = s->vx[i2].p;
             for (k = 0; k < 3; k++) {
                 double x1 = f1[k], x2 = f2[k];
                 u0[k] = x1 - pv[k];
@@ -2855,17 +2875,18 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
    joined to every boundary vertex) and no vertex left with a degenerate fan. */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 {
-    uint32_t st = dm__qem_new_stamp(s), c, opp[2];
+    uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
+    const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
     size_t common = 0, shared = 0, i;
-    int both_boundary = (s->flag[keep] & s->flag[rem] & DM__QEM_V_BOUNDARY) != 0;
-    for (c = s->vfirst[keep]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
+    for (j = 0; j < nk; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
         int k;
         for (k = 0; k < 3; k++)
-            if (t[k] != keep) s->mark[t[k]] = st;
+            if (t[k] != keep) s->vx[t[k]].mark = st;
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    for (j = 0; j < nr; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
         int k, has_keep = t[0] == keep || t[1] == keep || t[2] == keep;
         if (has_keep) {
             if (shared < 2)
@@ -2874,8 +2895,8 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
             shared++;
         }
         for (k = 0; k < 3; k++)
-            if (t[k] != rem && t[k] != keep && s->mark[t[k]] == st) {
-                s->mark[t[k]] = st + 1;
+            if (t[k] != rem && t[k] != keep && s->vx[t[k]].mark == st) {
+                s->vx[t[k]].mark = st + 1;
                 common++;
             }
     }
@@ -2887,73 +2908,111 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         return 0;
     }
     for (i = 0; i < shared; i++) {
-        size_t nt = s->tcount[opp[i]];
-        if (nt <= ((s->flag[opp[i]] & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+        size_t nt = s->vx[opp[i]].count;
+        if (nt <= ((s->vx[opp[i]].flag & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
     }
     return 1;
 }
 
-/* drops the corners of dead triangles from v's list */
-static void dm__qem_prune(dm__qem_simp *s, uint32_t v)
+/* Makes room for n more words at the end of adj: first by compacting it in place (the lists
+   that are still current slide down over the dead ones, in pool order), then by growing it. */
+static int dm__qem_adj_reserve(dm__qem_simp *s, size_t n)
 {
-    uint32_t *link = &s->vfirst[v];
-    while (*link != DM__QEM_NONE) {
-        if (!s->alive[*link / 3]) *link = s->cnext[*link];
-        else link = &s->cnext[*link];
+    size_t r = 0, w = 0;
+    if (s->adjend + n <= s->adjcap) return 1;
+    while (r < s->adjend) {
+        uint32_t owner = s->adj[r], len = s->adj[r + 1];
+        dm__qem_vert *ov = &s->vx[owner];
+        if (ov->first == r + 2 && ov->count > 0) {
+            uint32_t cnt = ov->count;
+            memmove(s->adj + w + 2, s->adj + r + 2, cnt * sizeof(uint32_t));
+            s->adj[w] = owner;
+            s->adj[w + 1] = cnt;
+            ov->first = (uint32_t)(w + 2);
+            w += 2 + (size_t)cnt;
+        }
+        r += 2 + (size_t)len;
     }
+    s->adjend = w;
+    if (s->adjend + n <= s->adjcap && s->adjend <= s->adjcap - s->adjcap / 4) return 1;
+    if (s->adjend + n > DM__QEM_ADJ_MAX) return 0;
+    return dm__qem_grow(&s->al, (void **)&s->adj, &s->adjcap, 2 * (s->adjend + n), sizeof(uint32_t));
 }
 
-/* Does the collapse rem -> keep with keep moved to `at`, and records it. 0 on allocation failure. */
+/* drops the corner of the dead triangle `tri` from v's list (order kept) */
+static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
+{
+    uint32_t *cl = s->adj + s->vx[v].first, n = s->vx[v].count, i, j = 0;
+    for (i = 0; i < n; i++)
+        if (cl[i] / 3 != tri) cl[j++] = cl[i];
+    s->vx[v].count = j;
+}
+
+/* Does the collapse rem -> keep with keep moved to `at`, and records it: keep's new corner list
+   (its live corners, then rem's) is appended to adj. 0 on allocation failure. */
 static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     dm__qem_rec r;
-    uint32_t c, next, opp[2];
-    size_t nopp = 0, i, vmax = 0;
+    uint32_t opp[2], dead[2], nk, nr, j, *out, *ck, *cr;
+    size_t nopp = 0, ndead = 0, i;
     int k;
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) vmax++;
-    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + vmax, sizeof(uint32_t))) return 0;
+    nk = s->vx[keep].count;
+    nr = s->vx[rem].count;
+    if (!dm__qem_adj_reserve(s, 2 + (size_t)nk + nr)) return 0;
+    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + nr, sizeof(uint32_t))) return 0;
     if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, s->nrec + 1, sizeof(dm__qem_rec))) return 0;
+    ck = s->adj + s->vx[keep].first;
+    cr = s->adj + s->vx[rem].first;
     r.keep = keep;
     r.remove = rem;
     r.first = s->nops;
     r.dead = r.moved = 0;
     for (k = 0; k < 3; k++) {
-        r.before[k] = s->pos[3 * (size_t)keep + k];
+        r.before[k] = s->vx[keep].p[k];
         r.after[k] = at[k];
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        uint32_t tri = c / 3;
+    for (j = 0; j < nr; j++) {
+        uint32_t tri = cr[j] / 3;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
         if (t[0] == keep || t[1] == keep || t[2] == keep) {
             for (k = 0; k < 3; k++)
-                if (t[k] != keep && t[k] != rem && nopp < 2) opp[nopp++] = t[k];
+                if (t[k] != keep && t[k] != rem && nopp < 2) {
+                    opp[nopp++] = t[k];
+                    if (ndead < 2) dead[ndead++] = tri;
+                }
             s->alive[tri] = 0;
             s->ops[s->nops++] = tri;
             r.dead++;
         }
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = next) {
-        next = s->cnext[c];
+    out = s->adj + s->adjend;
+    out[0] = keep;
+    out += 2;
+    i = 0;
+    for (j = 0; j < nk; j++)
+        if (s->alive[ck[j] / 3]) out[i++] = ck[j];
+    for (j = 0; j < nr; j++) {
+        uint32_t c = cr[j];
         if (!s->alive[c / 3]) continue;
         s->idx[c] = keep;
         s->ops[s->nops++] = c;
         r.moved++;
-        s->cnext[c] = s->vfirst[keep];
-        s->vfirst[keep] = c;
+        out[i++] = c;
     }
-    s->vfirst[rem] = DM__QEM_NONE;
-    dm__qem_prune(s, keep);
-    for (i = 0; i < nopp; i++) {
-        dm__qem_prune(s, opp[i]);
-        s->tcount[opp[i]]--;
+    out[-1] = (uint32_t)i;
+    s->vx[keep].first = (uint32_t)(s->adjend + 2);
+    s->vx[keep].count = (uint32_t)i;
+    s->adjend += 2 + i;
+    s->vx[rem].count = 0;
+    for (i = 0; i < nopp; i++) dm__qem_drop_corner(s, opp[i], dead[i]);
+    for (k = 0; k < 3; k++) {
+        s->pos[3 * (size_t)keep + k] = at[k];
+        s->vx[keep].p[k] = at[k];
     }
-    s->tcount[keep] += r.moved - r.dead;
-    s->tcount[rem] = 0;
-    for (k = 0; k < 3; k++) s->pos[3 * (size_t)keep + k] = at[k];
-    dm__qem_quadric_sum(&s->q[keep], &s->q[keep], &s->q[rem]);
-    s->flag[rem] |= DM__QEM_V_REMOVED;
-    s->ver[keep]++;
-    s->ver[rem]++;
+    dm__qem_quadric_sum(&s->vx[keep].q, &s->vx[keep].q, &s->vx[rem].q);
+    s->vx[rem].flag |= DM__QEM_V_REMOVED;
+    s->vx[keep].ver++;
+    s->vx[rem].ver++;
     s->live -= r.dead;
     s->rec[s->nrec++] = r;
     return 1;
@@ -2964,12 +3023,12 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 {
     size_t m = dm__qem_neighbours(s, keep), i, np = 0;
-    s->flag[keep] &= (uint8_t)~DM__QEM_V_PARKED;
+    s->vx[keep].flag &= ~(uint32_t)DM__QEM_V_PARKED;
     for (i = 0; i < m; i++) { /* the parked neighbours: to the ring scratch, new versions */
         uint32_t x = s->nbr[i];
-        if (s->flag[x] & DM__QEM_V_PARKED) {
-            s->flag[x] &= (uint8_t)~DM__QEM_V_PARKED;
-            s->ver[x]++;
+        if (s->vx[x].flag & DM__QEM_V_PARKED) {
+            s->vx[x].flag &= ~(uint32_t)DM__QEM_V_PARKED;
+            s->vx[x].ver++;
             s->ring[np++] = x;
         }
     }
@@ -2982,23 +3041,27 @@ static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 }
 
 /* Non-manifold detection, boundary flags and the initial quadrics (triangle planes weighted by
-   area; boundary edges add a perpendicular plane). tmp holds 3 n uint32. */
+   area; boundary edges add a perpendicular plane). tmp holds 4 n uint32, the last n zeroed. */
 static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
 {
     uint32_t *loc = tmp, *uf = tmp + s->n, *cnt = tmp + 2 * s->n; /* cnt: out | in << 16 */
+    uint32_t *mark = tmp + 3 * s->n, st = 0;
     size_t v, t;
     for (v = 0; v < s->n; v++) {
         size_t m = 0, i, fans = 0;
         int nonmanifold = 0, boundary = 0;
-        uint32_t c;
-        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        uint32_t ci, nc = s->vx[v].count;
+        const uint32_t *cl = s->adj + s->vx[v].first;
+        st++;
+        for (ci = 0; ci < nc; ci++) {
+            uint32_t c = cl[ci];
             const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
             uint32_t slot = c % 3, nx = tr[(slot + 1) % 3], pv = tr[(slot + 2) % 3], li[2], x;
             int k;
             for (k = 0; k < 2; k++) {
                 x = k ? pv : nx;
-                if (s->mark[x] != s->stamp + 1) {
-                    s->mark[x] = s->stamp + 1;
+                if (mark[x] != st) {
+                    mark[x] = st;
                     loc[x] = (uint32_t)m;
                     uf[m] = (uint32_t)m;
                     cnt[m] = 0;
@@ -3023,10 +3086,11 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
             if (uf[i] == i) fans++;
         }
         if (fans > 1) nonmanifold = 1;
-        if (nonmanifold) s->flag[v] |= DM__QEM_V_NONMANIFOLD;
-        if (boundary) s->flag[v] |= DM__QEM_V_BOUNDARY;
+        if (nonmanifold) s->vx[v].flag |= DM__QEM_V_NONMANIFOLD;
+        if (boundary) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
         if (boundary && !nonmanifold) { /* boundary planes, from the edge's tail */
-            for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+            for (ci = 0; ci < nc; ci++) {
+                uint32_t c = cl[ci];
                 const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
                 uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
                 if (cnt[loc[nx]] == 1u) {
@@ -3045,25 +3109,20 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
                         double d;
                         for (k = 0; k < 3; k++) pl[k] /= len;
                         d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
-                        dm__qem_quadric_add_plane(&s->q[v], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-                        dm__qem_quadric_add_plane(&s->q[nx], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+                        dm__qem_quadric_add_plane(&s->vx[v].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+                        dm__qem_quadric_add_plane(&s->vx[nx].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
                     }
                 }
             }
-        }
-        s->stamp += 2;
-        if (s->stamp >= 0xfffffff0u) {
-            memset(s->mark, 0, s->n * sizeof(uint32_t));
-            s->stamp = 0;
         }
     }
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
         double p[3][3], e[3], f[3], nrm[3], len, d;
         int k, j;
-        unsigned any = s->flag[tr[0]] | s->flag[tr[1]] | s->flag[tr[2]];
+        unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
         if (any & DM__QEM_V_NONMANIFOLD)
-            for (j = 0; j < 3; j++) s->flag[tr[j]] |= DM__QEM_V_FROZEN;
+            for (j = 0; j < 3; j++) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
         for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[j], p[j]);
         for (k = 0; k < 3; k++) {
             e[k] = p[1][k] - p[0][k];
@@ -3074,7 +3133,7 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
         d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
-        for (j = 0; j < 3; j++) dm__qem_quadric_add_plane(&s->q[tr[j]], nrm, d, 0.5 * len);
+        for (j = 0; j < 3; j++) dm__qem_quadric_add_plane(&s->vx[tr[j]].q, nrm, d, 0.5 * len);
     }
 }
 
@@ -3084,13 +3143,8 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->pos);
     a->free(a->user, s->idx);
     a->free(a->user, s->alive);
-    a->free(a->user, s->flag);
-    a->free(a->user, s->q);
-    a->free(a->user, s->vfirst);
-    a->free(a->user, s->cnext);
-    a->free(a->user, s->tcount);
-    a->free(a->user, s->ver);
-    a->free(a->user, s->mark);
+    a->free(a->user, s->vraw);
+    a->free(a->user, s->adj);
     a->free(a->user, s->nbr);
     a->free(a->user, s->ring);
     a->free(a->user, s->heap);
@@ -3124,7 +3178,9 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     if (!indices || !positions) return DM_ERR_INVALID_ARGUMENT;
     if (triangle_count == 0) return DM_ERR_NO_TRIANGLES;
     if (vertex_count == 0) return DM_ERR_BAD_INDEX;
-    if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u) return DM_ERR_TOO_LARGE;
+    if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u ||
+        3 * (double)triangle_count + 2 * (double)vertex_count > (double)DM__QEM_ADJ_MAX)
+        return DM_ERR_TOO_LARGE; /* corner ids and the corner pool's offsets are 32-bit */
     if (vertex_count > (size_t)-1 / (3 * sizeof(uint32_t)) || triangle_count > (size_t)-1 / (3 * sizeof(uint32_t)))
         return DM_ERR_TOO_LARGE;
     for (t = 0; t < 3 * triangle_count; t++) {
@@ -3147,16 +3203,19 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(pos, 3 * vertex_count, float);
     DM__QEM_ALLOC(idx, 3 * triangle_count, uint32_t);
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
-    DM__QEM_ALLOC(flag, vertex_count, uint8_t);
-    DM__QEM_ALLOC(q, vertex_count, dm__qem_quadric);
-    DM__QEM_ALLOC(vfirst, vertex_count, uint32_t);
-    DM__QEM_ALLOC(cnext, 3 * triangle_count, uint32_t);
-    DM__QEM_ALLOC(tcount, vertex_count, uint32_t);
-    DM__QEM_ALLOC(ver, vertex_count, uint32_t);
-    DM__QEM_ALLOC(mark, vertex_count, uint32_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
+    /* the corner pool: every list with its header, and half as much again for the appended
+       lists (compacted in place when full) */
+    s->adjcap = 3 * triangle_count + 2 * vertex_count;
+    s->adjcap += s->adjcap / 2 + 64;
+    if (s->adjcap > DM__QEM_ADJ_MAX) s->adjcap = DM__QEM_ADJ_MAX;
+    DM__QEM_ALLOC(adj, s->adjcap, uint32_t);
 #undef DM__QEM_ALLOC
+    if (vertex_count > ((size_t)-1 - 64) / sizeof(dm__qem_vert)) return DM_ERR_TOO_LARGE;
+    s->vraw = s->al.alloc(s->al.user, vertex_count * sizeof(dm__qem_vert) + 64);
+    if (!s->vraw) return DM_ERR_OUT_OF_MEMORY;
+    s->vx = (dm__qem_vert *)(void *)((char *)s->vraw + (64 - (size_t)((uintptr_t)s->vraw & 63)) % 64);
     memcpy(s->pos, positions, 3 * vertex_count * sizeof(float));
     for (t = 0; t < triangle_count; t++) {
         const uint32_t *tr = indices + 3 * t;
@@ -3167,19 +3226,22 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     *dropped = triangle_count - kept;
     s->t = kept;
     s->live = kept;
-    memset(s->flag, 0, vertex_count);
-    memset(s->q, 0, vertex_count * sizeof(dm__qem_quadric));
-    memset(s->ver, 0, vertex_count * sizeof(uint32_t));
-    memset(s->mark, 0, vertex_count * sizeof(uint32_t));
+    memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     s->stamp = 0;
-    for (v = 0; v < vertex_count; v++) {
-        s->vfirst[v] = DM__QEM_NONE;
-        s->tcount[v] = 0;
+    for (v = 0; v < vertex_count; v++) memcpy(s->vx[v].p, positions + 3 * v, 3 * sizeof(float));
+    for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
+    s->adjend = 0;
+    for (v = 0; v < vertex_count; v++) { /* counting sort: lists in increasing corner order */
+        if (!s->vx[v].count) continue;
+        s->adj[s->adjend] = (uint32_t)v;
+        s->adj[s->adjend + 1] = s->vx[v].count;
+        s->vx[v].first = (uint32_t)(s->adjend + 2);
+        s->adjend += 2 + (size_t)s->vx[v].count;
+        s->vx[v].count = 0;
     }
-    for (t = 3 * kept; t-- > 0;) { /* prepend in reverse: lists in increasing corner order */
-        s->cnext[t] = s->vfirst[s->idx[t]];
-        s->vfirst[s->idx[t]] = (uint32_t)t;
-        s->tcount[s->idx[t]]++;
+    for (t = 0; t < 3 * kept; t++) {
+        dm__qem_vert *x = &s->vx[s->idx[t]];
+        s->adj[x->first + x->count++] = (uint32_t)t;
     }
     for (v = 0; v < 3; v++) {
         s->center[v] = 0.5 * ((double)lo[v] + (double)hi[v]);
@@ -3266,18 +3328,19 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
     r = dm__qem_simp_init(&s, positions, vertex_count, indices, triangle_count, &dropped);
     if (r != DM_OK) goto done;
-    tmp = (uint32_t *)dm__alloc_array(&s.al, 3 * vertex_count, sizeof(uint32_t), &overflow);
+    tmp = (uint32_t *)dm__alloc_array(&s.al, 4 * vertex_count, sizeof(uint32_t), &overflow);
     if (!tmp) {
         r = overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
         goto done;
     }
+    memset(tmp + 3 * vertex_count, 0, vertex_count * sizeof(uint32_t));
     dm__qem_classify(&s, tmp);
     s.al.free(s.al.user, tmp);
     tmp = NULL;
     for (v = 0; v < vertex_count; v++) {
-        if (opt.locked && opt.locked[v]) s.flag[v] |= DM__QEM_V_LOCKED;
-        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.flag[v] & DM__QEM_V_BOUNDARY)) s.flag[v] |= DM__QEM_V_LOCKED;
-        if (s.flag[v] & DM__QEM_V_FROZEN) frozen++;
+        if (opt.locked && opt.locked[v]) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
     }
     /* every collapsible edge once, from its lower endpoint; then one heapify. A closed manifold
        has 1.5 edges per triangle; the heap starts with room for twice that */
@@ -3287,7 +3350,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     }
     for (v = 0; v < vertex_count; v++) {
         size_t m, i;
-        if (s.flag[v] & DM__QEM_V_FROZEN) continue;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
         m = dm__qem_neighbours(&s, (uint32_t)v);
         for (i = 0; i < m; i++) {
             uint32_t x = s.nbr[i], keep, rem;
@@ -3325,8 +3388,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         float at[3];
         size_t ring_count;
         int k, placed;
-        if ((s.flag[ea] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
-        if (s.ver[ea] + s.ver[e.b] != e.stamp) continue; /* stale */
+        if ((s.vx[ea].flag | s.vx[e.b].flag) & DM__QEM_V_REMOVED) continue;
+        if (s.vx[ea].ver + s.vx[e.b].ver != e.stamp) continue; /* stale */
         placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
         err = dm__qem_error(&s, ea, e.b, cost);
@@ -3336,8 +3399,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if (!dm__qem_check_topology(&s, keep, rem) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
-            s.flag[ea] |= DM__QEM_V_PARKED;
-            s.flag[e.b] |= DM__QEM_V_PARKED;
+            s.vx[ea].flag |= DM__QEM_V_PARKED;
+            s.vx[e.b].flag |= DM__QEM_V_PARKED;
             continue;
         }
         if (opt.constraint) {
@@ -3361,12 +3424,12 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                     at[k] = corrected[k];
                     q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
                 }
-                if (((s.flag[keep] & DM__QEM_V_LOCKED) || ((s.flag[keep] ^ s.flag[rem]) & DM__QEM_V_BOUNDARY)) &&
+                if (((s.vx[keep].flag & DM__QEM_V_LOCKED) || ((s.vx[keep].flag ^ s.vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
                     memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
                     ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
                 if (ok && dm__qem_check_geometry(&s, keep, rem, at) == (size_t)-1) ok = 0;
                 if (!ok) verdict = DM_COLLAPSE_VETO;
-                dm__qem_quadric_sum(&qs, &s.q[keep], &s.q[rem]);
+                dm__qem_quadric_sum(&qs, &s.vx[keep].q, &s.vx[rem].q);
                 cost = dm__qem_quadric_eval(&qs, q);
                 err = qs.w > 0.0 ? sqrt(cost / qs.w) * s.scale : 0.0;
             } else if (verdict != DM_COLLAPSE_ALLOW) {
@@ -3374,8 +3437,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             }
             if (verdict == DM_COLLAPSE_VETO) {
                 s.vetoed++;
-                s.flag[ea] |= DM__QEM_V_PARKED;
-                s.flag[e.b] |= DM__QEM_V_PARKED;
+                s.vx[ea].flag |= DM__QEM_V_PARKED;
+                s.vx[e.b].flag |= DM__QEM_V_PARKED;
                 continue;
             }
         }
