@@ -2438,6 +2438,20 @@ typedef struct dm__qem_cand {
 
 #define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
 
+/* A radix heap (Ahuja, Mehlhorn, Orlin, Tarjan 1990) over the 64-bit keys: bucket 0 holds keys
+   equal to the last popped one, bucket i > 0 the keys whose highest bit differing from it is
+   bit i - 1. Pushes append; a pop that finds bucket 0 empty takes the first non-empty bucket,
+   makes its smallest key the new `last` and spreads it over the buckets below. Every access is
+   sequential, where a binary or 4-ary heap of a million entries misses the cache at every level
+   of every pop. Keys must not go below the last popped one: a new candidate cheaper than that
+   (placement keeps Q(x) of a merged quadric close to monotone, not exactly) is queued at the
+   last popped cost, i.e. next. */
+#define DM__QEM_BUCKETS 65
+typedef struct dm__qem_bucket {
+    dm__qem_cand *e;
+    size_t n, cap;
+} dm__qem_bucket;
+
 /* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
 typedef struct dm__qem_rec {
     size_t first;
@@ -2464,10 +2478,9 @@ typedef struct dm__qem_vert {
     dm__qem_quadric q;     /* 88 bytes */
     float p[3];            /* the position (the same bits as pos) */
     uint32_t first, count; /* its live corners: adj[first .. first + count) */
-    uint32_t ver;          /* candidate version: bumped when its edges change */
     uint32_t mark;         /* visit stamp */
     uint32_t flag;         /* DM__QEM_V_* */
-    uint32_t pad[2];
+    uint32_t pad[3];
 } dm__qem_vert;
 
 typedef struct dm__qem_simp {
@@ -2485,8 +2498,11 @@ typedef struct dm__qem_simp {
     uint32_t stamp;
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
-    dm__qem_cand *heap;
-    size_t hsize, hcap;
+    uint32_t *ver;                 /* per vertex, candidate version: bumped when its edges change
+                                      (a dense array: the stale checks touch nothing else) */
+    dm__qem_bucket bucket[DM__QEM_BUCKETS]; /* the candidates: a radix heap */
+    uint64_t last;                 /* its last popped key */
+    size_t hsize;                  /* candidates in it */
     dm__qem_rec *rec;
     size_t nrec, caprec;
     uint32_t *ops;
@@ -2669,98 +2685,92 @@ static double dm__qem_error(const dm__qem_simp *s, uint32_t a, uint32_t b, doubl
     return w > 0.0 ? sqrt(cost / w) * s->scale : 0.0;
 }
 
-static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y) { return x->key < y->key; }
-
-/* A 4-ary min-heap: half the depth of a binary one, and the four children share a cache line
-   or two, which is what the pops (the simplifier's hottest loop) wait on. */
-static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
+static unsigned dm__qem_bucket_of(uint64_t key, uint64_t last)
 {
-    dm__qem_cand e = h[i];
-    for (;;) {
-        size_t c = 4 * i + 1, best, j, end;
-        uint64_t bk;
-        if (c >= n) break;
-        best = c;
-        bk = h[c].key;
-        end = c + 4 < n ? c + 4 : n;
-        for (j = c + 1; j < end; j++) { /* without branches; equal keys keep the leftmost */
-            int lt = h[j].key < bk;
-            best = lt ? j : best;
-            bk = lt ? h[j].key : bk;
-        }
-        if (!dm__qem_cand_less(&h[best], &e)) break;
-        h[i] = h[best];
-        i = best;
+    uint64_t x = key ^ last;
+#if defined(__GNUC__) || defined(__clang__)
+    return x ? 64u - (unsigned)__builtin_clzll((unsigned long long)x) : 0u;
+#else
+    unsigned b = 0;
+    while (x) {
+        b++;
+        x >>= 1;
     }
-    h[i] = e;
+    return b;
+#endif
+}
+
+static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
+{
+    dm__qem_bucket *b = &s->bucket[i];
+    if (b->n == b->cap && !dm__qem_grow(&s->al, (void **)&b->e, &b->cap, b->n + 1, sizeof(dm__qem_cand))) return 0;
+    b->e[b->n++] = *e;
+    return 1;
+}
+
+static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
+{
+    return s->ver[DM__QEM_CAND_A(e)] + s->ver[e->b] != e->stamp;
 }
 
 static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
 {
-    size_t i;
-    if (s->hsize == s->hcap &&
-        !dm__qem_grow(&s->al, (void **)&s->heap, &s->hcap, s->hsize + 1, sizeof(dm__qem_cand)))
-        return 0;
-    i = s->hsize++;
-    while (i > 0) {
-        size_t p = (i - 1) / 4;
-        if (!dm__qem_cand_less(e, &s->heap[p])) break;
-        s->heap[i] = s->heap[p];
-        i = p;
+    dm__qem_cand c = *e;
+    if (c.key < s->last) { /* below the last pop: at the last popped cost (one ulp up if needed) */
+        uint64_t k = (s->last & ~(uint64_t)0xffffffffu) | (c.key & 0xffffffffu);
+        c.key = k < s->last ? k + ((uint64_t)1 << 32) : k;
     }
-    s->heap[i] = *e;
+    if (!dm__qem_bucket_add(s, dm__qem_bucket_of(c.key, s->last), &c)) return 0;
+    s->hsize++;
     return 1;
 }
 
-/* Drops the stale entries and re-heapifies, once the heap holds more than two entries per live
-   triangle (there are about 1.5 live edges per triangle): the heap stays near the size of the
-   live mesh, which the 1M-triangle sphere showed to matter (1.6x faster than at four). */
+/* Drops the stale entries once the heap holds more than two entries per live triangle (there
+   are about 1.5 live edges per triangle), so that it stays near the size of the live mesh. */
 static void dm__qem_heap_purge(dm__qem_simp *s)
 {
-    size_t i, n = 0;
-    for (i = 0; i < s->hsize; i++) {
-        const dm__qem_cand *e = &s->heap[i];
-        uint32_t a = DM__QEM_CAND_A(e);
-        if (((s->vx[a].flag | s->vx[e->b].flag) & DM__QEM_V_REMOVED) == 0 && s->vx[a].ver + s->vx[e->b].ver == e->stamp)
-            s->heap[n++] = *e;
+    unsigned i;
+    s->hsize = 0;
+    for (i = 0; i < DM__QEM_BUCKETS; i++) {
+        dm__qem_bucket *b = &s->bucket[i];
+        size_t j, n = 0;
+        for (j = 0; j < b->n; j++)
+            if (!dm__qem_stale(s, &b->e[j])) b->e[n++] = b->e[j];
+        b->n = n;
+        s->hsize += n;
     }
-    s->hsize = n;
-    for (i = n / 4 + 1; i-- > 0;)
-        if (i < n) dm__qem_sift_down(s->heap, n, i);
 }
 
-/* Floyd's pop: the hole left by the top goes down to a leaf along the smallest children (no
-   compare against the moved element on the way), then the last element rises from there. */
-static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
+/* The smallest entry into *out: 1, or 0 when the heap is empty, -1 on allocation failure.
+   Equal keys come out last in, first out. Stale entries met while spreading are dropped. */
+static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
 {
-    dm__qem_cand top = s->heap[0], last;
-    dm__qem_cand *h = s->heap;
-    size_t n = --s->hsize, i = 0;
-    if (n == 0) return top;
-    last = h[n];
-    for (;;) {
-        size_t c = 4 * i + 1, best, j, end;
-        uint64_t bk;
-        if (c >= n) break;
-        best = c;
-        bk = h[c].key;
-        end = c + 4 < n ? c + 4 : n;
-        for (j = c + 1; j < end; j++) {
-            int lt = h[j].key < bk;
-            best = lt ? j : best;
-            bk = lt ? h[j].key : bk;
+    dm__qem_bucket *b0 = &s->bucket[0];
+    while (b0->n == 0) {
+        unsigned i = 1;
+        size_t j;
+        uint64_t m;
+        dm__qem_bucket *bi;
+        while (i < DM__QEM_BUCKETS && s->bucket[i].n == 0) i++;
+        if (i == DM__QEM_BUCKETS) return 0;
+        bi = &s->bucket[i];
+        m = bi->e[0].key;
+        for (j = 1; j < bi->n; j++)
+            if (bi->e[j].key < m) m = bi->e[j].key;
+        s->last = m;
+        for (j = 0; j < bi->n; j++) {
+            const dm__qem_cand *e = &bi->e[j];
+            if (dm__qem_stale(s, e)) {
+                s->hsize--;
+                continue;
+            }
+            if (!dm__qem_bucket_add(s, dm__qem_bucket_of(e->key, m), e)) return -1;
         }
-        h[i] = h[best];
-        i = best;
+        bi->n = 0;
     }
-    while (i > 0) {
-        size_t p = (i - 1) / 4;
-        if (!(last.key < h[p].key)) break;
-        h[i] = h[p];
-        i = p;
-    }
-    h[i] = last;
-    return top;
+    *out = b0->e[--b0->n];
+    s->hsize--;
+    return 1;
 }
 
 /* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
@@ -2789,7 +2799,7 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     memcpy(&bits, &f, sizeof bits);
     e.key = (uint64_t)bits << 32 | lo;
     e.b = a < b ? b : a;
-    e.stamp = s->vx[lo].ver + s->vx[e.b].ver;
+    e.stamp = s->ver[lo] + s->ver[e.b];
     return e;
 }
 
@@ -3011,8 +3021,8 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     }
     dm__qem_quadric_sum(&s->vx[keep].q, &s->vx[keep].q, &s->vx[rem].q);
     s->vx[rem].flag |= DM__QEM_V_REMOVED;
-    s->vx[keep].ver++;
-    s->vx[rem].ver++;
+    s->ver[keep]++;
+    s->ver[rem]++;
     s->live -= r.dead;
     s->rec[s->nrec++] = r;
     return 1;
@@ -3028,7 +3038,7 @@ static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
         uint32_t x = s->nbr[i];
         if (s->vx[x].flag & DM__QEM_V_PARKED) {
             s->vx[x].flag &= ~(uint32_t)DM__QEM_V_PARKED;
-            s->vx[x].ver++;
+            s->ver[x]++;
             s->ring[np++] = x;
         }
     }
@@ -3140,6 +3150,7 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
 static void dm__qem_simp_free(dm__qem_simp *s)
 {
     const dm_allocator *a = &s->al;
+    unsigned i;
     a->free(a->user, s->pos);
     a->free(a->user, s->idx);
     a->free(a->user, s->alive);
@@ -3147,7 +3158,8 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->adj);
     a->free(a->user, s->nbr);
     a->free(a->user, s->ring);
-    a->free(a->user, s->heap);
+    a->free(a->user, s->ver);
+    for (i = 0; i < DM__QEM_BUCKETS; i++) a->free(a->user, s->bucket[i].e);
     a->free(a->user, s->rec);
     a->free(a->user, s->ops);
 }
@@ -3204,6 +3216,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(idx, 3 * triangle_count, uint32_t);
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
+    DM__QEM_ALLOC(ver, vertex_count, uint32_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
     /* the corner pool: every list with its header, and half as much again for the appended
        lists (compacted in place when full) */
@@ -3227,6 +3240,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     s->t = kept;
     s->live = kept;
     memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
+    memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
     for (v = 0; v < vertex_count; v++) memcpy(s->vx[v].p, positions + 3 * v, 3 * sizeof(float));
     for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
@@ -3342,12 +3356,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
     }
-    /* every collapsible edge once, from its lower endpoint; then one heapify. A closed manifold
-       has 1.5 edges per triangle; the heap starts with room for twice that */
-    if (!dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, 3 * s.t + 64, sizeof(dm__qem_cand))) {
-        r = DM_ERR_OUT_OF_MEMORY;
-        goto done;
-    }
+    /* every collapsible edge once, from its lower endpoint */
     for (v = 0; v < vertex_count; v++) {
         size_t m, i;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
@@ -3355,16 +3364,15 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         for (i = 0; i < m; i++) {
             uint32_t x = s.nbr[i], keep, rem;
             double p[3], cost;
+            dm__qem_cand e;
             if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost)) continue;
-            if (s.hsize == s.hcap && !dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, s.hsize + 1, sizeof(dm__qem_cand))) {
+            e = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
+            if (!dm__qem_heap_push(&s, &e)) {
                 r = DM_ERR_OUT_OF_MEMORY;
                 goto done;
             }
-            s.heap[s.hsize++] = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
         }
     }
-    for (v = s.hsize / 4 + 1; v-- > 0;)
-        if (v < s.hsize) dm__qem_sift_down(s.heap, s.hsize, v);
 
     s.target = opt.target_triangles;
     to_remove = s.live > s.target ? s.live - s.target : 0;
@@ -3380,16 +3388,20 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         }
     }
     next_progress = 0;
-    while (s.hsize > 0 && (s.target == 0 || s.live > s.target) &&
-           (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
-        dm__qem_cand e = dm__qem_heap_pop(&s);
-        uint32_t ea = DM__QEM_CAND_A(&e), keep, rem;
+    while ((s.target == 0 || s.live > s.target) && (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
+        dm__qem_cand e;
+        uint32_t ea, keep, rem;
         double x[3], cost, err;
         float at[3];
         size_t ring_count;
-        int k, placed;
-        if ((s.vx[ea].flag | s.vx[e.b].flag) & DM__QEM_V_REMOVED) continue;
-        if (s.vx[ea].ver + s.vx[e.b].ver != e.stamp) continue; /* stale */
+        int k, placed, got = dm__qem_heap_pop(&s, &e);
+        if (got < 0) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
+        if (got == 0) break;
+        ea = DM__QEM_CAND_A(&e);
+        if (dm__qem_stale(&s, &e)) continue; /* a collapse bumped a version (removed ones too) */
         placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
         err = dm__qem_error(&s, ea, e.b, cost);
