@@ -2445,12 +2445,19 @@ typedef struct dm__qem_cand {
    sequential, where a binary or 4-ary heap of a million entries misses the cache at every level
    of every pop. Keys must not go below the last popped one: a new candidate cheaper than that
    (placement keeps Q(x) of a merged quadric close to monotone, not exactly) is queued at the
-   last popped cost, i.e. next. */
+   last popped cost, i.e. next. A bucket is a stack of 4 KiB chunks taken from a free list, so
+   spreading a bucket moves entries without ever copying a whole array. */
 #define DM__QEM_BUCKETS 65
+#define DM__QEM_CHUNK 255
+typedef struct dm__qem_chunk {
+    struct dm__qem_chunk *next; /* the older (full) chunks of the bucket, or the free list */
+    dm__qem_cand e[DM__QEM_CHUNK];
+} dm__qem_chunk;
 typedef struct dm__qem_bucket {
-    dm__qem_cand *e;
-    size_t n, cap;
+    dm__qem_chunk *top; /* the chunk being filled: its entries [0, n - (chunks below) * CHUNK) */
+    size_t n;           /* entries in the bucket */
 } dm__qem_bucket;
+#define DM__QEM_CHUNKS_PER_BLOCK 64
 
 /* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
 typedef struct dm__qem_rec {
@@ -2501,6 +2508,8 @@ typedef struct dm__qem_simp {
     uint32_t *ver;                 /* per vertex, candidate version: bumped when its edges change
                                       (a dense array: the stale checks touch nothing else) */
     dm__qem_bucket bucket[DM__QEM_BUCKETS]; /* the candidates: a radix heap */
+    dm__qem_chunk *free_chunks;    /* free list */
+    void *blocks;                  /* allocated chunk blocks, linked through their first word */
     uint64_t last;                 /* its last popped key */
     size_t hsize;                  /* candidates in it */
     dm__qem_rec *rec;
@@ -2700,12 +2709,57 @@ static unsigned dm__qem_bucket_of(uint64_t key, uint64_t last)
 #endif
 }
 
+static dm__qem_chunk *dm__qem_chunk_new(dm__qem_simp *s)
+{
+    dm__qem_chunk *c = s->free_chunks;
+    if (!c) { /* a block: a link word (padded to a chunk's alignment), then the chunks */
+        size_t i;
+        char *blk = (char *)s->al.alloc(s->al.user, sizeof(dm__qem_chunk) * (DM__QEM_CHUNKS_PER_BLOCK + 1));
+        if (!blk) return NULL;
+        memcpy(blk, &s->blocks, sizeof(void *));
+        s->blocks = blk;
+        for (i = 1; i <= DM__QEM_CHUNKS_PER_BLOCK; i++) {
+            dm__qem_chunk *k = (dm__qem_chunk *)(void *)(blk + i * sizeof(dm__qem_chunk));
+            k->next = s->free_chunks;
+            s->free_chunks = k;
+        }
+        c = s->free_chunks;
+    }
+    s->free_chunks = c->next;
+    return c;
+}
+
 static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
 {
     dm__qem_bucket *b = &s->bucket[i];
-    if (b->n == b->cap && !dm__qem_grow(&s->al, (void **)&b->e, &b->cap, b->n + 1, sizeof(dm__qem_cand))) return 0;
-    b->e[b->n++] = *e;
+    size_t at = b->n % DM__QEM_CHUNK;
+    if (at == 0) {
+        dm__qem_chunk *c = dm__qem_chunk_new(s);
+        if (!c) return 0;
+        c->next = b->n ? b->top : NULL;
+        b->top = c;
+    }
+    b->top->e[at] = *e;
+    b->n++;
     return 1;
+}
+
+/* Takes bucket i's chunks out (the bucket is left empty): returns the top chunk; *fill gets the
+   entry count of the top chunk (the ones below are full). */
+static dm__qem_chunk *dm__qem_bucket_take(dm__qem_simp *s, unsigned i, size_t *fill)
+{
+    dm__qem_bucket *b = &s->bucket[i];
+    dm__qem_chunk *c = b->n ? b->top : NULL;
+    *fill = b->n ? (b->n - 1) % DM__QEM_CHUNK + 1 : 0;
+    b->n = 0;
+    b->top = NULL;
+    return c;
+}
+
+static void dm__qem_chunk_free(dm__qem_simp *s, dm__qem_chunk *c)
+{
+    c->next = s->free_chunks;
+    s->free_chunks = c;
 }
 
 static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
@@ -2726,19 +2780,25 @@ static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
 }
 
 /* Drops the stale entries once the heap holds more than two entries per live triangle (there
-   are about 1.5 live edges per triangle), so that it stays near the size of the live mesh. */
-static void dm__qem_heap_purge(dm__qem_simp *s)
+   are about 1.5 live edges per triangle), so that it stays near the size of the live mesh.
+   The entries that stay are re-added to their bucket: a chunk freed is reused at once, so this
+   never needs more than one new chunk. 0 on allocation failure. */
+static int dm__qem_heap_purge(dm__qem_simp *s)
 {
     unsigned i;
     s->hsize = 0;
     for (i = 0; i < DM__QEM_BUCKETS; i++) {
-        dm__qem_bucket *b = &s->bucket[i];
-        size_t j, n = 0;
-        for (j = 0; j < b->n; j++)
-            if (!dm__qem_stale(s, &b->e[j])) b->e[n++] = b->e[j];
-        b->n = n;
-        s->hsize += n;
+        size_t fill, j;
+        dm__qem_chunk *c = dm__qem_bucket_take(s, i, &fill), *next;
+        for (; c; c = next, fill = DM__QEM_CHUNK) {
+            next = c->next;
+            for (j = 0; j < fill; j++)
+                if (!dm__qem_stale(s, &c->e[j]) && !dm__qem_bucket_add(s, i, &c->e[j])) return 0;
+            dm__qem_chunk_free(s, c);
+        }
+        s->hsize += s->bucket[i].n;
     }
+    return 1;
 }
 
 /* The smallest entry into *out: 1, or 0 when the heap is empty, -1 on allocation failure.
@@ -2746,29 +2806,42 @@ static void dm__qem_heap_purge(dm__qem_simp *s)
 static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
 {
     dm__qem_bucket *b0 = &s->bucket[0];
+    size_t at;
     while (b0->n == 0) {
         unsigned i = 1;
-        size_t j;
-        uint64_t m;
-        dm__qem_bucket *bi;
+        size_t j, fill;
+        uint64_t m = ~(uint64_t)0;
+        dm__qem_chunk *c, *next;
         while (i < DM__QEM_BUCKETS && s->bucket[i].n == 0) i++;
         if (i == DM__QEM_BUCKETS) return 0;
-        bi = &s->bucket[i];
-        m = bi->e[0].key;
-        for (j = 1; j < bi->n; j++)
-            if (bi->e[j].key < m) m = bi->e[j].key;
-        s->last = m;
-        for (j = 0; j < bi->n; j++) {
-            const dm__qem_cand *e = &bi->e[j];
-            if (dm__qem_stale(s, e)) {
-                s->hsize--;
-                continue;
-            }
-            if (!dm__qem_bucket_add(s, dm__qem_bucket_of(e->key, m), e)) return -1;
+        c = dm__qem_bucket_take(s, i, &fill);
+        for (next = c, j = fill; next; next = next->next, j = DM__QEM_CHUNK) {
+            size_t k;
+            for (k = 0; k < j; k++)
+                if (next->e[k].key < m) m = next->e[k].key;
         }
-        bi->n = 0;
+        s->last = m;
+        for (; c; c = next, fill = DM__QEM_CHUNK) {
+            next = c->next;
+            for (j = 0; j < fill; j++) {
+                const dm__qem_cand *e = &c->e[j];
+                if (dm__qem_stale(s, e)) {
+                    s->hsize--;
+                    continue;
+                }
+                if (!dm__qem_bucket_add(s, dm__qem_bucket_of(e->key, m), e)) return -1;
+            }
+            dm__qem_chunk_free(s, c);
+        }
     }
-    *out = b0->e[--b0->n];
+    at = (b0->n - 1) % DM__QEM_CHUNK;
+    *out = b0->top->e[at];
+    b0->n--;
+    if (at == 0) {
+        dm__qem_chunk *c = b0->top;
+        b0->top = b0->n ? c->next : NULL;
+        dm__qem_chunk_free(s, c);
+    }
     s->hsize--;
     return 1;
 }
@@ -3150,7 +3223,6 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
 static void dm__qem_simp_free(dm__qem_simp *s)
 {
     const dm_allocator *a = &s->al;
-    unsigned i;
     a->free(a->user, s->pos);
     a->free(a->user, s->idx);
     a->free(a->user, s->alive);
@@ -3159,7 +3231,12 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->nbr);
     a->free(a->user, s->ring);
     a->free(a->user, s->ver);
-    for (i = 0; i < DM__QEM_BUCKETS; i++) a->free(a->user, s->bucket[i].e);
+    while (s->blocks) {
+        void *next;
+        memcpy(&next, s->blocks, sizeof(void *));
+        a->free(a->user, s->blocks);
+        s->blocks = next;
+    }
     a->free(a->user, s->rec);
     a->free(a->user, s->ops);
 }
@@ -3458,7 +3535,10 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
-        if (s.hsize > 4096 && s.hsize / 2 > s.live) dm__qem_heap_purge(&s);
+        if (s.hsize > 4096 && s.hsize / 2 > s.live && !dm__qem_heap_purge(&s)) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
         if (err > s.max_error) s.max_error = err;
         if (opt.progress && s.nrec >= next_progress) {
             float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
