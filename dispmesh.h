@@ -2504,6 +2504,7 @@ typedef struct dm__qem_simp {
     size_t adjend, adjcap;
     uint32_t stamp;
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
+    size_t nnbr;
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
     uint32_t *ver;                 /* per vertex, candidate version: bumped when its edges change
                                       (a dense array: the stale checks touch nothing else) */
@@ -2955,18 +2956,25 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
 }
 
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
-   joined to every boundary vertex) and no vertex left with a degenerate fan. */
+   joined to every boundary vertex) and no vertex left with a degenerate fan. On the way, the
+   union of the two one-rings (keep's neighbours after the collapse) goes to nbr[0 .. nnbr). */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 {
     uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
     const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
     size_t common = 0, shared = 0, i;
     int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
+    size_t m = 0;
     for (j = 0; j < nk; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
         int k;
-        for (k = 0; k < 3; k++)
-            if (t[k] != keep) s->vx[t[k]].mark = st;
+        for (k = 0; k < 3; k++) {
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] != keep && x->mark != st) {
+                x->mark = st;
+                if (t[k] != rem) s->nbr[m++] = t[k];
+            }
+        }
     }
     for (j = 0; j < nr; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
@@ -2977,12 +2985,15 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
                     if (t[k] != keep && t[k] != rem) opp[shared] = t[k];
             shared++;
         }
-        for (k = 0; k < 3; k++)
-            if (t[k] != rem && t[k] != keep && s->vx[t[k]].mark == st) {
-                s->vx[t[k]].mark = st + 1;
-                common++;
-            }
+        for (k = 0; k < 3; k++) {
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] == rem || t[k] == keep || x->mark == st + 1) continue;
+            if (x->mark == st) common++;
+            else s->nbr[m++] = t[k];
+            x->mark = st + 1;
+        }
     }
+    s->nnbr = m;
     if (shared == 1) {
         if (!both_boundary || common != 1) return 0;
     } else if (shared == 2) {
@@ -3105,7 +3116,7 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
    its neighbours, whose one-ring just changed. */
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 {
-    size_t m = dm__qem_neighbours(s, keep), i, np = 0;
+    size_t m = s->nnbr, i, np = 0; /* from the topology check */
     s->vx[keep].flag &= ~(uint32_t)DM__QEM_V_PARKED;
     for (i = 0; i < m; i++) { /* the parked neighbours: to the ring scratch, new versions */
         uint32_t x = s->nbr[i];
