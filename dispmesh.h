@@ -3134,6 +3134,77 @@ static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
     return 1;
 }
 
+/* The boundary edge from corner c (of v) to the next vertex of its triangle adds the plane
+   through it perpendicular to the triangle to both its ends. */
+static void dm__qem_boundary_plane(dm__qem_simp *s, uint32_t v, uint32_t c)
+{
+    const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
+    uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
+    double p[3][3], e[3], f[3], nrm[3], pl[3], len, l2;
+    int k, j;
+    for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[(slot + (uint32_t)j) % 3], p[j]);
+    for (k = 0; k < 3; k++) {
+        e[k] = p[1][k] - p[0][k];
+        f[k] = p[2][k] - p[0][k];
+    }
+    dm__cross3(e, f, nrm);
+    dm__cross3(e, nrm, pl);
+    len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
+    l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    if (len > 0.0) {
+        double d;
+        for (k = 0; k < 3; k++) pl[k] /= len;
+        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
+        dm__qem_quadric_add_plane(&s->vx[v].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+        dm__qem_quadric_add_plane(&s->vx[nx].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+    }
+}
+
+/* The common case of the classification, a vertex of at most 16 triangles that is manifold:
+   each triangle's next one around v is the one whose previous vertex is this one's next, no
+   next or previous vertex repeats, and following the links from the one triangle without a
+   predecessor (or from any, on a closed fan) visits every triangle. Returns 0 interior,
+   1 boundary (its boundary planes added), -1 for anything else (the general code decides). */
+static int dm__qem_classify_small(dm__qem_simp *s, uint32_t v)
+{
+    uint32_t nxs[16], pvs[16], succ[16], i, j, nc = s->vx[v].count, links = 0, start = 0, steps = 0, has_pred = 0;
+    const uint32_t *cl = s->adj + s->vx[v].first;
+    if (nc > 16 || nc == 0) return -1;
+    for (i = 0; i < nc; i++) {
+        const uint32_t *tr = s->idx + 3 * (size_t)(cl[i] / 3);
+        uint32_t slot = cl[i] % 3;
+        nxs[i] = tr[slot == 2 ? 0 : slot + 1];
+        pvs[i] = tr[slot == 0 ? 2 : slot - 1];
+    }
+    for (i = 0; i < nc; i++) { /* a repeated previous vertex matches twice, a repeated next one
+                                  points twice at the same triangle */
+        uint32_t x = nxs[i], sj = DM__QEM_NONE;
+        for (j = 0; j < nc; j++)
+            if (pvs[j] == x) {
+                if (sj != DM__QEM_NONE) return -1;
+                sj = j;
+            }
+        succ[i] = sj;
+        if (sj != DM__QEM_NONE) {
+            if (has_pred & (1u << sj)) return -1;
+            has_pred |= 1u << sj;
+            links++;
+        }
+    }
+    if (links + 1 < nc) return -1;
+    while (links < nc && (has_pred & (1u << start))) start++; /* open fan: from the first triangle */
+    i = start;
+    do {
+        steps++;
+        i = succ[i];
+    } while (i != DM__QEM_NONE && i != start && steps <= nc);
+    if (steps != nc || (links == nc) != (i == start)) return -1;
+    if (links == nc) return 0;
+    for (i = 0; i < nc; i++)
+        if (succ[i] == DM__QEM_NONE) dm__qem_boundary_plane(s, v, cl[i]);
+    return 1;
+}
+
 /* Non-manifold detection, boundary flags and the initial quadrics (triangle planes weighted by
    area; boundary edges add a perpendicular plane). tmp holds 4 n uint32, the last n zeroed. */
 static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
@@ -3143,9 +3214,13 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
     size_t v, t;
     for (v = 0; v < s->n; v++) {
         size_t m = 0, i, fans = 0;
-        int nonmanifold = 0, boundary = 0;
+        int nonmanifold = 0, boundary = 0, small = dm__qem_classify_small(s, (uint32_t)v);
         uint32_t ci, nc = s->vx[v].count;
         const uint32_t *cl = s->adj + s->vx[v].first;
+        if (small >= 0) {
+            if (small) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
+            continue;
+        }
         st++;
         for (ci = 0; ci < nc; ci++) {
             uint32_t c = cl[ci];
@@ -3182,33 +3257,12 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         if (fans > 1) nonmanifold = 1;
         if (nonmanifold) s->vx[v].flag |= DM__QEM_V_NONMANIFOLD;
         if (boundary) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
-        if (boundary && !nonmanifold) { /* boundary planes, from the edge's tail */
+        if (boundary && !nonmanifold) /* boundary planes, from the edge's tail */
             for (ci = 0; ci < nc; ci++) {
-                uint32_t c = cl[ci];
-                const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
-                uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
-                if (cnt[loc[nx]] == 1u) {
-                    double p[3][3], e[3], f[3], nrm[3], pl[3], len, l2;
-                    int k, j;
-                    for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[(slot + (uint32_t)j) % 3], p[j]);
-                    for (k = 0; k < 3; k++) {
-                        e[k] = p[1][k] - p[0][k];
-                        f[k] = p[2][k] - p[0][k];
-                    }
-                    dm__cross3(e, f, nrm);
-                    dm__cross3(e, nrm, pl);
-                    len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
-                    l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                    if (len > 0.0) {
-                        double d;
-                        for (k = 0; k < 3; k++) pl[k] /= len;
-                        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
-                        dm__qem_quadric_add_plane(&s->vx[v].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-                        dm__qem_quadric_add_plane(&s->vx[nx].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-                    }
-                }
+                const uint32_t *tr = s->idx + 3 * (size_t)(cl[ci] / 3);
+                uint32_t slot = cl[ci] % 3;
+                if (cnt[loc[tr[(slot + 1) % 3]]] == 1u) dm__qem_boundary_plane(s, (uint32_t)v, cl[ci]);
             }
-        }
     }
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
