@@ -2421,6 +2421,11 @@ done:
 #define DM__QEM_MIN_COS 0.2          /* a triangle's normal may turn by at most acos(0.2) = 78 degrees */
 #define DM__QEM_MIN_SIN 1e-5         /* new triangles: 2 area > DM__QEM_MIN_SIN * longest edge^2 */
 #define DM__QEM_ADJ_MAX 0xfffffff0u  /* the corner pool's offsets are 32-bit */
+#if defined(__GNUC__) || defined(__clang__)
+#define DM__QEM_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define DM__QEM_PREFETCH(p) ((void)0)
+#endif
 
 /* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. */
 typedef struct dm__qem_quadric {
@@ -2965,6 +2970,18 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     size_t common = 0, shared = 0, i;
     int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
     size_t m = 0;
+    /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
+       of its triangles and the records of their vertices go out together first (no branch on
+       loaded data in this loop), and the logic below finds them in flight or in cache. */
+    for (j = 0; j < nk + nr; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)((j < nk ? ck[j] : cr[j - nk]) / 3);
+        int k;
+        for (k = 0; k < 3; k++) {
+            const char *x = (const char *)&s->vx[t[k]];
+            DM__QEM_PREFETCH(x);
+            DM__QEM_PREFETCH(x + 64);
+        }
+    }
     for (j = 0; j < nk; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
         int k;
