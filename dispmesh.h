@@ -2459,7 +2459,8 @@ typedef struct dm__qem_chunk {
     dm__qem_cand e[DM__QEM_CHUNK];
 } dm__qem_chunk;
 typedef struct dm__qem_bucket {
-    dm__qem_chunk *top; /* the chunk being filled: its entries [0, n - (chunks below) * CHUNK) */
+    dm__qem_chunk *top; /* the chunk being filled, NULL when empty */
+    size_t fill;        /* entries in top (DM__QEM_CHUNK when empty: the next add takes a chunk) */
     size_t n;           /* entries in the bucket */
 } dm__qem_bucket;
 #define DM__QEM_CHUNKS_PER_BLOCK 64
@@ -2738,14 +2739,14 @@ static dm__qem_chunk *dm__qem_chunk_new(dm__qem_simp *s)
 static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
 {
     dm__qem_bucket *b = &s->bucket[i];
-    size_t at = b->n % DM__QEM_CHUNK;
-    if (at == 0) {
+    if (b->fill == DM__QEM_CHUNK) {
         dm__qem_chunk *c = dm__qem_chunk_new(s);
         if (!c) return 0;
-        c->next = b->n ? b->top : NULL;
+        c->next = b->top;
         b->top = c;
+        b->fill = 0;
     }
-    b->top->e[at] = *e;
+    b->top->e[b->fill++] = *e;
     b->n++;
     return 1;
 }
@@ -2755,10 +2756,11 @@ static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e
 static dm__qem_chunk *dm__qem_bucket_take(dm__qem_simp *s, unsigned i, size_t *fill)
 {
     dm__qem_bucket *b = &s->bucket[i];
-    dm__qem_chunk *c = b->n ? b->top : NULL;
-    *fill = b->n ? (b->n - 1) % DM__QEM_CHUNK + 1 : 0;
+    dm__qem_chunk *c = b->top;
+    *fill = c ? b->fill : 0;
     b->n = 0;
     b->top = NULL;
+    b->fill = DM__QEM_CHUNK;
     return c;
 }
 
@@ -2812,7 +2814,6 @@ static int dm__qem_heap_purge(dm__qem_simp *s)
 static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
 {
     dm__qem_bucket *b0 = &s->bucket[0];
-    size_t at;
     while (b0->n == 0) {
         unsigned i = 1;
         size_t j, fill;
@@ -2840,12 +2841,12 @@ static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
             dm__qem_chunk_free(s, c);
         }
     }
-    at = (b0->n - 1) % DM__QEM_CHUNK;
-    *out = b0->top->e[at];
+    *out = b0->top->e[--b0->fill];
     b0->n--;
-    if (at == 0) {
+    if (b0->fill == 0) { /* the chunks below are full */
         dm__qem_chunk *c = b0->top;
-        b0->top = b0->n ? c->next : NULL;
+        b0->top = c->next;
+        b0->fill = DM__QEM_CHUNK;
         dm__qem_chunk_free(s, c);
     }
     s->hsize--;
@@ -3491,6 +3492,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     int overflow = 0;
     memset(&s, 0, sizeof s);
     memset(&rep, 0, sizeof rep);
+    for (v = 0; v < DM__QEM_BUCKETS; v++) s.bucket[v].fill = DM__QEM_CHUNK;
     if (options) opt = *options;
     else memset(&opt, 0, sizeof opt);
     s.al = dm__resolve_allocator(opt.allocator);
