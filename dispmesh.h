@@ -3022,6 +3022,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     for (i = 0; i < shared; i++) {
         size_t nt = s->vx[opp[i]].count;
         if (nt <= ((s->vx[opp[i]].flag & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+        DM__QEM_PREFETCH(s->adj + s->vx[opp[i]].first); /* the collapse drops a corner there */
     }
     return 1;
 }
@@ -3562,6 +3563,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         }
         if (got == 0) break;
         ea = DM__QEM_CAND_A(&e);
+        DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
+        DM__QEM_PREFETCH(&s.vx[e.b]);
         if (dm__qem_stale(&s, &e)) continue; /* a collapse bumped a version (removed ones too) */
         placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
