@@ -3566,6 +3566,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
         DM__QEM_PREFETCH(&s.vx[e.b]);
         if (dm__qem_stale(&s, &e)) continue; /* a collapse bumped a version (removed ones too) */
+        DM__QEM_PREFETCH(s.adj + s.vx[ea].first); /* for the topology check, while placing */
+        DM__QEM_PREFETCH(s.adj + s.vx[e.b].first);
         placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
         err = dm__qem_error(&s, ea, e.b, cost);
