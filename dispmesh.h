@@ -3518,15 +3518,30 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
     }
-    /* every collapsible edge once, from its lower endpoint */
+    /* every collapsible edge once, from its lower endpoint. A vertex that is not frozen is
+       manifold: its neighbours are the next vertices of its corners, each once, and on a
+       boundary also the one previous vertex that is nobody's next. */
     for (v = 0; v < vertex_count; v++) {
-        size_t m, i;
+        uint32_t i, j, nc = s.vx[v].count;
+        const uint32_t *cl = s.adj + s.vx[v].first;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
-        m = dm__qem_neighbours(&s, (uint32_t)v);
-        for (i = 0; i < m; i++) {
-            uint32_t x = s.nbr[i], keep, rem;
+        for (i = 0; i < 2 * nc; i++) {
+            const uint32_t *t = s.idx + 3 * (size_t)(cl[i % nc] / 3);
+            uint32_t slot = cl[i % nc] % 3, x, keep, rem;
             double p[3], cost;
             dm__qem_cand e;
+            if (i < nc) {
+                x = t[slot == 2 ? 0 : slot + 1];
+            } else {
+                if (!(s.vx[v].flag & DM__QEM_V_BOUNDARY)) break;
+                x = t[slot == 0 ? 2 : slot - 1];
+                for (j = 0; j < nc; j++) {
+                    const uint32_t *u = s.idx + 3 * (size_t)(cl[j] / 3);
+                    uint32_t sj = cl[j] % 3;
+                    if (u[sj == 2 ? 0 : sj + 1] == x) break;
+                }
+                if (j < nc) continue;
+            }
             if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost)) continue;
             e = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
             if (!dm__qem_heap_push(&s, &e)) {
