@@ -2489,11 +2489,10 @@ struct dm_pm {
    mesh, and one record costs two cache misses where separate arrays cost seven. */
 typedef struct dm__qem_vert {
     dm__qem_quadric q;     /* 88 bytes */
-    float p[3];            /* the position (the same bits as pos) */
+    double np[3];          /* the position (pos) in the normalised frame */
     uint32_t first, count; /* its live corners: adj[first .. first + count) */
     uint32_t mark;         /* visit stamp */
     uint32_t flag;         /* DM__QEM_V_* */
-    uint32_t pad[3];
 } dm__qem_vert;
 
 typedef struct dm__qem_simp {
@@ -2564,9 +2563,10 @@ static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 
 static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
 {
-    const float *p = s->vx[v].p;
-    int k;
-    for (k = 0; k < 3; k++) x[k] = ((double)p[k] - s->center[k]) * s->inv_scale;
+    const double *p = s->vx[v].np;
+    x[0] = p[0];
+    x[1] = p[1];
+    x[2] = p[2];
 }
 
 static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
@@ -2909,30 +2909,29 @@ static void dm__cross3(const double a[3], const double b[3], double r[3])
    orientation (normal turns by less than acos(DM__QEM_MIN_COS)) and is not degenerate. Writes the
    new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. Each triangle
    is (v, p1, p2) from v's corner on: old normal (p1 - v) x (p2 - v), new one with v at `at`;
-   the tests compare squares, so no square root. */
+   the tests compare squares, so no square root, and they are scale-free, so they run in the
+   normalised frame. */
 static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     size_t m = 0;
     double pa[3];
     int pass, k;
     const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
-    for (k = 0; k < 3; k++) pa[k] = at[k];
+    for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     for (pass = 0; pass < 2; pass++) {
         uint32_t v = pass ? rem : keep, other = pass ? keep : rem, j, nc = s->vx[v].count;
         const uint32_t *cl = s->adj + s->vx[v].first;
-        const float *fv = s->vx[v].p;
-        double pv[3];
-        for (k = 0; k < 3; k++) pv[k] = fv[k];
+        const double *pv = s->vx[v].np;
         for (j = 0; j < nc; j++) {
             uint32_t c = cl[j], tri = c / 3, slot = c - 3 * tri, i1, i2;
             const uint32_t *t = s->idx + 3 * (size_t)tri;
-            const float *f1, *f2;
+            const double *f1, *f2;
             double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
             i1 = t[slot == 2 ? 0 : slot + 1];
             i2 = t[slot == 0 ? 2 : slot - 1];
             if (i1 == other || i2 == other) continue; /* dies */
-            f1 = s->vx[i1].p;
-            f2 = s->vx[i2].p;
+            f1 = s->vx[i1].np;
+            f2 = s->vx[i2].np;
             for (k = 0; k < 3; k++) {
                 double x1 = f1[k], x2 = f2[k];
                 u0[k] = x1 - pv[k];
@@ -3081,7 +3080,7 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     r.first = s->nops;
     r.dead = r.moved = 0;
     for (k = 0; k < 3; k++) {
-        r.before[k] = s->vx[keep].p[k];
+        r.before[k] = s->pos[3 * (size_t)keep + k];
         r.after[k] = at[k];
     }
     for (j = 0; j < nr; j++) {
@@ -3120,7 +3119,7 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     for (i = 0; i < nopp; i++) dm__qem_drop_corner(s, opp[i], dead[i]);
     for (k = 0; k < 3; k++) {
         s->pos[3 * (size_t)keep + k] = at[k];
-        s->vx[keep].p[k] = at[k];
+        s->vx[keep].np[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     }
     dm__qem_quadric_sum(&s->vx[keep].q, &s->vx[keep].q, &s->vx[rem].q);
     s->vx[rem].flag |= DM__QEM_V_REMOVED;
@@ -3403,7 +3402,6 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
-    for (v = 0; v < vertex_count; v++) memcpy(s->vx[v].p, positions + 3 * v, 3 * sizeof(float));
     for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
     s->adjend = 0;
     for (v = 0; v < vertex_count; v++) { /* counting sort: lists in increasing corner order */
@@ -3424,6 +3422,11 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     }
     if (!(s->scale > 0.0)) s->scale = 1.0;
     s->inv_scale = 1.0 / s->scale;
+    for (v = 0; v < vertex_count; v++) {
+        int k;
+        for (k = 0; k < 3; k++)
+            s->vx[v].np[k] = ((double)positions[3 * v + (size_t)k] - s->center[k]) * s->inv_scale;
+    }
     return DM_OK;
 }
 
