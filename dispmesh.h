@@ -163,10 +163,14 @@
      THE METHOD, step by step
        1. Input checks (as dm_bvh_build); triangles with a repeated index are dropped (counted in
           the report, absent from every level, so the top level is the input without them).
-       2. Per vertex, a list of its triangle corners; classification: a vertex is non-manifold
-          when an edge at it has more than two triangles, two triangles the same way round, or
-          its triangles form more than one fan. Non-manifold vertices and every vertex that shares
-          a triangle with one are frozen: their triangles are left exactly as they are.
+       2. Per vertex, a list of its triangle corners (one pool, filled by a counting sort; a
+          collapse appends keep's new list, and the pool is compacted in place when full) and one
+          128-byte record (quadric, normalised position, list, flags). Classification: a vertex
+          is non-manifold when an edge at it has more than two triangles, two triangles the same
+          way round, or its triangles form more than one fan (fans of up to 16 triangles are
+          checked by linking each triangle to the next around the vertex; larger or irregular
+          ones by a union-find over the neighbours). Non-manifold vertices and every vertex that
+          shares a triangle with one are frozen: their triangles are left exactly as they are.
        3. Quadrics in a frame centred on the bounding box and scaled by its largest side: each
           triangle's plane weighted by its area, added to its three vertices; each boundary edge
           adds the plane through it perpendicular to its triangle, weighted 10 x its squared
@@ -179,21 +183,28 @@
           stays where it is. A locked vertex stays where it is; two locked vertices never merge.
           The surviving id is the boundary or locked one, else the lower id.
        5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
-          float), ties by the lower vertex id (then by heap position, which is as deterministic
-          as the rest), in a 4-ary min-heap with lazy
-          deletion (each entry carries the sum of its endpoints' version numbers; a collapse
-          bumps them).
+          float), ties by the lower vertex id, then last pushed first. The candidates sit in a
+          radix heap over the 64-bit key (cost bits, lower id): buckets by the highest bit that
+          differs from the last popped key, each a stack of 4 KiB chunks; a pop that finds the
+          lowest bucket empty spreads the next one. A candidate cheaper than the last popped one
+          (merged quadrics make costs nearly, not exactly, monotone) is queued at that cost.
+          Deletion is lazy: each entry carries the sum of its endpoints' version numbers, a
+          collapse bumps them, and stale entries are dropped when met (or all at once when the
+          heap exceeds two entries per live triangle).
        6. Checks on each popped candidate, in this order: the link condition (the common
           neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
           on a boundary edge; two boundary vertices joined by an interior edge never merge); no
           opposite vertex left with a degenerate fan (an interior one needs more than 3
           triangles, a boundary one more than 1); every surviving triangle of the one-ring keeps
           its orientation (its normal turns by less than acos(0.2) = 78 degrees) and is not
-          degenerate (2 area > 1e-5 longest edge^2); then the target error; then the constraint.
+          degenerate (2 area > 1e-5 longest edge^2); then the constraint. A candidate whose error
+          exceeds target_error is dropped before these checks (not counted as refused).
        7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
           the new position and Qa + Qb, and the record stores keep's positions before and after,
           the dead triangles and the moved corners. New candidates for keep's edges go in the
-          heap; neighbours that had a candidate refused get all theirs again.
+          heap; neighbours that had a candidate refused get all theirs again. (The checks first
+          touch the collapse's neighbourhood, cold on a large mesh: they issue its loads together
+          as prefetches before running their logic.)
 
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
      a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
@@ -221,9 +232,10 @@
      triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
      positions, in no level's mesh. Unreferenced vertices may hold NaN.
 
-     MEMORY. During dm_simplify about 145 bytes per vertex (the 88-byte quadric among them) and
-     40 per triangle, plus the candidate heap (16 bytes an entry: 3 per triangle reserved at the
-     start; stale entries are dropped when the heap exceeds 2 per live triangle). The progressive mesh
+     MEMORY. During dm_simplify about 160 bytes per vertex (the 128-byte record among them) and
+     45 per triangle, plus the candidate heap (16 bytes an entry, about 1.5 per triangle at the
+     start, never more than 2 per live triangle after a purge, in 4 KiB chunks allocated 64 at a
+     time) and the records of the expected collapses, reserved at the start. The progressive mesh
      keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
      triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
 
@@ -231,7 +243,8 @@
      dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
      concurrently with anything else on the same pm.
 
-     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit).
+     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit), and
+     3 triangles + 2 vertices below about 4.0e9 (offsets in the corner pool are 32-bit).
      Attributes (normals, UVs) are not simplified: the quadrics see positions only.
 
    PART 3: PARAMETERIZATION, DISPLACEMENT BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
