@@ -2986,14 +2986,15 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
        of its triangles and the records of their vertices go out together first (no branch on
        loaded data in this loop), and the logic below finds them in flight or in cache. */
-    for (j = 0; j < nk + nr; j++) {
-        const uint32_t *t = s->idx + 3 * (size_t)((j < nk ? ck[j] : cr[j - nk]) / 3);
-        int k;
-        for (k = 0; k < 3; k++) {
-            const char *x = (const char *)&s->vx[t[k]];
-            DM__QEM_PREFETCH(x);
-            DM__QEM_PREFETCH(x + 64);
-        }
+    for (j = 0; j < nk + nr; j++) { /* the two vertices after the corner's own */
+        uint32_t c = j < nk ? ck[j] : cr[j - nk], tri = c / 3, slot = c - 3 * tri;
+        const uint32_t *t = s->idx + 3 * (size_t)tri;
+        const char *x1 = (const char *)&s->vx[t[slot == 2 ? 0 : slot + 1]];
+        const char *x2 = (const char *)&s->vx[t[slot == 0 ? 2 : slot - 1]];
+        DM__QEM_PREFETCH(x1);
+        DM__QEM_PREFETCH(x1 + 64);
+        DM__QEM_PREFETCH(x2);
+        DM__QEM_PREFETCH(x2 + 64);
     }
     for (j = 0; j < nk; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
