@@ -3185,10 +3185,13 @@ static void dm__qem_boundary_plane(dm__qem_simp *s, uint32_t v, uint32_t c)
     l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
     if (len > 0.0) {
         double d;
+        dm__qem_quadric pq;
         for (k = 0; k < 3; k++) pl[k] /= len;
         d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
-        dm__qem_quadric_add_plane(&s->vx[v].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-        dm__qem_quadric_add_plane(&s->vx[nx].q, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2); /* the same terms */
+        dm__qem_quadric_sum(&s->vx[v].q, &s->vx[v].q, &pq);
+        dm__qem_quadric_sum(&s->vx[nx].q, &s->vx[nx].q, &pq);
     }
 }
 
@@ -3299,6 +3302,7 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
         double p[3][3], e[3], f[3], nrm[3], len, d;
+        dm__qem_quadric pq;
         int k, j;
         unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
         if (any & DM__QEM_V_NONMANIFOLD)
@@ -3313,7 +3317,9 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
         d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
-        for (j = 0; j < 3; j++) dm__qem_quadric_add_plane(&s->vx[tr[j]].q, nrm, d, 0.5 * len);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, nrm, d, 0.5 * len); /* once: the same terms go to all three */
+        for (j = 0; j < 3; j++) dm__qem_quadric_sum(&s->vx[tr[j]].q, &s->vx[tr[j]].q, &pq);
     }
 }
 
