@@ -163,10 +163,14 @@
      THE METHOD, step by step
        1. Input checks (as dm_bvh_build); triangles with a repeated index are dropped (counted in
           the report, absent from every level, so the top level is the input without them).
-       2. Per vertex, a list of its triangle corners; classification: a vertex is non-manifold
-          when an edge at it has more than two triangles, two triangles the same way round, or
-          its triangles form more than one fan. Non-manifold vertices and every vertex that shares
-          a triangle with one are frozen: their triangles are left exactly as they are.
+       2. Per vertex, a list of its triangle corners (one pool, filled by a counting sort; a
+          collapse appends keep's new list, and the pool is compacted in place when full) and one
+          128-byte record (quadric, normalised position, list, flags). Classification: a vertex
+          is non-manifold when an edge at it has more than two triangles, two triangles the same
+          way round, or its triangles form more than one fan (fans of up to 16 triangles are
+          checked by linking each triangle to the next around the vertex; larger or irregular
+          ones by a union-find over the neighbours). Non-manifold vertices and every vertex that
+          shares a triangle with one are frozen: their triangles are left exactly as they are.
        3. Quadrics in a frame centred on the bounding box and scaled by its largest side: each
           triangle's plane weighted by its area, added to its three vertices; each boundary edge
           adds the plane through it perpendicular to its triangle, weighted 10 x its squared
@@ -179,21 +183,28 @@
           stays where it is. A locked vertex stays where it is; two locked vertices never merge.
           The surviving id is the boundary or locked one, else the lower id.
        5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
-          float), ties by the lower vertex id (then by heap position, which is as deterministic
-          as the rest), in a 4-ary min-heap with lazy
-          deletion (each entry carries the sum of its endpoints' version numbers; a collapse
-          bumps them).
+          float), ties by the lower vertex id, then last pushed first. The candidates sit in a
+          radix heap over the 64-bit key (cost bits, lower id): buckets by the highest bit that
+          differs from the last popped key, each a stack of 4 KiB chunks; a pop that finds the
+          lowest bucket empty spreads the next one. A candidate cheaper than the last popped one
+          (merged quadrics make costs nearly, not exactly, monotone) is queued at that cost.
+          Deletion is lazy: each entry carries the sum of its endpoints' version numbers, a
+          collapse bumps them, and stale entries are dropped when met (or all at once when the
+          heap exceeds three entries per live triangle).
        6. Checks on each popped candidate, in this order: the link condition (the common
           neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
           on a boundary edge; two boundary vertices joined by an interior edge never merge); no
           opposite vertex left with a degenerate fan (an interior one needs more than 3
           triangles, a boundary one more than 1); every surviving triangle of the one-ring keeps
           its orientation (its normal turns by less than acos(0.2) = 78 degrees) and is not
-          degenerate (2 area > 1e-5 longest edge^2); then the target error; then the constraint.
+          degenerate (2 area > 1e-5 longest edge^2); then the constraint. A candidate whose error
+          exceeds target_error is dropped before these checks (not counted as refused).
        7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
           the new position and Qa + Qb, and the record stores keep's positions before and after,
           the dead triangles and the moved corners. New candidates for keep's edges go in the
-          heap; neighbours that had a candidate refused get all theirs again.
+          heap; neighbours that had a candidate refused get all theirs again. (The checks first
+          touch the collapse's neighbourhood, cold on a large mesh: they issue its loads together
+          as prefetches before running their logic.)
 
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
      a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
@@ -221,9 +232,10 @@
      triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
      positions, in no level's mesh. Unreferenced vertices may hold NaN.
 
-     MEMORY. During dm_simplify about 145 bytes per vertex (the 88-byte quadric among them) and
-     40 per triangle, plus the candidate heap (16 bytes an entry: 3 per triangle reserved at the
-     start; stale entries are dropped when the heap exceeds 2 per live triangle). The progressive mesh
+     MEMORY. During dm_simplify about 160 bytes per vertex (the 128-byte record among them) and
+     45 per triangle, plus the candidate heap (16 bytes an entry, about 1.5 per triangle at the
+     start, purged back to the live ones beyond 3 per live triangle, in 4 KiB chunks allocated 64
+     at a time) and the records of the expected collapses, reserved at the start. The progressive mesh
      keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
      triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
 
@@ -231,7 +243,8 @@
      dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
      concurrently with anything else on the same pm.
 
-     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit).
+     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit), and
+     3 triangles + 2 vertices below about 4.0e9 (offsets in the corner pool are 32-bit).
      Attributes (normals, UVs) are not simplified: the quadrics see positions only.
 
    PART 3: PARAMETERIZATION, DISPLACEMENT BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
@@ -2525,6 +2538,12 @@ done:
 #define DM__QEM_BOUNDARY_WEIGHT 10.0 /* boundary planes weigh this times the squared edge length */
 #define DM__QEM_MIN_COS 0.2          /* a triangle's normal may turn by at most acos(0.2) = 78 degrees */
 #define DM__QEM_MIN_SIN 1e-5         /* new triangles: 2 area > DM__QEM_MIN_SIN * longest edge^2 */
+#define DM__QEM_ADJ_MAX 0xfffffff0u  /* the corner pool's offsets are 32-bit */
+#if defined(__GNUC__) || defined(__clang__)
+#define DM__QEM_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define DM__QEM_PREFETCH(p) ((void)0)
+#endif
 
 /* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. */
 typedef struct dm__qem_quadric {
@@ -2541,6 +2560,28 @@ typedef struct dm__qem_cand {
 } dm__qem_cand;
 
 #define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
+
+/* A radix heap (Ahuja, Mehlhorn, Orlin, Tarjan 1990) over the 64-bit keys: bucket 0 holds keys
+   equal to the last popped one, bucket i > 0 the keys whose highest bit differing from it is
+   bit i - 1. Pushes append; a pop that finds bucket 0 empty takes the first non-empty bucket,
+   makes its smallest key the new `last` and spreads it over the buckets below. Every access is
+   sequential, where a binary or 4-ary heap of a million entries misses the cache at every level
+   of every pop. Keys must not go below the last popped one: a new candidate cheaper than that
+   (placement keeps Q(x) of a merged quadric close to monotone, not exactly) is queued at the
+   last popped cost, i.e. next. A bucket is a stack of 4 KiB chunks taken from a free list, so
+   spreading a bucket moves entries without ever copying a whole array. */
+#define DM__QEM_BUCKETS 65
+#define DM__QEM_CHUNK 255
+typedef struct dm__qem_chunk {
+    struct dm__qem_chunk *next; /* the older (full) chunks of the bucket, or the free list */
+    dm__qem_cand e[DM__QEM_CHUNK];
+} dm__qem_chunk;
+typedef struct dm__qem_bucket {
+    dm__qem_chunk *top; /* the chunk being filled, NULL when empty */
+    size_t fill;        /* entries in top (DM__QEM_CHUNK when empty: the next add takes a chunk) */
+    size_t n;           /* entries in the bucket */
+} dm__qem_bucket;
+#define DM__QEM_CHUNKS_PER_BLOCK 64
 
 /* One collapse: `dead` triangle ids then `moved` corner ids (3 triangle + slot) at ops[first]. */
 typedef struct dm__qem_rec {
@@ -2561,22 +2602,41 @@ struct dm_pm {
     uint32_t *scratch;  /* vertex_count, for dm_pm_get_mesh */
 };
 
+/* Everything the simplifier reads about one vertex, in one 128-byte record (two cache lines when
+   the array is 64-byte aligned): a collapse visits a few dozen vertices at random places of the
+   mesh, and one record costs two cache misses where separate arrays cost seven. */
+typedef struct dm__qem_vert {
+    dm__qem_quadric q;     /* 88 bytes */
+    double np[3];          /* the position (pos) in the normalised frame */
+    uint32_t first, count; /* its live corners: adj[first .. first + count) */
+    uint32_t mark;         /* visit stamp */
+    uint32_t flag;         /* DM__QEM_V_* */
+} dm__qem_vert;
+
 typedef struct dm__qem_simp {
     dm_allocator al;
     const dm_simplify_options *opt;
     size_t n, t, live, target;
     float *pos;
     uint32_t *idx;
-    uint8_t *alive, *flag;
-    dm__qem_quadric *q;
-    uint32_t *vfirst, *cnext;      /* per vertex a list of its corners (3 triangle + slot) */
-    uint32_t *tcount;              /* per vertex the length of that list (its live triangles) */
-    uint32_t *ver, *mark, stamp;   /* candidate versions; visit marks */
+    uint8_t *alive;
+    dm__qem_vert *vx;              /* n records, 64-byte aligned inside vraw */
+    void *vraw;
+    uint32_t *adj;                 /* corner lists (3 triangle + slot), each after a 2-word header
+                                      (owner, length); a collapse appends keep's new list */
+    size_t adjend, adjcap;
+    uint32_t stamp;
     uint32_t *nbr;                 /* scratch, n: neighbours of one vertex */
+    size_t nnbr;
     uint32_t *ring;                /* scratch, 3 t: the new one-ring for the constraint */
     uint32_t *oring;               /* scratch, 3 t: the old triangles of keep and remove (constraint only) */
-    dm__qem_cand *heap;
-    size_t hsize, hcap;
+    uint32_t *ver;                 /* per vertex, candidate version: bumped when its edges change
+                                      (a dense array: the stale checks touch nothing else) */
+    dm__qem_bucket bucket[DM__QEM_BUCKETS]; /* the candidates: a radix heap */
+    dm__qem_chunk *free_chunks;    /* free list */
+    void *blocks;                  /* allocated chunk blocks, linked through their first word */
+    uint64_t last;                 /* its last popped key */
+    size_t hsize;                  /* candidates in it */
     dm__qem_rec *rec;
     size_t nrec, caprec;
     uint32_t *ops;
@@ -2612,7 +2672,8 @@ static int dm__qem_grow(const dm_allocator *al, void **p, size_t *cap, size_t ne
 static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 {
     if (s->stamp >= 0xfffffff0u) { /* wrap: clear the marks once */
-        memset(s->mark, 0, s->n * sizeof(uint32_t));
+        size_t v;
+        for (v = 0; v < s->n; v++) s->vx[v].mark = 0;
         s->stamp = 0;
     }
     s->stamp += 2;
@@ -2621,8 +2682,10 @@ static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 
 static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
 {
-    int k;
-    for (k = 0; k < 3; k++) x[k] = ((double)s->pos[3 * (size_t)v + k] - s->center[k]) * s->inv_scale;
+    const double *p = s->vx[v].np;
+    x[0] = p[0];
+    x[1] = p[1];
+    x[2] = p[2];
 }
 
 static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
@@ -2716,145 +2779,213 @@ static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], cons
     return dm__qem_quadric_eval(q, x);
 }
 
-/* Which vertex stays, where it goes (normalised coordinates) and the cost. 0: never collapsible. */
+/* Which vertex stays, where it goes (normalised coordinates) and the cost Q(x). Returns 0 when the
+   edge is never collapsible, 2 when keep stays where it is (x = keep's position), else 1. */
 static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t *keep, uint32_t *rem, double x[3],
-                     double *cost, double *err)
+                         double *cost)
 {
-    unsigned fa = s->flag[a], fb = s->flag[b];
+    unsigned fa = s->vx[a].flag, fb = s->vx[b].flag;
     dm__qem_quadric q;
     double pa[3], pb[3];
-    int fixed = 1;
     if ((fa | fb) & (DM__QEM_V_FROZEN | DM__QEM_V_REMOVED)) return 0;
     if ((fa & fb) & DM__QEM_V_LOCKED) return 0;
-    if (fa & DM__QEM_V_LOCKED) *keep = a;
-    else if (fb & DM__QEM_V_LOCKED) *keep = b;
-    else if ((fa ^ fb) & DM__QEM_V_BOUNDARY) *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
-    else {
-        *keep = a < b ? a : b;
-        fixed = 0;
-    }
-    *rem = *keep == a ? b : a;
-    dm__qem_quadric_sum(&q, &s->q[a], &s->q[b]);
-    dm__qem_norm_pos(s, a, pa);
-    dm__qem_norm_pos(s, b, pb);
-    if (fixed) { /* the caller takes keep's float position as it is (no round trip) */
+    dm__qem_quadric_sum(&q, &s->vx[a].q, &s->vx[b].q);
+    if ((fa | fb) & DM__QEM_V_LOCKED || ((fa ^ fb) & DM__QEM_V_BOUNDARY)) {
+        /* the caller takes keep's float position as it is (no round trip) */
+        if (fa & DM__QEM_V_LOCKED) *keep = a;
+        else if (fb & DM__QEM_V_LOCKED) *keep = b;
+        else *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
+        *rem = *keep == a ? b : a;
         dm__qem_norm_pos(s, *keep, x);
         *cost = dm__qem_quadric_eval(&q, x);
-    } else if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
+        return 2;
+    }
+    *keep = a < b ? a : b;
+    *rem = a < b ? b : a;
+    dm__qem_norm_pos(s, a, pa);
+    dm__qem_norm_pos(s, b, pb);
+    if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
         dm__qem_segment_min(&q, pa, pb, x);
         *cost = dm__qem_quadric_eval(&q, x);
     } else {
         *cost = dm__qem_optimal(&q, pa, pb, x);
     }
-    *err = q.w > 0.0 ? sqrt(*cost / q.w) * s->scale : 0.0;
-    return fixed ? 2 : 1;
+    return 1;
 }
 
-static int dm__qem_cand_less(const dm__qem_cand *x, const dm__qem_cand *y) { return x->key < y->key; }
-
-/* A 4-ary min-heap: half the depth of a binary one, and the four children share a cache line
-   or two, which is what the pops (the simplifier's hottest loop) wait on. */
-static void dm__qem_sift_down(dm__qem_cand *h, size_t n, size_t i)
+/* A collapse's error in mesh units: sqrt(Q(x) / W), W the planes' total weight. */
+static double dm__qem_error(const dm__qem_simp *s, uint32_t a, uint32_t b, double cost)
 {
-    dm__qem_cand e = h[i];
-    for (;;) {
-        size_t c = 4 * i + 1, best, j, end;
-        uint64_t bk;
-        if (c >= n) break;
-        best = c;
-        bk = h[c].key;
-        end = c + 4 < n ? c + 4 : n;
-        for (j = c + 1; j < end; j++) { /* without branches; equal keys keep the leftmost */
-            int lt = h[j].key < bk;
-            best = lt ? j : best;
-            bk = lt ? h[j].key : bk;
-        }
-        if (!dm__qem_cand_less(&h[best], &e)) break;
-        h[i] = h[best];
-        i = best;
+    double w = s->vx[a].q.w + s->vx[b].q.w;
+    return w > 0.0 ? sqrt(cost / w) * s->scale : 0.0;
+}
+
+static unsigned dm__qem_bucket_of(uint64_t key, uint64_t last)
+{
+    uint64_t x = key ^ last;
+#if defined(__GNUC__) || defined(__clang__)
+    return x ? 64u - (unsigned)__builtin_clzll((unsigned long long)x) : 0u;
+#else
+    unsigned b = 0;
+    while (x) {
+        b++;
+        x >>= 1;
     }
-    h[i] = e;
+    return b;
+#endif
+}
+
+static dm__qem_chunk *dm__qem_chunk_new(dm__qem_simp *s)
+{
+    dm__qem_chunk *c = s->free_chunks;
+    if (!c) { /* a block: a link word (padded to a chunk's alignment), then the chunks */
+        size_t i;
+        char *blk = (char *)s->al.alloc(s->al.user, sizeof(dm__qem_chunk) * (DM__QEM_CHUNKS_PER_BLOCK + 1));
+        if (!blk) return NULL;
+        memcpy(blk, &s->blocks, sizeof(void *));
+        s->blocks = blk;
+        for (i = 1; i <= DM__QEM_CHUNKS_PER_BLOCK; i++) {
+            dm__qem_chunk *k = (dm__qem_chunk *)(void *)(blk + i * sizeof(dm__qem_chunk));
+            k->next = s->free_chunks;
+            s->free_chunks = k;
+        }
+        c = s->free_chunks;
+    }
+    s->free_chunks = c->next;
+    return c;
+}
+
+static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
+{
+    dm__qem_bucket *b = &s->bucket[i];
+    if (b->fill == DM__QEM_CHUNK) {
+        dm__qem_chunk *c = dm__qem_chunk_new(s);
+        if (!c) return 0;
+        c->next = b->top;
+        b->top = c;
+        b->fill = 0;
+    }
+    b->top->e[b->fill++] = *e;
+    b->n++;
+    return 1;
+}
+
+/* Takes bucket i's chunks out (the bucket is left empty): returns the top chunk; *fill gets the
+   entry count of the top chunk (the ones below are full). */
+static dm__qem_chunk *dm__qem_bucket_take(dm__qem_simp *s, unsigned i, size_t *fill)
+{
+    dm__qem_bucket *b = &s->bucket[i];
+    dm__qem_chunk *c = b->top;
+    *fill = c ? b->fill : 0;
+    b->n = 0;
+    b->top = NULL;
+    b->fill = DM__QEM_CHUNK;
+    return c;
+}
+
+static void dm__qem_chunk_free(dm__qem_simp *s, dm__qem_chunk *c)
+{
+    c->next = s->free_chunks;
+    s->free_chunks = c;
+}
+
+static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
+{
+    return s->ver[DM__QEM_CAND_A(e)] + s->ver[e->b] != e->stamp;
 }
 
 static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
 {
-    size_t i;
-    if (s->hsize == s->hcap &&
-        !dm__qem_grow(&s->al, (void **)&s->heap, &s->hcap, s->hsize + 1, sizeof(dm__qem_cand)))
-        return 0;
-    i = s->hsize++;
-    while (i > 0) {
-        size_t p = (i - 1) / 4;
-        if (!dm__qem_cand_less(e, &s->heap[p])) break;
-        s->heap[i] = s->heap[p];
-        i = p;
+    dm__qem_cand c = *e;
+    if (c.key < s->last) { /* below the last pop: at the last popped cost (one ulp up if needed) */
+        uint64_t k = (s->last & ~(uint64_t)0xffffffffu) | (c.key & 0xffffffffu);
+        c.key = k < s->last ? k + ((uint64_t)1 << 32) : k;
     }
-    s->heap[i] = *e;
+    if (!dm__qem_bucket_add(s, dm__qem_bucket_of(c.key, s->last), &c)) return 0;
+    s->hsize++;
     return 1;
 }
 
-/* Drops the stale entries and re-heapifies, once the heap holds more than two entries per live
-   triangle (there are about 1.5 live edges per triangle): the heap stays near the size of the
-   live mesh, which the 1M-triangle sphere showed to matter (1.6x faster than at four). */
-static void dm__qem_heap_purge(dm__qem_simp *s)
+/* Drops the stale entries once the heap holds more than three entries per live triangle (there
+   are about 1.5 live edges per triangle), so that it stays near the size of the live mesh
+   (spreading a bucket drops the stale entries it meets, so purges are rarely needed; at two
+   per triangle they took 15% of the bunny's time).
+   The entries that stay are re-added to their bucket: a chunk freed is reused at once, so this
+   never needs more than one new chunk. 0 on allocation failure. */
+static int dm__qem_heap_purge(dm__qem_simp *s)
 {
-    size_t i, n = 0;
-    for (i = 0; i < s->hsize; i++) {
-        const dm__qem_cand *e = &s->heap[i];
-        uint32_t a = DM__QEM_CAND_A(e);
-        if (((s->flag[a] | s->flag[e->b]) & DM__QEM_V_REMOVED) == 0 && s->ver[a] + s->ver[e->b] == e->stamp)
-            s->heap[n++] = *e;
+    unsigned i;
+    s->hsize = 0;
+    for (i = 0; i < DM__QEM_BUCKETS; i++) {
+        size_t fill, j;
+        dm__qem_chunk *c = dm__qem_bucket_take(s, i, &fill), *next;
+        for (; c; c = next, fill = DM__QEM_CHUNK) {
+            next = c->next;
+            for (j = 0; j < fill; j++)
+                if (!dm__qem_stale(s, &c->e[j]) && !dm__qem_bucket_add(s, i, &c->e[j])) return 0;
+            dm__qem_chunk_free(s, c);
+        }
+        s->hsize += s->bucket[i].n;
     }
-    s->hsize = n;
-    for (i = n / 4 + 1; i-- > 0;)
-        if (i < n) dm__qem_sift_down(s->heap, n, i);
+    return 1;
 }
 
-/* Floyd's pop: the hole left by the top goes down to a leaf along the smallest children (no
-   compare against the moved element on the way), then the last element rises from there. */
-static dm__qem_cand dm__qem_heap_pop(dm__qem_simp *s)
+/* The smallest entry into *out: 1, or 0 when the heap is empty, -1 on allocation failure.
+   Equal keys come out last in, first out. Stale entries met while spreading are dropped. */
+static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
 {
-    dm__qem_cand top = s->heap[0], last;
-    dm__qem_cand *h = s->heap;
-    size_t n = --s->hsize, i = 0;
-    if (n == 0) return top;
-    last = h[n];
-    for (;;) {
-        size_t c = 4 * i + 1, best, j, end;
-        uint64_t bk;
-        if (c >= n) break;
-        best = c;
-        bk = h[c].key;
-        end = c + 4 < n ? c + 4 : n;
-        for (j = c + 1; j < end; j++) {
-            int lt = h[j].key < bk;
-            best = lt ? j : best;
-            bk = lt ? h[j].key : bk;
+    dm__qem_bucket *b0 = &s->bucket[0];
+    while (b0->n == 0) {
+        unsigned i = 1;
+        size_t j, fill;
+        uint64_t m = ~(uint64_t)0;
+        dm__qem_chunk *c, *next;
+        while (i < DM__QEM_BUCKETS && s->bucket[i].n == 0) i++;
+        if (i == DM__QEM_BUCKETS) return 0;
+        c = dm__qem_bucket_take(s, i, &fill);
+        for (next = c, j = fill; next; next = next->next, j = DM__QEM_CHUNK) {
+            size_t k;
+            for (k = 0; k < j; k++)
+                if (next->e[k].key < m) m = next->e[k].key;
         }
-        h[i] = h[best];
-        i = best;
+        s->last = m;
+        for (; c; c = next, fill = DM__QEM_CHUNK) {
+            next = c->next;
+            for (j = 0; j < fill; j++) {
+                const dm__qem_cand *e = &c->e[j];
+                if (dm__qem_stale(s, e)) {
+                    s->hsize--;
+                    continue;
+                }
+                if (!dm__qem_bucket_add(s, dm__qem_bucket_of(e->key, m), e)) return -1;
+            }
+            dm__qem_chunk_free(s, c);
+        }
     }
-    while (i > 0) {
-        size_t p = (i - 1) / 4;
-        if (!(last.key < h[p].key)) break;
-        h[i] = h[p];
-        i = p;
+    *out = b0->top->e[--b0->fill];
+    b0->n--;
+    if (b0->fill == 0) { /* the chunks below are full */
+        dm__qem_chunk *c = b0->top;
+        b0->top = c->next;
+        b0->fill = DM__QEM_CHUNK;
+        dm__qem_chunk_free(s, c);
     }
-    h[i] = last;
-    return top;
+    s->hsize--;
+    return 1;
 }
 
 /* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
 static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
 {
-    uint32_t st = dm__qem_new_stamp(s), c;
+    uint32_t st = dm__qem_new_stamp(s), i, nc = s->vx[v].count;
+    const uint32_t *cl = s->adj + s->vx[v].first;
     size_t m = 0;
-    for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    for (i = 0; i < nc; i++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(cl[i] / 3);
         int k;
         for (k = 0; k < 3; k++)
-            if (t[k] != v && s->mark[t[k]] != st) {
-                s->mark[t[k]] = st;
+            if (t[k] != v && s->vx[t[k]].mark != st) {
+                s->vx[t[k]].mark = st;
                 s->nbr[m++] = t[k];
             }
     }
@@ -2873,15 +3004,15 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     return e;
 }
 
-/* Pushes every collapsible edge (v, x), x != skip. 0 on allocation failure. */
-static int dm__qem_push_edges(dm__qem_simp *s, uint32_t v, uint32_t skip)
+/* Pushes every collapsible edge (v, x) for x in nbr[0..m), x != skip. 0 on allocation failure. */
+static int dm__qem_push_list(dm__qem_simp *s, uint32_t v, const uint32_t *nbr, size_t m, uint32_t skip)
 {
-    size_t m = dm__qem_neighbours(s, v), i;
+    size_t i;
     for (i = 0; i < m; i++) {
-        uint32_t x = s->nbr[i], keep, rem;
-        double p[3], cost, err;
+        uint32_t x = nbr[i], keep, rem;
+        double p[3], cost;
         dm__qem_cand e;
-        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost, &err)) continue;
+        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost)) continue;
         e = dm__qem_make_cand(s, v, x, cost);
         if (!dm__qem_heap_push(s, &e)) return 0;
     }
@@ -2895,53 +3026,55 @@ static void dm__cross3(const double a[3], const double b[3], double r[3])
     r[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* Normal (length = 2 area) of a triangle whose vertex `moved` is at `at` (or NULL: unmoved);
-   *e2 gets its longest squared edge. */
-static void dm__qem_tri_normal(const dm__qem_simp *s, const uint32_t *t, uint32_t moved, const float *at, double nrm[3],
-                           double *e2)
-{
-    double p[3][3], u[3], v[3], w[3], l0, l1, l2;
-    int i, k;
-    for (i = 0; i < 3; i++) {
-        const float *src = (at && t[i] == moved) ? at : s->pos + 3 * (size_t)t[i];
-        for (k = 0; k < 3; k++) p[i][k] = src[k];
-    }
-    for (k = 0; k < 3; k++) {
-        u[k] = p[1][k] - p[0][k];
-        v[k] = p[2][k] - p[0][k];
-        w[k] = p[2][k] - p[1][k];
-    }
-    dm__cross3(u, v, nrm);
-    l0 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-    l1 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    l2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-    *e2 = l0 > l1 ? (l0 > l2 ? l0 : l2) : (l1 > l2 ? l1 : l2);
-}
-
 /* Geometry: every triangle of keep or rem that survives, with both moved to `at`, keeps its
    orientation (normal turns by less than acos(DM__QEM_MIN_COS)) and is not degenerate. Writes the
-   new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. */
+   new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. Each triangle
+   is (v, p1, p2) from v's corner on: old normal (p1 - v) x (p2 - v), new one with v at `at`;
+   the tests compare squares, so no square root, and they are scale-free, so they run in the
+   normalised frame. */
 static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     size_t m = 0;
-    int pass;
+    double pa[3];
+    int pass, k;
+    const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
+    for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     for (pass = 0; pass < 2; pass++) {
-        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, c;
-        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-            uint32_t tri = c / 3, nt[3];
+        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, j, nc = s->vx[v].count;
+        const uint32_t *cl = s->adj + s->vx[v].first;
+        const double *pv = s->vx[v].np;
+        for (j = 0; j < nc; j++) {
+            uint32_t c = cl[j], tri = c / 3, slot = c - 3 * tri, i1, i2;
             const uint32_t *t = s->idx + 3 * (size_t)tri;
-            double n0[3], n1[3], e2a, e2b, l0, l1, dot;
-            int k;
-            if (t[0] == other || t[1] == other || t[2] == other) continue; /* dies */
-            for (k = 0; k < 3; k++) nt[k] = t[k] == v ? keep : t[k];
-            dm__qem_tri_normal(s, t, v, NULL, n0, &e2a);
-            dm__qem_tri_normal(s, nt, keep, at, n1, &e2b);
-            l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
-            if (!(l1 > DM__QEM_MIN_SIN * e2b)) return (size_t)-1;
-            l0 = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
+            const double *f1, *f2;
+            double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
+            i1 = t[slot == 2 ? 0 : slot + 1];
+            i2 = t[slot == 0 ? 2 : slot - 1];
+            if (i1 == other || i2 == other) continue; /* dies */
+            f1 = s->vx[i1].np;
+            f2 = s->vx[i2].np;
+            for (k = 0; k < 3; k++) {
+                double x1 = f1[k], x2 = f2[k];
+                u0[k] = x1 - pv[k];
+                v0[k] = x2 - pv[k];
+                u1[k] = x1 - pa[k];
+                v1[k] = x2 - pa[k];
+                w[k] = x2 - x1;
+            }
+            dm__cross3(u1, v1, n1);
+            lu = u1[0] * u1[0] + u1[1] * u1[1] + u1[2] * u1[2];
+            lv = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2];
+            lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+            e2 = lu > lv ? (lu > lw ? lu : lw) : (lv > lw ? lv : lw);
+            l1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
+            if (!(l1 > min_sin2 * e2 * e2)) return (size_t)-1;
+            dm__cross3(u0, v0, n0);
+            l0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2];
             dot = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-            if (l0 > 0.0 && !(dot > DM__QEM_MIN_COS * l0 * l1)) return (size_t)-1;
-            for (k = 0; k < 3; k++) s->ring[3 * m + k] = nt[k];
+            if (l0 > 0.0 && !(dot > 0.0 && dot * dot > min_cos2 * l0 * l1)) return (size_t)-1;
+            s->ring[3 * m + slot] = keep;
+            s->ring[3 * m + (slot == 2 ? 0 : slot + 1)] = i1;
+            s->ring[3 * m + (slot == 0 ? 2 : slot - 1)] = i2;
             m++;
         }
     }
@@ -2952,11 +3085,11 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
 static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 {
     size_t m = 0;
-    uint32_t c;
-    for (c = s->vfirst[keep]; c != DM__QEM_NONE; c = s->cnext[c], m++)
-        memcpy(s->oring + 3 * m, s->idx + 3 * (size_t)(c / 3), 3 * sizeof(uint32_t));
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    uint32_t j, nk = s->vx[keep].count, nr = s->vx[rem].count;
+    const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
+    for (j = 0; j < nk; j++, m++) memcpy(s->oring + 3 * m, s->idx + 3 * (size_t)(ck[j] / 3), 3 * sizeof(uint32_t));
+    for (j = 0; j < nr; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
         if (t[0] == keep || t[1] == keep || t[2] == keep) continue; /* listed with keep */
         memcpy(s->oring + 3 * m, t, 3 * sizeof(uint32_t));
         m++;
@@ -2965,20 +3098,41 @@ static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 }
 
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
-   joined to every boundary vertex) and no vertex left with a degenerate fan. */
+   joined to every boundary vertex) and no vertex left with a degenerate fan. On the way, the
+   union of the two one-rings (keep's neighbours after the collapse) goes to nbr[0 .. nnbr). */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 {
-    uint32_t st = dm__qem_new_stamp(s), c, opp[2];
+    uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
+    const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
     size_t common = 0, shared = 0, i;
-    int both_boundary = (s->flag[keep] & s->flag[rem] & DM__QEM_V_BOUNDARY) != 0;
-    for (c = s->vfirst[keep]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
-        int k;
-        for (k = 0; k < 3; k++)
-            if (t[k] != keep) s->mark[t[k]] = st;
+    int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
+    size_t m = 0;
+    /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
+       of its triangles and the records of their vertices go out together first (no branch on
+       loaded data in this loop), and the logic below finds them in flight or in cache. */
+    for (j = 0; j < nk + nr; j++) { /* the two vertices after the corner's own */
+        uint32_t c = j < nk ? ck[j] : cr[j - nk], tri = c / 3, slot = c - 3 * tri;
+        const uint32_t *t = s->idx + 3 * (size_t)tri;
+        const char *x1 = (const char *)&s->vx[t[slot == 2 ? 0 : slot + 1]];
+        const char *x2 = (const char *)&s->vx[t[slot == 0 ? 2 : slot - 1]];
+        DM__QEM_PREFETCH(x1);
+        DM__QEM_PREFETCH(x1 + 64);
+        DM__QEM_PREFETCH(x2);
+        DM__QEM_PREFETCH(x2 + 64);
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        const uint32_t *t = s->idx + 3 * (size_t)(c / 3);
+    for (j = 0; j < nk; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
+        int k;
+        for (k = 0; k < 3; k++) {
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] != keep && x->mark != st) {
+                x->mark = st;
+                if (t[k] != rem) s->nbr[m++] = t[k];
+            }
+        }
+    }
+    for (j = 0; j < nr; j++) {
+        const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
         int k, has_keep = t[0] == keep || t[1] == keep || t[2] == keep;
         if (has_keep) {
             if (shared < 2)
@@ -2986,12 +3140,15 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
                     if (t[k] != keep && t[k] != rem) opp[shared] = t[k];
             shared++;
         }
-        for (k = 0; k < 3; k++)
-            if (t[k] != rem && t[k] != keep && s->mark[t[k]] == st) {
-                s->mark[t[k]] = st + 1;
-                common++;
-            }
+        for (k = 0; k < 3; k++) {
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] == rem || t[k] == keep || x->mark == st + 1) continue;
+            if (x->mark == st) common++;
+            else s->nbr[m++] = t[k];
+            x->mark = st + 1;
+        }
     }
+    s->nnbr = m;
     if (shared == 1) {
         if (!both_boundary || common != 1) return 0;
     } else if (shared == 2) {
@@ -3000,32 +3157,62 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         return 0;
     }
     for (i = 0; i < shared; i++) {
-        size_t nt = s->tcount[opp[i]];
-        if (nt <= ((s->flag[opp[i]] & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+        size_t nt = s->vx[opp[i]].count;
+        if (nt <= ((s->vx[opp[i]].flag & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+        DM__QEM_PREFETCH(s->adj + s->vx[opp[i]].first); /* the collapse drops a corner there */
     }
     return 1;
 }
 
-/* drops the corners of dead triangles from v's list */
-static void dm__qem_prune(dm__qem_simp *s, uint32_t v)
+/* Makes room for n more words at the end of adj: first by compacting it in place (the lists
+   that are still current slide down over the dead ones, in pool order), then by growing it. */
+static int dm__qem_adj_reserve(dm__qem_simp *s, size_t n)
 {
-    uint32_t *link = &s->vfirst[v];
-    while (*link != DM__QEM_NONE) {
-        if (!s->alive[*link / 3]) *link = s->cnext[*link];
-        else link = &s->cnext[*link];
+    size_t r = 0, w = 0;
+    if (s->adjend + n <= s->adjcap) return 1;
+    while (r < s->adjend) {
+        uint32_t owner = s->adj[r], len = s->adj[r + 1];
+        dm__qem_vert *ov = &s->vx[owner];
+        if (ov->first == r + 2 && ov->count > 0) {
+            uint32_t cnt = ov->count;
+            memmove(s->adj + w + 2, s->adj + r + 2, cnt * sizeof(uint32_t));
+            s->adj[w] = owner;
+            s->adj[w + 1] = cnt;
+            ov->first = (uint32_t)(w + 2);
+            w += 2 + (size_t)cnt;
+        }
+        r += 2 + (size_t)len;
     }
+    s->adjend = w;
+    if (s->adjend + n <= s->adjcap && s->adjend <= s->adjcap - s->adjcap / 4) return 1;
+    if (s->adjend + n > DM__QEM_ADJ_MAX) return 0;
+    return dm__qem_grow(&s->al, (void **)&s->adj, &s->adjcap, 2 * (s->adjend + n), sizeof(uint32_t));
 }
 
-/* Does the collapse rem -> keep with keep moved to `at`, and records it. 0 on allocation failure. */
+/* drops the corner of the dead triangle `tri` from v's list (order kept) */
+static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
+{
+    uint32_t *cl = s->adj + s->vx[v].first, n = s->vx[v].count, i, j = 0;
+    for (i = 0; i < n; i++)
+        if (cl[i] / 3 != tri) cl[j++] = cl[i];
+    s->vx[v].count = j;
+}
+
+/* Does the collapse rem -> keep with keep moved to `at`, and records it: keep's new corner list
+   (its live corners, then rem's) is appended to adj. 0 on allocation failure. */
 static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     dm__qem_rec r;
-    uint32_t c, next, opp[2];
-    size_t nopp = 0, i, vmax = 0;
+    uint32_t opp[2], dead[2], nk, nr, j, *out, *ck, *cr;
+    size_t nopp = 0, ndead = 0, i;
     int k;
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) vmax++;
-    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + vmax, sizeof(uint32_t))) return 0;
+    nk = s->vx[keep].count;
+    nr = s->vx[rem].count;
+    if (!dm__qem_adj_reserve(s, 2 + (size_t)nk + nr)) return 0;
+    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + nr, sizeof(uint32_t))) return 0;
     if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, s->nrec + 1, sizeof(dm__qem_rec))) return 0;
+    ck = s->adj + s->vx[keep].first;
+    cr = s->adj + s->vx[rem].first;
     r.keep = keep;
     r.remove = rem;
     r.first = s->nops;
@@ -3034,37 +3221,46 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
         r.before[k] = s->pos[3 * (size_t)keep + k];
         r.after[k] = at[k];
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = s->cnext[c]) {
-        uint32_t tri = c / 3;
+    for (j = 0; j < nr; j++) {
+        uint32_t tri = cr[j] / 3;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
         if (t[0] == keep || t[1] == keep || t[2] == keep) {
             for (k = 0; k < 3; k++)
-                if (t[k] != keep && t[k] != rem && nopp < 2) opp[nopp++] = t[k];
+                if (t[k] != keep && t[k] != rem && nopp < 2) {
+                    opp[nopp++] = t[k];
+                    if (ndead < 2) dead[ndead++] = tri;
+                }
             s->alive[tri] = 0;
             s->ops[s->nops++] = tri;
             r.dead++;
         }
     }
-    for (c = s->vfirst[rem]; c != DM__QEM_NONE; c = next) {
-        next = s->cnext[c];
+    out = s->adj + s->adjend;
+    out[0] = keep;
+    out += 2;
+    i = 0;
+    for (j = 0; j < nk; j++)
+        if (s->alive[ck[j] / 3]) out[i++] = ck[j];
+    for (j = 0; j < nr; j++) {
+        uint32_t c = cr[j];
         if (!s->alive[c / 3]) continue;
         s->idx[c] = keep;
         s->ops[s->nops++] = c;
         r.moved++;
-        s->cnext[c] = s->vfirst[keep];
-        s->vfirst[keep] = c;
+        out[i++] = c;
     }
-    s->vfirst[rem] = DM__QEM_NONE;
-    dm__qem_prune(s, keep);
-    for (i = 0; i < nopp; i++) {
-        dm__qem_prune(s, opp[i]);
-        s->tcount[opp[i]]--;
+    out[-1] = (uint32_t)i;
+    s->vx[keep].first = (uint32_t)(s->adjend + 2);
+    s->vx[keep].count = (uint32_t)i;
+    s->adjend += 2 + i;
+    s->vx[rem].count = 0;
+    for (i = 0; i < nopp; i++) dm__qem_drop_corner(s, opp[i], dead[i]);
+    for (k = 0; k < 3; k++) {
+        s->pos[3 * (size_t)keep + k] = at[k];
+        s->vx[keep].np[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     }
-    s->tcount[keep] += r.moved - r.dead;
-    s->tcount[rem] = 0;
-    for (k = 0; k < 3; k++) s->pos[3 * (size_t)keep + k] = at[k];
-    dm__qem_quadric_sum(&s->q[keep], &s->q[keep], &s->q[rem]);
-    s->flag[rem] |= DM__QEM_V_REMOVED;
+    dm__qem_quadric_sum(&s->vx[keep].q, &s->vx[keep].q, &s->vx[rem].q);
+    s->vx[rem].flag |= DM__QEM_V_REMOVED;
     s->ver[keep]++;
     s->ver[rem]++;
     s->live -= r.dead;
@@ -3076,46 +3272,124 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
    its neighbours, whose one-ring just changed. */
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 {
-    size_t m = dm__qem_neighbours(s, keep), i, np = 0;
-    for (i = 0; i < m; i++) { /* the parked neighbours go to the front of nbr */
+    size_t m = s->nnbr, i, np = 0; /* from the topology check */
+    s->vx[keep].flag &= ~(uint32_t)DM__QEM_V_PARKED;
+    for (i = 0; i < m; i++) { /* the parked neighbours: to the ring scratch, new versions */
         uint32_t x = s->nbr[i];
-        if (s->flag[x] & DM__QEM_V_PARKED) {
-            s->nbr[i] = s->nbr[np];
-            s->nbr[np++] = x;
-        }
-    }
-    s->flag[keep] &= (uint8_t)~DM__QEM_V_PARKED;
-    if (np) { /* nbr is overwritten by the pushes: copy the parked ones to the ring scratch */
-        for (i = 0; i < np; i++) s->ring[i] = s->nbr[i];
-        for (i = 0; i < np; i++) {
-            uint32_t x = s->ring[i];
-            s->flag[x] &= (uint8_t)~DM__QEM_V_PARKED;
+        if (s->vx[x].flag & DM__QEM_V_PARKED) {
+            s->vx[x].flag &= ~(uint32_t)DM__QEM_V_PARKED;
             s->ver[x]++;
+            s->ring[np++] = x;
         }
-        for (i = 0; i < np; i++)
-            if (!dm__qem_push_edges(s, s->ring[i], keep)) return 0;
     }
-    return dm__qem_push_edges(s, keep, DM__QEM_NONE);
+    if (!dm__qem_push_list(s, keep, s->nbr, m, DM__QEM_NONE)) return 0;
+    for (i = 0; i < np; i++) { /* nbr is reused: the parked ones are in ring */
+        size_t mx = dm__qem_neighbours(s, s->ring[i]);
+        if (!dm__qem_push_list(s, s->ring[i], s->nbr, mx, keep)) return 0;
+    }
+    return 1;
+}
+
+/* The boundary edge from corner c (of v) to the next vertex of its triangle adds the plane
+   through it perpendicular to the triangle to both its ends. */
+static void dm__qem_boundary_plane(dm__qem_simp *s, uint32_t v, uint32_t c)
+{
+    const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
+    uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
+    double p[3][3], e[3], f[3], nrm[3], pl[3], len, l2;
+    int k, j;
+    for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[(slot + (uint32_t)j) % 3], p[j]);
+    for (k = 0; k < 3; k++) {
+        e[k] = p[1][k] - p[0][k];
+        f[k] = p[2][k] - p[0][k];
+    }
+    dm__cross3(e, f, nrm);
+    dm__cross3(e, nrm, pl);
+    len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
+    l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    if (len > 0.0) {
+        double d;
+        dm__qem_quadric pq;
+        for (k = 0; k < 3; k++) pl[k] /= len;
+        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2); /* the same terms */
+        dm__qem_quadric_sum(&s->vx[v].q, &s->vx[v].q, &pq);
+        dm__qem_quadric_sum(&s->vx[nx].q, &s->vx[nx].q, &pq);
+    }
+}
+
+/* The common case of the classification, a vertex of at most 16 triangles that is manifold:
+   each triangle's next one around v is the one whose previous vertex is this one's next, no
+   next or previous vertex repeats, and following the links from the one triangle without a
+   predecessor (or from any, on a closed fan) visits every triangle. Returns 0 interior,
+   1 boundary (its boundary planes added), -1 for anything else (the general code decides). */
+static int dm__qem_classify_small(dm__qem_simp *s, uint32_t v)
+{
+    uint32_t nxs[16], pvs[16], succ[16], i, j, nc = s->vx[v].count, links = 0, start = 0, steps = 0, has_pred = 0;
+    const uint32_t *cl = s->adj + s->vx[v].first;
+    if (nc > 16 || nc == 0) return -1;
+    for (i = 0; i < nc; i++) {
+        const uint32_t *tr = s->idx + 3 * (size_t)(cl[i] / 3);
+        uint32_t slot = cl[i] % 3;
+        nxs[i] = tr[slot == 2 ? 0 : slot + 1];
+        pvs[i] = tr[slot == 0 ? 2 : slot - 1];
+    }
+    for (i = 0; i < nc; i++) { /* a repeated previous vertex matches twice, a repeated next one
+                                  points twice at the same triangle */
+        uint32_t x = nxs[i], sj = DM__QEM_NONE;
+        for (j = 0; j < nc; j++)
+            if (pvs[j] == x) {
+                if (sj != DM__QEM_NONE) return -1;
+                sj = j;
+            }
+        succ[i] = sj;
+        if (sj != DM__QEM_NONE) {
+            if (has_pred & (1u << sj)) return -1;
+            has_pred |= 1u << sj;
+            links++;
+        }
+    }
+    if (links + 1 < nc) return -1;
+    while (links < nc && (has_pred & (1u << start))) start++; /* open fan: from the first triangle */
+    i = start;
+    do {
+        steps++;
+        i = succ[i];
+    } while (i != DM__QEM_NONE && i != start && steps <= nc);
+    if (steps != nc || (links == nc) != (i == start)) return -1;
+    if (links == nc) return 0;
+    for (i = 0; i < nc; i++)
+        if (succ[i] == DM__QEM_NONE) dm__qem_boundary_plane(s, v, cl[i]);
+    return 1;
 }
 
 /* Non-manifold detection, boundary flags and the initial quadrics (triangle planes weighted by
-   area; boundary edges add a perpendicular plane). tmp holds 3 n uint32. */
+   area; boundary edges add a perpendicular plane). tmp holds 4 n uint32, the last n zeroed. */
 static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
 {
     uint32_t *loc = tmp, *uf = tmp + s->n, *cnt = tmp + 2 * s->n; /* cnt: out | in << 16 */
+    uint32_t *mark = tmp + 3 * s->n, st = 0;
     size_t v, t;
     for (v = 0; v < s->n; v++) {
         size_t m = 0, i, fans = 0;
-        int nonmanifold = 0, boundary = 0;
-        uint32_t c;
-        for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
+        int nonmanifold = 0, boundary = 0, small = dm__qem_classify_small(s, (uint32_t)v);
+        uint32_t ci, nc = s->vx[v].count;
+        const uint32_t *cl = s->adj + s->vx[v].first;
+        if (small >= 0) {
+            if (small) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
+            continue;
+        }
+        st++;
+        for (ci = 0; ci < nc; ci++) {
+            uint32_t c = cl[ci];
             const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
             uint32_t slot = c % 3, nx = tr[(slot + 1) % 3], pv = tr[(slot + 2) % 3], li[2], x;
             int k;
             for (k = 0; k < 2; k++) {
                 x = k ? pv : nx;
-                if (s->mark[x] != s->stamp + 1) {
-                    s->mark[x] = s->stamp + 1;
+                if (mark[x] != st) {
+                    mark[x] = st;
                     loc[x] = (uint32_t)m;
                     uf[m] = (uint32_t)m;
                     cnt[m] = 0;
@@ -3140,47 +3414,23 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
             if (uf[i] == i) fans++;
         }
         if (fans > 1) nonmanifold = 1;
-        if (nonmanifold) s->flag[v] |= DM__QEM_V_NONMANIFOLD;
-        if (boundary) s->flag[v] |= DM__QEM_V_BOUNDARY;
-        if (boundary && !nonmanifold) { /* boundary planes, from the edge's tail */
-            for (c = s->vfirst[v]; c != DM__QEM_NONE; c = s->cnext[c]) {
-                const uint32_t *tr = s->idx + 3 * (size_t)(c / 3);
-                uint32_t slot = c % 3, nx = tr[(slot + 1) % 3];
-                if (cnt[loc[nx]] == 1u) {
-                    double p[3][3], e[3], f[3], nrm[3], pl[3], len, l2;
-                    int k, j;
-                    for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[(slot + (uint32_t)j) % 3], p[j]);
-                    for (k = 0; k < 3; k++) {
-                        e[k] = p[1][k] - p[0][k];
-                        f[k] = p[2][k] - p[0][k];
-                    }
-                    dm__cross3(e, f, nrm);
-                    dm__cross3(e, nrm, pl);
-                    len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
-                    l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                    if (len > 0.0) {
-                        double d;
-                        for (k = 0; k < 3; k++) pl[k] /= len;
-                        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
-                        dm__qem_quadric_add_plane(&s->q[v], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-                        dm__qem_quadric_add_plane(&s->q[nx], pl, d, DM__QEM_BOUNDARY_WEIGHT * l2);
-                    }
-                }
+        if (nonmanifold) s->vx[v].flag |= DM__QEM_V_NONMANIFOLD;
+        if (boundary) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
+        if (boundary && !nonmanifold) /* boundary planes, from the edge's tail */
+            for (ci = 0; ci < nc; ci++) {
+                const uint32_t *tr = s->idx + 3 * (size_t)(cl[ci] / 3);
+                uint32_t slot = cl[ci] % 3;
+                if (cnt[loc[tr[(slot + 1) % 3]]] == 1u) dm__qem_boundary_plane(s, (uint32_t)v, cl[ci]);
             }
-        }
-        s->stamp += 2;
-        if (s->stamp >= 0xfffffff0u) {
-            memset(s->mark, 0, s->n * sizeof(uint32_t));
-            s->stamp = 0;
-        }
     }
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
         double p[3][3], e[3], f[3], nrm[3], len, d;
+        dm__qem_quadric pq;
         int k, j;
-        unsigned any = s->flag[tr[0]] | s->flag[tr[1]] | s->flag[tr[2]];
+        unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
         if (any & DM__QEM_V_NONMANIFOLD)
-            for (j = 0; j < 3; j++) s->flag[tr[j]] |= DM__QEM_V_FROZEN;
+            for (j = 0; j < 3; j++) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
         for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[j], p[j]);
         for (k = 0; k < 3; k++) {
             e[k] = p[1][k] - p[0][k];
@@ -3191,7 +3441,9 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
         d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
-        for (j = 0; j < 3; j++) dm__qem_quadric_add_plane(&s->q[tr[j]], nrm, d, 0.5 * len);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, nrm, d, 0.5 * len); /* once: the same terms go to all three */
+        for (j = 0; j < 3; j++) dm__qem_quadric_sum(&s->vx[tr[j]].q, &s->vx[tr[j]].q, &pq);
     }
 }
 
@@ -3201,17 +3453,18 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->pos);
     a->free(a->user, s->idx);
     a->free(a->user, s->alive);
-    a->free(a->user, s->flag);
-    a->free(a->user, s->q);
-    a->free(a->user, s->vfirst);
-    a->free(a->user, s->cnext);
-    a->free(a->user, s->tcount);
-    a->free(a->user, s->ver);
-    a->free(a->user, s->mark);
+    a->free(a->user, s->vraw);
+    a->free(a->user, s->adj);
     a->free(a->user, s->nbr);
     a->free(a->user, s->ring);
     a->free(a->user, s->oring);
-    a->free(a->user, s->heap);
+    a->free(a->user, s->ver);
+    while (s->blocks) {
+        void *next;
+        memcpy(&next, s->blocks, sizeof(void *));
+        a->free(a->user, s->blocks);
+        s->blocks = next;
+    }
     a->free(a->user, s->rec);
     a->free(a->user, s->ops);
 }
@@ -3242,7 +3495,9 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     if (!indices || !positions) return DM_ERR_INVALID_ARGUMENT;
     if (triangle_count == 0) return DM_ERR_NO_TRIANGLES;
     if (vertex_count == 0) return DM_ERR_BAD_INDEX;
-    if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u) return DM_ERR_TOO_LARGE;
+    if (vertex_count >= 0xffffffffu || triangle_count > 0x55555554u ||
+        3 * (double)triangle_count + 2 * (double)vertex_count > (double)DM__QEM_ADJ_MAX)
+        return DM_ERR_TOO_LARGE; /* corner ids and the corner pool's offsets are 32-bit */
     if (vertex_count > (size_t)-1 / (3 * sizeof(uint32_t)) || triangle_count > (size_t)-1 / (3 * sizeof(uint32_t)))
         return DM_ERR_TOO_LARGE;
     for (t = 0; t < 3 * triangle_count; t++) {
@@ -3265,17 +3520,21 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(pos, 3 * vertex_count, float);
     DM__QEM_ALLOC(idx, 3 * triangle_count, uint32_t);
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
-    DM__QEM_ALLOC(flag, vertex_count, uint8_t);
-    DM__QEM_ALLOC(q, vertex_count, dm__qem_quadric);
-    DM__QEM_ALLOC(vfirst, vertex_count, uint32_t);
-    DM__QEM_ALLOC(cnext, 3 * triangle_count, uint32_t);
-    DM__QEM_ALLOC(tcount, vertex_count, uint32_t);
-    DM__QEM_ALLOC(ver, vertex_count, uint32_t);
-    DM__QEM_ALLOC(mark, vertex_count, uint32_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
+    DM__QEM_ALLOC(ver, vertex_count, uint32_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
     if (s->opt->constraint) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
+    /* the corner pool: every list with its header, and half as much again for the appended
+       lists (compacted in place when full) */
+    s->adjcap = 3 * triangle_count + 2 * vertex_count;
+    s->adjcap += s->adjcap / 2 + 64;
+    if (s->adjcap > DM__QEM_ADJ_MAX) s->adjcap = DM__QEM_ADJ_MAX;
+    DM__QEM_ALLOC(adj, s->adjcap, uint32_t);
 #undef DM__QEM_ALLOC
+    if (vertex_count > ((size_t)-1 - 64) / sizeof(dm__qem_vert)) return DM_ERR_TOO_LARGE;
+    s->vraw = s->al.alloc(s->al.user, vertex_count * sizeof(dm__qem_vert) + 64);
+    if (!s->vraw) return DM_ERR_OUT_OF_MEMORY;
+    s->vx = (dm__qem_vert *)(void *)((char *)s->vraw + (64 - (size_t)((uintptr_t)s->vraw & 63)) % 64);
     memcpy(s->pos, positions, 3 * vertex_count * sizeof(float));
     for (t = 0; t < triangle_count; t++) {
         const uint32_t *tr = indices + 3 * t;
@@ -3286,19 +3545,22 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     *dropped = triangle_count - kept;
     s->t = kept;
     s->live = kept;
-    memset(s->flag, 0, vertex_count);
-    memset(s->q, 0, vertex_count * sizeof(dm__qem_quadric));
+    memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
-    memset(s->mark, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
-    for (v = 0; v < vertex_count; v++) {
-        s->vfirst[v] = DM__QEM_NONE;
-        s->tcount[v] = 0;
+    for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
+    s->adjend = 0;
+    for (v = 0; v < vertex_count; v++) { /* counting sort: lists in increasing corner order */
+        if (!s->vx[v].count) continue;
+        s->adj[s->adjend] = (uint32_t)v;
+        s->adj[s->adjend + 1] = s->vx[v].count;
+        s->vx[v].first = (uint32_t)(s->adjend + 2);
+        s->adjend += 2 + (size_t)s->vx[v].count;
+        s->vx[v].count = 0;
     }
-    for (t = 3 * kept; t-- > 0;) { /* prepend in reverse: lists in increasing corner order */
-        s->cnext[t] = s->vfirst[s->idx[t]];
-        s->vfirst[s->idx[t]] = (uint32_t)t;
-        s->tcount[s->idx[t]]++;
+    for (t = 0; t < 3 * kept; t++) {
+        dm__qem_vert *x = &s->vx[s->idx[t]];
+        s->adj[x->first + x->count++] = (uint32_t)t;
     }
     for (v = 0; v < 3; v++) {
         s->center[v] = 0.5 * ((double)lo[v] + (double)hi[v]);
@@ -3306,6 +3568,11 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     }
     if (!(s->scale > 0.0)) s->scale = 1.0;
     s->inv_scale = 1.0 / s->scale;
+    for (v = 0; v < vertex_count; v++) {
+        int k;
+        for (k = 0; k < 3; k++)
+            s->vx[v].np[k] = ((double)positions[3 * v + (size_t)k] - s->center[k]) * s->inv_scale;
+    }
     return DM_OK;
 }
 
@@ -3375,6 +3642,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     int overflow = 0;
     memset(&s, 0, sizeof s);
     memset(&rep, 0, sizeof rep);
+    for (v = 0; v < DM__QEM_BUCKETS; v++) s.bucket[v].fill = DM__QEM_CHUNK;
     if (options) opt = *options;
     else memset(&opt, 0, sizeof opt);
     s.al = dm__resolve_allocator(opt.allocator);
@@ -3385,66 +3653,96 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
     r = dm__qem_simp_init(&s, positions, vertex_count, indices, triangle_count, &dropped);
     if (r != DM_OK) goto done;
-    tmp = (uint32_t *)dm__alloc_array(&s.al, 3 * vertex_count, sizeof(uint32_t), &overflow);
+    tmp = (uint32_t *)dm__alloc_array(&s.al, 4 * vertex_count, sizeof(uint32_t), &overflow);
     if (!tmp) {
         r = overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
         goto done;
     }
+    memset(tmp + 3 * vertex_count, 0, vertex_count * sizeof(uint32_t));
     dm__qem_classify(&s, tmp);
     s.al.free(s.al.user, tmp);
     tmp = NULL;
     for (v = 0; v < vertex_count; v++) {
-        if (opt.locked && opt.locked[v]) s.flag[v] |= DM__QEM_V_LOCKED;
-        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.flag[v] & DM__QEM_V_BOUNDARY)) s.flag[v] |= DM__QEM_V_LOCKED;
-        if (s.flag[v] & DM__QEM_V_FROZEN) frozen++;
+        if (opt.locked && opt.locked[v]) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
     }
-    /* every collapsible edge once, from its lower endpoint; then one heapify. A closed manifold
-       has 1.5 edges per triangle; the heap starts with room for twice that */
-    if (!dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, 3 * s.t + 64, sizeof(dm__qem_cand))) {
-        r = DM_ERR_OUT_OF_MEMORY;
-        goto done;
-    }
+    /* every collapsible edge once, from its lower endpoint. A vertex that is not frozen is
+       manifold: its neighbours are the next vertices of its corners, each once, and on a
+       boundary also the one previous vertex that is nobody's next. */
     for (v = 0; v < vertex_count; v++) {
-        size_t m, i;
-        if (s.flag[v] & DM__QEM_V_FROZEN) continue;
-        m = dm__qem_neighbours(&s, (uint32_t)v);
-        for (i = 0; i < m; i++) {
-            uint32_t x = s.nbr[i], keep, rem;
-            double p[3], cost, err;
-            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost, &err)) continue;
-            if (s.hsize == s.hcap && !dm__qem_grow(&s.al, (void **)&s.heap, &s.hcap, s.hsize + 1, sizeof(dm__qem_cand))) {
+        uint32_t i, j, nc = s.vx[v].count;
+        const uint32_t *cl = s.adj + s.vx[v].first;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
+        for (i = 0; i < 2 * nc; i++) {
+            const uint32_t *t = s.idx + 3 * (size_t)(cl[i % nc] / 3);
+            uint32_t slot = cl[i % nc] % 3, x, keep, rem;
+            double p[3], cost;
+            dm__qem_cand e;
+            if (i < nc) {
+                x = t[slot == 2 ? 0 : slot + 1];
+            } else {
+                if (!(s.vx[v].flag & DM__QEM_V_BOUNDARY)) break;
+                x = t[slot == 0 ? 2 : slot - 1];
+                for (j = 0; j < nc; j++) {
+                    const uint32_t *u = s.idx + 3 * (size_t)(cl[j] / 3);
+                    uint32_t sj = cl[j] % 3;
+                    if (u[sj == 2 ? 0 : sj + 1] == x) break;
+                }
+                if (j < nc) continue;
+            }
+            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost)) continue;
+            e = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
+            if (!dm__qem_heap_push(&s, &e)) {
                 r = DM_ERR_OUT_OF_MEMORY;
                 goto done;
             }
-            s.heap[s.hsize++] = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
         }
     }
-    for (v = s.hsize / 4 + 1; v-- > 0;)
-        if (v < s.hsize) dm__qem_sift_down(s.heap, s.hsize, v);
 
     s.target = opt.target_triangles;
     to_remove = s.live > s.target ? s.live - s.target : 0;
+    { /* the records for the collapses to come (one per 2 triangles, about 6 ops each): grown
+         by doubling they would be copied several times */
+        size_t expect = to_remove / 2 + 16;
+        if (opt.max_collapses && expect > opt.max_collapses) expect = opt.max_collapses;
+        if (expect > vertex_count) expect = vertex_count;
+        if (!dm__qem_grow(&s.al, (void **)&s.rec, &s.caprec, expect, sizeof(dm__qem_rec)) ||
+            !dm__qem_grow(&s.al, (void **)&s.ops, &s.capops, 7 * expect, sizeof(uint32_t))) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
+    }
     next_progress = 0;
-    while (s.hsize > 0 && (s.target == 0 || s.live > s.target) &&
-           (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
-        dm__qem_cand e = dm__qem_heap_pop(&s);
-        uint32_t ea = DM__QEM_CAND_A(&e), keep, rem;
+    while ((s.target == 0 || s.live > s.target) && (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
+        dm__qem_cand e;
+        uint32_t ea, keep, rem;
         double x[3], cost, err;
         float at[3];
         size_t ring_count;
-        int k, placed;
-        if ((s.flag[ea] | s.flag[e.b]) & DM__QEM_V_REMOVED) continue;
-        if (s.ver[ea] + s.ver[e.b] != e.stamp) continue; /* stale */
-        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost, &err);
+        int k, placed, got = dm__qem_heap_pop(&s, &e);
+        if (got < 0) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
+        if (got == 0) break;
+        ea = DM__QEM_CAND_A(&e);
+        DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
+        DM__QEM_PREFETCH(&s.vx[e.b]);
+        if (dm__qem_stale(&s, &e)) continue; /* a collapse bumped a version (removed ones too) */
+        DM__QEM_PREFETCH(s.adj + s.vx[ea].first); /* for the topology check, while placing */
+        DM__QEM_PREFETCH(s.adj + s.vx[e.b].first);
+        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
         if (!placed) continue;
+        err = dm__qem_error(&s, ea, e.b, cost);
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
         for (k = 0; k < 3; k++)
             at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
         if (!dm__qem_check_topology(&s, keep, rem) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
-            s.flag[ea] |= DM__QEM_V_PARKED;
-            s.flag[e.b] |= DM__QEM_V_PARKED;
+            s.vx[ea].flag |= DM__QEM_V_PARKED;
+            s.vx[e.b].flag |= DM__QEM_V_PARKED;
             continue;
         }
         if (opt.constraint) {
@@ -3470,12 +3768,12 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                     at[k] = corrected[k];
                     q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
                 }
-                if (((s.flag[keep] & DM__QEM_V_LOCKED) || ((s.flag[keep] ^ s.flag[rem]) & DM__QEM_V_BOUNDARY)) &&
+                if (((s.vx[keep].flag & DM__QEM_V_LOCKED) || ((s.vx[keep].flag ^ s.vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
                     memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
                     ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
                 if (ok && dm__qem_check_geometry(&s, keep, rem, at) == (size_t)-1) ok = 0;
                 if (!ok) verdict = DM_COLLAPSE_VETO;
-                dm__qem_quadric_sum(&qs, &s.q[keep], &s.q[rem]);
+                dm__qem_quadric_sum(&qs, &s.vx[keep].q, &s.vx[rem].q);
                 cost = dm__qem_quadric_eval(&qs, q);
                 err = qs.w > 0.0 ? sqrt(cost / qs.w) * s.scale : 0.0;
             } else if (verdict != DM_COLLAPSE_ALLOW) {
@@ -3483,8 +3781,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             }
             if (verdict == DM_COLLAPSE_VETO) {
                 s.vetoed++;
-                s.flag[ea] |= DM__QEM_V_PARKED;
-                s.flag[e.b] |= DM__QEM_V_PARKED;
+                s.vx[ea].flag |= DM__QEM_V_PARKED;
+                s.vx[e.b].flag |= DM__QEM_V_PARKED;
                 continue;
             }
         }
@@ -3492,7 +3790,10 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
-        if (s.hsize > 4096 && s.hsize / 2 > s.live) dm__qem_heap_purge(&s);
+        if (s.hsize > 4096 && s.hsize / 3 > s.live && !dm__qem_heap_purge(&s)) {
+            r = DM_ERR_OUT_OF_MEMORY;
+            goto done;
+        }
         if (err > s.max_error) s.max_error = err;
         if (opt.progress && s.nrec >= next_progress) {
             float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
