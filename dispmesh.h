@@ -157,6 +157,11 @@
                          or vetoed edge is retried when a collapse changes its one-ring. When
                          vetoes stop the simplification above the target, dm_simplify still
                          returns DM_OK; the report says what was reached (reached_target = 0).
+                         The candidate also carries the old triangles of keep and remove.
+       on_collapse       called (with constraint_user) once per collapse that will be done, just
+                         before it is applied, with the same description: position is where keep
+                         goes, positions are still the old ones. A constraint that keeps its own
+                         picture of the mesh (dm_shell_constraint's vertex normals) follows it here.
        allocator, progress, progress_user   as for the BVH; progress gets the fraction of the
                          triangles to remove that are gone, every 1024 collapses and at the end.
 
@@ -329,7 +334,8 @@
      BOUNDING SHELL. Paper 000 keeps its base mesh outside the original and inside a shell grown
      from it (Cohen et al.'s simplification envelopes), and without height-field overlap:
        dm_shell *sh;  dm_shell_grow(orig..., NULL, &sh);
-       opt.constraint = dm_shell_constraint;  opt.constraint_user = sh;   // then dm_simplify(orig...)
+       opt.constraint = dm_shell_constraint;  opt.on_collapse = dm_shell_collapsed;
+       opt.constraint_user = sh;                                          // then dm_simplify(orig...)
      dm_shell_grow moves every vertex out along its angle-weighted normal in `steps` steps up to
      `thickness` (default 2% of the diagonal); a vertex stops for good when its next offset point
      would come closer to the original than 90% of its offset (the offset surface would run into
@@ -717,6 +723,9 @@ typedef struct dm_simplify_options {
     size_t max_collapses;             /* 0 = no limit; stop after this many collapses */
     dm_collapse_constraint constraint; /* NULL, or called for each candidate that passed every check */
     void *constraint_user;
+    void (*on_collapse)(void *user, const dm_collapse *done); /* NULL, or called with constraint_user
+                                         once a collapse is decided, just before it is applied:
+                                         position = where keep goes, positions still the old ones */
     const dm_allocator *allocator;    /* NULL = DM_MALLOC/DM_FREE; kept in the result for dm_pm_free */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -831,6 +840,12 @@ DMDEF void dm_shell_free(dm_shell *shell);
    collapse's old triangles), inside the shell, and free of height-field overlap along its
    interpolated normals. Not for two dm_simplify calls at once on one shell. */
 DMDEF int dm_shell_constraint(void *shell, const dm_collapse *candidate, float corrected[3]);
+
+/* dm_simplify_options.on_collapse for the same shell: follows the simplified mesh so that the
+   overlap check sees its exact vertex normals. Set both:
+     opt.constraint = dm_shell_constraint; opt.on_collapse = dm_shell_collapsed; opt.constraint_user = shell;
+   (without it, after two accepted candidates the check falls back to normals from the one-ring). */
+DMDEF void dm_shell_collapsed(void *shell, const dm_collapse *done);
 
 #ifdef __cplusplus
 }
@@ -3523,7 +3538,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ver, vertex_count, uint32_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
-    if (s->opt->constraint) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
+    if (s->opt->constraint || s->opt->on_collapse) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
     /* the corner pool: every list with its header, and half as much again for the appended
        lists (compacted in place when full) */
     s->adjcap = 3 * triangle_count + 2 * vertex_count;
@@ -3785,6 +3800,19 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                 s.vx[e.b].flag |= DM__QEM_V_PARKED;
                 continue;
             }
+        }
+        if (opt.on_collapse) {
+            dm_collapse done_c;
+            done_c.keep = keep;
+            done_c.remove = rem;
+            for (k = 0; k < 3; k++) done_c.position[k] = at[k];
+            done_c.error = err;
+            done_c.positions = s.pos;
+            done_c.triangles = s.ring; /* filled by the geometry check at `at` */
+            done_c.triangle_count = ring_count;
+            done_c.old_triangles = s.oring;
+            done_c.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
+            opt.on_collapse(opt.constraint_user, &done_c);
         }
         if (!dm__qem_collapse(&s, keep, rem, at) || !dm__qem_refresh(&s, keep)) {
             r = DM_ERR_OUT_OF_MEMORY;
@@ -5706,6 +5734,9 @@ typedef struct dm__sh_internal {
     double margin;       /* how far outside a plane counts as outside (world units) */
     double *scratch;     /* planes, Dykstra's corrections and one-ring normals of one candidate */
     size_t scratch_cap;  /* in doubles */
+    double *vsum;        /* per vertex: the angle-weighted normal sum of the simplified mesh, kept
+                            by dm_shell_collapsed */
+    size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls */
     uint32_t *pts;       /* original vertices near one candidate */
     size_t pts_cap;
     float *tri;          /* the candidate's old and new triangles: 9 coordinates and a bounding
@@ -5730,6 +5761,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->idx);
         a.free(a.user, in->scratch);
         a.free(a.user, in->pts);
+        a.free(a.user, in->vsum);
         a.free(a.user, in->tri);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_vert);
@@ -5820,6 +5852,9 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
     stopped = (uint8_t *)dm__pz_take(&sc, nv, 1);
     if (!acc || !e || !twin || !twin_he || !stopped) goto oom;
     dm__pz_vertex_normals(pos, nv, idx, nt, acc, sh->normals);
+    in->vsum = (double *)dm__alloc_array(&a, 3 * nv, sizeof(double), &sc.overflow);
+    if (!in->vsum) goto oom;
+    memcpy(in->vsum, acc, 3 * nv * sizeof(double));
     dm__pz_twins(idx, nt, e, twin, twin_he);
     for (i = 0; i < 3 * nt && !in->open; i++) in->open = twin[i] == DM_NO_HIT;
     { /* the vertex grid: about two referenced vertices per cell */
@@ -5930,6 +5965,53 @@ static int dm__sh_grow_scratch(dm_shell *sh, dm__sh_internal *in, size_t need)
     in->scratch = p;
     in->scratch_cap = 2 * need;
     return 1;
+}
+
+/* The angle-weighted unit normal that triangle t (keep at x) adds to its corner j's vertex. */
+static void dm__sh_contrib(const dm_collapse *c, const uint32_t *t, int j, const double x[3], double out[3])
+{
+    double p[3][3], n[3], ea[3], eb[3], la, lb, ang;
+    int k;
+    out[0] = out[1] = out[2] = 0.0;
+    for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
+    if (!dm__sh_plane(p[0], p[1], p[2], n)) return;
+    dm__pz_sub(p[(j + 1) % 3], p[j], ea);
+    dm__pz_sub(p[(j + 2) % 3], p[j], eb);
+    la = dm__pz_len(ea);
+    lb = dm__pz_len(eb);
+    if (!(la > 0.0 && lb > 0.0)) return;
+    ang = dm__dot3(ea, eb) / (la * lb);
+    ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+    for (k = 0; k < 3; k++) out[k] = ang * n[k];
+}
+
+DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
+{
+    dm_shell *sh = (dm_shell *)user;
+    dm__sh_internal *in;
+    double xk[3], xn[3], d[3];
+    size_t i;
+    int j, k;
+    if (!sh || !done || !sh->internal || !done->positions || !done->triangles || !done->old_triangles) return;
+    in = (dm__sh_internal *)sh->internal;
+    if (done->keep >= in->nv || done->remove >= in->nv) return;
+    in->collapsed++;
+    dm__pz_load(done->positions, done->keep, xk);
+    for (k = 0; k < 3; k++) xn[k] = done->position[k];
+    for (i = 0; i < done->old_triangle_count; i++)
+        for (j = 0; j < 3; j++) {
+            uint32_t w = done->old_triangles[3 * i + (size_t)j];
+            if (w >= in->nv) continue;
+            dm__sh_contrib(done, done->old_triangles + 3 * i, j, xk, d);
+            for (k = 0; k < 3; k++) in->vsum[3 * (size_t)w + (size_t)k] -= d[k];
+        }
+    for (i = 0; i < done->triangle_count; i++)
+        for (j = 0; j < 3; j++) {
+            uint32_t w = done->triangles[3 * i + (size_t)j];
+            if (w >= in->nv) continue;
+            dm__sh_contrib(done, done->triangles + 3 * i, j, xn, d);
+            for (k = 0; k < 3; k++) in->vsum[3 * (size_t)w + (size_t)k] += d[k];
+        }
 }
 
 /* Sample points of the overlap check, barycentric: the centroid, then towards each corner. */
@@ -6272,6 +6354,25 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             }
         }
     }
+    if (in->collapsed > 0 || in->accepted < 2) { /* dm_shell_collapsed follows the mesh: exact */
+        double xk[3];
+        dm__pz_load(c->positions, c->keep, xk);
+        for (i = 0; i < nr; i++)
+            for (j = 0; j < 3; j++) {
+                uint32_t w = c->triangles[3 * i + j];
+                size_t m;
+                int q;
+                if (w == c->keep || w >= in->nv) continue;
+                for (k = 0; k < 3; k++) vn[9 * i + 3 * j + (size_t)k] += in->vsum[3 * (size_t)w + (size_t)k];
+                for (m = 0; m < no; m++) /* less what w's old triangles here gave it */
+                    for (q = 0; q < 3; q++)
+                        if (c->old_triangles[3 * m + (size_t)q] == w) {
+                            double d[3];
+                            dm__sh_contrib(c, c->old_triangles + 3 * m, q, xk, d);
+                            for (k = 0; k < 3; k++) vn[9 * i + 3 * j + (size_t)k] -= d[k];
+                        }
+            }
+    }
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
         double p[3][3];
@@ -6327,6 +6428,7 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             }
         }
     }
+    in->accepted++;
     if (moved) {
         sh->moved++;
         return DM_COLLAPSE_MOVE;

@@ -144,6 +144,7 @@ int main(int argc, char **argv)
         memset(&so, 0, sizeof so);
         so.target_triangles = 500;
         so.constraint = dm_shell_constraint;
+        so.on_collapse = dm_shell_collapsed;
         so.constraint_user = sh;
         dm_pm *pm = NULL, *pu = NULL;
         dm_simplify_report rep_c;
@@ -151,6 +152,7 @@ int main(int argc, char **argv)
         if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pm, &rep_c) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }
         double t_con = bench_now() - t0;
         so.constraint = NULL;
+        so.on_collapse = NULL;
         so.target_triangles = rep_c.triangle_count;
         t0 = bench_now();
         if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pu, NULL) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }

@@ -609,6 +609,7 @@ int main(int argc, char **argv)
     memset(&so, 0, sizeof so);
     so.target_triangles = (size_t)faces;
     so.constraint = dm_shell_constraint;
+    so.on_collapse = dm_shell_collapsed;
     so.constraint_user = R.shell;
     stage_begin(&st, "simplify (shell-constrained)");
     so.progress = stage_progress; so.progress_user = &st;

@@ -42,6 +42,7 @@ static bool simplify(const mio_mesh &m, dm_shell *sh, size_t target, base_mesh *
     o.target_triangles = target;
     if (sh) {
         o.constraint = dm_shell_constraint;
+        o.on_collapse = dm_shell_collapsed;
         o.constraint_user = sh;
     }
     dm_pm *pm = NULL;

@@ -244,6 +244,7 @@ static dm_result simplify(const mesh *m, dm_shell *sh, size_t target, run *r)
     o.target_triangles = target;
     if (sh) {
         o.constraint = dm_shell_constraint;
+        o.on_collapse = dm_shell_collapsed;
         o.constraint_user = sh;
     }
     res = dm_simplify(m->p, m->nv, m->t, m->nt, &o, &r->pm, &r->rep);
