@@ -793,6 +793,85 @@ static void resource_checks(const mesh *in)
     T_CHECK_MSG(bad == 0 && total > 10, "allocation failure: %ld of %ld runs wrong", bad, total);
 }
 
+/* on_collapse: once per collapse done, in order, before it is applied (positions still the old
+   ones), with the position keep goes to; the old triangles are keep's and remove's. And a
+   constraint that moves keep far away (its cost goes up): the candidate waits in the queue at
+   that cost; the result is still deterministic and level k is still the k-th collapse. */
+typedef struct seen {
+    size_t n, bad;
+    uint32_t keep[8192], remove[8192];
+    float pos[8192][3];
+} seen;
+static void on_collapse_rec(void *user, const dm_collapse *d)
+{
+    seen *s = (seen *)user;
+    size_t i;
+    int has_keep = 0, has_remove = 0;
+    if (s->n < 8192) {
+        s->keep[s->n] = d->keep;
+        s->remove[s->n] = d->remove;
+        memcpy(s->pos[s->n], d->position, sizeof s->pos[0]);
+    }
+    s->n++;
+    for (i = 0; i < d->old_triangle_count; i++) {
+        const uint32_t *t = d->old_triangles + 3 * i;
+        int k;
+        for (k = 0; k < 3; k++) {
+            has_keep |= t[k] == d->keep;
+            has_remove |= t[k] == d->remove;
+        }
+        if (!(t[0] == d->keep || t[1] == d->keep || t[2] == d->keep || t[0] == d->remove || t[1] == d->remove ||
+              t[2] == d->remove))
+            s->bad++;
+    }
+    for (i = 0; i < d->triangle_count; i++) {
+        const uint32_t *t = d->triangles + 3 * i;
+        if (t[0] == d->remove || t[1] == d->remove || t[2] == d->remove) s->bad++;
+    }
+    if (!has_keep || !has_remove) s->bad++;
+}
+static int push_up(void *user, const dm_collapse *c, float corrected[3])
+{
+    (void)user;
+    if ((c->keep + c->remove) % 3) return DM_COLLAPSE_ALLOW;
+    corrected[0] = c->position[0] * 1.001f; /* a little outward on the unit sphere: costs more */
+    corrected[1] = c->position[1] * 1.001f;
+    corrected[2] = c->position[2] * 1.001f;
+    return DM_COLLAPSE_MOVE;
+}
+static void on_collapse_checks(const mesh *m)
+{
+    static seen a, b;
+    dm_simplify_options o;
+    dm_simplify_report ra, rb;
+    dm_pm *pa = NULL, *pb = NULL;
+    size_t i, mismatch = 0;
+    memset(&o, 0, sizeof o);
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    o.target_triangles = m->nt / 10;
+    o.on_collapse = on_collapse_rec;
+    o.constraint = push_up;
+    o.constraint_user = &a;
+    T_EQ_INT(dm_simplify(m->pos, m->nv, m->idx, m->nt, &o, &pa, &ra), DM_OK);
+    o.constraint_user = &b;
+    T_EQ_INT(dm_simplify(m->pos, m->nv, m->idx, m->nt, &o, &pb, &rb), DM_OK);
+    if (!pa || !pb) { dm_pm_free(pa); dm_pm_free(pb); return; }
+    T_EQ_SIZE(a.n, ra.collapse_count);
+    T_EQ_SIZE(a.bad, 0);
+    T_CHECK(a.n == b.n && memcmp(a.keep, b.keep, sizeof a.keep) == 0 && memcmp(a.pos, b.pos, sizeof a.pos) == 0);
+    for (i = 0; i < a.n && i < 8192; i++) { /* collapse i undoes as split (n - 1 - i) */
+        dm_vsplit v;
+        if (!dm_pm_get_vsplit(pa, a.n - 1 - i, &v) || v.keep != a.keep[i] || v.remove != a.remove[i] ||
+            memcmp(v.merged_position, a.pos[i], sizeof v.merged_position) != 0)
+            mismatch++;
+    }
+    T_CHECK_MSG(mismatch == 0, "%zu of %zu on_collapse calls differ from the recorded splits", mismatch, a.n);
+    T_CHECK(ra.triangle_count <= m->nt / 10);
+    dm_pm_free(pa);
+    dm_pm_free(pb);
+}
+
 int main(int argc, char **argv)
 {
     gsph_mesh g;
@@ -811,6 +890,7 @@ int main(int argc, char **argv)
     open_mesh_checks();
     error_bound_checks(&sph);
     constraint_checks(&sph);
+    on_collapse_checks(&sph);
     bad_input_checks();
     messy_checks();
     resource_checks(&sph);
