@@ -450,10 +450,10 @@ int main(int argc, char **argv)
         mio_error err;
         FILE *f = fopen(bunny, "rb");
         if (!f) {
-            T_SKIP_N(7, "bunny", "glmark2-data is not installed");
+            T_SKIP_N(14, "bunny", "glmark2-data is not installed");
         } else if (getenv("TEST_SANITIZE")) {
             fclose(f);
-            T_SKIP_N(7, "bunny", "70k triangles under the sanitizers: about a minute");
+            T_SKIP_N(14, "bunny", "70k triangles under the sanitizers: about a minute");
         } else {
             fclose(f);
             if (mio_read_file(bunny, NULL, &mm, &err) == MIO_OK) {
