@@ -9,6 +9,37 @@
 #include <stdlib.h>
 #include <math.h>
 
+/* edges of a triangle mesh: how many have one triangle (boundary), more than two, or two that
+   run them the same way (inconsistent orientation) */
+typedef struct edge_stats { size_t boundary, over, same_way, edges; } edge_stats;
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+static edge_stats edge_count(const uint32_t *idx, size_t nt)
+{
+    edge_stats r = {0, 0, 0, 0};
+    uint64_t *e = (uint64_t *)malloc(3 * nt * sizeof(uint64_t) + 8);
+    size_t i, j;
+    for (i = 0; i < 3 * nt; i++) {
+        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
+        /* key: min, max, and the direction in the lowest bit of a third field packed in */
+        e[i] = ((uint64_t)(a < b ? a : b) << 33) | ((uint64_t)(a < b ? b : a) << 1) | (uint64_t)(a < b);
+    }
+    qsort(e, 3 * nt, sizeof(uint64_t), cmp_u64);
+    for (i = 0; i < 3 * nt; i = j) {
+        size_t fwd = 0;
+        for (j = i; j < 3 * nt && (e[j] >> 1) == (e[i] >> 1); j++) fwd += e[j] & 1;
+        r.edges++;
+        if (j - i == 1) r.boundary++;
+        else if (j - i > 2) r.over++;
+        else if (fwd != 1) r.same_way++;
+    }
+    free(e);
+    return r;
+}
+
 static double uv_area(const dm_param *pm, size_t t)
 {
     const float *u = pm->uv + 6 * t;
@@ -239,6 +270,13 @@ int main(int argc, char **argv)
                 T_CHECK_MSG(rep.max <= 0.25 * base_rep.max, "recon max %.3g vs base-only %.3g", rep.max, base_rep.max);
                 printf("  note: sphere %dx%d: recon %zu tris rms %.2e max %.2e; base only rms %.2e max %.2e\n", res, res,
                        rec->triangle_count, rep.rms, rep.max, base_rep.rms, base_rep.max);
+                {
+                    edge_stats es = edge_count(rec->indices, rec->triangle_count);
+                    T_CHECK_MSG(es.over == 0 && es.same_way == 0, "recon: %zu edges with more than two triangles, %zu "
+                                "run the same way by both", es.over, es.same_way);
+                    printf("  note: sphere recon: %zu edges, %zu on a boundary (unzipped seams), %zu with more than two "
+                           "triangles, %zu run the same way by both\n", es.edges, es.boundary, es.over, es.same_way);
+                }
                 dm_trimesh_free(rec);
                 rec = NULL;
             }
