@@ -385,7 +385,7 @@
           it are not checked again; the tests check the final bake rays.
      Measured (tests/test_dispmesh_shell.c, brute-force checks): bunny to 500 faces, no original
      vertex on the outer side (worst signed distance 0), every sampled base point inside the shell,
-     every bake ray's first hit front-facing; 0.7 s for the shell and about 10 s for the
+     every bake ray's first hit front-facing; 0.7 s for the shell and about 15 s for the
      constrained simplification (the enclosure's point gathering and the re-queued candidates;
      the unconstrained one takes 0.1 s). An enclosing base is farther from the original than a
      least-squares one: RMS 2.06x our unconstrained simplification at the same face count on the
