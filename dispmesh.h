@@ -175,12 +175,7 @@
           the report, absent from every level, so the top level is the input without them).
        2. Per vertex, a list of its triangle corners (one pool, filled by a counting sort; a
           collapse appends keep's new list, and the pool is compacted in place when full) and one
-          64-byte record (quadric, normalised position, list; visit stamps and flags apart).
-          The quadric is stored in float about the vertex's own position, where its terms are
-          of the size of the vertex's error, and summed and solved in double: this keeps the
-          accuracy of double quadrics (the bunny's levels match them to 3 digits) in half the
-          bytes (peak memory of the 1M-triangle sphere to 10%: 163 MB, was 192 with the
-          128-byte record; time unchanged). Classification: a vertex
+          128-byte record (quadric, normalised position, list, flags). Classification: a vertex
           is non-manifold when an edge at it has more than two triangles, two triangles the same
           way round, or its triangles form more than one fan (fans of up to 16 triangles are
           checked by linking each triangle to the next around the vertex; larger or irregular
@@ -247,7 +242,7 @@
      triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
      positions, in no level's mesh. Unreferenced vertices may hold NaN.
 
-     MEMORY. During dm_simplify about 100 bytes per vertex (the 64-byte record among them) and
+     MEMORY. During dm_simplify about 160 bytes per vertex (the 128-byte record among them) and
      45 per triangle, plus the candidate heap (16 bytes an entry, about 1.5 per triangle at the
      start, purged back to the live ones beyond 3 per live triangle, in 4 KiB chunks allocated 64
      at a time) and the records of the expected collapses, reserved at the start. The progressive mesh
@@ -2586,22 +2581,10 @@ done:
 #define DM__QEM_PREFETCH(p) ((void)0)
 #endif
 
-/* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. The
-   working form, in double, in a frame centred at some point o (x = the offset from o). */
+/* Q(x) = x^T A x + 2 b^T x + c, A symmetric; w is the total weight (area) of its planes. */
 typedef struct dm__qem_quadric {
     double a00, a01, a02, a11, a12, a22, b0, b1, b2, c, w;
 } dm__qem_quadric;
-
-/* The stored form: the same terms in float, in the frame centred at the vertex's own position.
-   There b is Q's half gradient and c its value at the vertex, both of the size of the vertex's
-   own error: a quadric stored about the origin would hold c ~ w |p|^2 and lose a tiny cost to
-   cancellation (float keeps 7 digits; a collapse on a 1M-triangle mesh costs ~1e-10 w). A's
-   small eigenvalues are accepted only above 1e-7 trace^3 in det (dm__qem_optimal), well above
-   A's float rounding, so the solve keeps its accuracy. Half the bytes of double: the vertex
-   record fits one cache line. */
-typedef struct dm__qem_fquad {
-    float a00, a01, a02, a11, a12, a22, b0, b1, b2, c, w;
-} dm__qem_fquad;
 
 /* A heap entry (16 bytes): the edge (a < b) with its cost when the sum of its endpoints'
    versions was `stamp` (versions only grow, so any change to either makes the entry stale).
@@ -2655,14 +2638,15 @@ struct dm_pm {
     uint32_t *scratch;  /* vertex_count, for dm_pm_get_mesh */
 };
 
-/* What placement and the geometry check read about one vertex, in one 64-byte record (one
-   cache line when the array is 64-byte aligned): a collapse visits a few dozen vertices at
-   random places of the mesh. The visit stamps and flags, which the topology check reads for
-   many more vertices, are dense arrays of their own. */
+/* Everything the simplifier reads about one vertex, in one 128-byte record (two cache lines when
+   the array is 64-byte aligned): a collapse visits a few dozen vertices at random places of the
+   mesh, and one record costs two cache misses where separate arrays cost seven. */
 typedef struct dm__qem_vert {
-    dm__qem_fquad q;       /* 44 bytes, centred at np */
-    float np[3];           /* the position (pos) in the normalised frame */
+    dm__qem_quadric q;     /* 88 bytes */
+    double np[3];          /* the position (pos) in the normalised frame */
     uint32_t first, count; /* its live corners: adj[first .. first + count) */
+    uint32_t mark;         /* visit stamp */
+    uint32_t flag;         /* DM__QEM_V_* */
 } dm__qem_vert;
 
 typedef struct dm__qem_simp {
@@ -2673,8 +2657,6 @@ typedef struct dm__qem_simp {
     uint32_t *idx;
     uint8_t *alive;
     dm__qem_vert *vx;              /* n records, 64-byte aligned inside vraw */
-    uint32_t *vmark;               /* n visit stamps */
-    uint8_t *vflag;                /* n DM__QEM_V_* */
     void *vraw;
     uint32_t *adj;                 /* corner lists (3 triangle + slot), each after a 2-word header
                                       (owner, length); a collapse appends keep's new list */
@@ -2726,7 +2708,8 @@ static int dm__qem_grow(const dm_allocator *al, void **p, size_t *cap, size_t ne
 static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 {
     if (s->stamp >= 0xfffffff0u) { /* wrap: clear the marks once */
-        memset(s->vmark, 0, s->n * sizeof(uint32_t));
+        size_t v;
+        for (v = 0; v < s->n; v++) s->vx[v].mark = 0;
         s->stamp = 0;
     }
     s->stamp += 2;
@@ -2735,12 +2718,41 @@ static uint32_t dm__qem_new_stamp(dm__qem_simp *s)
 
 static void dm__qem_norm_pos(const dm__qem_simp *s, uint32_t v, double x[3])
 {
-    const float *p = s->vx[v].np;
+    const double *p = s->vx[v].np;
     x[0] = p[0];
     x[1] = p[1];
     x[2] = p[2];
 }
 
+static void dm__qem_quadric_add_plane(dm__qem_quadric *q, const double n[3], double d, double w)
+{
+    q->a00 += w * n[0] * n[0];
+    q->a01 += w * n[0] * n[1];
+    q->a02 += w * n[0] * n[2];
+    q->a11 += w * n[1] * n[1];
+    q->a12 += w * n[1] * n[2];
+    q->a22 += w * n[2] * n[2];
+    q->b0 += w * d * n[0];
+    q->b1 += w * d * n[1];
+    q->b2 += w * d * n[2];
+    q->c += w * d * d;
+    q->w += w;
+}
+
+static void dm__qem_quadric_sum(dm__qem_quadric *r, const dm__qem_quadric *a, const dm__qem_quadric *b)
+{
+    r->a00 = a->a00 + b->a00;
+    r->a01 = a->a01 + b->a01;
+    r->a02 = a->a02 + b->a02;
+    r->a11 = a->a11 + b->a11;
+    r->a12 = a->a12 + b->a12;
+    r->a22 = a->a22 + b->a22;
+    r->b0 = a->b0 + b->b0;
+    r->b1 = a->b1 + b->b1;
+    r->b2 = a->b2 + b->b2;
+    r->c = a->c + b->c;
+    r->w = a->w + b->w;
+}
 
 static double dm__qem_quadric_eval(const dm__qem_quadric *q, const double x[3])
 {
@@ -2749,90 +2761,6 @@ static double dm__qem_quadric_eval(const dm__qem_quadric *q, const double x[3])
     double az = q->a02 * x[0] + q->a12 * x[1] + q->a22 * x[2];
     double e = x[0] * (ax + 2.0 * q->b0) + x[1] * (ay + 2.0 * q->b1) + x[2] * (az + 2.0 * q->b2) + q->c;
     return e > 0.0 ? e : 0.0;
-}
-
-/* v's quadric in the frame centred at o (normalised coordinates): with d = v's position - o,
-   Q(y) = (y - d)^T A (y - d) + 2 b^T (y - d) + c. */
-static void dm__qem_load(const dm__qem_simp *s, uint32_t v, const double o[3], dm__qem_quadric *r)
-{
-    const dm__qem_fquad *f = &s->vx[v].q;
-    double d[3], ad[3];
-    int k;
-    for (k = 0; k < 3; k++) d[k] = (double)s->vx[v].np[k] - o[k];
-    r->a00 = f->a00;
-    r->a01 = f->a01;
-    r->a02 = f->a02;
-    r->a11 = f->a11;
-    r->a12 = f->a12;
-    r->a22 = f->a22;
-    r->w = f->w;
-    ad[0] = r->a00 * d[0] + r->a01 * d[1] + r->a02 * d[2];
-    ad[1] = r->a01 * d[0] + r->a11 * d[1] + r->a12 * d[2];
-    ad[2] = r->a02 * d[0] + r->a12 * d[1] + r->a22 * d[2];
-    r->b0 = (double)f->b0 - ad[0];
-    r->b1 = (double)f->b1 - ad[1];
-    r->b2 = (double)f->b2 - ad[2];
-    r->c = (double)f->c + d[0] * (ad[0] - 2.0 * f->b0) + d[1] * (ad[1] - 2.0 * f->b1) + d[2] * (ad[2] - 2.0 * f->b2);
-}
-
-/* The sum of a's and b's quadrics in the frame centred at a's position (*o gets it). */
-static void dm__qem_pair(const dm__qem_simp *s, uint32_t a, uint32_t b, double o[3], dm__qem_quadric *r)
-{
-    const dm__qem_fquad *fa = &s->vx[a].q;
-    dm__qem_norm_pos(s, a, o);
-    dm__qem_load(s, b, o, r);
-    r->a00 += fa->a00;
-    r->a01 += fa->a01;
-    r->a02 += fa->a02;
-    r->a11 += fa->a11;
-    r->a12 += fa->a12;
-    r->a22 += fa->a22;
-    r->b0 += fa->b0;
-    r->b1 += fa->b1;
-    r->b2 += fa->b2;
-    r->c += fa->c;
-    r->w += fa->w;
-}
-
-/* Stores q (centred at o) as v's quadric, re-centred at v's position. */
-static void dm__qem_store(dm__qem_simp *s, uint32_t v, const dm__qem_quadric *q, const double o[3])
-{
-    dm__qem_fquad *f = &s->vx[v].q;
-    double d[3], ad[3], c;
-    int k;
-    for (k = 0; k < 3; k++) d[k] = (double)s->vx[v].np[k] - o[k];
-    ad[0] = q->a00 * d[0] + q->a01 * d[1] + q->a02 * d[2];
-    ad[1] = q->a01 * d[0] + q->a11 * d[1] + q->a12 * d[2];
-    ad[2] = q->a02 * d[0] + q->a12 * d[1] + q->a22 * d[2];
-    c = d[0] * (ad[0] + 2.0 * q->b0) + d[1] * (ad[1] + 2.0 * q->b1) + d[2] * (ad[2] + 2.0 * q->b2) + q->c;
-    f->a00 = (float)q->a00;
-    f->a01 = (float)q->a01;
-    f->a02 = (float)q->a02;
-    f->a11 = (float)q->a11;
-    f->a12 = (float)q->a12;
-    f->a22 = (float)q->a22;
-    f->b0 = (float)(q->b0 + ad[0]);
-    f->b1 = (float)(q->b1 + ad[1]);
-    f->b2 = (float)(q->b2 + ad[2]);
-    f->c = c > 0.0 ? (float)c : 0.0f;
-    f->w = (float)q->w;
-}
-
-/* Adds the plane n.x + d = 0 (weight w) to v's stored quadric: dl = n.p + d at v's position. */
-static void dm__qem_add_plane_at(dm__qem_simp *s, uint32_t v, const double n[3], double dl, double w)
-{
-    dm__qem_fquad *f = &s->vx[v].q;
-    f->a00 += (float)(w * n[0] * n[0]);
-    f->a01 += (float)(w * n[0] * n[1]);
-    f->a02 += (float)(w * n[0] * n[2]);
-    f->a11 += (float)(w * n[1] * n[1]);
-    f->a12 += (float)(w * n[1] * n[2]);
-    f->a22 += (float)(w * n[2] * n[2]);
-    f->b0 += (float)(w * dl * n[0]);
-    f->b1 += (float)(w * dl * n[1]);
-    f->b2 += (float)(w * dl * n[2]);
-    f->c += (float)(w * dl * dl);
-    f->w += (float)w;
 }
 
 /* The minimiser of Q on the segment p0 p1 (a 1-D quadratic, always well posed). */
@@ -2892,14 +2820,12 @@ static double dm__qem_optimal(const dm__qem_quadric *q, const double p0[3], cons
 static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t *keep, uint32_t *rem, double x[3],
                          double *cost)
 {
-    unsigned fa = s->vflag[a], fb = s->vflag[b];
+    unsigned fa = s->vx[a].flag, fb = s->vx[b].flag;
     dm__qem_quadric q;
-    double o[3], pa[3] = {0.0, 0.0, 0.0}, pb[3], xl[3];
-    int k;
+    double pa[3], pb[3];
     if ((fa | fb) & (DM__QEM_V_FROZEN | DM__QEM_V_REMOVED)) return 0;
     if ((fa & fb) & DM__QEM_V_LOCKED) return 0;
-    dm__qem_pair(s, a, b, o, &q); /* in the frame centred at a */
-    for (k = 0; k < 3; k++) pb[k] = (double)s->vx[b].np[k] - o[k];
+    dm__qem_quadric_sum(&q, &s->vx[a].q, &s->vx[b].q);
     if ((fa | fb) & DM__QEM_V_LOCKED || ((fa ^ fb) & DM__QEM_V_BOUNDARY)) {
         /* the caller takes keep's float position as it is (no round trip) */
         if (fa & DM__QEM_V_LOCKED) *keep = a;
@@ -2907,18 +2833,19 @@ static int dm__qem_place(const dm__qem_simp *s, uint32_t a, uint32_t b, uint32_t
         else *keep = (fa & DM__QEM_V_BOUNDARY) ? a : b;
         *rem = *keep == a ? b : a;
         dm__qem_norm_pos(s, *keep, x);
-        *cost = dm__qem_quadric_eval(&q, *keep == a ? pa : pb);
+        *cost = dm__qem_quadric_eval(&q, x);
         return 2;
     }
     *keep = a < b ? a : b;
     *rem = a < b ? b : a;
+    dm__qem_norm_pos(s, a, pa);
+    dm__qem_norm_pos(s, b, pb);
     if (fa & DM__QEM_V_BOUNDARY) { /* along a boundary edge: stay on it (exact on lines) */
-        dm__qem_segment_min(&q, pa, pb, xl);
-        *cost = dm__qem_quadric_eval(&q, xl);
+        dm__qem_segment_min(&q, pa, pb, x);
+        *cost = dm__qem_quadric_eval(&q, x);
     } else {
-        *cost = dm__qem_optimal(&q, pa, pb, xl);
+        *cost = dm__qem_optimal(&q, pa, pb, x);
     }
-    for (k = 0; k < 3; k++) x[k] = o[k] + xl[k];
     return 1;
 }
 
@@ -3093,8 +3020,8 @@ static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
         const uint32_t *t = s->idx + 3 * (size_t)(cl[i] / 3);
         int k;
         for (k = 0; k < 3; k++)
-            if (t[k] != v && s->vmark[t[k]] != st) {
-                s->vmark[t[k]] = st;
+            if (t[k] != v && s->vx[t[k]].mark != st) {
+                s->vx[t[k]].mark = st;
                 s->nbr[m++] = t[k];
             }
     }
@@ -3160,12 +3087,11 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     for (pass = 0; pass < 2; pass++) {
         uint32_t v = pass ? rem : keep, other = pass ? keep : rem, j, nc = s->vx[v].count;
         const uint32_t *cl = s->adj + s->vx[v].first;
-        double pv[3];
-        dm__qem_norm_pos(s, v, pv);
+        const double *pv = s->vx[v].np;
         for (j = 0; j < nc; j++) {
             uint32_t c = cl[j], tri = c / 3, slot = c - 3 * tri, i1, i2;
             const uint32_t *t = s->idx + 3 * (size_t)tri;
-            const float *f1, *f2;
+            const double *f1, *f2;
             double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
             i1 = t[slot == 2 ? 0 : slot + 1];
             i2 = t[slot == 0 ? 2 : slot - 1];
@@ -3173,7 +3099,7 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
             f1 = s->vx[i1].np;
             f2 = s->vx[i2].np;
             for (k = 0; k < 3; k++) {
-                double x1 = (double)f1[k], x2 = (double)f2[k];
+                double x1 = f1[k], x2 = f2[k];
                 u0[k] = x1 - pv[k];
                 v0[k] = x2 - pv[k];
                 u1[k] = x1 - pa[k];
@@ -3224,7 +3150,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
     const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
     size_t common = 0, shared = 0, i;
-    int both_boundary = (s->vflag[keep] & s->vflag[rem] & DM__QEM_V_BOUNDARY) != 0;
+    int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
     size_t m = 0;
     /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
        of its triangles and the records of their vertices go out together first (no branch on
@@ -3232,19 +3158,20 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     for (j = 0; j < nk + nr; j++) { /* the two vertices after the corner's own */
         uint32_t c = j < nk ? ck[j] : cr[j - nk], tri = c / 3, slot = c - 3 * tri;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
-        uint32_t i1 = t[slot == 2 ? 0 : slot + 1], i2 = t[slot == 0 ? 2 : slot - 1];
-        DM__QEM_PREFETCH(&s->vx[i1]);
-        DM__QEM_PREFETCH(&s->vx[i2]);
-        DM__QEM_PREFETCH(&s->vmark[i1]);
-        DM__QEM_PREFETCH(&s->vmark[i2]);
+        const char *x1 = (const char *)&s->vx[t[slot == 2 ? 0 : slot + 1]];
+        const char *x2 = (const char *)&s->vx[t[slot == 0 ? 2 : slot - 1]];
+        DM__QEM_PREFETCH(x1);
+        DM__QEM_PREFETCH(x1 + 64);
+        DM__QEM_PREFETCH(x2);
+        DM__QEM_PREFETCH(x2 + 64);
     }
     for (j = 0; j < nk; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
         int k;
         for (k = 0; k < 3; k++) {
-            uint32_t *x = &s->vmark[t[k]];
-            if (t[k] != keep && *x != st) {
-                *x = st;
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] != keep && x->mark != st) {
+                x->mark = st;
                 if (t[k] != rem) s->nbr[m++] = t[k];
             }
         }
@@ -3259,11 +3186,11 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
             shared++;
         }
         for (k = 0; k < 3; k++) {
-            uint32_t *x = &s->vmark[t[k]];
-            if (t[k] == rem || t[k] == keep || *x == st + 1) continue;
-            if (*x == st) common++;
+            dm__qem_vert *x = &s->vx[t[k]];
+            if (t[k] == rem || t[k] == keep || x->mark == st + 1) continue;
+            if (x->mark == st) common++;
             else s->nbr[m++] = t[k];
-            *x = st + 1;
+            x->mark = st + 1;
         }
     }
     s->nnbr = m;
@@ -3276,7 +3203,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     }
     for (i = 0; i < shared; i++) {
         size_t nt = s->vx[opp[i]].count;
-        if (nt <= ((s->vflag[opp[i]] & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
+        if (nt <= ((s->vx[opp[i]].flag & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
         DM__QEM_PREFETCH(s->adj + s->vx[opp[i]].first); /* the collapse drops a corner there */
     }
     return 1;
@@ -3373,17 +3300,12 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     s->adjend += 2 + i;
     s->vx[rem].count = 0;
     for (i = 0; i < nopp; i++) dm__qem_drop_corner(s, opp[i], dead[i]);
-    {
-        dm__qem_quadric q;
-        double o[3];
-        dm__qem_pair(s, keep, rem, o, &q);
-        for (k = 0; k < 3; k++) {
-            s->pos[3 * (size_t)keep + k] = at[k];
-            s->vx[keep].np[k] = (float)(((double)at[k] - s->center[k]) * s->inv_scale);
-        }
-        dm__qem_store(s, keep, &q, o);
+    for (k = 0; k < 3; k++) {
+        s->pos[3 * (size_t)keep + k] = at[k];
+        s->vx[keep].np[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     }
-    s->vflag[rem] |= DM__QEM_V_REMOVED;
+    dm__qem_quadric_sum(&s->vx[keep].q, &s->vx[keep].q, &s->vx[rem].q);
+    s->vx[rem].flag |= DM__QEM_V_REMOVED;
     s->ver[keep]++;
     s->ver[rem]++;
     s->live -= r.dead;
@@ -3396,11 +3318,11 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
 {
     size_t m = s->nnbr, i, np = 0; /* from the topology check */
-    s->vflag[keep] &= ~(uint32_t)DM__QEM_V_PARKED;
+    s->vx[keep].flag &= ~(uint32_t)DM__QEM_V_PARKED;
     for (i = 0; i < m; i++) { /* the parked neighbours: to the ring scratch, new versions */
         uint32_t x = s->nbr[i];
-        if (s->vflag[x] & DM__QEM_V_PARKED) {
-            s->vflag[x] &= ~(uint32_t)DM__QEM_V_PARKED;
+        if (s->vx[x].flag & DM__QEM_V_PARKED) {
+            s->vx[x].flag &= ~(uint32_t)DM__QEM_V_PARKED;
             s->ver[x]++;
             s->ring[np++] = x;
         }
@@ -3430,10 +3352,15 @@ static void dm__qem_boundary_plane(dm__qem_simp *s, uint32_t v, uint32_t c)
     dm__cross3(e, nrm, pl);
     len = sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
     l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-    if (len > 0.0) { /* through p[0] = v: 0 there, e . pl at nx (0 up to rounding) */
+    if (len > 0.0) {
+        double d;
+        dm__qem_quadric pq;
         for (k = 0; k < 3; k++) pl[k] /= len;
-        dm__qem_add_plane_at(s, v, pl, 0.0, DM__QEM_BOUNDARY_WEIGHT * l2);
-        dm__qem_add_plane_at(s, nx, pl, pl[0] * e[0] + pl[1] * e[1] + pl[2] * e[2], DM__QEM_BOUNDARY_WEIGHT * l2);
+        d = -(pl[0] * p[0][0] + pl[1] * p[0][1] + pl[2] * p[0][2]);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, pl, d, DM__QEM_BOUNDARY_WEIGHT * l2); /* the same terms */
+        dm__qem_quadric_sum(&s->vx[v].q, &s->vx[v].q, &pq);
+        dm__qem_quadric_sum(&s->vx[nx].q, &s->vx[nx].q, &pq);
     }
 }
 
@@ -3495,7 +3422,7 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         uint32_t ci, nc = s->vx[v].count;
         const uint32_t *cl = s->adj + s->vx[v].first;
         if (small >= 0) {
-            if (small) s->vflag[v] |= DM__QEM_V_BOUNDARY;
+            if (small) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
             continue;
         }
         st++;
@@ -3532,8 +3459,8 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
             if (uf[i] == i) fans++;
         }
         if (fans > 1) nonmanifold = 1;
-        if (nonmanifold) s->vflag[v] |= DM__QEM_V_NONMANIFOLD;
-        if (boundary) s->vflag[v] |= DM__QEM_V_BOUNDARY;
+        if (nonmanifold) s->vx[v].flag |= DM__QEM_V_NONMANIFOLD;
+        if (boundary) s->vx[v].flag |= DM__QEM_V_BOUNDARY;
         if (boundary && !nonmanifold) /* boundary planes, from the edge's tail */
             for (ci = 0; ci < nc; ci++) {
                 const uint32_t *tr = s->idx + 3 * (size_t)(cl[ci] / 3);
@@ -3543,11 +3470,12 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
     }
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
-        double p[3][3], e[3], f[3], nrm[3], len;
+        double p[3][3], e[3], f[3], nrm[3], len, d;
+        dm__qem_quadric pq;
         int k, j;
-        unsigned any = s->vflag[tr[0]] | s->vflag[tr[1]] | s->vflag[tr[2]];
+        unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
         if (any & DM__QEM_V_NONMANIFOLD)
-            for (j = 0; j < 3; j++) s->vflag[tr[j]] |= DM__QEM_V_FROZEN;
+            for (j = 0; j < 3; j++) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
         for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[j], p[j]);
         for (k = 0; k < 3; k++) {
             e[k] = p[1][k] - p[0][k];
@@ -3557,10 +3485,10 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
-        /* through p[0]: at the other two corners n.e and n.f, 0 up to rounding */
-        dm__qem_add_plane_at(s, tr[0], nrm, 0.0, 0.5 * len);
-        dm__qem_add_plane_at(s, tr[1], nrm, nrm[0] * e[0] + nrm[1] * e[1] + nrm[2] * e[2], 0.5 * len);
-        dm__qem_add_plane_at(s, tr[2], nrm, nrm[0] * f[0] + nrm[1] * f[1] + nrm[2] * f[2], 0.5 * len);
+        d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
+        memset(&pq, 0, sizeof pq);
+        dm__qem_quadric_add_plane(&pq, nrm, d, 0.5 * len); /* once: the same terms go to all three */
+        for (j = 0; j < 3; j++) dm__qem_quadric_sum(&s->vx[tr[j]].q, &s->vx[tr[j]].q, &pq);
     }
 }
 
@@ -3576,8 +3504,6 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->ring);
     a->free(a->user, s->oring);
     a->free(a->user, s->ver);
-    a->free(a->user, s->vmark);
-    a->free(a->user, s->vflag);
     while (s->blocks) {
         void *next;
         memcpy(&next, s->blocks, sizeof(void *));
@@ -3641,8 +3567,6 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ver, vertex_count, uint32_t);
-    DM__QEM_ALLOC(vmark, vertex_count, uint32_t);
-    DM__QEM_ALLOC(vflag, vertex_count, uint8_t);
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
     if (s->opt->constraint || s->opt->on_collapse) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
     /* the corner pool: every list with its header, and half as much again for the appended
@@ -3668,8 +3592,6 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     s->live = kept;
     memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
-    memset(s->vmark, 0, vertex_count * sizeof(uint32_t));
-    memset(s->vflag, 0, vertex_count);
     s->stamp = 0;
     for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
     s->adjend = 0;
@@ -3694,7 +3616,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     for (v = 0; v < vertex_count; v++) {
         int k;
         for (k = 0; k < 3; k++)
-            s->vx[v].np[k] = (float)(((double)positions[3 * v + (size_t)k] - s->center[k]) * s->inv_scale);
+            s->vx[v].np[k] = ((double)positions[3 * v + (size_t)k] - s->center[k]) * s->inv_scale;
     }
     return DM_OK;
 }
@@ -3786,9 +3708,9 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     s.al.free(s.al.user, tmp);
     tmp = NULL;
     for (v = 0; v < vertex_count; v++) {
-        if (opt.locked && opt.locked[v]) s.vflag[v] |= DM__QEM_V_LOCKED;
-        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vflag[v] & DM__QEM_V_BOUNDARY)) s.vflag[v] |= DM__QEM_V_LOCKED;
-        if (s.vflag[v] & DM__QEM_V_FROZEN) frozen++;
+        if (opt.locked && opt.locked[v]) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
     }
     /* every collapsible edge once, from its lower endpoint. A vertex that is not frozen is
        manifold: its neighbours are the next vertices of its corners, each once, and on a
@@ -3796,7 +3718,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     for (v = 0; v < vertex_count; v++) {
         uint32_t i, j, nc = s.vx[v].count;
         const uint32_t *cl = s.adj + s.vx[v].first;
-        if (s.vflag[v] & DM__QEM_V_FROZEN) continue;
+        if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
         for (i = 0; i < 2 * nc; i++) {
             const uint32_t *t = s.idx + 3 * (size_t)(cl[i % nc] / 3);
             uint32_t slot = cl[i % nc] % 3, x, keep, rem;
@@ -3805,7 +3727,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             if (i < nc) {
                 x = t[slot == 2 ? 0 : slot + 1];
             } else {
-                if (!(s.vflag[v] & DM__QEM_V_BOUNDARY)) break;
+                if (!(s.vx[v].flag & DM__QEM_V_BOUNDARY)) break;
                 x = t[slot == 0 ? 2 : slot - 1];
                 for (j = 0; j < nc; j++) {
                     const uint32_t *u = s.idx + 3 * (size_t)(cl[j] / 3);
@@ -3864,8 +3786,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if (!dm__qem_check_topology(&s, keep, rem) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
-            s.vflag[ea] |= DM__QEM_V_PARKED;
-            s.vflag[e.b] |= DM__QEM_V_PARKED;
+            s.vx[ea].flag |= DM__QEM_V_PARKED;
+            s.vx[e.b].flag |= DM__QEM_V_PARKED;
             continue;
         }
         if (opt.constraint) {
@@ -3891,16 +3813,12 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                     at[k] = corrected[k];
                     q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
                 }
-                if (((s.vflag[keep] & DM__QEM_V_LOCKED) || ((s.vflag[keep] ^ s.vflag[rem]) & DM__QEM_V_BOUNDARY)) &&
+                if (((s.vx[keep].flag & DM__QEM_V_LOCKED) || ((s.vx[keep].flag ^ s.vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
                     memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
                     ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
                 if (ok && dm__qem_check_geometry(&s, keep, rem, at) == (size_t)-1) ok = 0;
                 if (!ok) verdict = DM_COLLAPSE_VETO;
-                { /* in the frame centred at keep */
-                    double o[3];
-                    dm__qem_pair(&s, keep, rem, o, &qs);
-                    for (k = 0; k < 3; k++) q[k] -= o[k];
-                }
+                dm__qem_quadric_sum(&qs, &s.vx[keep].q, &s.vx[rem].q);
                 cost = dm__qem_quadric_eval(&qs, q);
                 err = qs.w > 0.0 ? sqrt(cost / qs.w) * s.scale : 0.0;
                 if (ok) { /* costs much more where the constraint puts it: back in the queue at that cost */
@@ -3919,8 +3837,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             }
             if (verdict == DM_COLLAPSE_VETO) {
                 s.vetoed++;
-                s.vflag[ea] |= DM__QEM_V_PARKED;
-                s.vflag[e.b] |= DM__QEM_V_PARKED;
+                s.vx[ea].flag |= DM__QEM_V_PARKED;
+                s.vx[e.b].flag |= DM__QEM_V_PARKED;
                 continue;
             }
         }
