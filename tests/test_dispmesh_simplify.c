@@ -379,6 +379,67 @@ static mesh sheet(int n)
     return m;
 }
 
+/* Frames: a tilted plane must simplify with no error (the quadrics are exact on planes up to
+   rounding: a float quadric, or one in unnormalised coordinates, would show a noise floor here),
+   also when it sits far from the origin (then the input's own float rounding, 7.6e-6 at 100, is
+   the limit); and the same sheet at another scale must give the same result relative to its
+   size (the greedy order is chaotic under rounding, so "the same" is to within 10%). */
+static double frame_run(const mesh *in, double sx, double tx, size_t target, double *plane_dev, size_t *nt)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    mesh m = *in, out;
+    uint32_t *ids;
+    size_t i;
+    m.pos = (float *)malloc(3 * in->nv * sizeof(float));
+    for (i = 0; i < 3 * in->nv; i++) m.pos[i] = (float)(in->pos[i] * sx + tx);
+    memset(&o, 0, sizeof o);
+    o.target_triangles = target;
+    memset(&rep, 0, sizeof rep);
+    T_EQ_INT(dm_simplify(m.pos, m.nv, m.idx, m.nt, &o, &pm, &rep), DM_OK);
+    *plane_dev = 0.0;
+    *nt = rep.triangle_count;
+    if (pm) {
+        out = pm_mesh(pm, &ids);
+        for (i = 0; i < out.nv; i++) { /* the tilted plane z = 0.3 x + 0.2 y, in the input's frame */
+            const float *q = out.pos + 3 * i;
+            double x = (q[0] - tx) / sx, y = (q[1] - tx) / sx, z = (q[2] - tx) / sx;
+            double d = fabs(z - 0.3 * x - 0.2 * y);
+            if (d > *plane_dev) *plane_dev = d;
+        }
+        mesh_free(&out);
+        free(ids);
+        dm_pm_free(pm);
+    }
+    free(m.pos);
+    return rep.error / sx;
+}
+
+static void frame_checks(void)
+{
+    mesh flat = sheet(120), wavy = sheet(120);
+    size_t i, nt0, nt1, nt2;
+    double dev, dev1, dev2, e0, e1, e2;
+    for (i = 0; i < flat.nv; i++) flat.pos[3 * i + 2] = 0.3f * flat.pos[3 * i] + 0.2f * flat.pos[3 * i + 1];
+    e0 = frame_run(&flat, 1.0, 0.0, flat.nt / 50, &dev, &nt0);
+    T_CHECK_MSG(e0 <= 1e-7 && dev <= 1e-6, "tilted plane: error %.3g, off the plane by %.3g", e0, dev);
+    e1 = frame_run(&flat, 1.0, 100.0, flat.nt / 50, &dev1, &nt1);
+    T_CHECK_MSG(e1 <= 4.0 * 7.6e-6 && dev1 <= 2.0 * 7.6e-6, "tilted plane moved by 100: error %.3g, off the plane by %.3g", e1, dev1);
+    T_CHECK(nt0 <= flat.nt / 50 && nt1 <= flat.nt / 50);
+    printf("  frames: tilted plane error %.2g off %.2g (moved: %.2g off %.2g), %zu %zu\n", e0, dev, e1, dev1, nt0, nt1);
+    e0 = frame_run(&wavy, 1.0, 0.0, wavy.nt / 50, &dev, &nt0);
+    e1 = frame_run(&wavy, 1e-3, 0.0, wavy.nt / 50, &dev1, &nt1);
+    e2 = frame_run(&wavy, 1e3, 0.0, wavy.nt / 50, &dev2, &nt2);
+    T_CHECK_MSG(nt0 <= nt1 + 1 && nt1 <= nt0 + 1 && nt0 <= nt2 + 1 && nt2 <= nt0 + 1, "wavy sheet: %zu / %zu / %zu triangles",
+                nt0, nt1, nt2);
+    T_CHECK_MSG(e0 > 0.0 && fabs(e1 / e0 - 1.0) < 0.1 && fabs(e2 / e0 - 1.0) < 0.1,
+                "wavy sheet: error %.4g at size 1, %.4g at 1e-3, %.4g at 1e3 (relative)", e0, e1, e2);
+    printf("  frames: wavy sheet error %.4g / %.4g / %.4g, %zu %zu %zu triangles\n", e0, e1, e2, nt0, nt1, nt2);
+    mesh_free(&flat);
+    mesh_free(&wavy);
+}
+
 static int on_square_boundary(const float *p) { return p[0] == 0.0f || p[0] == 1.0f || p[1] == 0.0f || p[1] == 1.0f; }
 
 /* within 1e-5 of an edge of the square: a corner may slide along one edge by the quadric's balance */
@@ -888,6 +949,7 @@ int main(int argc, char **argv)
     closed_mesh_checks("sphere 5120 to 12", &sph, 0.0025);
     pm_checks("sphere 5120", &sph, 500);
     open_mesh_checks();
+    frame_checks();
     error_bound_checks(&sph);
     constraint_checks(&sph);
     on_collapse_checks(&sph);
