@@ -124,8 +124,8 @@ int main(int argc, char **argv)
     if (t_rec < 0 || run_recon(&s)) { fprintf(stderr, "dm_reconstruct failed\n"); return 1; }
     dm_distance_report rep, base_rep;
     dm_surface_distance(s.pos, s.nv, s.idx, s.nt, s.rec->positions, s.rec->vertex_count, s.rec->indices,
-                        s.rec->triangle_count, 200000, NULL, &rep);
-    dm_surface_distance(s.pos, s.nv, s.idx, s.nt, s.pos, s.nv, s.base.data(), n / 3, 200000, NULL, &base_rep);
+                        s.rec->triangle_count, nullptr, &rep);
+    dm_surface_distance(s.pos, s.nv, s.idx, s.nt, s.pos, s.nv, s.base.data(), n / 3, nullptr, &base_rep);
     printf("RESULT dispmesh_recon res=%d ms=%.3f rms=%.3g max=%.3g base_only_rms=%.3g base_only_max=%.3g\n", res,
            1e3 * t_rec, rep.rms, rep.max, base_rep.rms, base_rep.max);
     free_recon(&s);
@@ -166,7 +166,7 @@ int main(int argc, char **argv)
             std::vector<float> bp(3 * bnv);
             std::vector<uint32_t> bi(3 * bnt);
             dm_pm_get_mesh(both[k], bp.data(), bi.data(), NULL);
-            dm_surface_distance(s.pos, s.nv, s.idx, s.nt, bp.data(), bnv, bi.data(), bnt, 200000, NULL, reps[k]);
+            dm_surface_distance(s.pos, s.nv, s.idx, s.nt, bp.data(), bnv, bi.data(), bnt, nullptr, reps[k]);
         }
         printf("RESULT dispmesh_base faces=%zu shell_ms=%.1f constrained_ms=%.1f unconstrained_ms=%.1f base_only_rms=%.3g "
                "unconstrained_rms=%.3g ratio=%.2f moved=%zu vetoed=%zu\n",

@@ -102,6 +102,18 @@ static int stage_progress(void *user, float done)
     return 0;
 }
 
+/* one of four equal parts of a stage */
+typedef struct quarter {
+    stage *st;
+    int k;
+} quarter;
+
+static int quarter_progress(void *user, float done)
+{
+    quarter *q = (quarter *)user;
+    return stage_progress(q->st, 0.25f * ((float)q->k + done));
+}
+
 static void stage_end(stage *s, const char *note)
 {
     if (s->tenths < 10) stage_progress(s, 1.0f);
@@ -724,20 +736,30 @@ int main(int argc, char **argv)
     }
 
     stage_begin(&st, "surface distances");
-    r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.dense->positions, R.dense->vertex_count,
-                            R.dense->indices, R.dense->triangle_count, 0, NULL, &d_recon);
-    stage_progress(&st, 0.25f);
-    if (r == DM_OK)
-        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.base.p, R.base.nv, R.base.t, R.base.nt, 0, NULL,
-                                &d_base);
-    stage_progress(&st, 0.5f);
-    if (r == DM_OK)
-        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_same.p, R.free_same.nv, R.free_same.t,
-                                R.free_same.nt, 0, NULL, &d_same);
-    stage_progress(&st, 0.75f);
-    if (r == DM_OK)
-        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_bytes.p, R.free_bytes.nv, R.free_bytes.t,
-                                R.free_bytes.nt, 0, NULL, &d_bytes);
+    {
+        /* four measurements, each a quarter of the stage */
+        quarter q;
+        dm_distance_options dopt;
+        memset(&dopt, 0, sizeof dopt);
+        dopt.progress = quarter_progress;
+        dopt.progress_user = &q;
+        q.st = &st;
+        q.k = 0;
+        r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.dense->positions, R.dense->vertex_count,
+                                R.dense->indices, R.dense->triangle_count, &dopt, &d_recon);
+        q.k = 1;
+        if (r == DM_OK)
+            r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.base.p, R.base.nv, R.base.t, R.base.nt,
+                                    &dopt, &d_base);
+        q.k = 2;
+        if (r == DM_OK)
+            r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_same.p, R.free_same.nv,
+                                    R.free_same.t, R.free_same.nt, &dopt, &d_same);
+        q.k = 3;
+        if (r == DM_OK)
+            r = dm_surface_distance(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, R.free_bytes.p, R.free_bytes.nv,
+                                    R.free_bytes.t, R.free_bytes.nt, &dopt, &d_bytes);
+    }
     if (r != DM_OK) { stage_fail(&st, "dm_surface_distance", r); goto done; }
     stage_end(&st, NULL);
 

@@ -193,10 +193,11 @@ int main(int argc, char **argv)
         T_EQ_INT(dm_reconstruct(map, pm, NULL, &rec), DM_OK);
         if (rec) {
             dm_distance_report rep, brep;
-            size_t samples = getenv("TEST_SANITIZE") ? 20000 : 100000;
+            dm_distance_options dopt = {};
+            dopt.samples_per_side = getenv("TEST_SANITIZE") ? 20000 : 100000;
             T_EQ_INT(dm_surface_distance(pos, nv, idx, nt, rec->positions, rec->vertex_count, rec->indices,
-                                         rec->triangle_count, samples, NULL, &rep), DM_OK);
-            T_EQ_INT(dm_surface_distance(pos, nv, idx, nt, pos, nv, base.data(), bt, samples, NULL, &brep), DM_OK);
+                                         rec->triangle_count, &dopt, &rep), DM_OK);
+            T_EQ_INT(dm_surface_distance(pos, nv, idx, nt, pos, nv, base.data(), bt, &dopt, &brep), DM_OK);
             T_CHECK_MSG(rep.rms <= 0.1 * brep.rms, "recon rms %.3g vs base-only %.3g", rep.rms, brep.rms);
             std::printf("  note: recon rms %.3g max %.3g; base only rms %.3g max %.3g (of the diagonal)\n", rep.rms,
                         rep.max, brep.rms, brep.max);

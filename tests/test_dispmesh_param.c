@@ -6,6 +6,8 @@
 #include "test.h"
 #include "hashrand.h"
 #include "testmesh.h"
+
+static const dm_distance_options dist_20000 = {20000, NULL, NULL, NULL};
 #include <stdlib.h>
 #include <math.h>
 
@@ -130,6 +132,68 @@ static int cancel_progress(void *user, float done)
     return ++*calls >= cancel_at;
 }
 
+
+/* dm_surface_distance: two spheres of radius 1 and 1.02 on the same cube-sphere grid are 0.02
+   apart along every ray from the centre; progress, cancel, allocation failure, determinism. */
+typedef struct dist_prog { int calls, bad; float last; int cancel_at; } dist_prog;
+static int dist_progress(void *user, float done)
+{
+    dist_prog *d = (dist_prog *)user;
+    if (!(done >= d->last && done <= 1.0f)) d->bad++;
+    d->last = done;
+    return d->cancel_at > 0 && ++d->calls >= d->cancel_at;
+}
+
+static void test_surface_distance(void)
+{
+    mesh a = make_sphere(24, 0.0, 1.0), b = make_sphere(24, 0.0, 1.02);
+    dm_distance_options o;
+    dm_distance_report r1, r2;
+    dist_prog dp;
+    counting cnt;
+    dm_allocator al;
+    long k;
+    int oom_ok = 1, leak = 0;
+    dm_result r;
+    memset(&o, 0, sizeof o);
+    memset(&dp, 0, sizeof dp);
+    o.samples_per_side = 50000;
+    o.progress = dist_progress;
+    o.progress_user = &dp;
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, &o, &r1), DM_OK);
+    /* the two meshes are the same grid scaled: every point of one is 0.02 r from the other
+       along its ray, and the closest point is nearer by the facets' tilt only (< 2%) */
+    T_CHECK_MSG(fabs(r1.rms * r1.diagonal - 0.02) < 0.02 * 0.02 && fabs(r1.max * r1.diagonal - 0.02) < 0.02 * 0.03,
+                "spheres 1 and 1.02: rms %.5f max %.5f (world units)", r1.rms * r1.diagonal, r1.max * r1.diagonal);
+    T_CHECK_MSG(fabs(r1.diagonal - 2.0 * sqrt(3.0)) < 1e-5, "diagonal %.6f", r1.diagonal);
+    T_EQ_SIZE(r1.samples, 50000);
+    T_CHECK_MSG(dp.bad == 0 && dp.last == 1.0f, "progress: %d out of order, last %g", dp.bad, dp.last);
+    dp.calls = 0; dp.last = 0.0f; dp.cancel_at = 3;
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, &o, &r2), DM_CANCELLED);
+    T_CHECK(r2.rms == 0.0 && r2.max == 0.0 && r2.samples == 0);
+    o.progress = NULL;
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, &o, &r2), DM_OK);
+    T_CHECK_MSG(memcmp(&r1, &r2, sizeof r1) == 0, "not deterministic");
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, &o, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, 0, b.p, b.nv, b.t, b.nt, &o, &r2), DM_ERR_NO_TRIANGLES);
+    al.alloc = c_alloc;
+    al.free = c_free;
+    al.user = &cnt;
+    o.allocator = &al;
+    o.samples_per_side = 2000;
+    for (k = 0;; k++) {
+        cnt.calls = 0; cnt.fail_at = k; cnt.live = 0;
+        r = dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, &o, &r2);
+        leak |= cnt.live != 0;
+        if (r == DM_OK) break;
+        oom_ok &= r == DM_ERR_OUT_OF_MEMORY;
+    }
+    T_CHECK_MSG(oom_ok && !leak && k >= 3, "surface distance: %ld failure points, oom_ok %d leak %d", k, oom_ok, leak);
+    T_EQ_INT(dm_surface_distance(a.p, a.nv, a.t, a.nt, b.p, b.nv, b.t, b.nt, NULL, &r2), DM_OK);
+    T_EQ_SIZE(r2.samples, 200000);
+    mesh_free(&a);
+    mesh_free(&b);
+}
 
 /* dm_coverage_weights: the original's area over each base triangle */
 static void test_coverage_weights(void)
@@ -261,10 +325,9 @@ int main(int argc, char **argv)
             T_EQ_INT(r, DM_OK);
             if (rec) {
                 r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, rec->positions, rec->vertex_count,
-                                        rec->indices, rec->triangle_count, 20000, NULL, &rep);
+                                        rec->indices, rec->triangle_count, &dist_20000, &rep);
                 T_EQ_INT(r, DM_OK);
-                r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, base.p, base.nv, base.t, base.nt, 20000,
-                                        NULL, &base_rep);
+                r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, base.p, base.nv, base.t, base.nt, &dist_20000, &base_rep);
                 T_EQ_INT(r, DM_OK);
                 T_CHECK_MSG(rep.rms <= 0.1 * base_rep.rms, "recon rms %.3g vs base-only %.3g", rep.rms, base_rep.rms);
                 T_CHECK_MSG(rep.max <= 0.25 * base_rep.max, "recon max %.3g vs base-only %.3g", rep.max, base_rep.max);
@@ -320,8 +383,8 @@ int main(int argc, char **argv)
                 T_EQ_INT(r, DM_OK);
                 if (rec) {
                     dm_surface_distance(to.p, to.nv, to.t, to.nt, rec->positions, rec->vertex_count, rec->indices,
-                                        rec->triangle_count, 20000, NULL, &rep);
-                    dm_surface_distance(to.p, to.nv, to.t, to.nt, tb.p, tb.nv, tb.t, tb.nt, 20000, NULL, &base_rep);
+                                        rec->triangle_count, &dist_20000, &rep);
+                    dm_surface_distance(to.p, to.nv, to.t, to.nt, tb.p, tb.nv, tb.t, tb.nt, &dist_20000, &base_rep);
                     T_CHECK_MSG(rep.rms <= 0.1 * base_rep.rms, "torus recon rms %.3g vs base-only %.3g", rep.rms, base_rep.rms);
                     printf("  note: torus: recon rms %.2e max %.2e; base only rms %.2e max %.2e\n", rep.rms, rep.max,
                            base_rep.rms, base_rep.max);
@@ -454,5 +517,6 @@ int main(int argc, char **argv)
     mesh_free(&orig);
     mesh_free(&base);
     test_coverage_weights();
+    test_surface_distance();
     return T_END();
 }

@@ -16,6 +16,8 @@
 #include "meshio.h"
 #include "test.h"
 #include "testmesh.h"
+
+static const dm_distance_options dist_100000 = {100000, NULL, NULL, NULL};
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -283,8 +285,8 @@ static void check_mesh(const char *what, const mesh *m, size_t target, size_t ma
     T_CHECK_MSG(br.outside_shell == 0, "%s: %zu of %zu base samples outside the shell", what, br.outside_shell, br.samples);
     T_CHECK_MSG(br.back_first == 0, "%s: %zu of %zu bake rays meet a back face first", what, br.back_first, br.samples);
     if (closed) T_CHECK_MSG(br.missed == 0, "%s: %zu of %zu bake rays miss a closed original", what, br.missed, br.samples);
-    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, con.bp, con.bnv, con.bi, con.bnt, 100000, NULL, &dc) == DM_OK);
-    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, unc.bp, unc.bnv, unc.bi, unc.bnt, 100000, NULL, &du) == DM_OK);
+    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, con.bp, con.bnv, con.bi, con.bnt, &dist_100000, &dc) == DM_OK);
+    T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, unc.bp, unc.bnv, unc.bi, unc.bnt, &dist_100000, &du) == DM_OK);
     printf("  %s: %zu -> %zu faces (unconstrained %zu); rms %.3e (unconstrained %.3e, ratio %.2f), max %.3e; "
            "%zu vertices checked, %zu on a boundary, worst side %.2e; shell: %zu stopped; constraint: %zu moved, "
            "%zu/%zu/%zu vetoed (enclose/shell/overlap); rays missed %zu of %zu\n",
