@@ -323,7 +323,9 @@
      (nbr = own index, nbr_rot = 2: a mirror boundary, as a clamped filter sees it), so that every
      walk comes back. Measured: 0-1 such links among 4-13k seam crossings on the test sphere and
      torus, 10 among 19283 (0.05%) on a 500-triangle bunny base.
-     Reconstruction. One vertex per valid texel at pos - disp nrm; two triangles per 2x2 block
+     Reconstruction. One vertex per valid texel at pos - disp nrm, in row-major texel order (vertex
+     k stands for the k-th valid texel, so a texel's vertex is the count of valid texels before
+     it: edits of the map, by erosion.h say, map to the vertices without a lookup table); two triangles per 2x2 block
      of valid texels of one chart, one for three; a triangle across a depth break is left out (an
      edge longer than 8 texel spacings, or longer than 2 in a triangle whose normal is more than
      60 degrees from the original's normal at a corner: a fin between two sheets of the original,
@@ -676,7 +678,8 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
                         const dm_bake_options *options, dm_dispmap **out);
 DMDEF void dm_dispmap_free(dm_dispmap *map);
 
-/* The dense mesh base + map: one vertex per HIT texel at pos - disp * nrm, two triangles per
+/* The dense mesh base + map: one vertex per HIT texel at pos - disp * nrm (in row-major texel
+   order: vertex k is the k-th valid texel), two triangles per
    2x2 block of HIT texels of one chart (one when three are). allocator NULL = default. */
 DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param,
                                const dm_allocator *allocator, dm_trimesh **out);

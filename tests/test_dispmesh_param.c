@@ -324,6 +324,19 @@ int main(int argc, char **argv)
             r = dm_reconstruct(map, pm, NULL, &rec);
             T_EQ_INT(r, DM_OK);
             if (rec) {
+                size_t k = 0, i, wrong = 0;
+                for (i = 0; i < n; i++) { /* vertex k: the k-th valid texel, at pos - disp nrm */
+                    int c;
+                    if (!map->valid[i]) continue;
+                    for (c = 0; c < 3; c++)
+                        wrong += k >= rec->vertex_count ||
+                                 fabs((double)rec->positions[3 * k + (size_t)c] -
+                                      ((double)map->pos[3 * i + (size_t)c] - (double)map->disp[i] * map->nrm[3 * i + (size_t)c])) >
+                                     1e-5 * (1.0 + fabs((double)map->pos[3 * i + (size_t)c]));
+                    k++;
+                }
+                T_CHECK_MSG(wrong == 0 && k == rec->vertex_count, "reconstruction vertices vs valid texels: %zu wrong, %zu of %zu",
+                            wrong, k, rec->vertex_count);
                 r = dm_surface_distance(orig.p, orig.nv, orig.t, orig.nt, rec->positions, rec->vertex_count,
                                         rec->indices, rec->triangle_count, &dist_20000, &rep);
                 T_EQ_INT(r, DM_OK);
