@@ -339,8 +339,10 @@
      bunny, shell-constrained base of 500 faces, 512^2 map, inward bake: reconstruction RMS
      1.0e-4 and max 2.5e-3 of the diagonal against base-only 4.8e-3 and 2.2e-2 (0.02x, 0.11x);
      no texel flagged; every bake ray's first hit front-facing and equal to the stored depth;
-     2 of 105168 rays go out and in again within the shell (folds next to a collapse's one-ring,
-     whose vertex normals the collapse changed, are not checked again). The max depends on the base:
+     1 of 105168 rays goes out and in again within the shell (a fold patch at the bunny's paw,
+     between the overlap check's 4 samples of the triangle; one more crosses a pleat of the
+     original itself, triangle 69660 folded back onto its three neighbours, which no base
+     avoids). The max depends on the base:
      where an enclosing base spans a crevice of the original, no bake ray reaches its bottom (a
      base from an earlier candidate order did, under the bunny: symmetric max 2.1e-2, while the
      reconstruction's own points stayed within 1.5e-3). Requiring every original vertex to see
