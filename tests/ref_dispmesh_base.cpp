@@ -8,7 +8,9 @@
    under the base flagged (the bunny is closed: no holes); no overlap along the bake rays: for every
    valid texel, Embree's first hit along the texel's ray (from a quarter shell thickness
    outside) is front-facing and is the baked depth, and the ray does not go out and in again
-   within 2.25 shell thicknesses (a fold: three depths for one texel). Reported, not required (see dispmesh.h,
+   within 2.25 shell thicknesses (a fold: three depths for one texel; a ray that crosses a pleat of
+   the original itself, a triangle folded back onto its neighbours, is counted apart as
+   strict_folds). Reported, not required (see dispmesh.h,
    BOUNDING SHELL): base-only rms over our unconstrained simplification's at the same face count.
    The inner-side check of every original vertex is in test_dispmesh_shell. Skips without
    glmark2-data, and under the sanitizers (the constrained simplification of 70k triangles). */
@@ -107,7 +109,7 @@ int main(int argc, char **argv)
         em_scene em;
         em_open(em, pos, nv, idx, nt);
         RTCScene scene = em.scene;
-        size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0, folds = 0;
+        size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0, folds = 0, strict_folds = 0;
         double lift = 0.25 * sh->thickness, tol = 1e-5 * sh->diagonal;
         for (size_t i = 0; i < n; i++) {
             if (map->status[i] == DM_TEXEL_EMPTY) continue;
@@ -136,8 +138,13 @@ int main(int argc, char **argv)
             if (!(ng[0] * nn[0] + ng[1] * nn[1] + ng[2] * nn[2] > 0.0)) back++;
             if (!(std::fabs((rh.ray.tfar - lift) - map->disp[i]) <= tol + 1e-6 * rh.ray.tfar)) differ++;
             /* then out and in again within the shell's depth (2.25 thicknesses from the start):
-               a fold, where one texel would have three depths */
-            float t = rh.ray.tfar, tend = (float)(2.25 * sh->thickness);
+               a back face, then a front face more than 1e-4 of the diagonal deeper: a fold, where
+               one texel would have three depths. A front face right after a front face (or within
+               that gap of the way out) is a pleat of the original itself (triangles folded back
+               onto their neighbours), which a ray through it crosses whatever the base: counted
+               apart as strict_folds. */
+            float t = rh.ray.tfar, tend = (float)(2.25 * sh->thickness), out_t = -1.0f;
+            bool strict = false, fold = false;
             for (int crossing = 0; crossing < 8; crossing++) {
                 rh.ray.tnear = t + (float)(1e-6 * sh->diagonal);
                 rh.ray.tfar = tend;
@@ -145,16 +152,24 @@ int main(int argc, char **argv)
                 if (!(rh.ray.tnear < tend)) break;
                 rtcIntersect1(scene, &context, &rh);
                 if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-                if (rh.hit.Ng_x * nn[0] + rh.hit.Ng_y * nn[1] + rh.hit.Ng_z * nn[2] > 0.0f) { folds++; break; }
                 t = rh.ray.tfar;
+                if (rh.hit.Ng_x * nn[0] + rh.hit.Ng_y * nn[1] + rh.hit.Ng_z * nn[2] > 0.0f) {
+                    strict = true;
+                    if (out_t >= 0.0f && t - out_t > (float)(1e-4 * sh->diagonal)) fold = true;
+                    out_t = -1.0f;
+                } else {
+                    out_t = t;
+                }
             }
+            strict_folds += strict;
+            folds += fold;
         }
         em_close(em);
         T_CHECK_MSG(flagged <= under / 100, "%zu of %zu texels under the base flagged", flagged, under);
         T_CHECK_MSG(back == 0, "%zu of %zu bake rays meet a back face (or nothing) first", back, rays);
         T_CHECK_MSG(differ <= rays / 1000, "%zu of %zu baked depths differ from Embree's first hit", differ, rays);
-        /* the constraint checks the collapse's own one-ring; triangles next to it, whose vertex
-           normals change too, are not checked again: a handful of rays fold (2 of 105k here) */
+        /* the constraint samples 4 rays per triangle of the collapse's own one-ring: a fold patch
+           between them (here one ray of 105k, at the bunny's paw) is not seen */
         T_CHECK_MSG(folds <= rays / 10000, "%zu of %zu bake rays go out and in again within the shell", folds, rays);
 
         sd_mesh o = {pos, nv, idx, nt};
@@ -172,9 +187,9 @@ int main(int argc, char **argv)
                     db.max);
         std::printf("  note: directions: original to reconstruction rms %.3e max %.3e, back rms %.3e max %.3e\n", dr.rms_ab, dr.max_ab, dr.rms_ba, dr.max_ba);
         std::printf("RESULT ref_dispmesh_base faces=%zu res=%d rms=%.3e max=%.3e base_only_rms=%.3e base_only_max=%.3e "
-                    "unconstrained_rms=%.3e base_over_unconstrained=%.2f flagged=%.5f rays=%zu back=%zu folds=%zu\n",
+                    "unconstrained_rms=%.3e base_over_unconstrained=%.2f flagged=%.5f rays=%zu back=%zu folds=%zu strict_folds=%zu\n",
                     base.nt, res, dr.rms, dr.max, db.rms, db.max, du.rms, db.rms / du.rms,
-                    under ? (double)flagged / (double)under : 0.0, rays, back, folds);
+                    under ? (double)flagged / (double)under : 0.0, rays, back, folds, strict_folds);
     }
     dm_trimesh_free(rec);
     dm_dispmap_free(map);

@@ -8,7 +8,8 @@
    - the constrained base: every original vertex on the inner side of the base (signed distance
      with the angle-weighted pseudonormal at its closest base feature <= 1e-4 of the diagonal;
      vertices whose closest feature is on a boundary are excluded and counted), every sampled
-     base point inside the shell, the bake rays' first hits front-facing; the face count reached;
+     base point inside the shell, the bake rays' first hits front-facing, no bake ray (153 per
+     triangle) going out and in again (the bunny: at most 1 in 10000); the face count reached;
    - bad input, allocation failure at every point, cancel, determinism. */
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
@@ -193,12 +194,43 @@ static void vertex_normals(const float *p, size_t nv, const uint32_t *t, size_t 
 /* Base points (a barycentric grid of 15 per triangle): how many lie outside the shell (farther
    from the original than the thickness), and how many bake rays (along the inverted interpolated
    normal, from a quarter thickness outside, up to 2.25 thicknesses) first meet a back face or
-   nothing. */
-typedef struct base_report { size_t samples, outside_shell, back_first, missed; } base_report;
+   nothing. Then the bake rays of a finer grid (153 per triangle, FOLD_GRID subdivisions): how
+   many go out and in again (a back face, then a front face more than 1e-4 of the diagonal
+   deeper, within 2.25 thicknesses: a fold; a front face right after a front face is a pleat of
+   the original, not counted). */
+#define FOLD_GRID 16
+typedef struct base_report { size_t samples, outside_shell, back_first, missed, fold_rays, folds; } base_report;
+
+static int ray_folds(const dm_shell *sh, const dm_bvh *orig_bvh, const mesh *orig, const double y[3], const double n[3])
+{
+    double l = sqrt(dot3(n, n)), fn[3], out_t = -1.0;
+    dm_ray ray;
+    dm_hit hit;
+    int k, crossings;
+    for (k = 0; k < 3; k++) {
+        ray.dir[k] = (float)(-n[k] / l);
+        ray.org[k] = (float)(y[k] + 0.25 * sh->thickness * n[k] / l);
+    }
+    ray.tmin = 0.0f;
+    ray.tmax = 2.25f * sh->thickness;
+    if (!dm_bvh_intersect(orig_bvh, &ray, &hit)) return 0;
+    for (crossings = 0; crossings < 16; crossings++) {
+        ray.tmin = hit.t + 1e-6f * sh->diagonal;
+        if (!(ray.tmin < ray.tmax) || !dm_bvh_intersect(orig_bvh, &ray, &hit)) break;
+        unit_normal(orig->p, orig->t + 3 * hit.triangle, fn);
+        if (dot3(fn, n) <= 0) {
+            out_t = hit.t;
+        } else {
+            if (out_t >= 0 && hit.t - out_t > 1e-4 * sh->diagonal) return 1;
+            out_t = -1.0;
+        }
+    }
+    return 0;
+}
 static base_report check_base(const dm_shell *sh, const dm_bvh *orig_bvh, const mesh *orig, const float *bp, size_t bnv,
                               const uint32_t *bi, size_t bnt)
 {
-    base_report r = {0, 0, 0, 0};
+    base_report r = {0, 0, 0, 0, 0, 0};
     double *vn = (double *)malloc(3 * bnv * sizeof(double));
     size_t t;
     int i, j, k;
@@ -232,6 +264,20 @@ static base_report check_base(const dm_shell *sh, const dm_bvh *orig_bvh, const 
                 unit_normal(orig->p, orig->t + 3 * hit.triangle, fn);
                 if (dot3(fn, n) <= 0) r.back_first++;
             }
+    for (t = 0; t < bnt; t++)
+        for (i = 0; i <= FOLD_GRID; i++)
+            for (j = 0; i + j <= FOLD_GRID; j++) {
+                double w[3] = {(double)(FOLD_GRID - i - j) / FOLD_GRID, (double)i / FOLD_GRID, (double)j / FOLD_GRID};
+                double y[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+                int c;
+                for (c = 0; c < 3; c++)
+                    for (k = 0; k < 3; k++) {
+                        y[k] += w[c] * bp[3 * bi[3 * t + c] + k];
+                        n[k] += w[c] * vn[3 * bi[3 * t + c] + k];
+                    }
+                r.fold_rays++;
+                r.folds += ray_folds(sh, orig_bvh, orig, y, n);
+            }
     free(vn);
     return r;
 }
@@ -259,8 +305,9 @@ static dm_result simplify(const mesh *m, dm_shell *sh, size_t target, run *r)
 }
 static void run_free(run *r) { dm_pm_free(r->pm); free(r->bp); free(r->bi); memset(r, 0, sizeof *r); }
 
-/* the whole chain on one mesh: shell, constrained and unconstrained bases, checks */
-static void check_mesh(const char *what, const mesh *m, size_t target, size_t max_faces, int closed)
+/* the whole chain on one mesh: shell, constrained and unconstrained bases, checks; folds_per_10k:
+   folded bake rays tolerated per 10000 */
+static void check_mesh(const char *what, const mesh *m, size_t target, size_t max_faces, int closed, size_t folds_per_10k)
 {
     dm_shell *sh = NULL;
     dm_bvh *bvh = NULL;
@@ -285,13 +332,15 @@ static void check_mesh(const char *what, const mesh *m, size_t target, size_t ma
     T_CHECK_MSG(br.outside_shell == 0, "%s: %zu of %zu base samples outside the shell", what, br.outside_shell, br.samples);
     T_CHECK_MSG(br.back_first == 0, "%s: %zu of %zu bake rays meet a back face first", what, br.back_first, br.samples);
     if (closed) T_CHECK_MSG(br.missed == 0, "%s: %zu of %zu bake rays miss a closed original", what, br.missed, br.samples);
+    T_CHECK_MSG(br.folds <= br.fold_rays * folds_per_10k / 10000, "%s: %zu of %zu bake rays go out and in again", what,
+                br.folds, br.fold_rays);
     T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, con.bp, con.bnv, con.bi, con.bnt, &dist_100000, &dc) == DM_OK);
     T_CHECK(dm_surface_distance(m->p, m->nv, m->t, m->nt, unc.bp, unc.bnv, unc.bi, unc.bnt, &dist_100000, &du) == DM_OK);
     printf("  %s: %zu -> %zu faces (unconstrained %zu); rms %.3e (unconstrained %.3e, ratio %.2f), max %.3e; "
            "%zu vertices checked, %zu on a boundary, worst side %.2e; shell: %zu stopped; constraint: %zu moved, "
-           "%zu/%zu/%zu vetoed (enclose/shell/overlap); rays missed %zu of %zu\n",
+           "%zu/%zu/%zu vetoed (enclose/shell/overlap); rays missed %zu of %zu, folded %zu of %zu\n",
            what, m->nt, con.bnt, unc.bnt, dc.rms, du.rms, dc.rms / du.rms, dc.max, sr.checked, sr.boundary, sr.worst,
-           sh->stopped_vertices, sh->moved, sh->vetoed_enclose, sh->vetoed_shell, sh->vetoed_overlap, br.missed, br.samples);
+           sh->stopped_vertices, sh->moved, sh->vetoed_enclose, sh->vetoed_shell, sh->vetoed_overlap, br.missed, br.samples, br.folds, br.fold_rays);
     run_free(&con);
     run_free(&unc);
     dm_bvh_free(bvh);
@@ -416,7 +465,7 @@ int main(int argc, char **argv)
     mesh sphere, torus;
     T_BEGIN(argc, argv);
     sphere = make_sphere(24, 0.08, 1.0);
-    check_mesh("bumpy sphere", &sphere, 200, 200, 1);
+    check_mesh("bumpy sphere", &sphere, 200, 200, 1, 0);
     torus = make_torus(96, 48, 0.9, 0.05);
     {
         dm_shell *sh = NULL;
@@ -433,14 +482,14 @@ int main(int argc, char **argv)
         dm_shell_free(sh);
         dm_bvh_free(bvh);
     }
-    check_mesh("fat torus", &torus, 400, 400, 1);
+    check_mesh("fat torus", &torus, 400, 400, 1, 0);
     {   /* sharp edges and narrow grooves: the QEM position of an edge collapse lands far from
            keep, which the enclosure's old triangles must not follow */
         mesh box = make_grooved_box(12, 0.03);
-        check_mesh("grooved box", &box, 12, 12, 1);
+        check_mesh("grooved box", &box, 12, 12, 1, 0);
         mesh_free(&box);
         box = make_grooved_box(4, 0.03); /* left 3 vertices out by 2e-3 of the diagonal before */
-        check_mesh("coarse grooved box", &box, 12, 40, 1);
+        check_mesh("coarse grooved box", &box, 12, 40, 1, 0);
         mesh_free(&box);
     }
     test_bad_input(&sphere);
@@ -452,10 +501,10 @@ int main(int argc, char **argv)
         mio_error err;
         FILE *f = fopen(bunny, "rb");
         if (!f) {
-            T_SKIP_N(14, "bunny", "glmark2-data is not installed");
+            T_SKIP_N(15, "bunny", "glmark2-data is not installed");
         } else if (getenv("TEST_SANITIZE")) {
             fclose(f);
-            T_SKIP_N(14, "bunny", "70k triangles under the sanitizers: about a minute");
+            T_SKIP_N(15, "bunny", "70k triangles under the sanitizers: about a minute");
         } else {
             fclose(f);
             if (mio_read_file(bunny, NULL, &mm, &err) == MIO_OK) {
@@ -464,7 +513,10 @@ int main(int argc, char **argv)
                 b.t = mm.indices;
                 b.nv = mm.vertex_count;
                 b.nt = mm.triangle_count;
-                check_mesh("bunny", &b, 500, 510, 0);
+                /* the overlap check samples 4 rays per triangle of a collapse's one-ring: fold
+                   patches between them, or on the triangles next to the one-ring, are not seen
+                   (1 ray of 76500 here) */
+                check_mesh("bunny", &b, 500, 510, 0, 1);
                 mio_free_mesh(&mm);
             } else {
                 T_CHECK_MSG(0, "bunny: %s", err.message);
