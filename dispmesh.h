@@ -754,6 +754,9 @@ typedef struct dm_collapse {
     const uint32_t *old_triangles; /* 3 per triangle: the triangles of keep and remove before the
                                       collapse (the dying ones included), at `positions` */
     size_t old_triangle_count;
+    size_t level;              /* collapses done before this one in this dm_simplify run: 0 until
+                                  the first is done, so a constraint that follows the mesh (like
+                                  dm_shell_constraint) sees a new run begin */
 } dm_collapse;
 
 /* Returns DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE after writing a corrected position
@@ -872,7 +875,8 @@ typedef struct dm_shell {
     float thickness;           /* the limit used, world units */
     float diagonal;            /* the original's bounding-box diagonal */
     size_t stopped_vertices;   /* vertices stopped before the full thickness */
-    size_t moved, vetoed_enclose, vetoed_shell, vetoed_overlap; /* dm_shell_constraint's verdicts */
+    size_t moved, vetoed_enclose, vetoed_shell, vetoed_overlap; /* dm_shell_constraint's verdicts in
+                                  the current (or last) dm_simplify run */
     void *internal;            /* private: the original's BVH and a copy of its mesh */
 } dm_shell;
 
@@ -890,7 +894,9 @@ DMDEF int dm_shell_constraint(void *shell, const dm_collapse *candidate, float c
 /* dm_simplify_options.on_collapse for the same shell: follows the simplified mesh so that the
    overlap check sees its exact vertex normals. Set both:
      opt.constraint = dm_shell_constraint; opt.on_collapse = dm_shell_collapsed; opt.constraint_user = shell;
-   (without it, after two accepted candidates the check falls back to normals from the one-ring). */
+   (without it, after two accepted candidates the check falls back to normals from the one-ring).
+   One shell serves any number of dm_simplify runs, one at a time: a candidate or collapse with
+   level 0 after a run that did collapses starts again from the original's normals. */
 DMDEF void dm_shell_collapsed(void *shell, const dm_collapse *done);
 
 #ifdef __cplusplus
@@ -3829,6 +3835,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             cand.triangle_count = ring_count;
             cand.old_triangles = s.oring;
             cand.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
+            cand.level = s.nrec;
             verdict = opt.constraint(opt.constraint_user, &cand, corrected);
             if (verdict == DM_COLLAPSE_MOVE) {
                 double q[3];
@@ -3879,6 +3886,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             done_c.triangle_count = ring_count;
             done_c.old_triangles = s.oring;
             done_c.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
+            done_c.level = s.nrec;
             opt.on_collapse(opt.constraint_user, &done_c);
         }
         if (!dm__qem_collapse(&s, keep, rem, at) || !dm__qem_refresh(&s, keep)) {
@@ -5889,7 +5897,8 @@ typedef struct dm__sh_internal {
     size_t scratch_cap;  /* in doubles */
     double *vsum;        /* per vertex: the angle-weighted normal sum of the simplified mesh, kept
                             by dm_shell_collapsed */
-    size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls */
+    size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls (this run) */
+    size_t last_level;   /* the level of the last candidate or collapse seen */
     uint32_t *pts;       /* original vertices near one candidate */
     size_t pts_cap;
     float *tri;          /* the candidate's old and new triangles: 9 coordinates and a bounding
@@ -6138,6 +6147,19 @@ static void dm__sh_contrib(const dm_collapse *c, const uint32_t *t, int j, const
     for (k = 0; k < 3; k++) out[k] = ang * n[k];
 }
 
+/* A call at level 0 after one at a higher level, or after collapses were followed: a new
+   dm_simplify run on the original, so the followed normals, the counters and the verdicts go
+   back to the state dm_shell_grow left. */
+static void dm__sh_run_check(dm_shell *sh, dm__sh_internal *in, size_t level)
+{
+    if (level == 0 && (in->collapsed > 0 || in->last_level > 0)) {
+        dm__pz_vertex_normals(in->pos, in->nv, in->idx, in->nt, in->vsum, sh->normals);
+        in->collapsed = in->accepted = 0;
+        sh->moved = sh->vetoed_enclose = sh->vetoed_shell = sh->vetoed_overlap = 0;
+    }
+    in->last_level = level;
+}
+
 DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
 {
     dm_shell *sh = (dm_shell *)user;
@@ -6148,6 +6170,7 @@ DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
     if (!sh || !done || !sh->internal || !done->positions || !done->triangles || !done->old_triangles) return;
     in = (dm__sh_internal *)sh->internal;
     if (done->keep >= in->nv || done->remove >= in->nv) return;
+    dm__sh_run_check(sh, in, done->level);
     in->collapsed++;
     dm__pz_load(done->positions, done->keep, xk);
     for (k = 0; k < 3; k++) xn[k] = done->position[k];
@@ -6294,6 +6317,7 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
     if (!sh || !c || !corrected || !sh->internal || !c->positions || !c->triangles || !c->old_triangles)
         return DM_COLLAPSE_VETO;
     in = (dm__sh_internal *)sh->internal;
+    dm__sh_run_check(sh, in, c->level);
     no = c->old_triangle_count;
     nr = c->triangle_count;
     /* (1) Enclosure: the original's vertices near the collapse whose closest feature of the

@@ -454,8 +454,24 @@ static void test_cancel_and_determinism(const mesh *m)
     T_CHECK(simplify(m, b, 300, &rb) == DM_OK);
     T_CHECK(ra.bnv == rb.bnv && ra.bnt == rb.bnt && ra.bp && rb.bp &&
             memcmp(ra.bp, rb.bp, 3 * ra.bnv * sizeof(float)) == 0 && memcmp(ra.bi, rb.bi, 3 * ra.bnt * sizeof(uint32_t)) == 0);
-    run_free(&ra);
     run_free(&rb);
+    { /* one shell, several runs: the second run on shell a (which followed the first run's mesh)
+         and a run at another target in between give the same base as a fresh shell */
+        size_t moved = a->moved, vetoed = a->vetoed_enclose + a->vetoed_shell + a->vetoed_overlap;
+        run rc, rd;
+        T_CHECK(simplify(m, a, 500, &rc) == DM_OK);
+        T_CHECK(simplify(m, a, 300, &rd) == DM_OK);
+        T_CHECK_MSG(ra.bnv == rd.bnv && ra.bnt == rd.bnt && ra.bp && rd.bp &&
+                        memcmp(ra.bp, rd.bp, 3 * ra.bnv * sizeof(float)) == 0 &&
+                        memcmp(ra.bi, rd.bi, 3 * ra.bnt * sizeof(uint32_t)) == 0,
+                    "a shell used for a third run gives another base (%zu vs %zu faces)", rd.bnt, ra.bnt);
+        T_CHECK_MSG(a->moved == moved && a->vetoed_enclose + a->vetoed_shell + a->vetoed_overlap == vetoed,
+                    "verdicts of the last run: moved %zu vs %zu, vetoed %zu vs %zu", a->moved, moved,
+                    a->vetoed_enclose + a->vetoed_shell + a->vetoed_overlap, vetoed);
+        run_free(&rc);
+        run_free(&rd);
+    }
+    run_free(&ra);
     dm_shell_free(a);
     dm_shell_free(b);
 }
