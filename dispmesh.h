@@ -263,7 +263,7 @@
      caller (however it was made); these calls lay it out, bake, and rebuild:
        dm_param *pm;  dm_dispmap *map;  dm_trimesh *dense;
        dm_param_options po = {0};  po.width = po.height = 1024;
-       dm_coverage_weights(base..., orig..., NULL, NULL, NULL, weights);  // optional: texels where
+       dm_coverage_weights(base..., orig..., NULL, weights);  // optional: texels where
        po.triangle_weight = weights;             // the original's area is (one float a triangle)
        dm_parameterize(base_pos, base_nv, base_idx, base_nt, &po, &pm);  // charts + layout + packing
        dm_bake(pm, base_pos, base_nv, base_idx, base_nt, orig_pos, orig_nv, orig_idx, orig_nt,
@@ -720,15 +720,21 @@ DMDEF dm_result dm_surface_distance(const float *a_positions, size_t a_vertex_co
 /* Area-proportional weights for dm_param_options.triangle_weight: per base triangle, the area of
    the original that lies over it (each original triangle's area goes to the base triangle
    closest to its centroid), so that the map spends its texels where the original's surface
-   is. A base triangle with almost nothing over it still gets 5% of the mean weight, so that
-   every base triangle keeps texels. weights: base_triangle_count floats, written on success.
-   progress as elsewhere (NULL = none). */
+   is. A base triangle with almost nothing over it still gets a floor (5% of the mean weight
+   by default), so that every base triangle keeps texels. weights: base_triangle_count floats,
+   written on success. options NULL = all defaults. */
+typedef struct dm_coverage_options {
+    const dm_allocator *allocator;    /* NULL = malloc/free */
+    int (*progress)(void *user, float done); /* fraction of the original's triangles placed, about
+                                                every 16384 and at the end; nonzero cancels */
+    void *progress_user;
+    float floor;                      /* the least weight, a fraction of the mean: 0 = 0.05 */
+} dm_coverage_options;
 DMDEF dm_result dm_coverage_weights(const float *base_positions, size_t base_vertex_count,
                                     const uint32_t *base_indices, size_t base_triangle_count,
                                     const float *orig_positions, size_t orig_vertex_count,
                                     const uint32_t *orig_indices, size_t orig_triangle_count,
-                                    const dm_allocator *allocator, int (*progress)(void *user, float done),
-                                    void *progress_user, float *weights);
+                                    const dm_coverage_options *options, float *weights);
 
 /* "DM_OK", "DM_ERR_BAD_INDEX", ... (the enum name); "DM_ERR_?" outside the enum. */
 DMDEF const char *dm_result_string(dm_result r);
@@ -5829,24 +5835,28 @@ done:
 }
 
 DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t *bi, size_t bnt, const float *op,
-                                    size_t onv, const uint32_t *oi, size_t ont, const dm_allocator *allocator,
-                                    int (*progress)(void *user, float done), void *progress_user, float *weights)
+                                    size_t onv, const uint32_t *oi, size_t ont, const dm_coverage_options *options,
+                                    float *weights)
 {
+    dm_coverage_options opt;
     dm_bvh_options bo;
     dm_bvh *bvh = NULL;
-    dm_allocator a = dm__resolve_allocator(allocator);
+    dm_allocator a;
     double *sum, total = 0.0, floor_w;
     int overflow = 0;
     size_t t;
     dm_result r;
-    if (!weights) return DM_ERR_INVALID_ARGUMENT;
+    if (options) opt = *options;
+    else memset(&opt, 0, sizeof opt);
+    a = dm__resolve_allocator(opt.allocator);
+    if (!weights || !(opt.floor >= 0.0f && opt.floor <= 1.0f)) return DM_ERR_INVALID_ARGUMENT;
     r = dm__pz_check_mesh(bp, bnv, bi, bnt);
     if (r == DM_OK) r = dm__pz_check_mesh(op, onv, oi, ont);
     if (r != DM_OK) return r;
     sum = (double *)dm__alloc_array(&a, bnt, sizeof(double), &overflow);
     if (!sum) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
     memset(&bo, 0, sizeof bo);
-    bo.allocator = allocator;
+    bo.allocator = opt.allocator;
     r = dm_bvh_build(bp, bnv, bi, bnt, &bo, &bvh);
     if (r != DM_OK) {
         a.free(a.user, sum);
@@ -5867,14 +5877,15 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
         dm__cross3(e1, e2, n);
         area = 0.5 * sqrt(dm__dot3(n, n));
         if (dm_bvh_closest_point(bvh, c, INFINITY, &cl)) sum[cl.triangle] += area;
-        if (progress && (t & 65535) == 65535 && progress(progress_user, (float)((double)t / (double)ont))) {
+        if (opt.progress && ((t & 16383) == 16383 || t + 1 == ont) &&
+            opt.progress(opt.progress_user, (float)((double)(t + 1) / (double)ont))) {
             dm_bvh_free(bvh);
             a.free(a.user, sum);
             return DM_CANCELLED;
         }
     }
     for (t = 0; t < bnt; t++) total += sum[t];
-    floor_w = 0.05 * total / (double)bnt;
+    floor_w = (opt.floor > 0.0f ? (double)opt.floor : 0.05) * total / (double)bnt;
     for (t = 0; t < bnt; t++) weights[t] = (float)(sum[t] > floor_w ? sum[t] : floor_w);
     dm_bvh_free(bvh);
     a.free(a.user, sum);

@@ -642,8 +642,14 @@ int main(int argc, char **argv)
     R.weights = (float *)malloc(R.base.nt * sizeof(float) + 1);
     if (!R.weights) { fprintf(stderr, "dispmesh: out of memory\n"); goto done; }
     stage_begin(&st, "coverage weights");
-    r = dm_coverage_weights(R.base.p, R.base.nv, R.base.t, R.base.nt, R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, NULL,
-                            stage_progress, &st, R.weights);
+    {
+        dm_coverage_options copt;
+        memset(&copt, 0, sizeof copt);
+        copt.progress = stage_progress;
+        copt.progress_user = &st;
+        r = dm_coverage_weights(R.base.p, R.base.nv, R.base.t, R.base.nt, R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &copt,
+                                R.weights);
+    }
     if (r != DM_OK) { stage_fail(&st, "dm_coverage_weights", r); goto done; }
     stage_end(&st, NULL);
     memset(&po, 0, sizeof po);

@@ -130,7 +130,7 @@ int main(int argc, char **argv)
             double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
             orig_area += 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
         }
-        T_EQ_INT(dm_coverage_weights(pos, nv, base.data(), bt, pos, nv, idx, nt, NULL, NULL, NULL, w.data()), DM_OK);
+        T_EQ_INT(dm_coverage_weights(pos, nv, base.data(), bt, pos, nv, idx, nt, NULL, w.data()), DM_OK);
         for (size_t t = 0; t < bt; t++) wsum += w[t];
         /* every original triangle counted once; the 5% floor may add up to 5% */
         T_CHECK_MSG(wsum >= orig_area * (1.0 - 1e-4) && wsum <= 1.05 * orig_area, "weights add to %.5f, bunny area %.5f",

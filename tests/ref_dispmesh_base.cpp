@@ -91,7 +91,7 @@ int main(int argc, char **argv)
     dm_param_options po;
     std::memset(&po, 0, sizeof po);
     po.width = po.height = res;
-    T_EQ_INT(dm_coverage_weights(base.pos.data(), base.nv, base.idx.data(), base.nt, pos, nv, idx, nt, NULL, NULL, NULL,
+    T_EQ_INT(dm_coverage_weights(base.pos.data(), base.nv, base.idx.data(), base.nt, pos, nv, idx, nt, NULL,
                                  w.data()), DM_OK);
     po.triangle_weight = w.data();
     dm_param *pm = NULL;

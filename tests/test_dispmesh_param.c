@@ -206,14 +206,13 @@ static void test_coverage_weights(void)
     dm_param_options po;
     dm_param *pm = NULL;
     if (!w || !ws) {
-        T_SKIP_N(7, "coverage weights", "out of memory");
+        T_SKIP_N(13, "coverage weights", "out of memory");
         free(w);
         free(ws);
         return;
     }
     /* every original triangle lands somewhere: the weights add up to the original's area */
-    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
-                                 NULL, w), DM_OK);
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, w), DM_OK);
     for (t = 0; t < orig.nt; t++) total += tri_area(&orig, t);
     for (t = 0; t < base.nt; t++) sum += w[t];
     T_CHECK_MSG(fabs(sum - total) <= 1e-4 * total, "weights add to %.6f, the original's area is %.6f", sum, total);
@@ -225,16 +224,14 @@ static void test_coverage_weights(void)
     if (pm) check_param("sphere, coverage weights", &base, pm, w);
     dm_param_free(pm);
     /* a mesh over itself: each triangle's own area */
-    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, base.p, base.nv, base.t, base.nt, NULL, NULL,
-                                 NULL, w), DM_OK);
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, base.p, base.nv, base.t, base.nt, NULL, w), DM_OK);
     for (t = 0; t < base.nt; t++) {
         double a = tri_area(&base, t), e = fabs(w[t] - a) / a;
         if (e > worst) worst = e;
     }
     T_CHECK_MSG(worst <= 1e-5, "a mesh over itself: weight differs from the area by %.3g (relative)", worst);
     /* a sheet with a hole over a flat sheet: the triangles under the hole get the floor */
-    T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, NULL,
-                                 NULL, NULL, ws), DM_OK);
+    T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, NULL, ws), DM_OK);
     sum = 0.0;
     for (t = 0; t < sheet.nt; t++) {
         sum += ws[t];
@@ -244,12 +241,37 @@ static void test_coverage_weights(void)
     for (t = 0; t < sheet.nt; t++) low += ws[t] < 0.5 * mean;
     T_CHECK_MSG(wmin >= 0.049 * mean && low > 0, "floor: smallest weight %.4g of mean %.4g, %zu below half the mean",
                 wmin, mean, low);
+    { /* the floor is an option (a fraction of the mean of the unfloored weights: 0.3 is 6 times
+         the default 0.05), progress ends at 1, a nonzero return cancels */
+        dm_coverage_options co;
+        dist_prog dp;
+        double wmin2 = 1e30;
+        memset(&co, 0, sizeof co);
+        memset(&dp, 0, sizeof dp);
+        co.floor = 0.3f;
+        co.progress = dist_progress;
+        co.progress_user = &dp;
+        T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, &co, ws),
+                 DM_OK);
+        for (t = 0; t < sheet.nt; t++)
+            if (ws[t] < wmin2) wmin2 = ws[t];
+        T_CHECK_MSG(fabs(wmin2 / wmin - 6.0) < 1e-4, "floor 0.3: smallest weight %.5g, with the default %.5g", wmin2, wmin);
+        T_CHECK_MSG(dp.bad == 0 && dp.last == 1.0f, "progress: %d out of order, last %g", dp.bad, dp.last);
+        dp.cancel_at = 1;
+        T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, &co, ws),
+                 DM_CANCELLED);
+        co.progress = NULL;
+        co.floor = 2.0f;
+        T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, &co, ws),
+                 DM_ERR_INVALID_ARGUMENT);
+        co.floor = NAN;
+        T_EQ_INT(dm_coverage_weights(sheet.p, sheet.nv, sheet.t, sheet.nt, holed.p, holed.nv, holed.t, holed.nt, &co, ws),
+                 DM_ERR_INVALID_ARGUMENT);
+    }
     /* bad input */
-    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
-                                 NULL, NULL), DM_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL), DM_ERR_INVALID_ARGUMENT);
     orig.t[5] = (uint32_t)orig.nv;
-    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, NULL,
-                                 NULL, w), DM_ERR_BAD_INDEX);
+    T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, NULL, w), DM_ERR_BAD_INDEX);
     free(w);
     free(ws);
     mesh_free(&base);
