@@ -4086,6 +4086,20 @@ static void dm__pz_sub(const double a[3], const double b[3], double r[3])
 
 static double dm__pz_len(const double a[3]) { return sqrt(dm__dot3(a, a)); }
 
+/* The angle of triangle p at corner j (radians), or -1 when an edge there has zero length:
+   the weight of an angle-weighted vertex normal (Thurmer and Wuthrich 1998). */
+static double dm__pz_corner_angle(const double p[3][3], int j)
+{
+    double ea[3], eb[3], la, lb, ang;
+    dm__pz_sub(p[(j + 1) % 3], p[j], ea);
+    dm__pz_sub(p[(j + 2) % 3], p[j], eb);
+    la = dm__pz_len(ea);
+    lb = dm__pz_len(eb);
+    if (!(la > 0.0 && lb > 0.0)) return -1.0;
+    ang = dm__dot3(ea, eb) / (la * lb);
+    return acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+}
+
 /* twice the area normal of triangle t */
 static void dm__pz_face_normal(const float *pos, const uint32_t *idx, size_t t, double n[3])
 {
@@ -4112,14 +4126,8 @@ static void dm__pz_vertex_normals(const float *pos, size_t nv, const uint32_t *i
         if (!(len > 0.0)) continue;
         for (c = 0; c < 3; c++) dm__pz_load(pos, idx[3 * t + (size_t)c], p[c]);
         for (c = 0; c < 3; c++) {
-            double a[3], b[3], la, lb, ang;
-            dm__pz_sub(p[(c + 1) % 3], p[c], a);
-            dm__pz_sub(p[(c + 2) % 3], p[c], b);
-            la = dm__pz_len(a);
-            lb = dm__pz_len(b);
-            if (!(la > 0.0 && lb > 0.0)) continue;
-            ang = dm__dot3(a, b) / (la * lb);
-            ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+            double ang = dm__pz_corner_angle((const double(*)[3])p, c);
+            if (ang < 0.0) continue;
             for (k = 0; k < 3; k++) acc[3 * (size_t)idx[3 * t + (size_t)c] + (size_t)k] += ang * n[k] / len;
         }
     }
@@ -6143,18 +6151,13 @@ static int dm__sh_grow_scratch(dm_shell *sh, dm__sh_internal *in, size_t need)
 /* The angle-weighted unit normal that triangle t (keep at x) adds to its corner j's vertex. */
 static void dm__sh_contrib(const dm_collapse *c, const uint32_t *t, int j, const double x[3], double out[3])
 {
-    double p[3][3], n[3], ea[3], eb[3], la, lb, ang;
+    double p[3][3], n[3], ang;
     int k;
     out[0] = out[1] = out[2] = 0.0;
     for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
     if (!dm__sh_plane(p[0], p[1], p[2], n)) return;
-    dm__pz_sub(p[(j + 1) % 3], p[j], ea);
-    dm__pz_sub(p[(j + 2) % 3], p[j], eb);
-    la = dm__pz_len(ea);
-    lb = dm__pz_len(eb);
-    if (!(la > 0.0 && lb > 0.0)) return;
-    ang = dm__dot3(ea, eb) / (la * lb);
-    ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+    ang = dm__pz_corner_angle((const double(*)[3])p, j);
+    if (ang < 0.0) return;
     for (k = 0; k < 3; k++) out[k] = ang * n[k];
 }
 
@@ -6521,14 +6524,8 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
         if (!dm__sh_plane(p[0], p[1], p[2], n)) continue;
         for (j = 0; j < 3; j++) {
-            double ea[3], eb[3], la, lb, ang;
-            dm__pz_sub(p[(j + 1) % 3], p[j], ea);
-            dm__pz_sub(p[(j + 2) % 3], p[j], eb);
-            la = dm__pz_len(ea);
-            lb = dm__pz_len(eb);
-            if (!(la > 0.0 && lb > 0.0)) continue;
-            ang = dm__dot3(ea, eb) / (la * lb);
-            ang = acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+            double ang = dm__pz_corner_angle((const double(*)[3])p, (int)j);
+            if (ang < 0.0) continue;
             /* add to every ring triangle's corner at this vertex (all of them contain keep) */
             {
                 size_t m;
