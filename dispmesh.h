@@ -2634,6 +2634,10 @@ typedef struct dm__qem_cand {
 } dm__qem_cand;
 
 #define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
+/* the next and previous slot of a triangle (0 1 2), by shifts: a ternary here compiles to a
+   branch that mispredicts a third of the time */
+#define DM__QEM_NEXT(slot) ((0x09u >> (2u * (slot))) & 3u)
+#define DM__QEM_PREV(slot) ((0x12u >> (2u * (slot))) & 3u)
 
 /* A radix heap (Ahuja, Mehlhorn, Orlin, Tarjan 1990) over the 64-bit keys: bucket 0 holds keys
    equal to the last popped one, bucket i > 0 the keys whose highest bit differing from it is
@@ -3119,7 +3123,7 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
 {
     size_t m = 0;
     double pa[3];
-    int pass, k;
+    int pass, k, bad = 0, dies;
     const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
     for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     for (pass = 0; pass < 2; pass++) {
@@ -3131,9 +3135,9 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
             const uint32_t *t = s->idx + 3 * (size_t)tri;
             const double *f1, *f2;
             double u0[3], v0[3], u1[3], v1[3], w[3], n0[3], n1[3], l1, l0, dot, lu, lv, lw, e2;
-            i1 = t[slot == 2 ? 0 : slot + 1];
-            i2 = t[slot == 0 ? 2 : slot - 1];
-            if (i1 == other || i2 == other) continue; /* dies */
+            i1 = t[DM__QEM_NEXT(slot)];
+            i2 = t[DM__QEM_PREV(slot)];
+            dies = (i1 == other) | (i2 == other); /* tested like the others, its verdict unused: no branch */
             f1 = s->vx[i1].np;
             f2 = s->vx[i2].np;
             for (k = 0; k < 3; k++) {
@@ -3148,20 +3152,24 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
             lu = u1[0] * u1[0] + u1[1] * u1[1] + u1[2] * u1[2];
             lv = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2];
             lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-            e2 = lu > lv ? (lu > lw ? lu : lw) : (lv > lw ? lv : lw);
+            e2 = lu;
+            e2 = lv > e2 ? lv : e2;
+            e2 = lw > e2 ? lw : e2;
             l1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
-            if (!(l1 > min_sin2 * e2 * e2)) return (size_t)-1;
             dm__cross3(u0, v0, n0);
             l0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2];
             dot = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-            if (l0 > 0.0 && !(dot > 0.0 && dot * dot > min_cos2 * l0 * l1)) return (size_t)-1;
+            {
+                int thin = !(l1 > min_sin2 * e2 * e2), turned = (l0 > 0.0) & ((dot <= 0.0) | !(dot * dot > min_cos2 * l0 * l1));
+                bad |= (thin | turned) & (dies ^ 1);
+            }
             s->ring[3 * m + slot] = keep;
-            s->ring[3 * m + (slot == 2 ? 0 : slot + 1)] = i1;
-            s->ring[3 * m + (slot == 0 ? 2 : slot - 1)] = i2;
-            m++;
+            s->ring[3 * m + DM__QEM_NEXT(slot)] = i1;
+            s->ring[3 * m + DM__QEM_PREV(slot)] = i2;
+            m += !dies;
         }
     }
-    return m;
+    return bad ? (size_t)-1 : m;
 }
 
 /* The triangles of keep and rem before the collapse (each once) into s->oring; returns the count. */
@@ -3196,38 +3204,42 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     for (j = 0; j < nk + nr; j++) { /* the two vertices after the corner's own */
         uint32_t c = j < nk ? ck[j] : cr[j - nk], tri = c / 3, slot = c - 3 * tri;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
-        const char *x1 = (const char *)&s->vx[t[slot == 2 ? 0 : slot + 1]];
-        const char *x2 = (const char *)&s->vx[t[slot == 0 ? 2 : slot - 1]];
+        const char *x1 = (const char *)&s->vx[t[DM__QEM_NEXT(slot)]];
+        const char *x2 = (const char *)&s->vx[t[DM__QEM_PREV(slot)]];
         DM__QEM_PREFETCH(x1);
         DM__QEM_PREFETCH(x1 + 64);
         DM__QEM_PREFETCH(x2);
         DM__QEM_PREFETCH(x2 + 64);
     }
+    /* The marks: st for keep's neighbours, st + 1 once seen around rem. The loops are written
+       without data-dependent branches (the tests are unpredictable): every vertex is written to
+       nbr and the count moves on only for a new one; keep and rem get marks too, unused. */
     for (j = 0; j < nk; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
         int k;
         for (k = 0; k < 3; k++) {
-            dm__qem_vert *x = &s->vx[t[k]];
-            if (t[k] != keep && x->mark != st) {
-                x->mark = st;
-                if (t[k] != rem) s->nbr[m++] = t[k];
-            }
+            uint32_t y = t[k];
+            dm__qem_vert *x = &s->vx[y];
+            size_t fresh = (size_t)((x->mark != st) & (y != keep) & (y != rem));
+            x->mark = st;
+            s->nbr[m] = y;
+            m += fresh;
         }
     }
     for (j = 0; j < nr; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
-        int k, has_keep = t[0] == keep || t[1] == keep || t[2] == keep;
+        int k, has_keep = (t[0] == keep) | (t[1] == keep) | (t[2] == keep);
         if (has_keep) {
-            if (shared < 2)
-                for (k = 0; k < 3; k++)
-                    if (t[k] != keep && t[k] != rem) opp[shared] = t[k];
+            if (shared < 2) opp[shared] = t[0] ^ t[1] ^ t[2] ^ keep ^ rem; /* the third vertex */
             shared++;
         }
         for (k = 0; k < 3; k++) {
-            dm__qem_vert *x = &s->vx[t[k]];
-            if (t[k] == rem || t[k] == keep || x->mark == st + 1) continue;
-            if (x->mark == st) common++;
-            else s->nbr[m++] = t[k];
+            uint32_t y = t[k];
+            dm__qem_vert *x = &s->vx[y];
+            size_t live = (size_t)((y != keep) & (y != rem) & (x->mark != st + 1)), seen = (size_t)(x->mark == st);
+            common += live & seen;
+            s->nbr[m] = y;
+            m += live & (seen ^ 1u);
             x->mark = st + 1;
         }
     }
@@ -3276,8 +3288,11 @@ static int dm__qem_adj_reserve(dm__qem_simp *s, size_t n)
 static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
 {
     uint32_t *cl = s->adj + s->vx[v].first, n = s->vx[v].count, i, j = 0;
-    for (i = 0; i < n; i++)
-        if (cl[i] / 3 != tri) cl[j++] = cl[i];
+    for (i = 0; i < n; i++) {
+        uint32_t c = cl[i];
+        cl[j] = c;
+        j += c / 3 != tri;
+    }
     s->vx[v].count = j;
 }
 
@@ -3286,13 +3301,13 @@ static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
 static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
     dm__qem_rec r;
-    uint32_t opp[2], dead[2], nk, nr, j, *out, *ck, *cr;
-    size_t nopp = 0, ndead = 0, i;
+    uint32_t opp[3], dead[3], nk, nr, j, *out, *ck, *cr;
+    size_t nopp = 0, i;
     int k;
     nk = s->vx[keep].count;
     nr = s->vx[rem].count;
     if (!dm__qem_adj_reserve(s, 2 + (size_t)nk + nr)) return 0;
-    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + nr, sizeof(uint32_t))) return 0;
+    if (!dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, s->nops + nr + 1, sizeof(uint32_t))) return 0;
     if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, s->nrec + 1, sizeof(dm__qem_rec))) return 0;
     ck = s->adj + s->vx[keep].first;
     cr = s->adj + s->vx[rem].first;
@@ -3304,33 +3319,38 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
         r.before[k] = s->pos[3 * (size_t)keep + k];
         r.after[k] = at[k];
     }
+    /* The loops below have no branch on the mesh data (which triangle dies is unpredictable):
+       every candidate is written and the counts move on by 0 or 1. The topology check let
+       at most two triangles of rem contain keep. */
     for (j = 0; j < nr; j++) {
-        uint32_t tri = cr[j] / 3;
+        uint32_t tri = cr[j] / 3, dies;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
-        if (t[0] == keep || t[1] == keep || t[2] == keep) {
-            for (k = 0; k < 3; k++)
-                if (t[k] != keep && t[k] != rem && nopp < 2) {
-                    opp[nopp++] = t[k];
-                    if (ndead < 2) dead[ndead++] = tri;
-                }
-            s->alive[tri] = 0;
-            s->ops[s->nops++] = tri;
-            r.dead++;
-        }
+        dies = (t[0] == keep) | (t[1] == keep) | (t[2] == keep);
+        opp[nopp] = t[0] ^ t[1] ^ t[2] ^ keep ^ rem; /* the third vertex, if it dies */
+        dead[nopp] = tri;
+        nopp += dies & (nopp < 2);
+        s->alive[tri] = (uint8_t)(dies ^ 1u);
+        s->ops[s->nops] = tri;
+        s->nops += dies;
+        r.dead += dies;
     }
     out = s->adj + s->adjend;
     out[0] = keep;
     out += 2;
     i = 0;
-    for (j = 0; j < nk; j++)
-        if (s->alive[ck[j] / 3]) out[i++] = ck[j];
+    for (j = 0; j < nk; j++) {
+        uint32_t c = ck[j];
+        out[i] = c;
+        i += s->alive[c / 3];
+    }
     for (j = 0; j < nr; j++) {
-        uint32_t c = cr[j];
-        if (!s->alive[c / 3]) continue;
-        s->idx[c] = keep;
-        s->ops[s->nops++] = c;
-        r.moved++;
-        out[i++] = c;
+        uint32_t c = cr[j], live = s->alive[c / 3];
+        s->idx[c] = live ? keep : rem; /* a dead triangle keeps rem, for the vertex split */
+        s->ops[s->nops] = c;
+        s->nops += live;
+        r.moved += live;
+        out[i] = c;
+        i += live;
     }
     out[-1] = (uint32_t)i;
     s->vx[keep].first = (uint32_t)(s->adjend + 2);
@@ -3415,17 +3435,18 @@ static int dm__qem_classify_small(dm__qem_simp *s, uint32_t v)
     for (i = 0; i < nc; i++) {
         const uint32_t *tr = s->idx + 3 * (size_t)(cl[i] / 3);
         uint32_t slot = cl[i] % 3;
-        nxs[i] = tr[slot == 2 ? 0 : slot + 1];
-        pvs[i] = tr[slot == 0 ? 2 : slot - 1];
+        nxs[i] = tr[DM__QEM_NEXT(slot)];
+        pvs[i] = tr[DM__QEM_PREV(slot)];
     }
     for (i = 0; i < nc; i++) { /* a repeated previous vertex matches twice, a repeated next one
                                   points twice at the same triangle */
-        uint32_t x = nxs[i], sj = DM__QEM_NONE;
-        for (j = 0; j < nc; j++)
-            if (pvs[j] == x) {
-                if (sj != DM__QEM_NONE) return -1;
-                sj = j;
-            }
+        uint32_t x = nxs[i], sj = DM__QEM_NONE, hits = 0;
+        for (j = 0; j < nc; j++) { /* no branch on the comparison: it is unpredictable */
+            uint32_t eq = pvs[j] == x;
+            hits += eq;
+            sj = eq ? j : sj;
+        }
+        if (hits > 1) return -1;
         succ[i] = sj;
         if (sj != DM__QEM_NONE) {
             if (has_pred & (1u << sj)) return -1;
@@ -3763,14 +3784,14 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             double p[3], cost;
             dm__qem_cand e;
             if (i < nc) {
-                x = t[slot == 2 ? 0 : slot + 1];
+                x = t[DM__QEM_NEXT(slot)];
             } else {
                 if (!(s.vx[v].flag & DM__QEM_V_BOUNDARY)) break;
-                x = t[slot == 0 ? 2 : slot - 1];
+                x = t[DM__QEM_PREV(slot)];
                 for (j = 0; j < nc; j++) {
                     const uint32_t *u = s.idx + 3 * (size_t)(cl[j] / 3);
                     uint32_t sj = cl[j] % 3;
-                    if (u[sj == 2 ? 0 : sj + 1] == x) break;
+                    if (u[DM__QEM_NEXT(sj)] == x) break;
                 }
                 if (j < nc) continue;
             }
