@@ -3604,17 +3604,6 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
         return DM_ERR_TOO_LARGE; /* corner ids and the corner pool's offsets are 32-bit */
     if (vertex_count > (size_t)-1 / (3 * sizeof(uint32_t)) || triangle_count > (size_t)-1 / (3 * sizeof(uint32_t)))
         return DM_ERR_TOO_LARGE;
-    for (t = 0; t < 3 * triangle_count; t++) {
-        uint32_t i = indices[t];
-        int k;
-        if (i >= vertex_count) return DM_ERR_BAD_INDEX;
-        for (k = 0; k < 3; k++) {
-            float x = positions[3 * (size_t)i + k];
-            if (!(x >= -DM__MAX_COORD && x <= DM__MAX_COORD)) return DM_ERR_BAD_POSITION;
-            if (x < lo[k]) lo[k] = x;
-            if (x > hi[k]) hi[k] = x;
-        }
-    }
     s->n = vertex_count;
 #define DM__QEM_ALLOC(field, count, type)                                                      \
     do {                                                                                   \
@@ -3626,6 +3615,23 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ver, vertex_count, uint32_t);
+    /* the indices, then the positions of the vertices used (each once, not once per corner) */
+    memset(s->ver, 0, vertex_count * sizeof(uint32_t));
+    for (t = 0; t < 3 * triangle_count; t++) {
+        uint32_t i = indices[t];
+        if (i >= vertex_count) return DM_ERR_BAD_INDEX;
+        s->ver[i] = 1;
+    }
+    for (v = 0; v < vertex_count; v++) {
+        int k;
+        if (!s->ver[v]) continue;
+        for (k = 0; k < 3; k++) {
+            float x = positions[3 * v + (size_t)k];
+            if (!(x >= -DM__MAX_COORD && x <= DM__MAX_COORD)) return DM_ERR_BAD_POSITION;
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    }
     DM__QEM_ALLOC(ring, 3 * triangle_count > 3 * vertex_count ? 3 * triangle_count : 3 * vertex_count, uint32_t);
     if (s->opt->constraint || s->opt->on_collapse) DM__QEM_ALLOC(oring, 3 * triangle_count, uint32_t);
     /* the corner pool: every list with its header, and half as much again for the appended
