@@ -3575,22 +3575,27 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
     }
     for (t = 0; t < s->t; t++) {
         const uint32_t *tr = s->idx + 3 * t;
-        double p[3][3], e[3], f[3], nrm[3], len, d;
+        const double *p0, *p1, *p2;
+        double e[3], f[3], nrm[3], len, d;
         dm__qem_quadric pq;
         int k, j;
         unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
         if (any & DM__QEM_V_NONMANIFOLD)
             for (j = 0; j < 3; j++) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
-        for (j = 0; j < 3; j++) dm__qem_norm_pos(s, tr[j], p[j]);
+        p0 = s->vx[tr[0]].np;
+        p1 = s->vx[tr[1]].np;
+        p2 = s->vx[tr[2]].np;
         for (k = 0; k < 3; k++) {
-            e[k] = p[1][k] - p[0][k];
-            f[k] = p[2][k] - p[0][k];
+            e[k] = p1[k] - p0[k];
+            f[k] = p2[k] - p0[k];
         }
-        dm__cross3(e, f, nrm);
+        nrm[0] = e[1] * f[2] - e[2] * f[1];
+        nrm[1] = e[2] * f[0] - e[0] * f[2];
+        nrm[2] = e[0] * f[1] - e[1] * f[0];
         len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
         if (!(len > 0.0)) continue; /* zero area: no plane */
         for (k = 0; k < 3; k++) nrm[k] /= len;
-        d = -(nrm[0] * p[0][0] + nrm[1] * p[0][1] + nrm[2] * p[0][2]);
+        d = -(nrm[0] * p0[0] + nrm[1] * p0[1] + nrm[2] * p0[2]);
         memset(&pq, 0, sizeof pq);
         dm__qem_quadric_add_plane(&pq, nrm, d, 0.5 * len); /* once: the same terms go to all three */
         for (j = 0; j < 3; j++) dm__qem_quadric_sum(&s->vx[tr[j]].q, &s->vx[tr[j]].q, &pq);
@@ -3829,8 +3834,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         const uint32_t *cl = s.adj + s.vx[v].first;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
         for (i = 0; i < 2 * nc; i++) {
-            const uint32_t *t = s.idx + 3 * (size_t)(cl[i % nc] / 3);
-            uint32_t slot = cl[i % nc] % 3, x, keep, rem;
+            uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x, keep, rem;
+            const uint32_t *t = s.idx + (ci - slot);
             double p[3], cost;
             dm__qem_cand e;
             if (i < nc) {
