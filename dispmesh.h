@@ -3071,6 +3071,10 @@ static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
             next = c->next;
             for (j = 0; j < fill; j++) {
                 const dm__qem_cand *e = &c->e[j];
+                if (j + 16 < fill) { /* versions of a large mesh miss the cache: ask early */
+                    DM__QEM_PREFETCH(&s->ver[DM__QEM_CAND_A(e + 16)]);
+                    DM__QEM_PREFETCH(&s->ver[e[16].b]);
+                }
                 if (dm__qem_stale(s, e)) {
                     s->hsize--;
                     continue;
