@@ -3167,53 +3167,64 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
 {
     size_t m = 0;
     double pa[3];
-    int pass, k, bad = 0, dies;
+    int pass, k, bad = 0;
     const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
     for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     for (pass = 0; pass < 2; pass++) {
-        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, j, nc = s->vx[v].count;
+        uint32_t v = pass ? rem : keep, other = pass ? keep : rem, nc = s->vx[v].count, j0;
         const uint32_t *cl = s->adj + s->vx[v].first;
         const double *pv = s->vx[v].np;
-        for (j = 0; j < nc; j++) {
-            uint32_t c = cl[j], tri = c / 3, slot = c - 3 * tri, i1, i2;
-            const uint32_t *t = s->idx + 3 * (size_t)tri;
-            const double *f1, *f2;
-            double u0x, u0y, u0z, v0x, v0y, v0z, u1x, u1y, u1z, v1x, v1y, v1z, wx, wy, wz;
-            double n0x, n0y, n0z, n1x, n1y, n1z, l1, l0, dot, lu, lv, lw, e2;
-            i1 = t[DM__QEM_NEXT(slot)];
-            i2 = t[DM__QEM_PREV(slot)];
-            dies = (i1 == other) | (i2 == other); /* tested like the others, its verdict unused: no branch */
-            f1 = s->vx[i1].np;
-            f2 = s->vx[i2].np;
-            /* scalars, crosses written out: the compiler keeps them in registers */
-            u0x = f1[0] - pv[0], u0y = f1[1] - pv[1], u0z = f1[2] - pv[2];
-            v0x = f2[0] - pv[0], v0y = f2[1] - pv[1], v0z = f2[2] - pv[2];
-            u1x = f1[0] - pa[0], u1y = f1[1] - pa[1], u1z = f1[2] - pa[2];
-            v1x = f2[0] - pa[0], v1y = f2[1] - pa[1], v1z = f2[2] - pa[2];
-            wx = f2[0] - f1[0], wy = f2[1] - f1[1], wz = f2[2] - f1[2];
-            n1x = u1y * v1z - u1z * v1y;
-            n1y = u1z * v1x - u1x * v1z;
-            n1z = u1x * v1y - u1y * v1x;
-            n0x = u0y * v0z - u0z * v0y;
-            n0y = u0z * v0x - u0x * v0z;
-            n0z = u0x * v0y - u0y * v0x;
-            lu = u1x * u1x + u1y * u1y + u1z * u1z;
-            lv = v1x * v1x + v1y * v1y + v1z * v1z;
-            lw = wx * wx + wy * wy + wz * wz;
-            e2 = lu;
-            e2 = lv > e2 ? lv : e2;
-            e2 = lw > e2 ? lw : e2;
-            l1 = n1x * n1x + n1y * n1y + n1z * n1z;
-            l0 = n0x * n0x + n0y * n0y + n0z * n0z;
-            dot = n0x * n1x + n0y * n1y + n0z * n1z;
-            {
-                int thin = !(l1 > min_sin2 * e2 * e2), turned = (l0 > 0.0) & ((dot <= 0.0) | !(dot * dot > min_cos2 * l0 * l1));
-                bad |= (thin | turned) & (dies ^ 1);
+        /* The triangles that die (they hold `other`: two of each one-ring, a third of all) are
+           left out first, without a branch on which ones they are (unpredictable), by blocks of
+           64 corners; then the test runs on the others. */
+        for (j0 = 0; j0 < nc; j0 += 64) {
+            uint32_t lc[64], nl = 0, jj, jn = nc - j0 < 64u ? nc - j0 : 64u;
+            for (jj = 0; jj < jn; jj++) {
+                uint32_t c = cl[j0 + jj], slot = c % 3;
+                const uint32_t *t = s->idx + (c - slot);
+                lc[nl] = c;
+                nl += (t[DM__QEM_NEXT(slot)] != other) & (t[DM__QEM_PREV(slot)] != other);
             }
-            s->ring[3 * m + slot] = keep;
-            s->ring[3 * m + DM__QEM_NEXT(slot)] = i1;
-            s->ring[3 * m + DM__QEM_PREV(slot)] = i2;
-            m += !dies;
+            for (jj = 0; jj < nl; jj++) {
+                uint32_t c = lc[jj], slot = c % 3, i1, i2;
+                const uint32_t *t = s->idx + (c - slot);
+                const double *f1, *f2;
+                double u0x, u0y, u0z, v0x, v0y, v0z, u1x, u1y, u1z, v1x, v1y, v1z, wx, wy, wz;
+                double n0x, n0y, n0z, n1x, n1y, n1z, l1, l0, dot, lu, lv, lw, e2;
+                int thin, turned;
+                i1 = t[DM__QEM_NEXT(slot)];
+                i2 = t[DM__QEM_PREV(slot)];
+                f1 = s->vx[i1].np;
+                f2 = s->vx[i2].np;
+                /* scalars, crosses written out: the compiler keeps them in registers */
+                u0x = f1[0] - pv[0], u0y = f1[1] - pv[1], u0z = f1[2] - pv[2];
+                v0x = f2[0] - pv[0], v0y = f2[1] - pv[1], v0z = f2[2] - pv[2];
+                u1x = f1[0] - pa[0], u1y = f1[1] - pa[1], u1z = f1[2] - pa[2];
+                v1x = f2[0] - pa[0], v1y = f2[1] - pa[1], v1z = f2[2] - pa[2];
+                wx = f2[0] - f1[0], wy = f2[1] - f1[1], wz = f2[2] - f1[2];
+                n1x = u1y * v1z - u1z * v1y;
+                n1y = u1z * v1x - u1x * v1z;
+                n1z = u1x * v1y - u1y * v1x;
+                n0x = u0y * v0z - u0z * v0y;
+                n0y = u0z * v0x - u0x * v0z;
+                n0z = u0x * v0y - u0y * v0x;
+                lu = u1x * u1x + u1y * u1y + u1z * u1z;
+                lv = v1x * v1x + v1y * v1y + v1z * v1z;
+                lw = wx * wx + wy * wy + wz * wz;
+                e2 = lu;
+                e2 = lv > e2 ? lv : e2;
+                e2 = lw > e2 ? lw : e2;
+                l1 = n1x * n1x + n1y * n1y + n1z * n1z;
+                l0 = n0x * n0x + n0y * n0y + n0z * n0z;
+                dot = n0x * n1x + n0y * n1y + n0z * n1z;
+                thin = !(l1 > min_sin2 * e2 * e2);
+                turned = (l0 > 0.0) & ((dot <= 0.0) | !(dot * dot > min_cos2 * l0 * l1));
+                bad |= thin | turned;
+                s->ring[3 * m + slot] = keep;
+                s->ring[3 * m + DM__QEM_NEXT(slot)] = i1;
+                s->ring[3 * m + DM__QEM_PREV(slot)] = i2;
+                m++;
+            }
         }
     }
     return bad ? (size_t)-1 : m;
