@@ -3272,31 +3272,37 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     /* The marks: st for keep's neighbours, st + 1 once seen around rem. The loops are written
        without data-dependent branches (the tests are unpredictable): every vertex is written to
        nbr and the count moves on only for a new one; keep and rem get marks too, unused. */
+    /* (each corner's own vertex is keep or rem: only the two others are looked at) */
     for (j = 0; j < nk; j++) {
-        const uint32_t *t = s->idx + 3 * (size_t)(ck[j] / 3);
+        uint32_t c = ck[j], slot = c % 3, y[2];
+        const uint32_t *t = s->idx + (c - slot);
         int k;
-        for (k = 0; k < 3; k++) {
-            uint32_t y = t[k];
-            dm__qem_vert *x = &s->vx[y];
-            size_t fresh = (size_t)((x->mark != st) & (y != keep) & (y != rem));
+        y[0] = t[DM__QEM_NEXT(slot)];
+        y[1] = t[DM__QEM_PREV(slot)];
+        for (k = 0; k < 2; k++) {
+            dm__qem_vert *x = &s->vx[y[k]];
+            size_t fresh = (size_t)((x->mark != st) & (y[k] != rem));
             x->mark = st;
-            s->nbr[m] = y;
+            s->nbr[m] = y[k];
             m += fresh;
         }
     }
     for (j = 0; j < nr; j++) {
-        const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
-        int k, has_keep = (t[0] == keep) | (t[1] == keep) | (t[2] == keep);
+        uint32_t c = cr[j], slot = c % 3, y[2];
+        const uint32_t *t = s->idx + (c - slot);
+        int k, has_keep;
+        y[0] = t[DM__QEM_NEXT(slot)];
+        y[1] = t[DM__QEM_PREV(slot)];
+        has_keep = (y[0] == keep) | (y[1] == keep);
         if (has_keep) {
-            if (shared < 2) opp[shared] = t[0] ^ t[1] ^ t[2] ^ keep ^ rem; /* the third vertex */
+            if (shared < 2) opp[shared] = y[0] ^ y[1] ^ keep; /* the third vertex */
             shared++;
         }
-        for (k = 0; k < 3; k++) {
-            uint32_t y = t[k];
-            dm__qem_vert *x = &s->vx[y];
-            size_t live = (size_t)((y != keep) & (y != rem) & (x->mark != st + 1)), seen = (size_t)(x->mark == st);
+        for (k = 0; k < 2; k++) {
+            dm__qem_vert *x = &s->vx[y[k]];
+            size_t live = (size_t)((y[k] != keep) & (x->mark != st + 1)), seen = (size_t)(x->mark == st);
             common += live & seen;
-            s->nbr[m] = y;
+            s->nbr[m] = y[k];
             m += live & (seen ^ 1u);
             x->mark = st + 1;
         }
