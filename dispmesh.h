@@ -3277,8 +3277,8 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         uint32_t c = ck[j], slot = c % 3, y[2];
         const uint32_t *t = s->idx + (c - slot);
         int k;
-        y[0] = t[DM__QEM_NEXT(slot)];
-        y[1] = t[DM__QEM_PREV(slot)];
+        y[0] = t[slot == 0]; /* the other two in triangle order (the order nbr has always had) */
+        y[1] = t[2u - (slot == 2)];
         for (k = 0; k < 2; k++) {
             dm__qem_vert *x = &s->vx[y[k]];
             size_t fresh = (size_t)((x->mark != st) & (y[k] != rem));
@@ -3291,8 +3291,8 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         uint32_t c = cr[j], slot = c % 3, y[2];
         const uint32_t *t = s->idx + (c - slot);
         int k, has_keep;
-        y[0] = t[DM__QEM_NEXT(slot)];
-        y[1] = t[DM__QEM_PREV(slot)];
+        y[0] = t[slot == 0]; /* the other two in triangle order (the order nbr has always had) */
+        y[1] = t[2u - (slot == 2)];
         has_keep = (y[0] == keep) | (y[1] == keep);
         if (has_keep) {
             if (shared < 2) opp[shared] = y[0] ^ y[1] ^ keep; /* the third vertex */
