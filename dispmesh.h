@@ -2954,16 +2954,25 @@ static dm__qem_chunk *dm__qem_chunk_new(dm__qem_simp *s)
     return c;
 }
 
-static int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
+/* a new chunk on top of a full (or empty) bucket; 0 on allocation failure */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((noinline))
+#endif
+static int dm__qem_bucket_refill(dm__qem_simp *s, dm__qem_bucket *b)
+{
+    dm__qem_chunk *c = dm__qem_chunk_new(s);
+    if (!c) return 0;
+    c->next = b->top;
+    b->top = c;
+    b->fill = 0;
+    return 1;
+}
+
+/* inlined: the common case is a few instructions, and the spread calls it for every entry */
+DM__INLINE int dm__qem_bucket_add(dm__qem_simp *s, unsigned i, const dm__qem_cand *e)
 {
     dm__qem_bucket *b = &s->bucket[i];
-    if (b->fill == DM__QEM_CHUNK) {
-        dm__qem_chunk *c = dm__qem_chunk_new(s);
-        if (!c) return 0;
-        c->next = b->top;
-        b->top = c;
-        b->fill = 0;
-    }
+    if (b->fill == DM__QEM_CHUNK && !dm__qem_bucket_refill(s, b)) return 0;
     b->top->e[b->fill++] = *e;
     b->n++;
     s->nonempty[i >> 6] |= (uint64_t)1 << (i & 63u);
