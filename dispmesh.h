@@ -213,8 +213,8 @@
           The checks and the collapse are written without branches on the mesh data (counts
           move on by 0 or 1, tests are combined with & and |): which triangle dies or which
           neighbour is new is unpredictable, and on the bunny the branches the processor
-          guessed wrong fell from 4.1 M to 1.2 M a run (valgrind's branch simulator), for about
-          15% of the time.
+          guessed wrong fell from 4.1 M to 1.3 M a run to 10% (valgrind's branch simulator),
+          for about 15% of the time.
        7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
           the new position and Qa + Qb, and the record stores keep's positions before and after,
           the dead triangles and the moved corners. New candidates for keep's edges go in the
