@@ -3278,10 +3278,10 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
         DM__QEM_PREFETCH(x2);
         DM__QEM_PREFETCH(x2 + 64);
     }
-    /* The marks: st for keep's neighbours, st + 1 once seen around rem. The loops are written
-       without data-dependent branches (the tests are unpredictable): every vertex is written to
-       nbr and the count moves on only for a new one; keep and rem get marks too, unused. */
-    /* (each corner's own vertex is keep or rem: only the two others are looked at) */
+    /* The marks: st for keep's neighbours, st + 1 once seen around rem. Each corner's own
+       vertex is keep or rem, so only its two others are looked at. The loops have no
+       data-dependent branches (the tests are unpredictable): every vertex is written to nbr and
+       the count moves on only for a new one; rem gets a mark too, unused. */
     for (j = 0; j < nk; j++) {
         uint32_t c = ck[j], slot = c % 3, y[2];
         const uint32_t *t = s->idx + (c - slot);
