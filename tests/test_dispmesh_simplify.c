@@ -852,6 +852,30 @@ static void resource_checks(const mesh *in)
         if (r != DM_ERR_OUT_OF_MEMORY || pm != NULL || c.allocs != c.frees) bad++;
     }
     T_CHECK_MSG(bad == 0 && total > 10, "allocation failure: %ld of %ld runs wrong", bad, total);
+    /* bad input, as the doc says: a bad index before anything is allocated; a bad position
+       (checked once per used vertex, after the working arrays) leaves nothing allocated */
+    {
+        uint32_t *idx = (uint32_t *)malloc(3 * in->nt * sizeof(uint32_t));
+        float *pos = (float *)malloc(3 * in->nv * sizeof(float));
+        T_CHECK(idx && pos);
+        if (idx && pos) {
+            memcpy(idx, in->idx, 3 * in->nt * sizeof(uint32_t));
+            memcpy(pos, in->pos, 3 * in->nv * sizeof(float));
+            idx[3 * in->nt - 1] = (uint32_t)in->nv; /* the last corner */
+            c.allocs = c.frees = 0;
+            c.fail_at = -1;
+            pm = (dm_pm *)&o;
+            T_EQ_INT(dm_simplify(pos, in->nv, idx, in->nt, &o, &pm, NULL), DM_ERR_BAD_INDEX);
+            T_CHECK(pm == NULL && c.allocs == 0);
+            idx[3 * in->nt - 1] = in->idx[3 * in->nt - 1];
+            pos[3 * (size_t)idx[3 * in->nt - 1] + 1] = NAN; /* a vertex of the last triangle */
+            pm = (dm_pm *)&o;
+            T_EQ_INT(dm_simplify(pos, in->nv, idx, in->nt, &o, &pm, NULL), DM_ERR_BAD_POSITION);
+            T_CHECK(pm == NULL && c.allocs == c.frees);
+        }
+        free(idx);
+        free(pos);
+    }
 }
 
 /* on_collapse: once per collapse done, in order, before it is applied (positions still the old
