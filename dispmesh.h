@@ -2731,6 +2731,10 @@ typedef struct dm__qem_simp {
     void *blocks;                  /* allocated chunk blocks, linked through their first word */
     uint64_t last;                 /* its last popped key */
     size_t hsize;                  /* candidates in it */
+    uint64_t floor;                /* the key being collapsed: a cheaper new candidate is queued at it */
+    dm__qem_cand *front;           /* the candidates at or below `last`, out of the buckets: the
+                                      next few, popped ahead (see dm__qem_next), in push order */
+    size_t nfront, capfront;
     dm__qem_rec *rec;
     size_t nrec, caprec;
     uint32_t *ops;
@@ -3007,9 +3011,14 @@ static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
 static int dm__qem_heap_push(dm__qem_simp *s, const dm__qem_cand *e)
 {
     dm__qem_cand c = *e;
-    if (c.key < s->last) { /* below the last pop: at the last popped cost (one ulp up if needed) */
-        uint64_t k = (s->last & ~(uint64_t)0xffffffffu) | (c.key & 0xffffffffu);
-        c.key = k < s->last ? k + ((uint64_t)1 << 32) : k;
+    if (c.key < s->floor) { /* below the key being collapsed: at its cost (one ulp up if needed) */
+        uint64_t k = (s->floor & ~(uint64_t)0xffffffffu) | (c.key & 0xffffffffu);
+        c.key = k < s->floor ? k + ((uint64_t)1 << 32) : k;
+    }
+    if (c.key <= s->last) { /* not above the ones popped ahead: with them */
+        if (!dm__qem_grow(&s->al, (void **)&s->front, &s->capfront, s->nfront + 1, sizeof(dm__qem_cand))) return 0;
+        s->front[s->nfront++] = c;
+        return 1;
     }
     if (!dm__qem_bucket_add(s, dm__qem_bucket_of(c.key, s->last), &c)) return 0;
     s->hsize++;
@@ -3103,6 +3112,89 @@ static int dm__qem_heap_pop(dm__qem_simp *s, dm__qem_cand *out)
     }
     s->hsize--;
     return 1;
+}
+
+/* The candidates are taken from s->front, which the radix heap's next few are popped into
+   DM__QEM_AHEAD collapses ahead: on a large mesh each collapse works at a random place, and
+   its data (versions, records, corner lists, triangles, the neighbours' records: each needs
+   the one before) would otherwise come from memory one miss after another. A collapse asks
+   for the next candidate's data one stage at a time (dm__qem_ahead), so that it arrives while
+   the collapse works. New candidates not above the last popped key join the front (heap_push).
+   The cheapest in front comes next, the last pushed among equals (as from bucket 0), so the
+   order of collapses is the one without look-ahead. */
+#define DM__QEM_AHEAD 2
+
+/* the index of the cheapest in front (the last pushed among equals) but `skip` */
+static size_t dm__qem_front_min(const dm__qem_simp *s, size_t skip)
+{
+    size_t i, best = DM__QEM_NONE;
+    for (i = s->nfront; i-- > 0;)
+        if (i != skip && (best == DM__QEM_NONE || s->front[i].key < s->front[best].key)) best = i;
+    return best;
+}
+
+/* The next candidate into *out: 1, or 0 when none is left, -1 on allocation failure. */
+static int dm__qem_next(dm__qem_simp *s, dm__qem_cand *out)
+{
+    size_t best;
+    while (s->nfront <= DM__QEM_AHEAD) {
+        dm__qem_cand c;
+        int got = dm__qem_heap_pop(s, &c);
+        if (got <= 0) {
+            if (got < 0) return -1;
+            break;
+        }
+        if (!dm__qem_grow(&s->al, (void **)&s->front, &s->capfront, s->nfront + 1, sizeof(dm__qem_cand))) return -1;
+        s->front[s->nfront++] = c;
+        DM__QEM_PREFETCH(&s->ver[DM__QEM_CAND_A(&c)]); /* the first stage */
+        DM__QEM_PREFETCH(&s->ver[c.b]);
+        DM__QEM_PREFETCH(&s->vx[DM__QEM_CAND_A(&c)]);
+        DM__QEM_PREFETCH(&s->vx[c.b]);
+        DM__QEM_PREFETCH(s->pos + 3 * (size_t)DM__QEM_CAND_A(&c));
+        DM__QEM_PREFETCH(s->pos + 3 * (size_t)c.b);
+    }
+    if (!s->nfront) return 0;
+    best = dm__qem_front_min(s, DM__QEM_NONE);
+    *out = s->front[best];
+    memmove(s->front + best, s->front + best + 1, (s->nfront - best - 1) * sizeof(dm__qem_cand));
+    s->nfront--;
+    return 1;
+}
+
+/* For the candidate `which` places ahead (0: the next one, 1: the one after), stage 0 asks
+   for its corner lists, stage 1 for its triangles, stage 2 for its neighbours' records: each
+   stage reads what the one before asked for, a collapse or so earlier. */
+static void dm__qem_ahead(const dm__qem_simp *s, int which, int stage)
+{
+    uint32_t v[2];
+    size_t i0;
+    int k;
+    if (!s->nfront) return;
+    i0 = dm__qem_front_min(s, DM__QEM_NONE);
+    if (which) {
+        i0 = dm__qem_front_min(s, i0);
+        if (i0 == DM__QEM_NONE) return;
+    }
+    v[0] = DM__QEM_CAND_A(&s->front[i0]);
+    v[1] = s->front[i0].b;
+    for (k = 0; k < 2; k++) {
+        const uint32_t *cl = s->adj + s->vx[v[k]].first;
+        uint32_t i, n = s->vx[v[k]].count;
+        if (stage == 0) {
+            DM__QEM_PREFETCH(cl);
+            continue;
+        }
+        for (i = 0; i < n; i++) {
+            uint32_t c = cl[i], slot = c % 3;
+            const uint32_t *t = s->idx + (c - slot);
+            if (stage == 1) {
+                DM__QEM_PREFETCH(t);
+                continue;
+            }
+            DM__QEM_PREFETCH(&s->vx[t[DM__QEM_NEXT(slot)]]);
+            DM__QEM_PREFETCH((const char *)&s->vx[t[DM__QEM_NEXT(slot)]] + 64);
+        }
+    }
 }
 
 /* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
@@ -3331,6 +3423,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     }
     return 1;
 }
+
 
 /* Makes room for n more words at the end of adj: first by compacting it in place (the lists
    that are still current slide down over the dead ones, in pool order), then by growing it. */
@@ -3652,6 +3745,7 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     }
     a->free(a->user, s->rec);
     a->free(a->user, s->ops);
+    a->free(a->user, s->front);
 }
 
 DMDEF void dm_pm_free(dm_pm *pm)
@@ -3909,12 +4003,15 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         double x[3], cost, err;
         float at[3];
         size_t ring_count;
-        int k, placed, got = dm__qem_heap_pop(&s, &e);
+        int k, placed, got = dm__qem_next(&s, &e);
         if (got < 0) {
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
         if (got == 0) break;
+        s.floor = e.key;
+        dm__qem_ahead(&s, 1, 0); /* the one after the next: its corner lists */
+        dm__qem_ahead(&s, 0, 1); /* the next one: its triangles */
         ea = DM__QEM_CAND_A(&e);
         DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
         DM__QEM_PREFETCH(&s.vx[e.b]);
@@ -4005,6 +4102,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
+        dm__qem_ahead(&s, 0, 2); /* the next one: its neighbours */
         if (s.hsize > 4096 && s.hsize / 3 > s.live && !dm__qem_heap_purge(&s)) {
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
