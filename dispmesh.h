@@ -2735,6 +2735,7 @@ typedef struct dm__qem_simp {
     dm__qem_cand *front;           /* the candidates at or below `last`, out of the buckets: the
                                       next few, popped ahead (see dm__qem_next), in push order */
     size_t nfront, capfront;
+    uint64_t ahead_key;            /* the key of the candidate whose neighbours were asked for */
     dm__qem_rec *rec;
     size_t nrec, caprec;
     uint32_t *ops;
@@ -3162,9 +3163,11 @@ static int dm__qem_next(dm__qem_simp *s, dm__qem_cand *out)
 }
 
 /* For the candidate `which` places ahead (0: the next one, 1: the one after), stage 0 asks
-   for its corner lists, stage 1 for its triangles, stage 2 for its neighbours' records: each
-   stage reads what the one before asked for, a collapse or so earlier. */
-static void dm__qem_ahead(const dm__qem_simp *s, int which, int stage)
+   for its corner lists, stage 1 for its triangles, stage 2 for its neighbours' records (and
+   notes its key: the topology check need not ask again): each stage reads what the one before
+   asked for, a collapse or so earlier. (A function of prefetches alone would be dropped: gcc
+   takes it for one without effect.) */
+static void dm__qem_ahead(dm__qem_simp *s, int which, int stage)
 {
     uint32_t v[2];
     size_t i0;
@@ -3177,6 +3180,7 @@ static void dm__qem_ahead(const dm__qem_simp *s, int which, int stage)
     }
     v[0] = DM__QEM_CAND_A(&s->front[i0]);
     v[1] = s->front[i0].b;
+    if (stage == 2) s->ahead_key = s->front[i0].key;
     for (k = 0; k < 2; k++) {
         const uint32_t *cl = s->adj + s->vx[v[k]].first;
         uint32_t i, n = s->vx[v[k]].count;
@@ -3350,7 +3354,7 @@ static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
    joined to every boundary vertex) and no vertex left with a degenerate fan. On the way, the
    union of the two one-rings (keep's neighbours after the collapse) goes to nbr[0 .. nnbr). */
-static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
+static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem, int fetched)
 {
     uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
     const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
@@ -3359,8 +3363,9 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     size_t m = 0;
     /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
        of its triangles and the records of their vertices go out together first (no branch on
-       loaded data in this loop), and the logic below finds them in flight or in cache. */
-    for (j = 0; j < nk + nr; j++) { /* the two vertices after the corner's own */
+       loaded data in this loop), and the logic below finds them in flight or in cache; unless
+       the collapse before asked for them already (dm__qem_ahead). */
+    for (j = 0; j < (fetched ? 0 : nk + nr); j++) { /* the two vertices after the corner's own */
         uint32_t c = j < nk ? ck[j] : cr[j - nk], tri = c / 3, slot = c - 3 * tri;
         const uint32_t *t = s->idx + 3 * (size_t)tri;
         const char *x1 = (const char *)&s->vx[t[DM__QEM_NEXT(slot)]];
@@ -4024,7 +4029,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         if (opt.target_error > 0.0 && err > opt.target_error) continue;
         for (k = 0; k < 3; k++)
             at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
-        if (!dm__qem_check_topology(&s, keep, rem) ||
+        if (!dm__qem_check_topology(&s, keep, rem, e.key == s.ahead_key) ||
             (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
             s.rejected++;
             s.vx[ea].flag |= DM__QEM_V_PARKED;
