@@ -3197,6 +3197,7 @@ static void dm__qem_ahead(dm__qem_simp *s, int which, int stage)
             }
             DM__QEM_PREFETCH(&s->vx[t[DM__QEM_NEXT(slot)]]);
             DM__QEM_PREFETCH((const char *)&s->vx[t[DM__QEM_NEXT(slot)]] + 64);
+            DM__QEM_PREFETCH(&s->ver[t[DM__QEM_NEXT(slot)]]); /* for its new candidates */
         }
     }
 }
@@ -3509,10 +3510,11 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     out[0] = keep;
     out += 2;
     i = 0;
-    for (j = 0; j < nk; j++) {
+    if (nopp < 2) dead[1] = dead[0]; /* nopp >= 1: the topology check saw one or two */
+    for (j = 0; j < nk; j++) { /* keep's list holds live triangles but the ones that die now */
         uint32_t c = ck[j];
         out[i] = c;
-        i += s->alive[c / 3];
+        i += (c - 3u * dead[0] > 2u) & (c - 3u * dead[1] > 2u); /* c / 3 is neither */
     }
     for (j = 0; j < nr; j++) {
         uint32_t c = cr[j], live = s->alive[c / 3];
