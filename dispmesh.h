@@ -4017,7 +4017,6 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         }
         if (got == 0) break;
         s.floor = e.key;
-        dm__qem_ahead(&s, 1, 0); /* the one after the next: its corner lists */
         dm__qem_ahead(&s, 0, 1); /* the next one: its triangles */
         ea = DM__QEM_CAND_A(&e);
         DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
@@ -4038,6 +4037,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             s.vx[e.b].flag |= DM__QEM_V_PARKED;
             continue;
         }
+        dm__qem_ahead(&s, 1, 0); /* the one after the next (popped at the start): its corner lists */
         if (opt.constraint) {
             dm_collapse cand;
             float corrected[3];
