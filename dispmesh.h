@@ -3188,13 +3188,13 @@ static void dm__qem_ahead(dm__qem_simp *s, int which, int stage)
             DM__QEM_PREFETCH(cl);
             continue;
         }
+        if (stage == 1) { /* the corner's own word: its triangle's line, but for a rare straddle */
+            for (i = 0; i < n; i++) DM__QEM_PREFETCH(s->idx + cl[i]);
+            continue;
+        }
         for (i = 0; i < n; i++) {
             uint32_t c = cl[i], slot = c % 3;
             const uint32_t *t = s->idx + (c - slot);
-            if (stage == 1) {
-                DM__QEM_PREFETCH(t);
-                continue;
-            }
             DM__QEM_PREFETCH(&s->vx[t[DM__QEM_NEXT(slot)]]);
             DM__QEM_PREFETCH((const char *)&s->vx[t[DM__QEM_NEXT(slot)]] + 64);
             DM__QEM_PREFETCH(&s->ver[t[DM__QEM_NEXT(slot)]]); /* for its new candidates */
@@ -3241,15 +3241,32 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     return e;
 }
 
+/* The cost of collapsing edge (v, x) into *cost; 0 if it is never collapsible. Two free interior
+   vertices (the common case) take the short way, with what dm__qem_place would do. */
+DM__INLINE int dm__qem_cost(const dm__qem_simp *s, uint32_t v, uint32_t x, double *cost)
+{
+    const unsigned special = DM__QEM_V_FROZEN | DM__QEM_V_REMOVED | DM__QEM_V_LOCKED | DM__QEM_V_BOUNDARY;
+    const dm__qem_vert *a = &s->vx[v], *b = &s->vx[x];
+    uint32_t keep, rem;
+    double p[3];
+    if (!((a->flag | b->flag) & special)) {
+        dm__qem_quadric q;
+        dm__qem_quadric_sum(&q, &a->q, &b->q);
+        *cost = dm__qem_optimal(&q, a->np, b->np, p);
+        return 1;
+    }
+    return dm__qem_place(s, v, x, &keep, &rem, p, cost);
+}
+
 /* Pushes every collapsible edge (v, x) for x in nbr[0..m), x != skip. 0 on allocation failure. */
 static int dm__qem_push_list(dm__qem_simp *s, uint32_t v, const uint32_t *nbr, size_t m, uint32_t skip)
 {
     size_t i;
     for (i = 0; i < m; i++) {
-        uint32_t x = nbr[i], keep, rem;
-        double p[3], cost;
+        uint32_t x = nbr[i];
+        double cost;
         dm__qem_cand e;
-        if (x == skip || !dm__qem_place(s, v, x, &keep, &rem, p, &cost)) continue;
+        if (x == skip || !dm__qem_cost(s, v, x, &cost)) continue;
         e = dm__qem_make_cand(s, v, x, cost);
         if (!dm__qem_heap_push(s, &e)) return 0;
     }
@@ -3965,9 +3982,9 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
         const uint32_t *cl = s.adj + s.vx[v].first;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
         for (i = 0; i < 2 * nc; i++) {
-            uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x, keep, rem;
+            uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x;
             const uint32_t *t = s.idx + (ci - slot);
-            double p[3], cost;
+            double cost;
             dm__qem_cand e;
             if (i < nc) {
                 x = t[DM__QEM_NEXT(slot)];
@@ -3981,7 +3998,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
                 }
                 if (j < nc) continue;
             }
-            if (x < v || !dm__qem_place(&s, (uint32_t)v, x, &keep, &rem, p, &cost)) continue;
+            if (x < v || !dm__qem_cost(&s, (uint32_t)v, x, &cost)) continue;
             e = dm__qem_make_cand(&s, (uint32_t)v, x, cost);
             if (!dm__qem_heap_push(&s, &e)) {
                 r = DM_ERR_OUT_OF_MEMORY;
