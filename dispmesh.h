@@ -3489,8 +3489,8 @@ static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
    (its live corners, then rem's) is appended to adj. 0 on allocation failure. */
 static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
 {
-    dm__qem_rec r;
-    uint32_t opp[3], dead[3], nk, nr, j, *out, *ck, *cr;
+    dm__qem_rec *r;
+    uint32_t opp[3], dead[3], nk, nr, j, *out, *ck, *cr, ndead = 0, nmoved = 0;
     size_t nopp = 0, i;
     int k;
     nk = s->vx[keep].count;
@@ -3500,13 +3500,14 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, s->nrec + 1, sizeof(dm__qem_rec))) return 0;
     ck = s->adj + s->vx[keep].first;
     cr = s->adj + s->vx[rem].first;
-    r.keep = keep;
-    r.remove = rem;
-    r.first = s->nops;
-    r.dead = r.moved = 0;
+    r = &s->rec[s->nrec]; /* written in place: a copy of a record built on the stack stalls on
+                             store forwarding (16-byte loads of 8-byte stores) */
+    r->keep = keep;
+    r->remove = rem;
+    r->first = s->nops;
     for (k = 0; k < 3; k++) {
-        r.before[k] = s->pos[3 * (size_t)keep + k];
-        r.after[k] = at[k];
+        r->before[k] = s->pos[3 * (size_t)keep + k];
+        r->after[k] = at[k];
     }
     /* The loops below have no branch on the mesh data (which triangle dies is unpredictable):
        every candidate is written and the counts move on by 0 or 1. The topology check let
@@ -3521,7 +3522,7 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
         s->alive[tri] = (uint8_t)(dies ^ 1u);
         s->ops[s->nops] = tri;
         s->nops += dies;
-        r.dead += dies;
+        ndead += dies;
     }
     out = s->adj + s->adjend;
     out[0] = keep;
@@ -3538,7 +3539,7 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
         s->idx[c] = live ? keep : rem; /* a dead triangle keeps rem, for the vertex split */
         s->ops[s->nops] = c;
         s->nops += live;
-        r.moved += live;
+        nmoved += live;
         out[i] = c;
         i += live;
     }
@@ -3556,8 +3557,10 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     s->vx[rem].flag |= DM__QEM_V_REMOVED;
     s->ver[keep]++;
     s->ver[rem]++;
-    s->live -= r.dead;
-    s->rec[s->nrec++] = r;
+    s->live -= ndead;
+    r->dead = ndead;
+    r->moved = nmoved;
+    s->nrec++;
     return 1;
 }
 
@@ -3855,20 +3858,21 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
-    for (t = 0; t < 3 * kept; t++) s->vx[s->idx[t]].count++;
+    /* counting sort, lists in increasing corner order; counts and cursors in the dense ver and
+       nbr arrays (random increments in the 128-byte records miss the cache) */
+    for (t = 0; t < 3 * kept; t++) s->ver[s->idx[t]]++;
     s->adjend = 0;
-    for (v = 0; v < vertex_count; v++) { /* counting sort: lists in increasing corner order */
-        if (!s->vx[v].count) continue;
+    for (v = 0; v < vertex_count; v++) {
+        uint32_t cnt = s->ver[v];
+        if (!cnt) continue;
         s->adj[s->adjend] = (uint32_t)v;
-        s->adj[s->adjend + 1] = s->vx[v].count;
-        s->vx[v].first = (uint32_t)(s->adjend + 2);
-        s->adjend += 2 + (size_t)s->vx[v].count;
-        s->vx[v].count = 0;
+        s->adj[s->adjend + 1] = cnt;
+        s->vx[v].first = s->nbr[v] = (uint32_t)(s->adjend + 2);
+        s->vx[v].count = cnt;
+        s->adjend += 2 + (size_t)cnt;
     }
-    for (t = 0; t < 3 * kept; t++) {
-        dm__qem_vert *x = &s->vx[s->idx[t]];
-        s->adj[x->first + x->count++] = (uint32_t)t;
-    }
+    for (t = 0; t < 3 * kept; t++) s->adj[s->nbr[s->idx[t]]++] = (uint32_t)t;
+    memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     for (v = 0; v < 3; v++) {
         s->center[v] = 0.5 * ((double)lo[v] + (double)hi[v]);
         if ((double)hi[v] - lo[v] > s->scale) s->scale = (double)hi[v] - lo[v];
