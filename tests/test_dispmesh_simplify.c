@@ -21,7 +21,9 @@
      triangles (dropped and counted), an edge with three triangles (its vertices' triangles are
      left alone), isolated vertices, a lone triangle and a tetrahedron (nothing to collapse);
    - progress and cancel; allocation-failure injection at every allocation (returns
-     DM_ERR_OUT_OF_MEMORY, leaks nothing). */
+     DM_ERR_OUT_OF_MEMORY, leaks nothing);
+   - white box: the two-at-a-time placement gives the one-at-a-time solve's bits, and refuses
+     exactly where that one falls back to the edge. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -957,6 +959,57 @@ static void on_collapse_checks(const mesh *m)
     dm_pm_free(pb);
 }
 
+/* White box: the placement run two edges at a time (dm__qem_optimal_lanes) gives the bits of
+   the one-at-a-time solve (dm__qem_optimal) where it accepts a lane, and refuses exactly the
+   lanes where dm__qem_optimal falls back to the segment: random quadrics from 1 to 6 planes
+   (1 or 2 planes: A singular, always refused), minimisers near and far from the edge. */
+static void lanes_checks(void)
+{
+    size_t trial, accepted = 0, refused = 0, mismatched = 0;
+    for (trial = 0; trial < 20000; trial++) {
+        dm__qem_quadric q[DM__QEM_LANES];
+        double pa[DM__QEM_LANES][3], pb[DM__QEM_LANES][3], cost[DM__QEM_LANES];
+        const double *p0[DM__QEM_LANES], *p1[DM__QEM_LANES];
+        int ok[DM__QEM_LANES], l, k;
+        for (l = 0; l < DM__QEM_LANES; l++) { /* planes through a point near the edge or far from it */
+            uint64_t id = (uint64_t)trial * DM__QEM_LANES + (uint64_t)l;
+            int planes = 1 + (int)(unit_random(id, 1) * 6.0), j;
+            double far = unit_random(id, 2) < 0.5 ? 0.03 : 0.2, t[3];
+            for (k = 0; k < 3; k++) {
+                pa[l][k] = unit_random(id, 10 + (uint64_t)k) - 0.5;
+                pb[l][k] = pa[l][k] + 0.05 * (unit_random(id, 20 + (uint64_t)k) - 0.5);
+                t[k] = 0.5 * (pa[l][k] + pb[l][k]) + far * (unit_random(id, 30 + (uint64_t)k) - 0.5);
+            }
+            p0[l] = pa[l];
+            p1[l] = pb[l];
+            memset(&q[l], 0, sizeof q[l]);
+            for (j = 0; j < planes; j++) {
+                float d[3];
+                double n[3];
+                random_direction(id * 8 + (uint64_t)j, 3, d);
+                for (k = 0; k < 3; k++) n[k] = d[k];
+                dm__qem_quadric_add_plane(&q[l], n, -(n[0] * t[0] + n[1] * t[1] + n[2] * t[2]) + 1e-3 * (unit_random(id * 8 + (uint64_t)j, 4) - 0.5),
+                                          0.1 + unit_random(id * 8 + (uint64_t)j, 5));
+            }
+        }
+        dm__qem_optimal_lanes(q, p0, p1, cost, ok);
+        for (l = 0; l < DM__QEM_LANES; l++) {
+            double x[3], xs[3], c = dm__qem_optimal(&q[l], p0[l], p1[l], x);
+            dm__qem_segment_min(&q[l], p0[l], p1[l], xs);
+            if (ok[l]) { /* solved: the same cost, bit for bit */
+                accepted++;
+                mismatched += memcmp(&c, &cost[l], sizeof c) != 0;
+            } else { /* refused: dm__qem_optimal took the segment too */
+                refused++;
+                mismatched += memcmp(x, xs, sizeof x) != 0;
+            }
+        }
+    }
+    printf("  lanes: %zu accepted, %zu refused, %zu differ from the one-at-a-time solve\n", accepted, refused, mismatched);
+    T_CHECK(accepted > 1000 && refused > 1000);
+    T_CHECK(mismatched == 0);
+}
+
 int main(int argc, char **argv)
 {
     gsph_mesh g;
@@ -974,6 +1027,7 @@ int main(int argc, char **argv)
     pm_checks("sphere 5120", &sph, 500);
     open_mesh_checks();
     frame_checks();
+    lanes_checks();
     error_bound_checks(&sph);
     constraint_checks(&sph);
     on_collapse_checks(&sph);
