@@ -188,10 +188,14 @@
        4. Placement for an edge (a, b), Q = Qa + Qb. Both interior: the minimiser of Q, A x = -b,
           solved by the adjugate when det(A) > 1e-7 trace(A)^3 and the solution lies within two
           edge lengths of the midpoint; otherwise (flat or cylindrical regions: A singular or
-          nearly so) the minimiser of Q on the segment a b, which always exists. Both on the boundary (and the edge a boundary edge): the segment's
-          minimiser, so a boundary stays on its edges. One on the boundary: the boundary vertex
-          stays where it is. A locked vertex stays where it is; two locked vertices never merge.
-          The surviving id is the boundary or locked one, else the lower id.
+          nearly so) the minimiser of Q on the segment a b, which always exists. Both on the
+          boundary (and the edge a boundary edge): the segment's minimiser, so a boundary stays
+          on its edges. One on the boundary: the boundary vertex stays where it is. A locked
+          vertex stays where it is; two locked vertices never merge. The surviving id is the
+          boundary or locked one, else the lower id. New candidates are costed in batches, two
+          edges between free interior vertices at a time: a solve is a chain of dependent
+          operations, and two independent chains side by side run in little more than the time
+          of one (the same bits as one at a time; the bunny simplifies about 12% faster).
        5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
           float), ties by the lower vertex id, then last pushed first. The candidates sit in a
           radix heap over the 64-bit key (cost bits, lower id): buckets by the highest octal
@@ -227,7 +231,8 @@
           start, neighbours at its end), each stage reading what the one before asked for. A
           new candidate not above the last popped key joins the front list, and the cheapest
           in it comes next, so the collapses are the same as without the look-ahead, bit for
-          bit; the 1M-triangle sphere simplifies about 20% faster.
+          bit. With this and the batched costs, the 1M-triangle sphere simplifies in about 0.6
+          of the time it took before, the bunny in about 0.8.
 
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
      a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
