@@ -4076,19 +4076,9 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     /* every collapsible edge once, from its lower endpoint. A vertex that is not frozen is
        manifold: its neighbours are the next vertices of its corners, each once, and on a
        boundary also the one previous vertex that is nobody's next. */
-    for (v = 0, nedge = 0; v <= vertex_count; v++) {
-        uint32_t i, j, nc;
-        const uint32_t *cl;
-        if (v == vertex_count || nedge > DM__QEM_BATCH - 16) { /* by batches */
-            if (nedge && !dm__qem_push_edges(&s, ea, eb, nedge)) {
-                r = DM_ERR_OUT_OF_MEMORY;
-                goto done;
-            }
-            nedge = 0;
-            if (v == vertex_count) break;
-        }
-        nc = s.vx[v].count;
-        cl = s.adj + s.vx[v].first;
+    for (v = 0, nedge = 0; v < vertex_count; v++) { /* costed and pushed by batches */
+        uint32_t i, j, nc = s.vx[v].count;
+        const uint32_t *cl = s.adj + s.vx[v].first;
         if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
         for (i = 0; i < 2 * nc; i++) {
             uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x;
@@ -4116,6 +4106,10 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             ea[nedge] = (uint32_t)v;
             eb[nedge++] = x;
         }
+    }
+    if (nedge && !dm__qem_push_edges(&s, ea, eb, nedge)) {
+        r = DM_ERR_OUT_OF_MEMORY;
+        goto done;
     }
 
     s.target = opt.target_triangles;
