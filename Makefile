@@ -60,6 +60,10 @@ BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_MESHOPT)),$(B)/bench_dispmesh)
 TOOLS      = $(B)/gen_sphere
 
+# Each header's own targets (examples, tests, benches) in a fragment of its own: mk/<header>.mk appends to
+# EXAMPLES, C_TESTS, REF_TESTS, BENCHES and TOOLS and may add rules.
+include $(sort $(wildcard mk/*.mk))
+
 .PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
 .DELETE_ON_ERROR:
 
