@@ -1244,6 +1244,95 @@ static void test_bunny(void)
     mio_free_mesh(&mesh);
 }
 
+/* ---- digests (issue 16: "digests first") ---------------------------------------------------------
+   FNV-1a 64 over the bits of what dfm_chol_factor leaves in the factor object: the permutation,
+   the column counts, the supernode partition, each supernode's rows and every value of L. The
+   expected figures were recorded on the code before dfm_chol_analyze was split into its named
+   steps (commit 7ca88e6); a restructuring that keeps them keeps the factor bit for bit. A change
+   of behaviour must update them in the same commit and say why. */
+static uint64_t fnv1a(uint64_t h, const void *data, size_t bytes)
+{
+    const unsigned char *c = (const unsigned char *)data;
+    size_t i;
+    for (i = 0; i < bytes; i++) h = (h ^ c[i]) * 1099511628211ull;
+    return h;
+}
+
+static uint64_t factor_digest(const dfm_chol *c)
+{
+    uint64_t h = 1469598103934665603ull;
+    size_t n = c->n, ns = c->nsuper;
+    h = fnv1a(h, &n, sizeof n);
+    h = fnv1a(h, &ns, sizeof ns);
+    h = fnv1a(h, c->perm, n * sizeof(int32_t));
+    h = fnv1a(h, c->colcount, n * sizeof(size_t));
+    h = fnv1a(h, c->sup_first, (ns + 1) * sizeof(int32_t));
+    h = fnv1a(h, c->sup_rowptr, (ns + 1) * sizeof(size_t));
+    h = fnv1a(h, c->sup_valptr, (ns + 1) * sizeof(size_t));
+    h = fnv1a(h, c->rows, c->sup_rowptr[ns] * sizeof(int32_t));
+    h = fnv1a(h, c->values, c->sup_valptr[ns] * sizeof(double));
+    return h;
+}
+
+static uint64_t digest_of(const dfm_csc *a, const dfm_chol_options *o)
+{
+    dfm_chol *c = NULL;
+    uint64_t h = 0;
+    if (dfm_chol_analyze(a, o, &c) == DFM_OK && dfm_chol_factor(c, a) == DFM_OK) h = factor_digest(c);
+    dfm_chol_free(c);
+    return h;
+}
+
+static void test_factor_digests(void)
+{
+    /* recorded at 7ca88e6 (see above); the same with gcc and clang, -O1 and -O2, and with
+       DFM_NO_VECTOR_EXTENSIONS */
+    static const uint64_t expect[5] = {0xa917f7a31f7d6327ull, 0xc6781e36ba21c6dcull, 0x23e6f27f24450ed4ull,
+                                       0x87e4e3bfc27f1049ull, 0xcdba1408c543f30eull};
+    uint64_t got[5];
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, i;
+    dfm_csc lap, bil, blk, rnd;
+    dfm_chol_options o = dfm_chol_default_options();
+    double *dg, *co;
+    unsigned char *fixed;
+    grid_mesh(40, 37, &pos, &idx, &nv, &nt);
+    fixed = every_kth(nv, 50);
+    dg = (double *)calloc(nv, sizeof(double));
+    co = (double *)malloc(3 * nv * sizeof(double));
+    for (i = 0; i < nv; i++) dg[i] = fixed[i] ? 1.0 : 0.0;
+    for (i = 0; i < 3 * nv; i++) co[i] = pos[i];
+    dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_COTAN, NULL, &lap);
+    dfm_normal_matrix(&lap, dg, NULL, &bil); /* the bi-Laplacian of Laplacian editing */
+    add_diagonal(&lap, fixed, 1.0);
+    dfm_block_expand(&bil, 3, NULL, NULL, &blk);
+    rnd = random_spd(700, 6.0, 77, 0.5);
+    got[0] = digest_of(&lap, &o);  /* grid cotangent Laplacian, AMD */
+    got[1] = digest_of(&bil, &o);  /* its normal matrix, AMD */
+    o.coords = co;
+    got[2] = digest_of(&bil, &o);  /* the same with coordinates: nested dissection tried */
+    o.coords = NULL;
+    o.block_size = 3;
+    got[3] = digest_of(&blk, &o);  /* 3x3-block expansion, vertex-graph ordering */
+    o = dfm_chol_default_options();
+    got[4] = digest_of(&rnd, &o);  /* random SPD matrix */
+    for (i = 0; i < 5; i++) {
+        printf("DIGEST dfm_chol_factor case=%d fnv1a=%016llx\n", (int)i, (unsigned long long)got[i]);
+        T_CHECK_MSG(got[i] == expect[i], "case %d digest %016llx, recorded %016llx", (int)i,
+                    (unsigned long long)got[i], (unsigned long long)expect[i]);
+    }
+    free(pos);
+    free(idx);
+    free(fixed);
+    free(dg);
+    free(co);
+    dfm_csc_free(&lap);
+    dfm_csc_free(&bil);
+    dfm_csc_free(&blk);
+    dfm_csc_free(&rnd);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1264,5 +1353,6 @@ int main(int argc, char **argv)
     test_amd_quality();
     test_nested_dissection();
     test_bunny();
+    test_factor_digests();
     return T_END();
 }
