@@ -54,11 +54,17 @@
 
    MATRICES
      dfm_csc holds an n_rows x n_cols matrix column by column: the rows of column j are
-     row_index[col_start[j] .. col_start[j+1]-1], with values beside them. kind says what is
-     stored: DFM_CSC_GENERAL (every entry) or DFM_CSC_SYMMETRIC_LOWER (a symmetric matrix given
-     by its lower triangle, row >= column; this is what the factorization takes). Row indices
-     need not be sorted; duplicate entries are summed. Matrices made by this header have sorted
-     rows without duplicates and are freed with dfm_csc_free.
+     row_index[col_start[j] .. col_start[j+1]-1], with values beside them. The field types:
+       size_t   n_rows, n_cols;
+       size_t  *col_start;   n_cols + 1 offsets (size_t: nnz may exceed 2^32)
+       int32_t *row_index;   col_start[n_cols] row indices (int32_t: at most 2^31 - 1 rows)
+       double  *values;      col_start[n_cols] values
+       int      kind;        DFM_CSC_GENERAL or DFM_CSC_SYMMETRIC_LOWER
+       dfm_allocator allocator;  what dfm_csc_free gives the arrays back to
+     kind says what is stored: DFM_CSC_GENERAL (every entry) or DFM_CSC_SYMMETRIC_LOWER (a
+     symmetric matrix given by its lower triangle, row >= column; this is what the factorization
+     takes). Row indices need not be sorted; duplicate entries are summed. Matrices made by this
+     header have sorted rows without duplicates and are freed with dfm_csc_free.
 
    STRUCTURE
      Analysis: ordering (AMD on the graph of A + A^T without the diagonal; rows denser than
@@ -67,10 +73,11 @@
      boundary as vertex separator, down to parts of 128 nodes, then minimum degree constrained to
      eliminate the parts first and the separators deepest-first, like CHOLMOD's NESDIS with
      CAMD; the fill of both orderings is counted and the smaller kept), elimination tree (Liu
-     1990) of the permuted matrix, postorder, column counts by row-subtree traversal (O(nnz(L))), fundamental
-     supernodes, then relaxed amalgamation (a child merged into its parent when the merged
-     block stays small or adds few explicit zeros, as CHOLMOD does), then each supernode's sorted
-     row structure. Factor: supernodes in postorder, left-looking: assemble A's columns, subtract
+     1990) of the permuted matrix, postorder, column counts by row-subtree traversal
+     (O(nnz(L))), fundamental supernodes, then relaxed amalgamation (a child merged into its
+     parent when the merged block stays small or adds few explicit zeros, as CHOLMOD does), the
+     supernode partition, A's entries mapped to their places in L, then each supernode's sorted
+     row structure (dfm_chol_analyze calls one function per step, in this order). Factor: supernodes in postorder, left-looking: assemble A's columns, subtract
      the update of every descendant supernode that has rows in it (one dense C = L_d L_d'^T
      product per descendant, scattered by relative row indices), then a blocked dense Cholesky of
      the supernode's diagonal block and triangular solve of the rows below it (one blocked
@@ -1801,215 +1808,304 @@ static int dfm__cmp_i32(const void *x, const void *y)
     return a < b ? -1 : a > b;
 }
 
-DFMDEF dfm_result dfm_chol_analyze(const dfm_csc *a, const dfm_chol_options *options, dfm_chol **out)
+/* Workspace of the symbolic analysis, one home for every temporary array (freed together). */
+typedef struct dfm__symbolic {
+    size_t *ust;        /* n + 2: the upper pattern of the permuted matrix by columns ... */
+    int32_t *ur;        /* ... and its rows */
+    int32_t *parent;    /* n: elimination tree */
+    int32_t *w1, *w2, *w3, *post, *order; /* n + 1 each: marks, lists, stacks, orderings */
+    size_t *count;      /* n: column counts of L */
+    size_t nf;          /* fundamental supernodes */
+    size_t *fstart;     /* nf + 1: their first columns */
+    size_t *gcols, *grows, *gzeros, *gnext; /* relaxed groups of fundamental supernodes */
+    int32_t *arow;      /* nnz(A): the new row of each of A's entries, grouped by new column */
+    int32_t *relmap, *buf; /* n: relative row positions, gathered rows */
+} dfm__symbolic;
+
+static void dfm__symbolic_free(dfm__symbolic *s, const dfm_allocator *al)
 {
-    dfm_chol_options opt = options ? *options : dfm_chol_default_options();
-    dfm_allocator al = dfm__resolve_allocator(opt.allocator);
-    dfm_result err;
-    dfm_chol *c = NULL;
-    size_t n, j, p, b, nf, s, ns, total_rows, total_vals;
-    size_t *ust = NULL, *adj_start = NULL;
-    int32_t *ur = NULL, *adj = NULL, *parent = NULL, *w1 = NULL, *w2 = NULL, *w3 = NULL, *post = NULL,
-            *order = NULL;
-    size_t *count = NULL, *gcols = NULL, *grows = NULL, *gzeros = NULL, *gnext = NULL, *fstart = NULL;
-    int32_t *relmap = NULL, *buf = NULL, *arow = NULL;
-    if (!out) return DFM_ERR_INVALID_ARGUMENT;
-    *out = NULL;
-    err = dfm__validate_pattern(a);
+    dfm__free(al, s->ust);
+    dfm__free(al, s->ur);
+    dfm__free(al, s->parent);
+    dfm__free(al, s->w1);
+    dfm__free(al, s->w2);
+    dfm__free(al, s->w3);
+    dfm__free(al, s->post);
+    dfm__free(al, s->order);
+    dfm__free(al, s->count);
+    dfm__free(al, s->fstart);
+    dfm__free(al, s->gcols);
+    dfm__free(al, s->grows);
+    dfm__free(al, s->gzeros);
+    dfm__free(al, s->gnext);
+    dfm__free(al, s->arow);
+    dfm__free(al, s->relmap);
+    dfm__free(al, s->buf);
+    memset(s, 0, sizeof *s);
+}
+
+/* Step 0: the arguments, and a diagonal entry in every column (else A cannot be definite). */
+static dfm_result dfm__analyze_check(const dfm_csc *a, const dfm_chol_options *opt)
+{
+    size_t n, j, p, b;
+    dfm_result err = dfm__validate_pattern(a);
     if (err != DFM_OK) return err;
     if (a->kind != DFM_CSC_SYMMETRIC_LOWER || a->n_cols == 0) return DFM_ERR_INVALID_ARGUMENT;
     n = a->n_cols;
-    b = opt.block_size > 1 ? opt.block_size : 1;
+    b = opt->block_size > 1 ? opt->block_size : 1;
     if (n % b != 0) return DFM_ERR_INVALID_ARGUMENT;
-    if (opt.ordering < DFM_ORDER_AMD || opt.ordering > DFM_ORDER_GIVEN) return DFM_ERR_INVALID_ARGUMENT;
-    if (opt.ordering == DFM_ORDER_GIVEN && !opt.perm) return DFM_ERR_INVALID_ARGUMENT;
-    /* every column needs its diagonal entry, or the matrix cannot be positive definite */
+    if (opt->ordering < DFM_ORDER_AMD || opt->ordering > DFM_ORDER_GIVEN) return DFM_ERR_INVALID_ARGUMENT;
+    if (opt->ordering == DFM_ORDER_GIVEN && !opt->perm) return DFM_ERR_INVALID_ARGUMENT;
     for (j = 0; j < n; j++) {
         int has = 0;
         for (p = a->col_start[j]; p < a->col_start[j + 1]; p++) has |= (size_t)a->row_index[p] == j;
         if (!has) return DFM_ERR_STRUCTURALLY_SINGULAR;
     }
-    c = (dfm_chol *)dfm__alloc(&al, 1, sizeof(dfm_chol), &err);
+    return DFM_OK;
+}
+
+/* The factor object with its permutation arrays, and the analysis's O(n) workspace. */
+static dfm_result dfm__chol_create(const dfm_csc *a, const dfm_chol_options *opt, const dfm_allocator *al,
+                                   dfm_chol **out, dfm__symbolic *s)
+{
+    dfm_result err = DFM_OK;
+    size_t n = a->n_cols;
+    dfm_chol *c = (dfm_chol *)dfm__alloc(al, 1, sizeof(dfm_chol), &err);
+    *out = NULL;
+    memset(s, 0, sizeof *s);
     if (!c) return err;
     memset(c, 0, sizeof *c);
-    c->al = al;
-    c->progress = opt.progress;
-    c->progress_user = opt.progress_user;
+    c->al = *al;
+    c->progress = opt->progress;
+    c->progress_user = opt->progress_user;
     c->n = n;
     c->nnz_a = a->col_start[n];
     c->pattern_hash = dfm__pattern_hash(a);
     c->failed_column = -1;
-    c->perm = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    c->iperm = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    parent = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    w1 = (int32_t *)dfm__alloc(&al, n + 1, sizeof(int32_t), &err);
-    w2 = (int32_t *)dfm__alloc(&al, n + 1, sizeof(int32_t), &err);
-    w3 = (int32_t *)dfm__alloc(&al, n + 1, sizeof(int32_t), &err);
-    post = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    order = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    count = (size_t *)dfm__alloc(&al, n, sizeof(size_t), &err);
-    if (err != DFM_OK) goto fail;
+    *out = c;
+    c->perm = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    c->iperm = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->parent = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->w1 = (int32_t *)dfm__alloc(al, n + 1, sizeof(int32_t), &err);
+    s->w2 = (int32_t *)dfm__alloc(al, n + 1, sizeof(int32_t), &err);
+    s->w3 = (int32_t *)dfm__alloc(al, n + 1, sizeof(int32_t), &err);
+    s->post = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->order = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->count = (size_t *)dfm__alloc(al, n, sizeof(size_t), &err);
+    return err;
+}
 
-    /* 1. fill-reducing ordering */
-    if (opt.ordering == DFM_ORDER_NATURAL) {
-        for (j = 0; j < n; j++) order[j] = (int32_t)j;
-    } else if (opt.ordering == DFM_ORDER_GIVEN) {
-        for (j = 0; j < n; j++) w1[j] = 0;
-        for (j = 0; j < n; j++) {
-            int32_t v = opt.perm[j];
-            if (v < 0 || (size_t)v >= n || w1[v]) {
-                err = DFM_ERR_BAD_INDEX;
-                goto fail;
-            }
-            w1[v] = 1;
-            order[j] = v;
-        }
-    } else {
-        size_t nb = n / b, k, r;
-        err = dfm__adjacency(a, b, &al, &adj_start, &adj);
-        if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, &al, opt.progress, opt.progress_user, post);
-        if (err != DFM_OK) goto fail;
-        if (opt.coords && nb > DFM__ND_LEAF) {
-            /* nested dissection too; keep the ordering with the smaller fill */
-            double fill_amd, fill_nd;
-            size_t v;
-            for (v = 0; v < 3 * nb; v++)
-                if (!dfm__finite(opt.coords[v])) {
-                    err = DFM_ERR_BAD_VALUE;
-                    goto fail;
-                }
-            err = dfm__nd_order((int32_t)nb, adj_start, adj, opt.coords, &al, opt.progress, opt.progress_user, w3);
-            if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, post, &al, &fill_amd);
-            if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, w3, &al, &fill_nd);
-            if (err != DFM_OK) goto fail;
-            if (fill_nd < fill_amd) memcpy(post, w3, nb * sizeof(int32_t));
-        }
+/* Step 1a: DFM_ORDER_GIVEN, checked to be a permutation. */
+static dfm_result dfm__given_order(size_t n, const int32_t *perm, int32_t *mark, int32_t *order)
+{
+    size_t j;
+    for (j = 0; j < n; j++) mark[j] = 0;
+    for (j = 0; j < n; j++) {
+        int32_t v = perm[j];
+        if (v < 0 || (size_t)v >= n || mark[v]) return DFM_ERR_BAD_INDEX;
+        mark[v] = 1;
+        order[j] = v;
+    }
+    return DFM_OK;
+}
+
+/* Step 1b: AMD on the (block) graph, and nested dissection when coordinates are given, the one
+   with the smaller fill kept; the block ordering is expanded to the b unknowns of each block. */
+static dfm_result dfm__graph_order(const dfm_csc *a, const dfm_chol_options *opt, const dfm_allocator *al,
+                                   dfm__symbolic *s)
+{
+    size_t b = opt->block_size > 1 ? opt->block_size : 1, nb = a->n_cols / b, k, r;
+    size_t *adj_start = NULL;
+    int32_t *adj = NULL, *amd = s->post, *nd = s->w3;
+    dfm_result err = dfm__adjacency(a, b, al, &adj_start, &adj);
+    if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, al, opt->progress, opt->progress_user, amd);
+    if (err == DFM_OK && opt->coords && nb > DFM__ND_LEAF) {
+        double fill_amd, fill_nd;
+        for (k = 0; k < 3 * nb && err == DFM_OK; k++)
+            if (!dfm__finite(opt->coords[k])) err = DFM_ERR_BAD_VALUE;
+        if (err == DFM_OK) err = dfm__nd_order((int32_t)nb, adj_start, adj, opt->coords, al, opt->progress, opt->progress_user, nd);
+        if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, amd, al, &fill_amd);
+        if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, nd, al, &fill_nd);
+        if (err == DFM_OK && fill_nd < fill_amd) memcpy(amd, nd, nb * sizeof(int32_t));
+    }
+    if (err == DFM_OK)
         for (k = 0; k < nb; k++)
-            for (r = 0; r < b; r++) order[k * b + r] = (int32_t)((size_t)post[k] * b + r);
-        dfm__free(&al, adj_start);
-        dfm__free(&al, adj);
-        adj_start = NULL;
-        adj = NULL;
-    }
-    /* 2. elimination tree of the ordered matrix, then its postorder (same fill, supernodes
-          become contiguous) */
-    for (j = 0; j < n; j++) c->iperm[order[j]] = (int32_t)j;
-    err = dfm__permuted_upper(a, c->iperm, &al, &ust, &ur);
-    if (err != DFM_OK) goto fail;
-    dfm__etree(n, ust, ur, parent, w1);
-    dfm__postorder(n, parent, w1, w2, w3, post);
-    for (j = 0; j < n; j++) c->perm[j] = order[post[j]];
-    for (j = 0; j < n; j++) c->iperm[c->perm[j]] = (int32_t)j;
-    dfm__free(&al, ust);
-    dfm__free(&al, ur);
-    ust = NULL;
-    ur = NULL;
-    err = dfm__permuted_upper(a, c->iperm, &al, &ust, &ur);
-    if (err != DFM_OK) goto fail;
-    dfm__etree(n, ust, ur, parent, w1);
+            for (r = 0; r < b; r++) s->order[k * b + r] = (int32_t)((size_t)amd[k] * b + r);
+    dfm__free(al, adj_start);
+    dfm__free(al, adj);
+    return err;
+}
 
-    /* 3. column counts by row subtrees: row r of L holds the etree nodes on the paths from each
-          upper entry (k, r) up to r */
+/* Step 1: the fill-reducing ordering, into s->order. */
+static dfm_result dfm__fill_order(const dfm_csc *a, const dfm_chol_options *opt, const dfm_allocator *al,
+                                  dfm__symbolic *s)
+{
+    size_t j, n = a->n_cols;
+    if (opt->ordering == DFM_ORDER_NATURAL) {
+        for (j = 0; j < n; j++) s->order[j] = (int32_t)j;
+        return DFM_OK;
+    }
+    if (opt->ordering == DFM_ORDER_GIVEN) return dfm__given_order(n, opt->perm, s->w1, s->order);
+    return dfm__graph_order(a, opt, al, s);
+}
+
+/* The upper pattern of the matrix permuted by c->iperm, replacing the previous one. */
+static dfm_result dfm__permute_pattern(const dfm_csc *a, const dfm_chol *c, const dfm_allocator *al,
+                                       dfm__symbolic *s)
+{
+    dfm__free(al, s->ust);
+    dfm__free(al, s->ur);
+    s->ust = NULL;
+    s->ur = NULL;
+    return dfm__permuted_upper(a, c->iperm, al, &s->ust, &s->ur);
+}
+
+/* Step 2: elimination tree of the ordered matrix and its postorder, which has the same fill and
+   makes every supernode's columns contiguous; c->perm = order composed with the postorder, and
+   s->ust/ur/parent describe the matrix in that final numbering. */
+static dfm_result dfm__postordered_etree(const dfm_csc *a, dfm_chol *c, const dfm_allocator *al, dfm__symbolic *s)
+{
+    size_t j, n = c->n;
+    dfm_result err;
+    for (j = 0; j < n; j++) c->iperm[s->order[j]] = (int32_t)j;
+    err = dfm__permute_pattern(a, c, al, s);
+    if (err != DFM_OK) return err;
+    dfm__etree(n, s->ust, s->ur, s->parent, s->w1);
+    dfm__postorder(n, s->parent, s->w1, s->w2, s->w3, s->post);
+    for (j = 0; j < n; j++) c->perm[j] = s->order[s->post[j]];
+    for (j = 0; j < n; j++) c->iperm[c->perm[j]] = (int32_t)j;
+    err = dfm__permute_pattern(a, c, al, s);
+    if (err != DFM_OK) return err;
+    dfm__etree(n, s->ust, s->ur, s->parent, s->w1);
+    return DFM_OK;
+}
+
+/* Step 3: column counts by row subtrees: row r of L holds the etree nodes on the paths from each
+   upper entry (k, r) up to r. Also nnz(L) and the flop count. */
+static void dfm__column_counts(dfm_chol *c, dfm__symbolic *s)
+{
+    size_t j, p, n = c->n;
+    int32_t *mark = s->w1;
     for (j = 0; j < n; j++) {
-        count[j] = 1;
-        w1[j] = -1;
+        s->count[j] = 1;
+        mark[j] = -1;
     }
     for (j = 0; j < n; j++) {
-        w1[j] = (int32_t)j;
-        for (p = ust[j]; p < ust[j + 1]; p++) {
-            int32_t x = ur[p];
-            while (w1[x] != (int32_t)j) {
-                count[x]++;
-                w1[x] = (int32_t)j;
-                x = parent[x];
+        mark[j] = (int32_t)j;
+        for (p = s->ust[j]; p < s->ust[j + 1]; p++) {
+            int32_t x = s->ur[p];
+            while (mark[x] != (int32_t)j) {
+                s->count[x]++;
+                mark[x] = (int32_t)j;
+                x = s->parent[x];
             }
         }
     }
     c->nnz_l = 0;
     c->flops = 0.0;
     for (j = 0; j < n; j++) {
-        c->nnz_l += count[j];
-        c->flops += (double)count[j] * (double)count[j];
+        c->nnz_l += s->count[j];
+        c->flops += (double)s->count[j] * (double)s->count[j];
     }
+}
 
-    /* 4. fundamental supernodes: j + 1 joins j when it is j's parent, its only child, and its
-          column is j's minus the diagonal */
-    for (j = 0; j < n; j++) w2[j] = 0;
+/* Step 4: fundamental supernodes: j + 1 joins j when it is j's parent, its only child, and its
+   column is j's minus the diagonal. */
+static dfm_result dfm__fundamental_supernodes(size_t n, const dfm_allocator *al, dfm__symbolic *s)
+{
+    dfm_result err = DFM_OK;
+    size_t j;
+    int32_t *nchild = s->w2;
+    for (j = 0; j < n; j++) nchild[j] = 0;
     for (j = 0; j < n; j++)
-        if (parent[j] != -1) w2[parent[j]]++;
-    fstart = (size_t *)dfm__alloc(&al, n + 1, sizeof(size_t), &err);
-    gcols = (size_t *)dfm__alloc(&al, n + 1, sizeof(size_t), &err);
-    grows = (size_t *)dfm__alloc(&al, n + 1, sizeof(size_t), &err);
-    gzeros = (size_t *)dfm__alloc(&al, n + 1, sizeof(size_t), &err);
-    gnext = (size_t *)dfm__alloc(&al, n + 1, sizeof(size_t), &err);
-    if (err != DFM_OK) goto fail;
-    nf = 0;
+        if (s->parent[j] != -1) nchild[s->parent[j]]++;
+    s->fstart = (size_t *)dfm__alloc(al, n + 1, sizeof(size_t), &err);
+    s->gcols = (size_t *)dfm__alloc(al, n + 1, sizeof(size_t), &err);
+    s->grows = (size_t *)dfm__alloc(al, n + 1, sizeof(size_t), &err);
+    s->gzeros = (size_t *)dfm__alloc(al, n + 1, sizeof(size_t), &err);
+    s->gnext = (size_t *)dfm__alloc(al, n + 1, sizeof(size_t), &err);
+    if (err != DFM_OK) return err;
+    s->nf = 0;
     for (j = 0; j < n; j++) {
-        if (j > 0 && parent[j - 1] == (int32_t)j && w2[j] == 1 && count[j] + 1 == count[j - 1]) continue;
-        fstart[nf++] = j;
+        if (j > 0 && s->parent[j - 1] == (int32_t)j && nchild[j] == 1 && s->count[j] + 1 == s->count[j - 1]) continue;
+        s->fstart[s->nf++] = j;
     }
-    fstart[nf] = n;
-    /* 5. relaxed amalgamation, from the last supernode down: merge s with the group after it
-          when that group holds s's parent and the merged block stays small or dense enough */
-    for (s = 0; s < nf; s++) {
-        gcols[s] = fstart[s + 1] - fstart[s];
-        grows[s] = count[fstart[s]];
-        gzeros[s] = 0;
-        gnext[s] = s + 1;
+    s->fstart[s->nf] = n;
+    return DFM_OK;
+}
+
+/* Step 5: relaxed amalgamation, from the last supernode down: s joins the group after it when
+   that group holds s's parent and the merged block stays small or dense enough. */
+static void dfm__relax_supernodes(dfm__symbolic *s)
+{
+    size_t g, nf = s->nf;
+    for (g = 0; g < nf; g++) {
+        s->gcols[g] = s->fstart[g + 1] - s->fstart[g];
+        s->grows[g] = s->count[s->fstart[g]];
+        s->gzeros[g] = 0;
+        s->gnext[g] = g + 1;
     }
-    for (s = nf - 1; s-- > 0;) {
-        size_t last = fstart[s + 1] - 1, nc, nr, ent, z;
-        if (parent[last] != (int32_t)(last + 1)) continue;
-        nc = gcols[s] + gcols[s + 1];
-        nr = gcols[s] + grows[s + 1];
+    for (g = nf - 1; g-- > 0;) {
+        size_t last = s->fstart[g + 1] - 1, nc, nr, ent, z;
+        if (s->parent[last] != (int32_t)(last + 1)) continue;
+        nc = s->gcols[g] + s->gcols[g + 1];
+        nr = s->gcols[g] + s->grows[g + 1];
         ent = dfm__trapezoid(nc, nr);
-        z = gzeros[s] + gzeros[s + 1] + ent - dfm__trapezoid(gcols[s], grows[s]) - dfm__trapezoid(gcols[s + 1], grows[s + 1]);
+        z = s->gzeros[g] + s->gzeros[g + 1] + ent - dfm__trapezoid(s->gcols[g], s->grows[g]) -
+            dfm__trapezoid(s->gcols[g + 1], s->grows[g + 1]);
         if (!dfm__relax_merge(nc, ent, z)) continue;
-        gcols[s] = nc;
-        grows[s] = nr;
-        gzeros[s] = z;
-        gnext[s] = gnext[s + 1];
-        gcols[s + 1] = 0; /* no longer a group head */
+        s->gcols[g] = nc;
+        s->grows[g] = nr;
+        s->gzeros[g] = z;
+        s->gnext[g] = s->gnext[g + 1];
+        s->gcols[g + 1] = 0; /* no longer a group head */
     }
-    ns = 0;
-    for (s = 0; s < nf; s = gnext[s]) ns++;
+}
+
+/* Step 6: the supernode partition (the group heads) and the offsets of each supernode's rows and
+   values. */
+static dfm_result dfm__supernode_layout(dfm_chol *c, const dfm_allocator *al, const dfm__symbolic *s)
+{
+    dfm_result err = DFM_OK;
+    size_t g, j, ns = 0, total_rows = 0, total_vals = 0, big = (size_t)-1 >> 4;
+    for (g = 0; g < s->nf; g = s->gnext[g]) ns++;
     c->nsuper = ns;
-    c->sup_first = (int32_t *)dfm__alloc(&al, ns + 1, sizeof(int32_t), &err);
-    c->sup_rowptr = (size_t *)dfm__alloc(&al, ns + 1, sizeof(size_t), &err);
-    c->sup_valptr = (size_t *)dfm__alloc(&al, ns + 1, sizeof(size_t), &err);
-    c->col_super = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    if (err != DFM_OK) goto fail;
-    total_rows = 0;
-    total_vals = 0;
+    c->sup_first = (int32_t *)dfm__alloc(al, ns + 1, sizeof(int32_t), &err);
+    c->sup_rowptr = (size_t *)dfm__alloc(al, ns + 1, sizeof(size_t), &err);
+    c->sup_valptr = (size_t *)dfm__alloc(al, ns + 1, sizeof(size_t), &err);
+    c->col_super = (int32_t *)dfm__alloc(al, c->n, sizeof(int32_t), &err);
+    if (err != DFM_OK) return err;
     ns = 0;
-    for (s = 0; s < nf; s = gnext[s]) {
-        c->sup_first[ns] = (int32_t)fstart[s];
+    for (g = 0; g < s->nf; g = s->gnext[g]) {
+        c->sup_first[ns] = (int32_t)s->fstart[g];
         c->sup_rowptr[ns] = total_rows;
         c->sup_valptr[ns] = total_vals;
-        if (grows[s] > ((size_t)-1 >> 4) / gcols[s] || total_vals > ((size_t)-1 >> 4) - grows[s] * gcols[s]) {
-            err = DFM_ERR_TOO_LARGE;
-            goto fail;
-        }
-        total_rows += grows[s];
-        total_vals += grows[s] * gcols[s];
-        for (j = fstart[s]; j < fstart[s] + gcols[s]; j++) c->col_super[j] = (int32_t)ns;
+        if (s->grows[g] > big / s->gcols[g] || total_vals > big - s->grows[g] * s->gcols[g]) return DFM_ERR_TOO_LARGE;
+        total_rows += s->grows[g];
+        total_vals += s->grows[g] * s->gcols[g];
+        for (j = s->fstart[g]; j < s->fstart[g] + s->gcols[g]; j++) c->col_super[j] = (int32_t)ns;
         ns++;
     }
-    c->sup_first[ns] = (int32_t)n;
+    c->sup_first[ns] = (int32_t)c->n;
     c->sup_rowptr[ns] = total_rows;
     c->sup_valptr[ns] = total_vals;
+    return DFM_OK;
+}
 
-    /* 6. each supernode's rows: its columns, then the rows below them of A's columns and of the
-          children's rows (children come first in postorder), sorted */
-    c->rows = (int32_t *)dfm__alloc(&al, total_rows, sizeof(int32_t), &err);
-    relmap = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    buf = (int32_t *)dfm__alloc(&al, n, sizeof(int32_t), &err);
-    arow = (int32_t *)dfm__alloc(&al, c->nnz_a, sizeof(int32_t), &err);
-    c->amap_start = (size_t *)dfm__alloc(&al, n + 2, sizeof(size_t), &err);
-    c->amap_src = (size_t *)dfm__alloc(&al, c->nnz_a, sizeof(size_t), &err);
-    c->amap_dst = (size_t *)dfm__alloc(&al, c->nnz_a, sizeof(size_t), &err);
-    if (err != DFM_OK) goto fail;
-    /* A's entries grouped by new column (the smaller of the two new indices) */
+/* Step 7: A's entries grouped by new column (the smaller of the two new indices): where each
+   comes from (c->amap_src) and its new row (s->arow); c->amap_dst is filled by step 8. */
+static dfm_result dfm__map_entries(dfm_chol *c, const dfm_csc *a, const dfm_allocator *al, dfm__symbolic *s)
+{
+    dfm_result err = DFM_OK;
+    size_t n = c->n, j, p;
+    c->rows = (int32_t *)dfm__alloc(al, c->sup_rowptr[c->nsuper], sizeof(int32_t), &err);
+    s->relmap = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->buf = (int32_t *)dfm__alloc(al, n, sizeof(int32_t), &err);
+    s->arow = (int32_t *)dfm__alloc(al, c->nnz_a, sizeof(int32_t), &err);
+    c->amap_start = (size_t *)dfm__alloc(al, n + 2, sizeof(size_t), &err);
+    c->amap_src = (size_t *)dfm__alloc(al, c->nnz_a, sizeof(size_t), &err);
+    c->amap_dst = (size_t *)dfm__alloc(al, c->nnz_a, sizeof(size_t), &err);
+    if (err != DFM_OK) return err;
     memset(c->amap_start, 0, (n + 2) * sizeof(size_t));
     for (j = 0; j < n; j++)
         for (p = a->col_start[j]; p < a->col_start[j + 1]; p++) {
@@ -2022,89 +2118,108 @@ DFMDEF dfm_result dfm_chol_analyze(const dfm_csc *a, const dfm_chol_options *opt
             int32_t I = c->iperm[a->row_index[p]], J = c->iperm[j];
             size_t t = c->amap_start[(I < J ? I : J) + 1]++;
             c->amap_src[t] = p;
-            arow[t] = I > J ? I : J;
+            s->arow[t] = I > J ? I : J;
         }
-    for (j = 0; j < n; j++) {
-        relmap[j] = -1;
-        w1[j] = -1;
+    return DFM_OK;
+}
+
+/* The rows of supernode sn into s->buf, unsorted: its columns, then the rows below them of A's
+   columns and of its children's rows (children come first in postorder; s->w2 = head and s->w3 =
+   next of the children lists, s->w1 = marks). Returns the count. */
+static size_t dfm__gather_rows(const dfm_chol *c, size_t sn, dfm__symbolic *s)
+{
+    size_t f = (size_t)c->sup_first[sn], l = (size_t)c->sup_first[sn + 1], cnt = 0, j, t;
+    int32_t ch, *mark = s->w1;
+    for (j = f; j < l; j++) {
+        s->buf[cnt++] = (int32_t)j;
+        mark[j] = (int32_t)sn;
     }
-    /* children lists of supernodes: w2 = head, w3 = next */
-    for (s = 0; s < ns; s++) w2[s] = -1;
+    for (j = f; j < l; j++)
+        for (t = c->amap_start[j]; t < c->amap_start[j + 1]; t++) {
+            int32_t row = s->arow[t];
+            if (mark[row] != (int32_t)sn) {
+                mark[row] = (int32_t)sn;
+                s->buf[cnt++] = row;
+            }
+        }
+    for (ch = s->w2[sn]; ch != -1; ch = s->w3[ch]) {
+        size_t cnc = (size_t)(c->sup_first[ch + 1] - c->sup_first[ch]);
+        for (t = c->sup_rowptr[ch] + cnc; t < c->sup_rowptr[ch + 1]; t++) {
+            int32_t row = c->rows[t];
+            if ((size_t)row >= f && mark[row] != (int32_t)sn) {
+                mark[row] = (int32_t)sn;
+                s->buf[cnt++] = row;
+            }
+        }
+    }
+    return cnt;
+}
+
+/* Step 8: each supernode's sorted row structure, where A's entries land in its value block
+   (c->amap_dst), the parent supernode's children list, and the largest update block. */
+static dfm_result dfm__supernode_rows(dfm_chol *c, const dfm_chol_options *opt, dfm__symbolic *s)
+{
+    size_t sn, j, t, r, n = c->n, ns = c->nsuper;
+    for (j = 0; j < n; j++) {
+        s->relmap[j] = -1;
+        s->w1[j] = -1;
+    }
+    for (sn = 0; sn < ns; sn++) s->w2[sn] = -1;
     c->max_update = 1;
-    for (s = 0; s < ns; s++) {
-        size_t f = (size_t)c->sup_first[s], l = (size_t)c->sup_first[s + 1], nc = l - f, cnt = 0, t, r;
-        size_t cap = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
-        int32_t ch, *rs = c->rows + c->sup_rowptr[s];
-        for (j = f; j < l; j++) {
-            buf[cnt++] = (int32_t)j;
-            w1[j] = (int32_t)s;
-        }
-        for (j = f; j < l; j++)
-            for (t = c->amap_start[j]; t < c->amap_start[j + 1]; t++) {
-                int32_t row = arow[t];
-                if (w1[row] != (int32_t)s) {
-                    w1[row] = (int32_t)s;
-                    buf[cnt++] = row;
-                }
-            }
-        for (ch = w2[s]; ch != -1; ch = w3[ch]) {
-            size_t cnc = (size_t)(c->sup_first[ch + 1] - c->sup_first[ch]);
-            for (t = c->sup_rowptr[ch] + cnc; t < c->sup_rowptr[ch + 1]; t++) {
-                int32_t row = c->rows[t];
-                if ((size_t)row >= f && w1[row] != (int32_t)s) {
-                    w1[row] = (int32_t)s;
-                    buf[cnt++] = row;
-                }
-            }
-        }
-        if (cnt != cap) { /* the counts and the structure disagree: cannot happen */
-            err = DFM_ERR_INVALID_ARGUMENT;
-            goto fail;
-        }
-        qsort(buf + nc, cnt - nc, sizeof(int32_t), dfm__cmp_i32);
-        memcpy(rs, buf, cnt * sizeof(int32_t));
+    for (sn = 0; sn < ns; sn++) {
+        size_t f = (size_t)c->sup_first[sn], l = (size_t)c->sup_first[sn + 1], nc = l - f;
+        size_t cnt = dfm__gather_rows(c, sn, s);
+        int32_t *rs = c->rows + c->sup_rowptr[sn];
+        if (cnt != c->sup_rowptr[sn + 1] - c->sup_rowptr[sn]) return DFM_ERR_INVALID_ARGUMENT; /* cannot happen */
+        qsort(s->buf + nc, cnt - nc, sizeof(int32_t), dfm__cmp_i32);
+        memcpy(rs, s->buf, cnt * sizeof(int32_t));
         if (cnt > c->max_rows) c->max_rows = cnt;
-        for (r = 0; r < cnt; r++) relmap[rs[r]] = (int32_t)r;
+        for (r = 0; r < cnt; r++) s->relmap[rs[r]] = (int32_t)r;
         for (j = f; j < l; j++)
             for (t = c->amap_start[j]; t < c->amap_start[j + 1]; t++)
-                c->amap_dst[t] = c->sup_valptr[s] + (j - f) * cnt + (size_t)relmap[arow[t]];
+                c->amap_dst[t] = c->sup_valptr[sn] + (j - f) * cnt + (size_t)s->relmap[s->arow[t]];
         if (cnt > nc) {
             int32_t ps = c->col_super[rs[nc]];
             size_t m = cnt - nc;
-            w3[s] = w2[ps];
-            w2[ps] = (int32_t)s;
+            s->w3[sn] = s->w2[ps];
+            s->w2[ps] = (int32_t)sn;
             if (m * m > c->max_update) c->max_update = m * m;
         }
-        if (opt.progress && (s & 4095) == 0 && opt.progress(opt.progress_user, 0.9f + 0.1f * (float)s / (float)ns)) {
-            err = DFM_CANCELLED;
-            goto fail;
-        }
+        if (opt->progress && (sn & 4095) == 0 &&
+            opt->progress(opt->progress_user, 0.9f + 0.1f * (float)sn / (float)ns))
+            return DFM_CANCELLED;
     }
-    c->values = (double *)dfm__alloc(&al, total_vals, sizeof(double), &err);
-    if (err != DFM_OK) goto fail;
-    c->colcount = count;
-    count = NULL;
-    if (opt.progress && opt.progress(opt.progress_user, 1.0f)) err = DFM_CANCELLED;
-fail:
-    dfm__free(&al, ust);
-    dfm__free(&al, ur);
-    dfm__free(&al, adj_start);
-    dfm__free(&al, adj);
-    dfm__free(&al, parent);
-    dfm__free(&al, w1);
-    dfm__free(&al, w2);
-    dfm__free(&al, w3);
-    dfm__free(&al, post);
-    dfm__free(&al, order);
-    dfm__free(&al, count);
-    dfm__free(&al, fstart);
-    dfm__free(&al, gcols);
-    dfm__free(&al, grows);
-    dfm__free(&al, gzeros);
-    dfm__free(&al, gnext);
-    dfm__free(&al, relmap);
-    dfm__free(&al, buf);
-    dfm__free(&al, arow);
+    return DFM_OK;
+}
+
+/* The symbolic analysis as CSparse's cs_schol and CHOLMOD's analysis do it, step by step. */
+DFMDEF dfm_result dfm_chol_analyze(const dfm_csc *a, const dfm_chol_options *options, dfm_chol **out)
+{
+    dfm_chol_options opt = options ? *options : dfm_chol_default_options();
+    dfm_allocator al = dfm__resolve_allocator(opt.allocator);
+    dfm__symbolic s;
+    dfm_chol *c = NULL;
+    dfm_result err;
+    if (!out) return DFM_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    err = dfm__analyze_check(a, &opt);
+    if (err != DFM_OK) return err;
+    err = dfm__chol_create(a, &opt, &al, &c, &s);
+    if (err == DFM_OK) err = dfm__fill_order(a, &opt, &al, &s);       /* 1. AMD / ND / given */
+    if (err == DFM_OK) err = dfm__postordered_etree(a, c, &al, &s);   /* 2. etree, postorder */
+    if (err == DFM_OK) dfm__column_counts(c, &s);                     /* 3. column counts */
+    if (err == DFM_OK) err = dfm__fundamental_supernodes(c->n, &al, &s); /* 4. supernodes */
+    if (err == DFM_OK) dfm__relax_supernodes(&s);                     /* 5. amalgamation */
+    if (err == DFM_OK) err = dfm__supernode_layout(c, &al, &s);       /* 6. partition */
+    if (err == DFM_OK) err = dfm__map_entries(c, a, &al, &s);         /* 7. A's entries */
+    if (err == DFM_OK) err = dfm__supernode_rows(c, &opt, &s);        /* 8. row structure */
+    if (err == DFM_OK) c->values = (double *)dfm__alloc(&al, c->sup_valptr[c->nsuper], sizeof(double), &err);
+    if (err == DFM_OK) {
+        c->colcount = s.count;
+        s.count = NULL;
+        if (opt.progress && opt.progress(opt.progress_user, 1.0f)) err = DFM_CANCELLED;
+    }
+    dfm__symbolic_free(&s, &al);
     if (err != DFM_OK) dfm_chol_free(c);
     else *out = c;
     return err;
