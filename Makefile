@@ -41,7 +41,7 @@ HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain $(B)/dispmesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
-             $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param $(B)/test_dispmesh_shell
+             $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param $(B)/test_dispmesh_shell $(B)/test_dispmesh_digest
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
 endif

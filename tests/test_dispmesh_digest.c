@@ -1,0 +1,157 @@
+/* test_dispmesh_digest.c - the bits of paper 000's pipeline on fixed generated inputs, as FNV-1a
+   64-bit digests: dm_simplify without and with dm_shell_constraint, dm_parameterize, dm_bake and
+   dm_reconstruct, on a bumpy sphere and a bumpy torus.
+   A change that is meant to keep the output (a restructuring, a speed-up) keeps every digest; a
+   change of behaviour updates the table below in the same commit and says why. Each digest is
+   printed, so a changed one can be read from the log. The inputs are small enough for the
+   sanitizer build (which must give the same bits: no digest depends on the optimisation level). */
+#define DM_IMPLEMENTATION
+#include "dispmesh.h"
+#include "test.h"
+#include "testmesh.h"
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct digest { uint64_t h; } digest;
+static void fnv(digest *d, const void *data, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)data;
+    size_t i;
+    for (i = 0; i < n; i++) d->h = (d->h ^ p[i]) * 0x100000001b3ull;
+}
+static digest fnv_start(void) { digest d; d.h = 0xcbf29ce484222325ull; return d; }
+
+/* the recorded digests: one line per stage and mesh */
+typedef struct expected { const char *name; uint64_t h; } expected;
+static const expected table[] = {
+    {"sphere simplify", 0xd29f81dab6e9d82cull},
+    {"sphere simplify shell", 0xad76b4b4613c1dd1ull},
+    {"sphere parameterize", 0x48f9a7b1042adbbdull},
+    {"sphere bake", 0x823a6e403f8fc09full},
+    {"sphere reconstruct", 0xd7e4dab15854c2d0ull},
+    {"torus simplify", 0xab7b78e3a557c32cull},
+    {"torus simplify shell", 0x0ecaffa59cbc7e20ull},
+    {"torus parameterize", 0x2841cd17a18e6cd6ull},
+    {"torus bake", 0x697a9b877b0914e5ull},
+    {"torus reconstruct", 0x9b403ea1d1e6465eull},
+};
+
+static void check_digest(const char *name, digest d)
+{
+    size_t i;
+    printf("digest %-24s 0x%016llx\n", name, (unsigned long long)d.h);
+    for (i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (strcmp(table[i].name, name) == 0) {
+            T_CHECK_MSG(table[i].h == d.h, "%s: digest 0x%016llx, recorded 0x%016llx", name,
+                        (unsigned long long)d.h, (unsigned long long)table[i].h);
+            return;
+        }
+    T_CHECK_MSG(0, "%s: no recorded digest", name);
+}
+
+/* the base after dm_simplify (all its levels' records are covered by the base and the count of
+   splits: a change in any collapse changes the base) */
+static int simplify(const mesh *m, dm_shell *sh, size_t target, float **bp, size_t *bnv, uint32_t **bi,
+                    size_t *bnt, digest *d)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    size_t splits;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = target;
+    if (sh) {
+        o.constraint = dm_shell_constraint;
+        o.on_collapse = dm_shell_collapsed;
+        o.constraint_user = sh;
+    }
+    if (!T_CHECK(dm_simplify(m->p, m->nv, m->t, m->nt, &o, &pm, &rep) == DM_OK)) return 0;
+    dm_pm_counts(pm, bnv, bnt);
+    *bp = (float *)malloc(3 * *bnv * sizeof(float) + 1);
+    *bi = (uint32_t *)malloc(3 * *bnt * sizeof(uint32_t) + 1);
+    dm_pm_get_mesh(pm, *bp, *bi, NULL);
+    splits = dm_pm_split_count(pm);
+    *d = fnv_start();
+    fnv(d, *bp, 3 * *bnv * sizeof(float));
+    fnv(d, *bi, 3 * *bnt * sizeof(uint32_t));
+    fnv(d, &splits, sizeof splits);
+    dm_pm_free(pm);
+    return 1;
+}
+
+static void pipeline(const char *what, const mesh *m, size_t target, int res)
+{
+    char name[64];
+    float *bp = NULL, *up = NULL;
+    uint32_t *bi = NULL, *ui = NULL;
+    size_t bnv = 0, bnt = 0, unv = 0, unt = 0, n;
+    dm_shell *sh = NULL;
+    dm_param *param = NULL;
+    dm_dispmap *map = NULL;
+    dm_trimesh *dense = NULL;
+    dm_param_options po;
+    dm_bake_options bo;
+    digest d;
+    snprintf(name, sizeof name, "%s simplify", what);
+    if (simplify(m, NULL, target, &up, &unv, &ui, &unt, &d)) check_digest(name, d);
+    if (!T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &sh) == DM_OK)) goto done;
+    snprintf(name, sizeof name, "%s simplify shell", what);
+    if (!simplify(m, sh, target, &bp, &bnv, &bi, &bnt, &d)) goto done;
+    check_digest(name, d);
+    memset(&po, 0, sizeof po);
+    po.width = po.height = res;
+    if (!T_CHECK(dm_parameterize(bp, bnv, bi, bnt, &po, &param) == DM_OK)) goto done;
+    n = (size_t)res * (size_t)res;
+    d = fnv_start();
+    fnv(&d, param->uv, 6 * bnt * sizeof(float));
+    fnv(&d, param->chart, bnt * sizeof(uint32_t));
+    fnv(&d, param->twin, 3 * bnt * sizeof(uint32_t));
+    fnv(&d, param->texel_triangle, n * sizeof(uint32_t));
+    fnv(&d, param->texel_bary, 2 * n * sizeof(float));
+    fnv(&d, param->nbr, 4 * n * sizeof(uint32_t));
+    fnv(&d, param->nbr_rot, 4 * n);
+    snprintf(name, sizeof name, "%s parameterize", what);
+    check_digest(name, d);
+    memset(&bo, 0, sizeof bo);
+    bo.inward = 1;
+    if (!T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &map) == DM_OK)) goto done;
+    d = fnv_start();
+    fnv(&d, map->pos, 3 * n * sizeof(float));
+    fnv(&d, map->nrm, 3 * n * sizeof(float));
+    fnv(&d, map->disp, n * sizeof(float));
+    fnv(&d, map->normal, 3 * n * sizeof(float));
+    fnv(&d, map->area, n * sizeof(float));
+    fnv(&d, map->valid, n);
+    fnv(&d, map->status, n);
+    snprintf(name, sizeof name, "%s bake", what);
+    check_digest(name, d);
+    if (!T_CHECK(dm_reconstruct(map, param, NULL, &dense) == DM_OK)) goto done;
+    d = fnv_start();
+    fnv(&d, dense->positions, 3 * dense->vertex_count * sizeof(float));
+    fnv(&d, dense->indices, 3 * dense->triangle_count * sizeof(uint32_t));
+    snprintf(name, sizeof name, "%s reconstruct", what);
+    check_digest(name, d);
+done:
+    dm_trimesh_free(dense);
+    dm_dispmap_free(map);
+    dm_param_free(param);
+    dm_shell_free(sh);
+    free(bp);
+    free(bi);
+    free(up);
+    free(ui);
+}
+
+int main(int argc, char **argv)
+{
+    mesh sphere, torus;
+    T_BEGIN(argc, argv);
+    sphere = make_sphere(12, 0.08, 1.0);
+    pipeline("sphere", &sphere, 200, 128);
+    torus = make_torus(64, 32, 0.5, 0.05);
+    pipeline("torus", &torus, 300, 128);
+    mesh_free(&sphere);
+    mesh_free(&torus);
+    return T_END();
+}
