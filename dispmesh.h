@@ -257,7 +257,8 @@
      left allocated (the positions are checked once per used vertex, after the working arrays
      are allocated; a bad index is found before). Duplicate
      vertices (same position, different ids) are different vertices: a seam between them is two
-     boundaries, each kept as a boundary. Zero-area triangles have no plane; they may be collapsed
+     boundaries, each kept as a boundary. A triangle soup (no vertex in two triangles) with
+     repeated positions is DM_ERR_NOT_WELDED: dm_weld makes the mesh it stands for. Zero-area triangles have no plane; they may be collapsed
      away, and are never the reason a new degenerate triangle appears. Edges with three or more
      triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
      positions, in no level's mesh. Unreferenced vertices may hold NaN.
@@ -487,7 +488,9 @@ typedef enum dm_result {
     DM_ERR_TOO_LARGE,        /* a byte size overflows size_t, or counts exceed the 32-bit ids */
     DM_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
     DM_CANCELLED,            /* the progress callback returned nonzero */
-    DM_ERR_MAP_TOO_SMALL     /* dm_parameterize: the charts and gutters do not fit the map */
+    DM_ERR_MAP_TOO_SMALL,    /* dm_parameterize: the charts and gutters do not fit the map */
+    DM_ERR_NOT_WELDED        /* dm_simplify: a triangle soup (no vertex shared by two triangles,
+                                positions repeated): weld it first (dm_weld) */
 } dm_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -843,6 +846,18 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
 /* Frees a progressive mesh (NULL is fine) with the allocator it was made with. */
 DMDEF void dm_pm_free(dm_pm *pm);
 
+/* Welds a mesh whose triangles do not share vertices (an STL file, a triangle soup): vertices at
+   the same position (bit for bit, -0 = +0) become one, numbered in the order the indices first
+   use them; unreferenced vertices are dropped. out_positions holds 3 * vertex_count floats and
+   out_indices 3 * triangle_count (caller-owned; they may not alias the input); *out_vertex_count
+   receives the welded count. A mesh already welded comes back renumbered in first-use order, so
+   welding a soup made from a mesh gives that mesh renumbered in first-use order, bit for bit.
+   allocator NULL = default (a hash table of 8 bytes per vertex while it runs). Errors as for
+   dm_bvh_build (NULL arrays, bad index, bad position of a referenced vertex, sizes). */
+DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint32_t *indices,
+                        size_t triangle_count, const dm_allocator *allocator, float *out_positions,
+                        uint32_t *out_indices, size_t *out_vertex_count);
+
 /* Number of vertex splits (= collapses done). Levels run from 0 (base) to this (the input). */
 DMDEF size_t dm_pm_split_count(const dm_pm *pm);
 
@@ -984,6 +999,7 @@ DMDEF const char *dm_result_string(dm_result r)
     case DM_ERR_OUT_OF_MEMORY: return "DM_ERR_OUT_OF_MEMORY";
     case DM_CANCELLED: return "DM_CANCELLED";
     case DM_ERR_MAP_TOO_SMALL: return "DM_ERR_MAP_TOO_SMALL";
+    case DM_ERR_NOT_WELDED: return "DM_ERR_NOT_WELDED";
     }
     return "DM_ERR_?";
 }
@@ -3885,6 +3901,128 @@ DMDEF void dm_pm_free(dm_pm *pm)
     a.free(a.user, pm);
 }
 
+/* the checks every mesh argument gets (as dm_bvh_build's) */
+static dm_result dm__pz_check_mesh(const float *pos, size_t nv, const uint32_t *idx, size_t nt)
+{
+    size_t i;
+    dm_result r = dm__check_sizes(pos, nv, idx, nt); /* the BVH's checks, as for every mesh argument */
+    if (r == DM_OK && !pos) r = DM_ERR_INVALID_ARGUMENT;
+    for (i = 0; r == DM_OK && i < nt; i++) {
+        float p[9];
+        r = dm__fetch_triangle(pos, nv, idx, i, p);
+    }
+    return r;
+}
+
+/* ---- welding ---- */
+
+/* a position's bits with -0 read as +0, for hashing and comparing */
+static void dm__weld_key(const float *p, uint32_t key[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float x = p[k] == 0.0f ? 0.0f : p[k];
+        memcpy(&key[k], &x, sizeof x);
+    }
+}
+
+static uint32_t dm__weld_hash(const uint32_t key[3])
+{
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    int k;
+    for (k = 0; k < 3; k++) h = (h ^ key[k]) * 0xff51afd7ed558ccdull;
+    return (uint32_t)(h ^ (h >> 32));
+}
+
+/* remap[v] = the welded id of vertex v in first-use order (UINT32_MAX when unreferenced);
+   *welded = the number of welded vertices. Indices must be checked already. */
+static dm_result dm__weld_map(const float *pos, size_t nv, const uint32_t *idx, size_t nt, const dm_allocator *a,
+                              uint32_t *remap, size_t *welded)
+{
+    size_t cap = 16, i, count = 0;
+    uint32_t *table, *first; /* open addressing: the welded id + 1 (0 = empty); first input vertex of each id */
+    int overflow = 0;
+    while (cap < 2 * nv) cap *= 2;
+    table = (uint32_t *)dm__alloc_array(a, cap, sizeof(uint32_t), &overflow);
+    first = (uint32_t *)dm__alloc_array(a, nv, sizeof(uint32_t), &overflow);
+    if (!table || !first) {
+        a->free(a->user, table);
+        a->free(a->user, first);
+        return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    }
+    memset(table, 0, cap * sizeof(uint32_t));
+    for (i = 0; i < nv; i++) remap[i] = UINT32_MAX;
+    for (i = 0; i < 3 * nt; i++) {
+        uint32_t v = idx[i], key[3], slot;
+        if (remap[v] != UINT32_MAX) continue;
+        dm__weld_key(pos + 3 * (size_t)v, key);
+        for (slot = dm__weld_hash(key) & (uint32_t)(cap - 1);; slot = (slot + 1) & (uint32_t)(cap - 1)) {
+            uint32_t other[3];
+            if (table[slot] == 0) {
+                first[count] = v;
+                table[slot] = (uint32_t)++count;
+                remap[v] = (uint32_t)(count - 1);
+                break;
+            }
+            dm__weld_key(pos + 3 * (size_t)first[table[slot] - 1], other);
+            if (memcmp(key, other, sizeof key) == 0) {
+                remap[v] = table[slot] - 1;
+                break;
+            }
+        }
+    }
+    a->free(a->user, table);
+    a->free(a->user, first);
+    *welded = count;
+    return DM_OK;
+}
+
+DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint32_t *indices,
+                        size_t triangle_count, const dm_allocator *allocator, float *out_positions,
+                        uint32_t *out_indices, size_t *out_vertex_count)
+{
+    dm_allocator a = dm__resolve_allocator(allocator);
+    uint32_t *remap;
+    size_t i, welded = 0;
+    int overflow = 0;
+    dm_result r;
+    if (!out_positions || !out_indices || !out_vertex_count) return DM_ERR_INVALID_ARGUMENT;
+    *out_vertex_count = 0;
+    r = dm__pz_check_mesh(positions, vertex_count, indices, triangle_count);
+    if (r != DM_OK) return r;
+    remap = (uint32_t *)dm__alloc_array(&a, vertex_count, sizeof(uint32_t), &overflow);
+    if (!remap) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    r = dm__weld_map(positions, vertex_count, indices, triangle_count, &a, remap, &welded);
+    if (r == DM_OK) {
+        size_t written = 0; /* ids come in first-use order: the first corner of each id writes it */
+        for (i = 0; i < 3 * triangle_count; i++) {
+            uint32_t id = remap[indices[i]];
+            out_indices[i] = id;
+            if (id == written) memcpy(out_positions + 3 * written++, positions + 3 * (size_t)indices[i], 3 * sizeof(float));
+        }
+        *out_vertex_count = welded;
+    }
+    a.free(a.user, remap);
+    return r;
+}
+
+/* A mesh in which no vertex is in two triangles cannot be simplified; when positions repeat it is
+   an unwelded mesh (an STL file, say), which the caller should weld rather than get back as it was. */
+static dm_result dm__qem_check_welded(dm__qem_simp *s, const float *positions, size_t vertex_count)
+{
+    uint32_t *remap;
+    size_t welded = 0, used = 0, v;
+    int overflow = 0;
+    dm_result r;
+    remap = (uint32_t *)dm__alloc_array(&s->al, vertex_count, sizeof(uint32_t), &overflow);
+    if (!remap) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    r = dm__weld_map(positions, vertex_count, s->idx, s->t, &s->al, remap, &welded);
+    for (v = 0; v < vertex_count; v++) used += remap[v] != UINT32_MAX;
+    s->al.free(s->al.user, remap);
+    if (r != DM_OK) return r;
+    return welded < used ? DM_ERR_NOT_WELDED : DM_OK;
+}
+
 /* Input checks and the simplifier's arrays (triangles with a repeated index dropped). */
 static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size_t vertex_count, const uint32_t *indices,
                                size_t triangle_count, size_t *dropped)
@@ -3978,7 +4116,8 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
         for (k = 0; k < 3; k++)
             s->vx[v].np[k] = ((double)positions[3 * v + (size_t)k] - s->center[k]) * s->inv_scale;
     }
-    return DM_OK;
+    for (v = 0; v < vertex_count && s->vx[v].count <= 1; v++) {}
+    return v == vertex_count && kept > 1 ? dm__qem_check_welded(s, positions, vertex_count) : DM_OK;
 }
 
 /* The progressive mesh from the simplifier's final state (arrays moved, not copied). */
@@ -4364,17 +4503,6 @@ DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint3
    Section: part 3 helpers (mesh checks, scratch memory, small vector maths in double)
    --------------------------------------------------------------------------------------------- */
 
-static dm_result dm__pz_check_mesh(const float *pos, size_t nv, const uint32_t *idx, size_t nt)
-{
-    size_t i;
-    dm_result r = dm__check_sizes(pos, nv, idx, nt); /* the BVH's checks, as for every mesh argument */
-    if (r == DM_OK && !pos) r = DM_ERR_INVALID_ARGUMENT;
-    for (i = 0; r == DM_OK && i < nt; i++) {
-        float p[9];
-        r = dm__fetch_triangle(pos, nv, idx, i, p);
-    }
-    return r;
-}
 
 /* Temporaries of one call, all freed together on every exit path. */
 #define DM__PZ_SLOTS 40

@@ -12,7 +12,8 @@
      --both-ways bake with the nearest hit either way along the normal; the default is the paper's
                  rule, the first hit along -normal (dm_bake_options.inward), right for a base that
                  encloses the original, as the shell constraint makes it
-   The pipeline (dispmesh.h): dm_shell_grow (the bounding shell of the original), dm_simplify with
+   The pipeline (dispmesh.h): dm_weld when the triangles do not share their vertices (an STL file),
+   dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
    mesh) and dm_surface_distance (200000 samples a side) against the original.
@@ -24,10 +25,14 @@
      PREFIX_recon.obj    the reconstruction (positions only)
      PREFIX_views.png    original | base with wireframe | reconstruction, one camera, captions
    Progress goes to stderr; the last line on stdout is
-     RESULT dispmesh faces= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
+     RESULT dispmesh target= faces= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
             equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
    with distances as fractions of the original's bounding-box diagonal (see print_result).
-   Exit status 0 on success, 1 on bad arguments or unreadable input, 2 when a stage fails. */
+   The stage notes say which constraint vetoed how many collapses (enclosure, shell, overlap) and
+   whether the target was reached; RESULT's target= is --faces and faces= what was reached.
+   Exit status 0 on success, 1 on bad arguments or unreadable input, 2 when a stage fails or the
+   result is unusable: base triangles without a texel (the map is too coarse for the base; the
+   reconstruction would have holes) or more than 1% of the texels under the base without a hit. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -528,6 +533,69 @@ static void run_free(run *R)
     memset(R, 0, sizeof *R);
 }
 
+/* Welds an original whose triangles do not share their vertices (an STL file, a triangle soup):
+   dm_simplify refuses those (DM_ERR_NOT_WELDED). A mesh that welding does not change keeps its
+   numbering. 0 on failure (message printed). */
+static int weld_original(run *R)
+{
+    mesh w;
+    size_t used = 0, k;
+    dm_result r;
+    uint8_t *seen;
+    w.p = (float *)malloc(3 * R->orig.nv * sizeof(float) + 1);
+    w.t = (uint32_t *)malloc(3 * R->orig.nt * sizeof(uint32_t) + 1);
+    seen = (uint8_t *)calloc(R->orig.nv + 1, 1);
+    if (!w.p || !w.t || !seen) {
+        free(w.p); free(w.t); free(seen);
+        fprintf(stderr, "dispmesh: out of memory\n");
+        return 0;
+    }
+    w.nt = R->orig.nt;
+    r = dm_weld(R->orig.p, R->orig.nv, R->orig.t, R->orig.nt, NULL, w.p, w.t, &w.nv);
+    for (k = 0; r == DM_OK && k < 3 * R->orig.nt; k++) used += !seen[R->orig.t[k]]++ ? 1 : 0;
+    free(seen);
+    if (r != DM_OK) {
+        free(w.p); free(w.t);
+        fprintf(stderr, "dispmesh: the mesh cannot be welded: %s\n", dm_result_string(r));
+        return 0;
+    }
+    if (w.nv == used) { /* already welded */
+        free(w.p); free(w.t);
+        return 1;
+    }
+    fprintf(stderr, "dispmesh: welded vertices at equal positions: %zu -> %zu vertices\n", used, w.nv);
+    if (R->orig_owned) mesh_free(&R->orig);
+    R->orig = w;
+    R->orig_owned = 1;
+    return 1;
+}
+
+/* The result is unusable when parts of the base get no texel (the map is too coarse for the base:
+   the reconstruction would have holes there) or when more than 1% of the texels under the base
+   find no original surface. Returns 1 when it is usable; otherwise says why. */
+static int result_usable(const run *R, long res, size_t inside, size_t missed)
+{
+    size_t n = (size_t)R->map->width * (size_t)R->map->height, t, k, bare = 0;
+    uint8_t *has = (uint8_t *)calloc(R->base.nt + 1, 1);
+    if (!has) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
+    for (k = 0; k < n; k++)
+        if (R->param->texel_triangle[k] < R->base.nt) has[R->param->texel_triangle[k]] = 1;
+    for (t = 0; t < R->base.nt; t++) bare += !has[t];
+    free(has);
+    if (bare > 0) {
+        fprintf(stderr, "dispmesh: error: the map is too coarse for the base: %zu of %zu base triangles have no texel, "
+                        "so the reconstruction would have holes there; use a larger --res than %ld or fewer --faces\n",
+                bare, R->base.nt, res);
+        return 0;
+    }
+    if (missed * 100 > inside) {
+        fprintf(stderr, "dispmesh: error: %zu of %zu texels under the base (%.1f%%, more than 1%%) found no surface of "
+                        "the original within the search distance\n", missed, inside, 100.0 * (double)missed / (double)inside);
+        return 0;
+    }
+    return 1;
+}
+
 static void usage(FILE *to)
 {
     fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways]\n"
@@ -594,6 +662,7 @@ int main(int argc, char **argv)
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
     }
+    if (!weld_original(&R)) goto done;
     diag = bbox_diagonal(&R.orig, lo, hi);
     if (!(diag > 0.0) || !isfinite(diag)) {
         fprintf(stderr, "dispmesh: %s: the mesh has no extent (bounding-box diagonal %g)\n", brick ? "brick" : in, diag);
@@ -630,9 +699,10 @@ int main(int argc, char **argv)
     dm_pm_set_level(R.pm, 0);
     if (!pm_to_mesh(R.pm, &R.base)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     {
-        char note[160];
-        snprintf(note, sizeof note, "%zu -> %zu triangles%s, %zu vetoed", srep.input_triangles, R.base.nt,
-                 srep.reached_target ? "" : " (target not reached)", srep.vetoed);
+        char note[256];
+        snprintf(note, sizeof note, "%zu -> %zu triangles%s, %zu vetoed (enclosure %zu, shell %zu, overlap %zu)",
+                 srep.input_triangles, R.base.nt, srep.reached_target ? "" : " (target not reached)", srep.vetoed,
+                 R.shell->vetoed_enclose, R.shell->vetoed_shell, R.shell->vetoed_overlap);
         stage_end(&st, note);
     }
     if (!srep.reached_target)
@@ -692,6 +762,7 @@ int main(int argc, char **argv)
         snprintf(note, sizeof note, "%zu texels in charts, %zu missed", inside, missed);
         stage_end(&st, note);
     }
+    if (!result_usable(&R, res, inside, missed)) goto done;
 
     /* 6. the reconstruction and the distances */
     stage_begin(&st, "reconstruct");
@@ -809,9 +880,9 @@ int main(int argc, char **argv)
                     "(%zu triangles)\n", R.base.nv, R.base.nt, uv_count, bytes_base, bytes_free, R.free_bytes.nt);
 
     /* 8. the result */
-    printf("RESULT dispmesh faces=%zu res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
+    printf("RESULT dispmesh target=%ld faces=%zu res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
            "unconstrained_rms=%.4e equal_bytes_rms=%.4e equal_bytes_max=%.4e flagged=%.5f bake_ms=%.1f total_ms=%.1f\n",
-           R.base.nt, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
+           faces, R.base.nt, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
            bake_ms, now_ms() - t0);
     fflush(stdout);
     status = ferror(stdout) ? 2 : 0;

@@ -3,9 +3,11 @@
 # brick, and its refusal of bad input. Checks properties only, never timings:
 #   --brick --faces 12 --res 128: exit 0; the five files exist and are not empty; the PNGs pass pngcheck
 #   (counted skip without it); the RESULT line has every field, numeric; faces <= 12; rms < base_only_rms;
-#   flagged <= 0.01.
+#   flagged <= 0.01; target = 12.
+#   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12.
 #   bad input (missing file, malformed files of our own and, when installed, of assimp-testmodels,
-#   --res 0, a bad number, a mesh without extent, an unwritable prefix): a non-zero exit below 128 (no
+#   --res 0, a bad number, a mesh without extent, an unwritable prefix, a map too coarse for the base so
+#   that base triangles get no texel): a non-zero exit below 128 (no
 #   signal), a "dispmesh:" message and no sanitizer report.
 # `make test` does not build the examples: the binary is built here with make when it is missing (with
 # the sanitizer flags of `make sanitize` when TEST_SANITIZE=1).
@@ -58,7 +60,7 @@ result=$(grep '^RESULT dispmesh ' "$tmp/out.txt" | tail -n 1)
 check "one RESULT dispmesh line" [ -n "$result" ]
 field() { echo "$result" | tr ' ' '\n' | sed -n "s/^$1=//p"; }
 isnum() { echo "$1" | grep -q -E '^[-+]?[0-9]+(\.[0-9]*)?([eE][-+]?[0-9]+)?$'; }
-for k in faces res rms max base_only_rms base_only_max unconstrained_rms equal_bytes_rms equal_bytes_max flagged bake_ms total_ms; do
+for k in target faces res rms max base_only_rms base_only_max unconstrained_rms equal_bytes_rms equal_bytes_max flagged bake_ms total_ms; do
   v=$(field $k)
   check "RESULT field $k is a number ('$v')" isnum "$v"
 done
@@ -71,6 +73,25 @@ if isnum "$flagged" && num "$flagged <= 0.01"; then ok; else bad "flagged texels
 if isnum "$faces" && [ -s "$tmp/brick_base.obj" ]; then
   nf=$(grep -c '^f ' "$tmp/brick_base.obj")
   check "brick_base.obj has the RESULT's $faces faces (has $nf)" [ "$nf" = "$faces" ]
+fi
+
+check "RESULT target is --faces 12 ($(field target))" [ "$(field target)" = 12 ]
+
+# ---- an unwelded mesh: the generated brick's 496 triangles as an ASCII STL -------------------------
+if "$prog" --brick --faces 496 --res 256 --no-views -o "$tmp/full" >/dev/null 2>"$tmp/full_err.txt"; then
+  awk 'BEGIN { print "solid brick" } /^v / { n++; x[n] = $2; y[n] = $3; z[n] = $4 }
+       /^f / { print " facet normal 0 0 0"; print "  outer loop"
+               for (i = 2; i <= 4; i++) { split($i, a, "/"); print "   vertex " x[a[1]] " " y[a[1]] " " z[a[1]] }
+               print "  endloop"; print " endfacet" } END { print "endsolid brick" }' "$tmp/full_base.obj" >"$tmp/soup.stl"
+  "$prog" "$tmp/soup.stl" --faces 12 --res 128 --no-views -o "$tmp/soup" >"$tmp/soup_out.txt" 2>"$tmp/soup_err.txt"
+  rc=$?
+  check "unwelded STL run exits 0 (status $rc): $(tail -n 2 "$tmp/soup_err.txt")" [ $rc -eq 0 ]
+  check "unwelded STL is welded: $(grep -m1 welded "$tmp/soup_err.txt")" grep -q 'welded vertices at equal positions: 1488 -> 250' "$tmp/soup_err.txt"
+  result=$(grep '^RESULT dispmesh ' "$tmp/soup_out.txt" | tail -n 1)
+  faces=$(field faces)
+  if isnum "$faces" && num "$faces <= 12"; then ok; else bad "welded STL base has '$faces' triangles, more than --faces 12"; fi
+else
+  bad "brick at --faces 496 failed: $(tail -n 3 "$tmp/full_err.txt")"
 fi
 
 # ---- bad input --------------------------------------------------------------------------------------
@@ -101,6 +122,7 @@ refuse "empty file" "$tmp/empty.obj" -o "$tmp/x"
 refuse "--res 0" --brick --res 0 -o "$tmp/x"
 refuse "--faces abc" --brick --faces abc -o "$tmp/x"
 refuse "--res too small for the charts" --brick --faces 496 --res 8 -o "$tmp/x"
+refuse "--res too coarse for the base (triangles without a texel)" --brick --faces 496 --res 32 -o "$tmp/x"
 refuse "unwritable prefix" --brick --res 64 -o "$tmp/no/such/dir/x"
 refuse "no input" -o "$tmp/x"
 found=0

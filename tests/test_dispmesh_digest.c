@@ -4,7 +4,10 @@
    A change that is meant to keep the output (a restructuring, a speed-up) keeps every digest; a
    change of behaviour updates the table below in the same commit and says why. Each digest is
    printed, so a changed one can be read from the log. The inputs are small enough for the
-   sanitizer build (which must give the same bits: no digest depends on the optimisation level). */
+   sanitizer build (which must give the same bits: no digest depends on the optimisation level).
+   Welding: an unwelded copy of each mesh (every triangle its own three vertices) is refused by
+   dm_simplify (DM_ERR_NOT_WELDED, nothing leaked), and dm_weld turns it into the mesh renumbered in
+   first-use order, bit for bit, so the whole pipeline gives the same digests on both. */
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
 #include "test.h"
@@ -37,6 +40,7 @@ static const expected table[] = {
     {"torus reconstruct", 0x9b403ea1d1e6465eull},
 };
 
+#define STAGES 5
 static void check_digest(const char *name, digest d)
 {
     size_t i;
@@ -80,7 +84,9 @@ static int simplify(const mesh *m, dm_shell *sh, size_t target, float **bp, size
     return 1;
 }
 
-static void pipeline(const char *what, const mesh *m, size_t target, int res)
+/* the five stages' digests into out (0 where a stage failed); checked against the table when
+   check is set */
+static void pipeline(const char *what, const mesh *m, size_t target, int res, int check, uint64_t out[STAGES])
 {
     char name[64];
     float *bp = NULL, *up = NULL;
@@ -93,12 +99,13 @@ static void pipeline(const char *what, const mesh *m, size_t target, int res)
     dm_param_options po;
     dm_bake_options bo;
     digest d;
-    snprintf(name, sizeof name, "%s simplify", what);
-    if (simplify(m, NULL, target, &up, &unv, &ui, &unt, &d)) check_digest(name, d);
+    memset(out, 0, STAGES * sizeof out[0]);
+#define RECORD(stage, label) do { snprintf(name, sizeof name, "%s " label, what); out[stage] = d.h; \
+                                  if (check) check_digest(name, d); } while (0)
+    if (simplify(m, NULL, target, &up, &unv, &ui, &unt, &d)) RECORD(0, "simplify");
     if (!T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &sh) == DM_OK)) goto done;
-    snprintf(name, sizeof name, "%s simplify shell", what);
     if (!simplify(m, sh, target, &bp, &bnv, &bi, &bnt, &d)) goto done;
-    check_digest(name, d);
+    RECORD(1, "simplify shell");
     memset(&po, 0, sizeof po);
     po.width = po.height = res;
     if (!T_CHECK(dm_parameterize(bp, bnv, bi, bnt, &po, &param) == DM_OK)) goto done;
@@ -111,8 +118,7 @@ static void pipeline(const char *what, const mesh *m, size_t target, int res)
     fnv(&d, param->texel_bary, 2 * n * sizeof(float));
     fnv(&d, param->nbr, 4 * n * sizeof(uint32_t));
     fnv(&d, param->nbr_rot, 4 * n);
-    snprintf(name, sizeof name, "%s parameterize", what);
-    check_digest(name, d);
+    RECORD(2, "parameterize");
     memset(&bo, 0, sizeof bo);
     bo.inward = 1;
     if (!T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &map) == DM_OK)) goto done;
@@ -124,14 +130,13 @@ static void pipeline(const char *what, const mesh *m, size_t target, int res)
     fnv(&d, map->area, n * sizeof(float));
     fnv(&d, map->valid, n);
     fnv(&d, map->status, n);
-    snprintf(name, sizeof name, "%s bake", what);
-    check_digest(name, d);
+    RECORD(3, "bake");
     if (!T_CHECK(dm_reconstruct(map, param, NULL, &dense) == DM_OK)) goto done;
     d = fnv_start();
     fnv(&d, dense->positions, 3 * dense->vertex_count * sizeof(float));
     fnv(&d, dense->indices, 3 * dense->triangle_count * sizeof(uint32_t));
-    snprintf(name, sizeof name, "%s reconstruct", what);
-    check_digest(name, d);
+    RECORD(4, "reconstruct");
+#undef RECORD
 done:
     dm_trimesh_free(dense);
     dm_dispmap_free(map);
@@ -143,14 +148,113 @@ done:
     free(ui);
 }
 
+/* every triangle its own three vertices */
+static mesh unweld(const mesh *m)
+{
+    mesh u;
+    size_t i;
+    u.nv = 3 * m->nt;
+    u.nt = m->nt;
+    u.p = (float *)malloc(3 * u.nv * sizeof(float));
+    u.t = (uint32_t *)malloc(3 * u.nt * sizeof(uint32_t));
+    for (i = 0; i < 3 * m->nt; i++) {
+        memcpy(u.p + 3 * i, m->p + 3 * (size_t)m->t[i], 3 * sizeof(float));
+        u.t[i] = (uint32_t)i;
+    }
+    return u;
+}
+
+/* the same mesh with its vertices numbered in the order the triangles first use them */
+static mesh first_use_order(const mesh *m)
+{
+    mesh r;
+    uint32_t *id = (uint32_t *)malloc(m->nv * sizeof(uint32_t));
+    size_t i, n = 0;
+    r.p = (float *)malloc(3 * m->nv * sizeof(float));
+    r.t = (uint32_t *)malloc(3 * m->nt * sizeof(uint32_t));
+    r.nt = m->nt;
+    for (i = 0; i < m->nv; i++) id[i] = UINT32_MAX;
+    for (i = 0; i < 3 * m->nt; i++) {
+        uint32_t v = m->t[i];
+        if (id[v] == UINT32_MAX) {
+            memcpy(r.p + 3 * n, m->p + 3 * (size_t)v, 3 * sizeof(float));
+            id[v] = (uint32_t)n++;
+        }
+        r.t[i] = id[v];
+    }
+    r.nv = n;
+    free(id);
+    return r;
+}
+
+static void test_weld(const char *what, const mesh *m, size_t target, int res)
+{
+    mesh soup = unweld(m), ref = first_use_order(m), w;
+    uint64_t a[STAGES], b[STAGES];
+    size_t nw = 0, k;
+    counting c;
+    dm_allocator al;
+    dm_simplify_options o;
+    dm_pm *pm = NULL;
+    int i;
+    al.alloc = c_alloc;
+    al.free = c_free;
+    al.user = &c;
+    memset(&c, 0, sizeof c);
+    c.fail_at = 1L << 40;
+    memset(&o, 0, sizeof o);
+    o.target_triangles = target;
+    o.allocator = &al;
+    T_CHECK(dm_simplify(soup.p, soup.nv, soup.t, soup.nt, &o, &pm, NULL) == DM_ERR_NOT_WELDED);
+    T_CHECK(pm == NULL && c.live == 0);
+    w.p = (float *)malloc(3 * soup.nv * sizeof(float));
+    w.t = (uint32_t *)malloc(3 * soup.nt * sizeof(uint32_t));
+    w.nt = soup.nt;
+    T_CHECK(dm_weld(soup.p, soup.nv, soup.t, soup.nt, &al, w.p, w.t, &nw) == DM_OK);
+    w.nv = nw;
+    T_CHECK(c.live == 0);
+    T_CHECK_MSG(nw == ref.nv && memcmp(w.p, ref.p, 3 * nw * sizeof(float)) == 0 &&
+                    memcmp(w.t, ref.t, 3 * ref.nt * sizeof(uint32_t)) == 0,
+                "%s: welded %zu vertices, the mesh has %zu", what, nw, ref.nv);
+    /* welding a welded mesh renumbers it, nothing more */
+    T_CHECK(dm_weld(m->p, m->nv, m->t, m->nt, NULL, w.p, w.t, &nw) == DM_OK);
+    T_CHECK(nw == ref.nv && memcmp(w.p, ref.p, 3 * nw * sizeof(float)) == 0);
+    T_CHECK(dm_weld(soup.p, soup.nv, soup.t, soup.nt, NULL, w.p, w.t, &nw) == DM_OK);
+    pipeline(what, &ref, target, res, 0, a);
+    pipeline(what, &w, target, res, 0, b);
+    for (i = 0; i < STAGES; i++)
+        T_CHECK_MSG(a[i] != 0 && a[i] == b[i], "%s stage %d: welded soup 0x%016llx, renumbered mesh 0x%016llx", what, i,
+                    (unsigned long long)b[i], (unsigned long long)a[i]);
+    /* bad input and every allocation failing in turn: an error, nothing leaked */
+    soup.p[3 * soup.t[7] + 1] = NAN;
+    T_CHECK(dm_weld(soup.p, soup.nv, soup.t, soup.nt, NULL, w.p, w.t, &nw) == DM_ERR_BAD_POSITION && nw == 0);
+    soup.t[4] = (uint32_t)soup.nv;
+    T_CHECK(dm_weld(soup.p, soup.nv, soup.t, soup.nt, NULL, w.p, w.t, &nw) == DM_ERR_BAD_INDEX);
+    T_CHECK(dm_weld(soup.p, soup.nv, soup.t, soup.nt, NULL, NULL, w.t, &nw) == DM_ERR_INVALID_ARGUMENT);
+    for (k = 0; k <= 3; k++) { /* dm_weld allocates three arrays */
+        dm_result r;
+        memset(&c, 0, sizeof c);
+        c.fail_at = (long)k;
+        r = dm_weld(ref.p, ref.nv, ref.t, ref.nt, &al, w.p, w.t, &nw);
+        T_CHECK_MSG((k < 3 ? r == DM_ERR_OUT_OF_MEMORY : r == DM_OK) && c.live == 0, "%s: allocation %zu fails: %s, %ld live",
+                    what, k, dm_result_string(r), c.live);
+    }
+    mesh_free(&soup);
+    mesh_free(&ref);
+    mesh_free(&w);
+}
+
 int main(int argc, char **argv)
 {
     mesh sphere, torus;
+    uint64_t d[STAGES];
     T_BEGIN(argc, argv);
     sphere = make_sphere(12, 0.08, 1.0);
-    pipeline("sphere", &sphere, 200, 128);
+    pipeline("sphere", &sphere, 200, 128, 1, d);
+    test_weld("sphere", &sphere, 200, 128);
     torus = make_torus(64, 32, 0.5, 0.05);
-    pipeline("torus", &torus, 300, 128);
+    pipeline("torus", &torus, 300, 128, 1, d);
+    test_weld("torus", &torus, 300, 128);
     mesh_free(&sphere);
     mesh_free(&torus);
     return T_END();
