@@ -1,0 +1,2 @@
+# texel.h (issue 19): tests
+C_TESTS += $(B)/test_texel

@@ -1,0 +1,1703 @@
+/* texel.h - v0.1 - MIT licence or public domain (see end of file)
+   Time-varying texels (TVT): volumetric grass that withers over time (Jiao, Yang, Heng, Wu 2010).
+
+   WHAT
+     - Static grass texel: random cone blades voxelised into density, normal, tangent, diffuse
+       colour and specular, res^3 voxels (res a power of two, 8..1024). The texel wraps at its
+       four side borders (blades crossing a border come back on the other side), so it tiles.
+       Storage is sparse: res^3 voxels in bricks of 4^3, an index of uint32 per brick (empty
+       bricks cost 4 bytes), 8- or 16-bit channels. tvt_texel_bytes reports the bytes.
+     - Point-based structure (PBS): proportion * density points per voxel (default 6), and
+       normalised Gaussian splatting back into a texel (total density kept exactly).
+     - The physical-biological model: water-content curves, vein / mesophyll shrinkage with
+       stiffening, droop that bends blades more toward the tip, point merging, colour from
+       chlorophyll a, b and carotene absorption spectra to linear sRGB, and wd(t).
+
+   HOW TO USE (in ten lines)
+       // in exactly one C or C++ file, #define TVT_IMPLEMENTATION before #include "texel.h"
+       tvt_grass_desc g = tvt_grass_default_desc();          // 100 cones at 64^3
+       tvt_texel grass, frame; tvt_points pts;
+       tvt_build_grass(&g, &grass);                          // the static texel (wd = 0)
+       tvt_sample(&grass, NULL, &pts);                       // texel -> points
+       for (int k = 1; k <= 8; k++) {                        // age to wd = 1 in 8 steps
+           tvt_age(&pts, k / 8.0f, NULL);                    // move, shrink, droop, yellow, merge
+           tvt_splat(&pts, NULL, &frame);  use(&frame);  tvt_texel_free(&frame);
+       }
+       tvt_points_free(&pts); tvt_texel_free(&grass);
+
+   PIPELINE (paper sections 2 and 3)
+     1. Blades (tvt_grass_blades): root uniform in the base square, height uniform in
+        [height_min, height_max] * res, base radius uniform in [radius_min, radius_max] voxels
+        tapering linearly to 0 at the tip, lean uniform in [lean_min, lean_max] degrees toward a
+        uniform azimuth. Roots are placed on a 1/4096-voxel lattice so that an integer shift of
+        every root is exact in float: the voxeliser then gives the shifted texel bit for bit.
+     2. Voxelisation (tvt_build_texel): each voxel is sampled on a supersample^3 lattice;
+        density = covered fraction summed over blades (not clamped: it is an extinction
+        density, overlapping blades add up); tangent = cone axis (the vein direction); normal =
+        (sample - closest axis point) / local radius, averaged, so |normal| is about 0 on the
+        axis (the paper's vein cells) and up to 1 at the surface (mesophyll cells); colour =
+        the pigment colour at wd = 0 times a per-blade brightness; specular = 0.3. Every voxel
+        also keeps the index of the blade that covers most of it (static texels only), so that
+        points know their blade's root and axis exactly (the paper reconstructs the root from
+        the tangent line, which is kept for texels without blade indices).
+     3. Sampling (tvt_sample): in each voxel, q = proportion * density points, rounded down or up
+        at random with the probability of the fraction (unbiased), uniform in the voxel, each
+        inheriting the voxel's attributes. Random numbers come from a hash of (seed, voxel), so
+        the result does not depend on the traversal order.
+     4. Ageing (tvt_age): every point's position is a function of its rest state and wd, see
+        MODEL; close points are merged after each step (the only path-dependent part).
+     5. Splatting (tvt_splat): each point spreads its mass m over the 3^3 voxel centres around
+        it with Gaussian weights exp(-d^2 / 2 sigma^2), sigma = 0.5 voxel, divided by their sum:
+        density(v) = sum_i m_i w_i(v) / proportion, attributes = sum m w A / sum m w. The paper's
+        a * exp(...) with a fixed a loses or gains mass depending on where a point falls in its
+        voxel; normalising per point keeps the total density exactly and is the paper's formula
+        for a smooth field (where the lattice sum of a normalised Gaussian is 1). Voxels below
+        z = 0 or above the top are left out of the sum, so no mass is lost at the ground.
+
+   MODEL (paper section 3; the paper gives the quantities but no curves, values or forms)
+     wd(t) = clamp(t / duration, 0, 1): the paper never defines it; linear time is the choice
+       that lets key frames at equal wd steps be equal time steps.
+     Water content (fraction of the initial), logistic in wd, w(0) = 1 (paper Fig 9b is a figure
+       only):  w(wd) = [w_end + (1 - w_end) / (1 + exp((wd - c) / s))] / (same at wd = 0),
+       w_end = 0.25; standard c = 0.45, s = 0.08; ample water c = 0.60, s = 0.08; low temperature
+       c = 0.55, s = 0.15. Water lost dw(wd) = 1 - w(wd).
+     Shrinkage: the paper's initial strains eps0_v = k_v dw, eps0_m = k_m dw (k_v = 0.10 <
+       k_m = 0.40: veins hold their water better). The moduli stiffen, E(wd) = E0 (1 + gamma wd),
+       gamma = 4, and a stiffer cell realises less of its free strain: d eps = d eps0 * E0 / E(wd)
+       (integrated over wd in 256 midpoint steps). So shrinkage slows and settles, as the paper
+       says. Axial (blade length) strain from the vein / mesophyll mix weighted by stiffness and
+       area, e_ax = 1 - (1 - eps_mix)^(1/3); radial strain of mesophyll, e_rad = 1 -
+       (1 - eps_m)^(1/2). The paper writes E_v < E_m but justifies it by veins resisting
+       deformation more, i.e. E_v > E_m; vein_stiffness (E_v / E_m) defaults to 2, and 0.5 gives
+       the literal reading.
+     Droop: the paper rotates each point about the root at omega_i = omega / h_i^2, which makes
+       the root turn fastest (against its own text, and infinite at h = 0), and rigid rotation of
+       each point about the root at its own rate stretches the blade and tears it. Here the
+       blade's direction at arc length s is turned toward its lean azimuth by
+           phi(s) = Theta(wd) * min(s / L, 1)^beta,  beta = 2,  L = droop_length * res (0.6),
+       Theta(wd) = droop_max (80 degrees) * dw(wd) / dw(1) (support lost with the water), and the
+       centre line is the integral of that direction: the blade bends more toward the tip, tips
+       move more than roots, the length is kept (after shrinkage) and it cannot tear. L is one
+       length for all blades, so that tall blades, with more lever arm, droop more.
+       Points that would go below the ground lie on it (z = 0).
+     Frame: tangent = the bent centre line's direction; the normal is turned with it.
+     Colour (paper section 3.2): pigments chlorophyll a : b : carotene = 27 : 9 : 4 at wd = 0;
+       chlorophyll follows Chl(wd) = [0.03 + 0.97 / (1 + exp((wd - 0.4) / 0.1))] / (same at 0),
+       carotene stays constant. Reflectance R(l) = 0.55 exp(-3 A(l)) (Beer-Lambert: the paper's
+       L - absorption can go negative), A = sum of pigment amounts times their absorption
+       spectra (sums of Gaussians at the pigments' literature peaks), plus a brown term
+       1.5 dw/dw(1) exp(-(l - 380) / 110) for the oxidised polyphenols of dry blades (not in the
+       paper; without it wd = 1 is a clean yellow, not the yellow-brown of withered grass).
+       R is integrated on 380..780 nm with the CIE 1931 fit of Wyman, Sloan, Shirley (2013)
+       under an equal-energy illuminant and converted to linear sRGB. Each blade ages with a
+       delay in [-colour_jitter, colour_jitter] (0.05) of wd for its colour, so a patch is not
+       one flat tint. Specular: ms = ms0 (0.4 + 0.6 w(wd)) (dry grass is less glossy).
+     Merging (paper Algorithm 1): after each step, each point (in index order) absorbs its
+       nearest later point closer than merge_threshold (0.15 voxel): position, normal, tangent,
+       colour, specular and rest state are mass-weighted means and masses add. Density counts
+       mass, so merging keeps the grass (the paper counts each point as 1, which would make
+       merged grass thinner). A hash grid of 0.3-voxel cells makes it O(n). Time is the outer
+       loop (the paper's Algorithm 1 loops over points outside time, which cannot merge).
+
+   OPTIONS
+     Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
+     Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options. Zero
+     (or a NULL pointer) means the default; tvt_*_default_*() return the resolved values.
+       tvt_grass_desc   res (64), blade_count (100), seed, height_min/max (0.55, 0.9 of res),
+                        radius_min/max (1.5 voxels), lean_min/max (3, 12 degrees), supersample
+                        (3), bits (8 or 16; 8), ms (0.3), allocator, progress.
+       tvt_sample_options  proportion (6), seed, allocator, progress.
+       tvt_model_options   water_curve (TVT_WATER_STANDARD / _AMPLE / _COLD), k_vein (0.10),
+                        k_mesophyll (0.40), vein_stiffness (2), stiffening (4), area_ratio (3),
+                        droop_max_deg (80), droop_exponent (2), droop_length (0.6 of res),
+                        merge_threshold (0.15 voxel;
+                        no_merge = 1 turns merging off), colour_jitter (0.05), progress.
+       tvt_splat_options   bits (8), sigma (0.5 voxel), allocator, progress.
+
+   MEMORY
+     A tvt_texel owns its brick index, brick data, per-voxel blade indices (static texels
+     only) and blade table, allocated with the allocator it was built with; tvt_texel_free
+     frees them. Per voxel of an occupied brick: 11 bytes at 8 bits, 22 at 16 bits, +2 for the
+     blade index of a static texel. 8-bit density is stored as the square root of density /
+     density_max (fine steps for the faint voxels a splat makes; 16-bit is linear); vectors map
+     [-1, 1] and colours [0, 1] linearly. A tvt_points holds 140 bytes per point. Building and
+     splatting use a float scratch grid of 52 bytes per voxel of each touched brick.
+
+   ERRORS
+     Functions return tvt_result (TVT_OK = 0); tvt_result_string() names it.
+       TVT_ERR_INVALID_ARGUMENT  a NULL pointer, an unknown option value;
+       TVT_ERR_BAD_RESOLUTION    res not a power of two in 8..1024, bits not 8 or 16;
+       TVT_ERR_BAD_PARAMETER     a NaN or infinite parameter, or one out of its range
+                                 (negative radius, height_min > height_max, ...);
+       TVT_ERR_BAD_WD            wd outside [0, 1] (NaN included) in tvt_age; tvt_wd_from_time
+                                 clamps instead (documented there);
+       TVT_ERR_EMPTY             zero blades, or sampling a texel with no density;
+       TVT_ERR_TOO_LARGE         a size that overflows size_t or 32-bit counts;
+       TVT_ERR_OUT_OF_MEMORY     the allocator returned NULL;
+       TVT_CANCELLED             the progress callback returned nonzero.
+     On failure the output object is zeroed and nothing is leaked; tvt_age leaves the points as
+     they were unless it fails inside merging (then they are valid, at the new wd, unmerged).
+
+   THREAD SAFETY
+     No global state; every function is re-entrant. The same input and options give the same
+     bits on every run (random numbers from seeded hashes, sums in a fixed order).
+
+   LIMITS
+     res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points.
+     Not in this version (paper section 4): key frames and interpolation, mingling, the LOD
+     pyramid, tiling over a terrain, sampling and ray marching.
+
+   REFERENCES
+     Jiao Shao-Hui, Yang Gang, Heng Pheng-Ann, Wu En-Hua, "Realistic grass withering simulation
+       based on time-varying texels" (in Chinese), Journal of Software 21(9), 2010, 2224-2236.
+     J. T. Kajiya, T. L. Kay, "Rendering fur with three dimensional textures", SIGGRAPH 1989.
+     F. Neyret, "Modeling, animating, and rendering complex scenes using volumetric textures",
+       IEEE TVCG 4(1), 1998.
+     C. Wyman, P.-P. Sloan, P. Shirley, "Simple analytic approximations to the CIE XYZ color
+       matching functions", JCGT 2(2), 2013. */
+#ifndef TVT_TEXEL_H
+#define TVT_TEXEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef TVT_STATIC
+#if defined(__GNUC__) || defined(__clang__)
+#define TVTDEF static __attribute__((unused))
+#else
+#define TVTDEF static
+#endif
+#else
+#define TVTDEF extern
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum tvt_result {
+    TVT_OK = 0,
+    TVT_ERR_INVALID_ARGUMENT, /* NULL pointer, unknown option value */
+    TVT_ERR_BAD_RESOLUTION,   /* res not a power of two in 8..1024, bits not 8 or 16 */
+    TVT_ERR_BAD_PARAMETER,    /* NaN, infinite or out-of-range parameter */
+    TVT_ERR_BAD_WD,           /* wd outside [0, 1] */
+    TVT_ERR_EMPTY,            /* zero blades, or a texel with no density */
+    TVT_ERR_TOO_LARGE,        /* a size overflows */
+    TVT_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
+    TVT_CANCELLED             /* the progress callback returned nonzero */
+} tvt_result;
+
+/* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
+typedef struct tvt_allocator {
+    void *(*alloc)(void *user, size_t size);
+    void (*free)(void *user, void *ptr);
+    void *user;
+} tvt_allocator;
+
+enum { TVT_WATER_STANDARD = 0, TVT_WATER_AMPLE = 1, TVT_WATER_COLD = 2 };
+enum { TVT_BRICK = 4, TVT_CHANNELS = 11 };
+#define TVT_NO_BLADE 0xFFFFu
+#define TVT_EMPTY_BRICK 0xFFFFFFFFu
+
+/* One voxel, decoded. Vectors are not normalised (|normal| ~ 0 on a blade's axis). */
+typedef struct tvt_voxel {
+    float density;    /* extinction density: covered fraction of the voxel, summed over blades */
+    float normal[3];  /* radial direction from the blade axis, length up to 1 */
+    float tangent[3]; /* blade direction (unit where one blade covers the voxel) */
+    float color[3];   /* diffuse colour, linear sRGB in [0, 1] */
+    float specular;   /* specular coefficient in [0, 1] */
+} tvt_voxel;
+
+/* A cone blade, in voxel units: z up, the ground is z = 0, x and y wrap at res. */
+typedef struct tvt_blade {
+    float root[3];    /* centre of the base, z = 0 */
+    float axis[3];    /* unit axis, axis[2] > 0 */
+    float bend[3];    /* unit, perpendicular to axis, forward-down toward the lean azimuth */
+    float height;     /* axis length */
+    float radius;     /* base radius (voxels), tapering to 0 at the tip */
+    float brightness; /* colour factor (0.85..1.15) */
+    float wd_delay;   /* colour ages at wd + wd_delay */
+} tvt_blade;
+
+/* A texel: res^3 voxels in TVT_BRICK^3 bricks. */
+typedef struct tvt_texel {
+    int res;                 /* voxels per side */
+    int bits;                /* 8 or 16 bits per channel */
+    int bricks_per_side;     /* res / TVT_BRICK */
+    uint32_t *brick_index;   /* bricks_per_side^3 (x fastest): brick number or TVT_EMPTY_BRICK */
+    size_t brick_count;      /* occupied bricks, stored in index order */
+    void *data;              /* brick_count * 64 voxels * 11 channels of uint8_t or uint16_t */
+    float density_max;       /* scale of the density channel */
+    uint16_t *blade_of_voxel;/* NULL, or brick_count * 64 blade indices (TVT_NO_BLADE = none) */
+    tvt_blade *blades;       /* NULL, or the blades of a static texel */
+    size_t blade_count;
+    tvt_allocator allocator;
+} tvt_texel;
+
+typedef struct tvt_grass_desc {
+    int res;                 /* 8..1024, power of two; 0 = 64 */
+    size_t blade_count;      /* 1..65534; 0 = 100 (use tvt_build_texel for an empty texel) */
+    uint64_t seed;
+    float height_min, height_max; /* fraction of res; 0 = 0.55, 0.9 */
+    float radius_min, radius_max; /* base radius in voxels; 0 = 1.5 */
+    float lean_min_deg, lean_max_deg; /* 0 = 3, 12 */
+    int supersample;         /* samples per voxel side, 1..8; 0 = 3 */
+    int bits;                /* 8 or 16; 0 = 8 */
+    float specular;          /* 0 = 0.3 */
+    const tvt_allocator *allocator; /* NULL = TVT_MALLOC/TVT_FREE */
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_grass_desc;
+
+/* One point of the PBS, voxel units. The rest state (root ... specular0) is where the point
+   was at wd = 0 relative to its blade; tvt_age computes pos, normal, tangent, color and
+   specular from it. */
+typedef struct tvt_point {
+    float pos[3], normal[3], tangent[3], color[3], specular, mass;
+    float root[3], axis[3], bend[3]; /* the blade's root (unwrapped, near pos), axis, bend */
+    float ell;                       /* arc length from the root along the axis at wd = 0 */
+    float radial[3];                 /* offset from the axis at wd = 0 */
+    float normal0[3];                /* normal at wd = 0 */
+    float brightness, specular0, wd_delay;
+} tvt_point;
+
+typedef struct tvt_points {
+    tvt_point *p;
+    size_t count;
+    int res;
+    float proportion;        /* points per unit density, as sampled */
+    float wd;                /* weathering degree of the current state */
+    tvt_allocator allocator;
+} tvt_points;
+
+typedef struct tvt_sample_options {
+    float proportion;        /* points per unit density per voxel; 0 = 6 */
+    uint64_t seed;
+    const tvt_allocator *allocator;
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_sample_options;
+
+typedef struct tvt_model_options {
+    int water_curve;         /* TVT_WATER_STANDARD (0), TVT_WATER_AMPLE, TVT_WATER_COLD */
+    float k_vein, k_mesophyll; /* 0 = 0.10, 0.40 */
+    float vein_stiffness;    /* E_v / E_m; 0 = 2 (the paper's literal text: 0.5) */
+    float stiffening;        /* gamma in E(wd) = E0 (1 + gamma wd); 0 = 4 */
+    float area_ratio;        /* mesophyll : vein cross-section; 0 = 3 */
+    float droop_max_deg;     /* 0 = 80 */
+    float droop_exponent;    /* beta; 0 = 2 */
+    float droop_length;      /* arc length where the bend reaches droop_max, fraction of res; 0 = 0.6 */
+    float merge_threshold;   /* voxels; 0 = 0.15 */
+    int no_merge;            /* 1 = never merge */
+    float colour_jitter;     /* per-blade wd delay bound for colour; 0 = 0.05, negative = none */
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_model_options;
+
+/* The model's scalars at one wd (tvt_model_eval). */
+typedef struct tvt_model_state {
+    float water;             /* w(wd), 1 at wd = 0 */
+    float water_lost;        /* 1 - w */
+    float chlorophyll;       /* Chl(wd), 1 at wd = 0 */
+    float strain_vein, strain_mesophyll; /* realised volume strains */
+    float axial_shrink, radial_shrink;   /* linear strains e_ax, e_rad */
+    float droop;             /* Theta(wd), radians */
+    float specular_factor;   /* 0.4 + 0.6 w */
+    float color[3];          /* pigment colour, linear sRGB */
+} tvt_model_state;
+
+typedef struct tvt_splat_options {
+    int bits;                /* 8 or 16; 0 = 8 */
+    float sigma;             /* Gaussian sigma in voxels, 0.25..1; 0 = 0.5 */
+    const tvt_allocator *allocator; /* NULL = the points' allocator */
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_splat_options;
+
+/* ---- defaults ----------------------------------------------------------------------------------- */
+TVTDEF tvt_grass_desc tvt_grass_default_desc(void);
+TVTDEF tvt_sample_options tvt_sample_default_options(void);
+TVTDEF tvt_model_options tvt_model_default_options(void);
+TVTDEF tvt_splat_options tvt_splat_default_options(void);
+
+/* ---- static texel ------------------------------------------------------------------------------- */
+
+/* Random blades of desc (steps 1 of PIPELINE). out: desc->blade_count blades (default 100). */
+TVTDEF tvt_result tvt_grass_blades(const tvt_grass_desc *desc, tvt_blade *out, size_t out_capacity);
+
+/* Voxelises blades (any number, 0 gives an empty texel) at desc->res with desc's supersample,
+   bits, allocator and progress; the blade table is copied into out. out is zeroed on failure. */
+TVTDEF tvt_result tvt_build_texel(const tvt_blade *blades, size_t blade_count, const tvt_grass_desc *desc,
+                                  tvt_texel *out);
+
+/* tvt_grass_blades then tvt_build_texel. desc NULL = defaults. */
+TVTDEF tvt_result tvt_build_grass(const tvt_grass_desc *desc, tvt_texel *out);
+
+/* A texel from res^3 dense voxels (x fastest, then y, then z), for any content. bits 8 or 16. */
+TVTDEF tvt_result tvt_texel_from_voxels(int res, const tvt_voxel *voxels, int bits, const tvt_allocator *allocator,
+                                        tvt_texel *out);
+
+/* Voxel (x, y, z), decoded; x and y wrap, z outside 0..res-1 gives an empty voxel. */
+TVTDEF void tvt_texel_voxel(const tvt_texel *t, long x, long y, long z, tvt_voxel *out);
+
+/* Bytes held by the texel: brick index, brick data, blade indices and blade table. */
+TVTDEF size_t tvt_texel_bytes(const tvt_texel *t);
+
+/* Sum of all voxels' density. */
+TVTDEF double tvt_texel_total_density(const tvt_texel *t);
+
+TVTDEF void tvt_texel_free(tvt_texel *t);
+
+/* ---- points ------------------------------------------------------------------------------------- */
+
+/* Texel -> points (step 3). TVT_ERR_EMPTY if the texel has no density. */
+TVTDEF tvt_result tvt_sample(const tvt_texel *t, const tvt_sample_options *options, tvt_points *out);
+
+/* Moves the points to weathering degree wd (step 4), then merges close points. wd in [0, 1];
+   going back in wd is allowed (merges are not undone). */
+TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *options);
+
+/* Points -> texel (step 5). An empty point set gives an empty texel. */
+TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *options, tvt_texel *out);
+
+TVTDEF void tvt_points_free(tvt_points *pts);
+
+/* ---- model -------------------------------------------------------------------------------------- */
+
+/* The model's scalars at wd (clamped to [0, 1]; NaN gives wd = 0). options NULL = defaults. */
+TVTDEF tvt_result tvt_model_eval(const tvt_model_options *options, float wd, tvt_model_state *out);
+
+/* Pigment colour (linear sRGB) for chlorophyll fraction chl (1 = fresh) and browning in [0, 1]. */
+TVTDEF void tvt_pigment_color(float chlorophyll, float browning, float rgb[3]);
+
+/* wd(t) = clamp(t / duration, 0, 1); duration <= 0 or NaN input gives 0. */
+TVTDEF float tvt_wd_from_time(float t, float duration);
+
+/* "TVT_OK", "TVT_ERR_EMPTY", ... (the enum name); "TVT_ERR_?" outside the enum. */
+TVTDEF const char *tvt_result_string(tvt_result r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TVT_TEXEL_H */
+
+/* ============================================================================================
+   Implementation
+   ============================================================================================ */
+#ifdef TVT_IMPLEMENTATION
+#ifndef TVT_IMPLEMENTATION_DONE
+#define TVT_IMPLEMENTATION_DONE
+
+#include <string.h>
+#include <math.h>
+
+#if defined(TVT_MALLOC) && defined(TVT_FREE)
+/* both given */
+#elif !defined(TVT_MALLOC) && !defined(TVT_FREE)
+#include <stdlib.h>
+#define TVT_MALLOC(sz) malloc(sz)
+#define TVT_FREE(p) free(p)
+#else
+#error "texel.h: define both TVT_MALLOC and TVT_FREE, or neither"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------------------------------
+   Small helpers: allocation, hashing, vectors
+   --------------------------------------------------------------------------------------------- */
+#define TVT__PI 3.14159265358979323846
+
+static void *tvt__default_alloc(void *user, size_t size) { (void)user; return TVT_MALLOC(size); }
+static void tvt__default_free(void *user, void *p) { (void)user; TVT_FREE(p); }
+
+static tvt_allocator tvt__resolve_allocator(const tvt_allocator *a)
+{
+    tvt_allocator r;
+    if (a && a->alloc && a->free) return *a;
+    r.alloc = tvt__default_alloc;
+    r.free = tvt__default_free;
+    r.user = NULL;
+    return r;
+}
+
+static void *tvt__alloc(const tvt_allocator *a, size_t count, size_t size)
+{
+    if (size != 0 && count > ((size_t)-1) / size) return NULL;
+    if (count * size == 0) return a->alloc(a->user, 1);
+    return a->alloc(a->user, count * size);
+}
+
+static void tvt__free(const tvt_allocator *a, void *p) { if (p) a->free(a->user, p); }
+
+static int tvt__finite(float x) { return x == x && x - x == 0.0f; }
+
+/* splitmix64: the per-voxel / per-blade random streams */
+static uint64_t tvt__mix(uint64_t z)
+{
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* uniform in [0, 1) with 24 bits, advancing the state */
+static float tvt__rand(uint64_t *s)
+{
+    *s += 0x9E3779B97F4A7C15ull;
+    return (float)(tvt__mix(*s) >> 40) * (1.0f / 16777216.0f);
+}
+
+static float tvt__dot(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static void tvt__normalize(float *v)
+{
+    float l = sqrtf(tvt__dot(v, v));
+    if (l > 1e-20f) { v[0] /= l; v[1] /= l; v[2] /= l; }
+}
+
+static int tvt__check_res(int res)
+{
+    return res >= 8 && res <= 1024 && (res & (res - 1)) == 0;
+}
+
+static int tvt__report(int (*progress)(void *, float), void *user, float done)
+{
+    return progress ? progress(user, done) : 0;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Sparse float accumulation grid (building and splatting). Per voxel TVT__ACC floats:
+   weight, normal*3, tangent*3, colour*3, specular, best coverage, best blade.
+   --------------------------------------------------------------------------------------------- */
+enum { TVT__ACC = 13, TVT__BV = TVT_BRICK * TVT_BRICK * TVT_BRICK };
+
+typedef struct tvt__acc {
+    int res, nb;
+    uint32_t *index;
+    float *data;
+    size_t count, cap;
+    int failed;
+    tvt_allocator a;
+} tvt__acc;
+
+static tvt_result tvt__acc_init(tvt__acc *g, int res, const tvt_allocator *a)
+{
+    size_t n, i;
+    memset(g, 0, sizeof(*g));
+    g->res = res;
+    g->nb = res / TVT_BRICK;
+    g->a = *a;
+    n = (size_t)g->nb * g->nb * g->nb;
+    g->index = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    if (!g->index) return TVT_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) g->index[i] = TVT_EMPTY_BRICK;
+    return TVT_OK;
+}
+
+static void tvt__acc_free(tvt__acc *g)
+{
+    tvt__free(&g->a, g->index);
+    tvt__free(&g->a, g->data);
+    memset(g, 0, sizeof(*g));
+}
+
+static int tvt__acc_grow(tvt__acc *g)
+{
+    size_t cap = g->cap ? g->cap * 2 : 64;
+    float *d = (float *)tvt__alloc(&g->a, cap, sizeof(float) * TVT__ACC * TVT__BV);
+    if (!d) return 0;
+    if (g->count) memcpy(d, g->data, g->count * sizeof(float) * TVT__ACC * TVT__BV);
+    tvt__free(&g->a, g->data);
+    g->data = d;
+    g->cap = cap;
+    return 1;
+}
+
+/* The accumulator of voxel (x, y, z) (x, y in 0..res-1, z in 0..res-1), its brick created on
+   demand; NULL after an allocation failure (g->failed is then set). */
+static float *tvt__acc_voxel(tvt__acc *g, int x, int y, int z)
+{
+    size_t b = ((size_t)(z >> 2) * g->nb + (size_t)(y >> 2)) * g->nb + (size_t)(x >> 2);
+    uint32_t k = g->index[b];
+    if (k == TVT_EMPTY_BRICK) {
+        if (g->failed || (g->count == g->cap && !tvt__acc_grow(g))) { g->failed = 1; return NULL; }
+        k = (uint32_t)g->count++;
+        memset(g->data + (size_t)k * TVT__ACC * TVT__BV, 0, sizeof(float) * TVT__ACC * TVT__BV);
+        for (size_t i = 0; i < TVT__BV; i++) g->data[((size_t)k * TVT__BV + i) * TVT__ACC + 12] = -1.0f;
+        g->index[b] = k;
+    }
+    return g->data + ((size_t)k * TVT__BV + (size_t)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3))) * TVT__ACC;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Channel encoding
+   --------------------------------------------------------------------------------------------- */
+static unsigned tvt__q(float v, float qmax)
+{
+    float f = v * qmax + 0.5f;
+    if (!(f > 0.0f)) return 0;
+    if (f > qmax) return (unsigned)qmax;
+    return (unsigned)f;
+}
+
+/* voxel -> 11 quantised channels */
+static void tvt__encode(const tvt_voxel *v, float density_max, int bits, unsigned *q)
+{
+    float qm = bits == 8 ? 255.0f : 65535.0f, d = density_max > 0 ? v->density / density_max : 0.0f;
+    int i;
+    q[0] = tvt__q(bits == 8 ? sqrtf(d > 0 ? d : 0) : d, qm);
+    for (i = 0; i < 3; i++) {
+        q[1 + i] = tvt__q(0.5f * (v->normal[i] + 1.0f), qm);
+        q[4 + i] = tvt__q(0.5f * (v->tangent[i] + 1.0f), qm);
+        q[7 + i] = tvt__q(v->color[i], qm);
+    }
+    q[10] = tvt__q(v->specular, qm);
+}
+
+static void tvt__decode(const unsigned *q, float density_max, int bits, tvt_voxel *v)
+{
+    float inv = bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f, d = (float)q[0] * inv;
+    int i;
+    if (q[0] == 0) { memset(v, 0, sizeof(*v)); return; } /* an empty voxel has no attributes */
+    v->density = density_max * (bits == 8 ? d * d : d);
+    for (i = 0; i < 3; i++) {
+        v->normal[i] = (float)q[1 + i] * inv * 2.0f - 1.0f;
+        v->tangent[i] = (float)q[4 + i] * inv * 2.0f - 1.0f;
+        v->color[i] = (float)q[7 + i] * inv;
+    }
+    v->specular = (float)q[10] * inv;
+}
+
+static void tvt__store(tvt_texel *t, size_t slot, const unsigned *q)
+{
+    int c;
+    if (t->bits == 8) {
+        uint8_t *d = (uint8_t *)t->data + slot * TVT_CHANNELS;
+        for (c = 0; c < TVT_CHANNELS; c++) d[c] = (uint8_t)q[c];
+    } else {
+        uint16_t *d = (uint16_t *)t->data + slot * TVT_CHANNELS;
+        for (c = 0; c < TVT_CHANNELS; c++) d[c] = (uint16_t)q[c];
+    }
+}
+
+static void tvt__load(const tvt_texel *t, size_t slot, unsigned *q)
+{
+    int c;
+    if (t->bits == 8) {
+        const uint8_t *d = (const uint8_t *)t->data + slot * TVT_CHANNELS;
+        for (c = 0; c < TVT_CHANNELS; c++) q[c] = d[c];
+    } else {
+        const uint16_t *d = (const uint16_t *)t->data + slot * TVT_CHANNELS;
+        for (c = 0; c < TVT_CHANNELS; c++) q[c] = d[c];
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Accumulator -> texel: normalise attributes, find the density scale, keep bricks with density
+   --------------------------------------------------------------------------------------------- */
+/* accumulated voxel -> decoded voxel (density = weight * density_factor) */
+static void tvt__acc_resolve(const float *a, float density_factor, tvt_voxel *v)
+{
+    float w = a[0];
+    int i;
+    v->density = w * density_factor;
+    for (i = 0; i < 3; i++) {
+        v->normal[i] = w > 0 ? a[1 + i] / w : 0.0f;
+        v->tangent[i] = w > 0 ? a[4 + i] / w : 0.0f;
+        v->color[i] = w > 0 ? a[7 + i] / w : 0.0f;
+    }
+    v->specular = w > 0 ? a[10] / w : 0.0f;
+    if (w > 0) tvt__normalize(v->tangent);
+}
+
+/* Brick of accumulator brick k: does any voxel quantise to a nonzero density? */
+static int tvt__brick_occupied(const tvt__acc *g, uint32_t k, float density_factor, float density_max, int bits)
+{
+    size_t i;
+    for (i = 0; i < TVT__BV; i++) {
+        tvt_voxel v;
+        unsigned q[TVT_CHANNELS];
+        tvt__acc_resolve(g->data + ((size_t)k * TVT__BV + i) * TVT__ACC, density_factor, &v);
+        tvt__encode(&v, density_max, bits, q);
+        if (q[0]) return 1;
+    }
+    return 0;
+}
+
+static tvt_result tvt__texel_alloc(tvt_texel *t, int res, int bits, size_t bricks, int with_blades,
+                                   const tvt_allocator *a)
+{
+    size_t nidx = (size_t)(res / TVT_BRICK) * (res / TVT_BRICK) * (res / TVT_BRICK), i;
+    memset(t, 0, sizeof(*t));
+    t->res = res;
+    t->bits = bits;
+    t->bricks_per_side = res / TVT_BRICK;
+    t->allocator = *a;
+    t->brick_count = bricks;
+    t->brick_index = (uint32_t *)tvt__alloc(a, nidx, sizeof(uint32_t));
+    t->data = tvt__alloc(a, bricks * TVT__BV * TVT_CHANNELS, (size_t)bits / 8);
+    if (with_blades) t->blade_of_voxel = (uint16_t *)tvt__alloc(a, bricks * TVT__BV, sizeof(uint16_t));
+    if (!t->brick_index || !t->data || (with_blades && !t->blade_of_voxel)) {
+        tvt_texel_free(t);
+        return TVT_ERR_OUT_OF_MEMORY;
+    }
+    for (i = 0; i < nidx; i++) t->brick_index[i] = TVT_EMPTY_BRICK;
+    return TVT_OK;
+}
+
+/* Writes the accumulator into a new texel. Bricks come in index order whatever order the
+   accumulator made them in, so the texel's bytes depend on its content only. */
+static tvt_result tvt__acc_to_texel(const tvt__acc *g, float density_factor, int bits, int with_blades,
+                                    tvt_texel *out)
+{
+    size_t nidx = (size_t)g->nb * g->nb * g->nb, b, i, kept = 0;
+    float dmax = 0.0f;
+    tvt_result r;
+    for (i = 0; i < g->count * TVT__BV; i++) {
+        float d = g->data[i * TVT__ACC] * density_factor;
+        if (d > dmax) dmax = d;
+    }
+    for (b = 0; b < nidx; b++)
+        if (g->index[b] != TVT_EMPTY_BRICK && tvt__brick_occupied(g, g->index[b], density_factor, dmax, bits)) kept++;
+    r = tvt__texel_alloc(out, g->res, bits, kept, with_blades, &g->a);
+    if (r != TVT_OK) return r;
+    out->density_max = dmax;
+    kept = 0;
+    for (b = 0; b < nidx; b++) {
+        uint32_t k = g->index[b];
+        if (k == TVT_EMPTY_BRICK || !tvt__brick_occupied(g, k, density_factor, dmax, bits)) continue;
+        out->brick_index[b] = (uint32_t)kept;
+        for (i = 0; i < TVT__BV; i++) {
+            const float *a = g->data + ((size_t)k * TVT__BV + i) * TVT__ACC;
+            tvt_voxel v;
+            unsigned q[TVT_CHANNELS];
+            tvt__acc_resolve(a, density_factor, &v);
+            tvt__encode(&v, dmax, bits, q);
+            tvt__store(out, kept * TVT__BV + i, q);
+            if (with_blades) out->blade_of_voxel[kept * TVT__BV + i] = (uint16_t)(q[0] && a[12] >= 0 ? (unsigned)a[12] : TVT_NO_BLADE);
+        }
+        kept++;
+    }
+    return TVT_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Model: curves, shrinkage, droop, pigment colour
+   --------------------------------------------------------------------------------------------- */
+static float tvt__logistic(float x, float lo, float c, float s) { return lo + (1.0f - lo) / (1.0f + expf((x - c) / s)); }
+
+static float tvt__water(int curve, float wd)
+{
+    static const float c[3] = {0.45f, 0.60f, 0.55f}, s[3] = {0.08f, 0.08f, 0.15f};
+    return tvt__logistic(wd, 0.25f, c[curve], s[curve]) / tvt__logistic(0.0f, 0.25f, c[curve], s[curve]);
+}
+
+static float tvt__chlorophyll(float wd) { return tvt__logistic(wd, 0.03f, 0.40f, 0.10f) / tvt__logistic(0.0f, 0.03f, 0.40f, 0.10f); }
+
+static float tvt__gauss(float x, float mu, float s1, float s2)
+{
+    float d = (x - mu) / (x < mu ? s1 : s2);
+    return expf(-0.5f * d * d);
+}
+
+/* absorption spectra (unit peak), sums of Gaussians at the literature peaks */
+static float tvt__abs_chla(float l) { return tvt__gauss(l, 430, 18, 18) + 0.8f * tvt__gauss(l, 665, 18, 18) + 0.3f * tvt__gauss(l, 620, 20, 20); }
+static float tvt__abs_chlb(float l) { return tvt__gauss(l, 455, 18, 18) + 0.6f * tvt__gauss(l, 645, 16, 16); }
+static float tvt__abs_car(float l) { return 0.75f * tvt__gauss(l, 425, 14, 14) + tvt__gauss(l, 452, 14, 14) + 0.9f * tvt__gauss(l, 480, 14, 14); }
+
+TVTDEF void tvt_pigment_color(float chlorophyll, float browning, float rgb[3])
+{
+    float X = 0, Y = 0, Z = 0, N = 0, chl = chlorophyll, br = browning;
+    int i;
+    if (!(chl > 0)) chl = 0;
+    if (!(br > 0)) br = 0;
+    for (i = 0; i < 81; i++) {
+        float l = 380.0f + 5.0f * (float)i;
+        float A = 3.0f * ((27.0f / 40.0f) * chl * tvt__abs_chla(l) + (9.0f / 40.0f) * chl * tvt__abs_chlb(l) +
+                          (4.0f / 40.0f) * tvt__abs_car(l)) + 1.5f * br * expf(-(l - 380.0f) / 110.0f);
+        float R = 0.55f * expf(-A);
+        float x = 1.056f * tvt__gauss(l, 599.8f, 37.9f, 31.0f) + 0.362f * tvt__gauss(l, 442.0f, 16.0f, 26.7f) -
+                  0.065f * tvt__gauss(l, 501.1f, 20.4f, 26.2f);
+        float y = 0.821f * tvt__gauss(l, 568.8f, 46.9f, 40.5f) + 0.286f * tvt__gauss(l, 530.9f, 16.3f, 31.1f);
+        float z = 1.217f * tvt__gauss(l, 437.0f, 11.8f, 36.0f) + 0.681f * tvt__gauss(l, 459.0f, 26.0f, 13.8f);
+        X += R * x; Y += R * y; Z += R * z; N += y;
+    }
+    X /= N; Y /= N; Z /= N;
+    rgb[0] = 3.2406f * X - 1.5372f * Y - 0.4986f * Z;
+    rgb[1] = -0.9689f * X + 1.8758f * Y + 0.0415f * Z;
+    rgb[2] = 0.0557f * X - 0.2040f * Y + 1.0570f * Z;
+    for (i = 0; i < 3; i++) rgb[i] = rgb[i] < 0 ? 0 : rgb[i] > 1 ? 1 : rgb[i];
+}
+
+static int tvt__model_resolve(const tvt_model_options *in, tvt_model_options *o)
+{
+    tvt_model_options d = tvt_model_default_options();
+    *o = in ? *in : d;
+    if (o->water_curve < 0 || o->water_curve > 2) return 0;
+#define TVT__DEF(f) if (o->f == 0) o->f = d.f
+    TVT__DEF(k_vein); TVT__DEF(k_mesophyll); TVT__DEF(vein_stiffness); TVT__DEF(stiffening);
+    TVT__DEF(area_ratio); TVT__DEF(droop_max_deg); TVT__DEF(droop_exponent); TVT__DEF(droop_length);
+    TVT__DEF(merge_threshold);
+    TVT__DEF(colour_jitter);
+#undef TVT__DEF
+    if (o->colour_jitter < 0) o->colour_jitter = 0;
+    return tvt__finite(o->k_vein) && tvt__finite(o->k_mesophyll) && tvt__finite(o->vein_stiffness) &&
+           tvt__finite(o->stiffening) && tvt__finite(o->area_ratio) && tvt__finite(o->droop_max_deg) &&
+           tvt__finite(o->droop_exponent) && tvt__finite(o->droop_length) && tvt__finite(o->merge_threshold) && tvt__finite(o->colour_jitter) &&
+           o->k_vein > 0 && o->k_vein < 1 && o->k_mesophyll > 0 && o->k_mesophyll < 1 && o->vein_stiffness > 0 &&
+           o->stiffening > 0 && o->area_ratio > 0 && o->droop_max_deg > 0 && o->droop_max_deg <= 90 &&
+           o->droop_exponent > 0 && o->droop_exponent <= 8 && o->droop_length > 0.01f &&
+           o->droop_length <= 4 && o->merge_threshold > 0 && o->merge_threshold <= 1 && o->colour_jitter <= 0.5f;
+}
+
+/* realised strains: d eps = k dw'(wd) E0 / E(wd), midpoint rule on 256 steps over [0, wd] */
+static void tvt__strains(const tvt_model_options *o, float wd, float *eps_v, float *eps_m)
+{
+    const int n = 256;
+    double h = wd / n, sum = 0.0;
+    int i;
+    for (i = 0; i < n; i++) {
+        float a = (float)(i * h), b = (float)((i + 1) * h), mid = 0.5f * (a + b);
+        float ddw = tvt__water(o->water_curve, a) - tvt__water(o->water_curve, b);
+        sum += ddw / (1.0 + o->stiffening * mid);
+    }
+    *eps_v = (float)(o->k_vein * sum);
+    *eps_m = (float)(o->k_mesophyll * sum);
+}
+
+static void tvt__model_at(const tvt_model_options *o, float wd, tvt_model_state *s)
+{
+    float ev, em, mix, lost1 = 1.0f - tvt__water(o->water_curve, 1.0f);
+    s->water = tvt__water(o->water_curve, wd);
+    s->water_lost = 1.0f - s->water;
+    s->chlorophyll = tvt__chlorophyll(wd);
+    tvt__strains(o, wd, &ev, &em);
+    s->strain_vein = ev;
+    s->strain_mesophyll = em;
+    /* stiffness- and area-weighted volume strain of the blade's cross-section */
+    mix = (o->vein_stiffness * ev + o->area_ratio * em) / (o->vein_stiffness + o->area_ratio);
+    s->axial_shrink = 1.0f - cbrtf(1.0f - mix);
+    s->radial_shrink = 1.0f - sqrtf(1.0f - em);
+    s->droop = (float)(o->droop_max_deg * TVT__PI / 180.0) * (s->water_lost / lost1);
+    s->specular_factor = 0.4f + 0.6f * s->water;
+    tvt_pigment_color(s->chlorophyll, s->water_lost / lost1, s->color);
+}
+
+TVTDEF tvt_result tvt_model_eval(const tvt_model_options *options, float wd, tvt_model_state *out)
+{
+    tvt_model_options o;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!tvt__model_resolve(options, &o)) return TVT_ERR_BAD_PARAMETER;
+    if (!(wd > 0)) wd = 0;
+    if (wd > 1) wd = 1;
+    tvt__model_at(&o, wd, out);
+    return TVT_OK;
+}
+
+TVTDEF float tvt_wd_from_time(float t, float duration)
+{
+    float wd;
+    if (!(duration > 0) || !tvt__finite(duration)) return 0.0f;
+    wd = t / duration;
+    return wd > 0 ? (wd < 1 ? wd : 1.0f) : 0.0f;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Blades and voxelisation
+   --------------------------------------------------------------------------------------------- */
+static tvt_result tvt__grass_resolve(const tvt_grass_desc *in, tvt_grass_desc *d)
+{
+    tvt_grass_desc def = tvt_grass_default_desc();
+    *d = in ? *in : def;
+#define TVT__DEF(f) if (d->f == 0) d->f = def.f
+    TVT__DEF(res); TVT__DEF(blade_count); TVT__DEF(height_min); TVT__DEF(height_max); TVT__DEF(radius_min);
+    TVT__DEF(radius_max); TVT__DEF(lean_min_deg); TVT__DEF(lean_max_deg); TVT__DEF(supersample); TVT__DEF(bits);
+    TVT__DEF(specular);
+#undef TVT__DEF
+    if (!tvt__check_res(d->res) || (d->bits != 8 && d->bits != 16)) return TVT_ERR_BAD_RESOLUTION;
+    if (!tvt__finite(d->height_min) || !tvt__finite(d->height_max) || !tvt__finite(d->radius_min) ||
+        !tvt__finite(d->radius_max) || !tvt__finite(d->lean_min_deg) || !tvt__finite(d->lean_max_deg) ||
+        !tvt__finite(d->specular) || d->height_min <= 0 || d->height_max > 1 || d->height_min > d->height_max ||
+        d->radius_min <= 0 || d->radius_min > d->radius_max || d->radius_max > 0.25f * (float)d->res ||
+        d->lean_min_deg < 0 || d->lean_min_deg > d->lean_max_deg || d->lean_max_deg > 60 ||
+        d->supersample < 1 || d->supersample > 8 || d->specular < 0 || d->specular > 1)
+        return TVT_ERR_BAD_PARAMETER;
+    if (d->blade_count > 65534) return TVT_ERR_TOO_LARGE;
+    return TVT_OK;
+}
+
+TVTDEF tvt_result tvt_grass_blades(const tvt_grass_desc *desc, tvt_blade *out, size_t out_capacity)
+{
+    tvt_grass_desc d;
+    tvt_result r = tvt__grass_resolve(desc, &d);
+    size_t i;
+    if (r != TVT_OK) return r;
+    if (!out || out_capacity < d.blade_count) return TVT_ERR_INVALID_ARGUMENT;
+    for (i = 0; i < d.blade_count; i++) {
+        uint64_t s = tvt__mix(d.seed ^ tvt__mix((uint64_t)i + 1));
+        tvt_blade *b = out + i;
+        float res = (float)d.res, lean, az, ca, sa;
+        /* roots on a 1/4096 lattice: integer shifts of them are exact in float */
+        b->root[0] = floorf(tvt__rand(&s) * res * 4096.0f) / 4096.0f;
+        b->root[1] = floorf(tvt__rand(&s) * res * 4096.0f) / 4096.0f;
+        b->root[2] = 0.0f;
+        b->height = res * (d.height_min + (d.height_max - d.height_min) * tvt__rand(&s));
+        b->radius = d.radius_min + (d.radius_max - d.radius_min) * tvt__rand(&s);
+        lean = (float)((d.lean_min_deg + (d.lean_max_deg - d.lean_min_deg) * tvt__rand(&s)) * TVT__PI / 180.0);
+        az = (float)(2.0 * TVT__PI * tvt__rand(&s));
+        ca = cosf(az); sa = sinf(az);
+        b->axis[0] = sinf(lean) * ca; b->axis[1] = sinf(lean) * sa; b->axis[2] = cosf(lean);
+        b->bend[0] = cosf(lean) * ca; b->bend[1] = cosf(lean) * sa; b->bend[2] = -sinf(lean);
+        b->brightness = 0.85f + 0.3f * tvt__rand(&s);
+        b->wd_delay = 2.0f * tvt__rand(&s) - 1.0f; /* scaled by the model's colour_jitter */
+    }
+    return TVT_OK;
+}
+
+/* Coverage of voxel (vx, vy, vz) (coordinates relative to the blade's integer root cell) by
+   blade b whose root has fractional part rf: returns the covered fraction and the summed
+   normals of the covered samples. */
+static float tvt__voxel_cover(const tvt_blade *b, const float *rf, int vx, int vy, int vz, int ss, float *nsum)
+{
+    int i, j, k, inside = 0;
+    float inv = 1.0f / (float)ss;
+    nsum[0] = nsum[1] = nsum[2] = 0.0f;
+    for (k = 0; k < ss; k++)
+        for (j = 0; j < ss; j++)
+            for (i = 0; i < ss; i++) {
+                float p[3], ell, q[3], d2, rl;
+                p[0] = (float)vx + ((float)i + 0.5f) * inv - rf[0];
+                p[1] = (float)vy + ((float)j + 0.5f) * inv - rf[1];
+                p[2] = (float)vz + ((float)k + 0.5f) * inv;
+                ell = tvt__dot(p, b->axis);
+                if (ell < 0 || ell > b->height) continue;
+                q[0] = p[0] - ell * b->axis[0]; q[1] = p[1] - ell * b->axis[1]; q[2] = p[2] - ell * b->axis[2];
+                d2 = tvt__dot(q, q);
+                rl = b->radius * (1.0f - ell / b->height);
+                if (d2 >= rl * rl) continue;
+                inside++;
+                nsum[0] += q[0] / rl; nsum[1] += q[1] / rl; nsum[2] += q[2] / rl;
+            }
+    return (float)inside / (float)(ss * ss * ss);
+}
+
+static void tvt__acc_add(float *a, float cov, const float *nsum, int ss, const tvt_blade *b, const float *green,
+                         float ms, size_t blade_index)
+{
+    float nn = 1.0f / (float)(ss * ss * ss);
+    int c;
+    a[0] += cov;
+    for (c = 0; c < 3; c++) {
+        a[1 + c] += nsum[c] * nn;
+        a[4 + c] += cov * b->axis[c];
+        a[7 + c] += cov * b->brightness * green[c];
+    }
+    a[10] += cov * ms;
+    if (cov > a[11]) { a[11] = cov; a[12] = (float)blade_index; }
+}
+
+/* One blade into the accumulator, layer by layer along z: each layer's voxels lie within
+   radius + 1 of where the axis crosses the layer. */
+static int tvt__voxelize_blade(tvt__acc *g, const tvt_blade *b, size_t bi, int ss, const float *green, float ms)
+{
+    int res = g->res, top = (int)ceilf(b->height * b->axis[2]), z;
+    float rf[2];
+    int ri[2];
+    ri[0] = (int)floorf(b->root[0]); ri[1] = (int)floorf(b->root[1]);
+    rf[0] = b->root[0] - (float)ri[0]; rf[1] = b->root[1] - (float)ri[1];
+    if (top > res) top = res;
+    for (z = 0; z < top; z++) {
+        float t = ((float)z + 0.5f) / b->axis[2];
+        float cx = rf[0] + t * b->axis[0], cy = rf[1] + t * b->axis[1];
+        float reach = b->radius + 1.0f + 0.5f * sqrtf(b->axis[0] * b->axis[0] + b->axis[1] * b->axis[1]) / b->axis[2];
+        int x0 = (int)floorf(cx - reach), x1 = (int)floorf(cx + reach), y0 = (int)floorf(cy - reach),
+            y1 = (int)floorf(cy + reach), x, y;
+        for (y = y0; y <= y1; y++)
+            for (x = x0; x <= x1; x++) {
+                float nsum[3], cov = tvt__voxel_cover(b, rf, x, y, z, ss, nsum), *a;
+                if (cov <= 0) continue;
+                a = tvt__acc_voxel(g, ((x + ri[0]) % res + res) % res, ((y + ri[1]) % res + res) % res, z);
+                if (!a) return 0;
+                tvt__acc_add(a, cov, nsum, ss, b, green, ms, bi);
+            }
+    }
+    return 1;
+}
+
+static int tvt__blades_valid(const tvt_blade *b, size_t n, int res)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        const float *f = &b[i].root[0];
+        size_t k;
+        for (k = 0; k < sizeof(tvt_blade) / sizeof(float); k++)
+            if (!tvt__finite(f[k])) return 0;
+        if (b[i].root[0] < 0 || b[i].root[0] >= (float)res || b[i].root[1] < 0 || b[i].root[1] >= (float)res ||
+            b[i].axis[2] <= 0.05f || b[i].height <= 0 || b[i].radius <= 0 || b[i].radius > 0.25f * (float)res ||
+            fabsf(tvt__dot(b[i].axis, b[i].axis) - 1.0f) > 1e-3f || b[i].brightness < 0 ||
+            b[i].wd_delay < -1 || b[i].wd_delay > 1)
+            return 0;
+    }
+    return 1;
+}
+
+TVTDEF tvt_result tvt_build_texel(const tvt_blade *blades, size_t blade_count, const tvt_grass_desc *desc,
+                                  tvt_texel *out)
+{
+    tvt_grass_desc d;
+    tvt_allocator a;
+    tvt__acc g;
+    tvt_result r;
+    float green[3];
+    size_t i;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!blades && blade_count) return TVT_ERR_INVALID_ARGUMENT;
+    r = tvt__grass_resolve(desc, &d);
+    if (r != TVT_OK) return r;
+    if (blade_count > 65534) return TVT_ERR_TOO_LARGE;
+    if (!tvt__blades_valid(blades, blade_count, d.res)) return TVT_ERR_BAD_PARAMETER;
+    a = tvt__resolve_allocator(d.allocator);
+    tvt_pigment_color(1.0f, 0.0f, green);
+    r = tvt__acc_init(&g, d.res, &a);
+    for (i = 0; r == TVT_OK && i < blade_count; i++) {
+        if (!tvt__voxelize_blade(&g, blades + i, i, d.supersample, green, d.specular)) r = TVT_ERR_OUT_OF_MEMORY;
+        else if (tvt__report(d.progress, d.progress_user, 0.95f * (float)(i + 1) / (float)blade_count))
+            r = TVT_CANCELLED;
+    }
+    if (r == TVT_OK) r = tvt__acc_to_texel(&g, 1.0f, d.bits, 1, out);
+    tvt__acc_free(&g);
+    if (r == TVT_OK && blade_count) {
+        out->blades = (tvt_blade *)tvt__alloc(&a, blade_count, sizeof(tvt_blade));
+        if (!out->blades) r = TVT_ERR_OUT_OF_MEMORY;
+        else { memcpy(out->blades, blades, blade_count * sizeof(tvt_blade)); out->blade_count = blade_count; }
+    }
+    if (r == TVT_OK && tvt__report(d.progress, d.progress_user, 1.0f)) r = TVT_CANCELLED;
+    if (r != TVT_OK) tvt_texel_free(out);
+    return r;
+}
+
+TVTDEF tvt_result tvt_build_grass(const tvt_grass_desc *desc, tvt_texel *out)
+{
+    tvt_grass_desc d;
+    tvt_allocator a;
+    tvt_blade *blades;
+    tvt_result r;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    r = tvt__grass_resolve(desc, &d);
+    if (r != TVT_OK) return r;
+    a = tvt__resolve_allocator(d.allocator);
+    blades = (tvt_blade *)tvt__alloc(&a, d.blade_count, sizeof(tvt_blade));
+    if (!blades) return TVT_ERR_OUT_OF_MEMORY;
+    r = tvt_grass_blades(&d, blades, d.blade_count);
+    if (r == TVT_OK) r = tvt_build_texel(blades, d.blade_count, &d, out);
+    tvt__free(&a, blades);
+    return r;
+}
+
+TVTDEF tvt_result tvt_texel_from_voxels(int res, const tvt_voxel *voxels, int bits, const tvt_allocator *allocator,
+                                        tvt_texel *out)
+{
+    tvt_allocator a = tvt__resolve_allocator(allocator);
+    tvt__acc g;
+    tvt_result r;
+    size_t i, n;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!voxels) return TVT_ERR_INVALID_ARGUMENT;
+    if (!tvt__check_res(res) || (bits != 8 && bits != 16)) return TVT_ERR_BAD_RESOLUTION;
+    n = (size_t)res * res * res;
+    for (i = 0; i < n; i++) {
+        const float *f = &voxels[i].density;
+        size_t k;
+        for (k = 0; k < sizeof(tvt_voxel) / sizeof(float); k++)
+            if (!tvt__finite(f[k])) return TVT_ERR_BAD_PARAMETER;
+        if (voxels[i].density < 0) return TVT_ERR_BAD_PARAMETER;
+    }
+    r = tvt__acc_init(&g, res, &a);
+    for (i = 0; r == TVT_OK && i < n; i++) {
+        const tvt_voxel *v = voxels + i;
+        float *acc;
+        int c;
+        if (!(v->density > 0)) continue;
+        acc = tvt__acc_voxel(&g, (int)(i % (size_t)res), (int)(i / (size_t)res % (size_t)res),
+                             (int)(i / ((size_t)res * res)));
+        if (!acc) { r = TVT_ERR_OUT_OF_MEMORY; break; }
+        acc[0] = v->density;
+        for (c = 0; c < 3; c++) {
+            acc[1 + c] = v->normal[c] * v->density;
+            acc[4 + c] = v->tangent[c] * v->density;
+            acc[7 + c] = v->color[c] * v->density;
+        }
+        acc[10] = v->specular * v->density;
+    }
+    if (r == TVT_OK) r = tvt__acc_to_texel(&g, 1.0f, bits, 0, out);
+    tvt__acc_free(&g);
+    return r;
+}
+
+static size_t tvt__slot(const tvt_texel *t, long x, long y, long z, int *ok)
+{
+    long res = t->res;
+    size_t b;
+    uint32_t k;
+    *ok = 0;
+    if (z < 0 || z >= res || !t->brick_index) return 0;
+    x = ((x % res) + res) % res;
+    y = ((y % res) + res) % res;
+    b = ((size_t)(z >> 2) * (size_t)t->bricks_per_side + (size_t)(y >> 2)) * (size_t)t->bricks_per_side + (size_t)(x >> 2);
+    k = t->brick_index[b];
+    if (k == TVT_EMPTY_BRICK) return 0;
+    *ok = 1;
+    return (size_t)k * TVT__BV + (size_t)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
+}
+
+TVTDEF void tvt_texel_voxel(const tvt_texel *t, long x, long y, long z, tvt_voxel *out)
+{
+    int ok;
+    size_t slot = tvt__slot(t, x, y, z, &ok);
+    unsigned q[TVT_CHANNELS];
+    if (!ok) { memset(out, 0, sizeof(*out)); return; }
+    tvt__load(t, slot, q);
+    tvt__decode(q, t->density_max, t->bits, out);
+}
+
+TVTDEF size_t tvt_texel_bytes(const tvt_texel *t)
+{
+    size_t nb = (size_t)t->bricks_per_side, bytes = nb * nb * nb * sizeof(uint32_t);
+    bytes += t->brick_count * TVT__BV * TVT_CHANNELS * (size_t)(t->bits / 8);
+    if (t->blade_of_voxel) bytes += t->brick_count * TVT__BV * sizeof(uint16_t);
+    return bytes + t->blade_count * sizeof(tvt_blade);
+}
+
+TVTDEF double tvt_texel_total_density(const tvt_texel *t)
+{
+    double sum = 0.0;
+    size_t i;
+    for (i = 0; i < t->brick_count * TVT__BV; i++) {
+        unsigned q[TVT_CHANNELS];
+        tvt_voxel v;
+        tvt__load(t, i, q);
+        tvt__decode(q, t->density_max, t->bits, &v);
+        sum += v.density;
+    }
+    return sum;
+}
+
+TVTDEF void tvt_texel_free(tvt_texel *t)
+{
+    if (!t) return;
+    if (t->allocator.free) {
+        tvt__free(&t->allocator, t->brick_index);
+        tvt__free(&t->allocator, t->data);
+        tvt__free(&t->allocator, t->blade_of_voxel);
+        tvt__free(&t->allocator, t->blades);
+    }
+    memset(t, 0, sizeof(*t));
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Texel -> points (PIPELINE step 3)
+   --------------------------------------------------------------------------------------------- */
+static float tvt__luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+/* The rest state of a point of blade b: root moved to the image nearest the point. */
+static void tvt__rest_from_blade(const tvt_blade *b, int res, tvt_point *p)
+{
+    float d[3];
+    int c;
+    for (c = 0; c < 2; c++) {
+        float off = p->pos[c] - b->root[c];
+        p->root[c] = b->root[c] + (float)res * floorf(off / (float)res + 0.5f);
+    }
+    p->root[2] = 0.0f;
+    memcpy(p->axis, b->axis, sizeof(p->axis));
+    memcpy(p->bend, b->bend, sizeof(p->bend));
+    for (c = 0; c < 3; c++) d[c] = p->pos[c] - p->root[c];
+    p->ell = tvt__dot(d, b->axis);
+    if (p->ell < 0) p->ell = 0;
+    for (c = 0; c < 3; c++) p->radial[c] = d[c] - p->ell * b->axis[c];
+    p->wd_delay = b->wd_delay;
+}
+
+/* The paper's rest state (Fig 6a): the root is where the tangent line through the point meets
+   the ground; the point lies on its own axis (no radial offset). */
+static void tvt__rest_from_tangent(uint64_t *s, tvt_point *p)
+{
+    float t[3], d[3], dl;
+    int c;
+    memcpy(t, p->tangent, sizeof(t));
+    tvt__normalize(t);
+    if (t[2] < 0.2f) { t[0] = 0; t[1] = 0; t[2] = 1; }
+    for (c = 0; c < 3; c++) p->root[c] = p->pos[c] - t[c] * (p->pos[2] / t[2]);
+    p->root[2] = 0.0f;
+    p->ell = p->pos[2] / t[2];
+    memcpy(p->axis, t, sizeof(t));
+    memset(p->radial, 0, sizeof(p->radial));
+    d[0] = t[0]; d[1] = t[1]; d[2] = 0.0f;
+    dl = sqrtf(d[0] * d[0] + d[1] * d[1]);
+    if (dl < 1e-3f) {
+        float az = (float)(2.0 * TVT__PI) * tvt__rand(s);
+        d[0] = cosf(az); d[1] = sinf(az);
+    } else { d[0] /= dl; d[1] /= dl; }
+    dl = tvt__dot(d, t);
+    for (c = 0; c < 3; c++) p->bend[c] = d[c] - dl * t[c];
+    tvt__normalize(p->bend);
+    p->wd_delay = 2.0f * tvt__rand(s) - 1.0f;
+}
+
+static void tvt__point_init(const tvt_texel *t, const tvt_voxel *v, unsigned blade, const float *pos, float green_lum,
+                            uint64_t *s, tvt_point *p)
+{
+    memcpy(p->pos, pos, sizeof(p->pos));
+    memcpy(p->normal, v->normal, sizeof(p->normal));
+    memcpy(p->normal0, v->normal, sizeof(p->normal0));
+    memcpy(p->tangent, v->tangent, sizeof(p->tangent));
+    memcpy(p->color, v->color, sizeof(p->color));
+    p->specular = p->specular0 = v->specular;
+    p->mass = 1.0f;
+    p->brightness = tvt__luminance(v->color) / green_lum;
+    if (blade < t->blade_count) tvt__rest_from_blade(t->blades + blade, t->res, p);
+    else tvt__rest_from_tangent(s, p);
+}
+
+/* Points of one voxel: the first random number of its stream rounds q = proportion * density. */
+static unsigned tvt__voxel_points(float q, uint64_t *s)
+{
+    float f = floorf(q);
+    return (unsigned)f + (tvt__rand(s) < q - f ? 1u : 0u);
+}
+
+static tvt_result tvt__sample_resolve(const tvt_sample_options *in, tvt_sample_options *o)
+{
+    tvt_sample_options d = tvt_sample_default_options();
+    *o = in ? *in : d;
+    if (o->proportion == 0) o->proportion = d.proportion;
+    if (!tvt__finite(o->proportion) || o->proportion < 0.01f || o->proportion > 1000.0f) return TVT_ERR_BAD_PARAMETER;
+    return TVT_OK;
+}
+
+/* Calls fn for every stored voxel in index order with its global coordinates and slot. */
+typedef struct tvt__sampler {
+    const tvt_texel *t;
+    tvt_sample_options o;
+    tvt_point *out;     /* NULL: count only */
+    size_t count;
+    float green_lum;
+} tvt__sampler;
+
+static void tvt__sample_voxel(tvt__sampler *S, long x, long y, long z, size_t slot)
+{
+    const tvt_texel *t = S->t;
+    unsigned q[TVT_CHANNELS], n, i;
+    tvt_voxel v;
+    uint64_t s = tvt__mix(S->o.seed ^ tvt__mix((((uint64_t)z * (uint64_t)t->res + (uint64_t)y) * (uint64_t)t->res +
+                                                (uint64_t)x) + 1));
+    tvt__load(t, slot, q);
+    if (!q[0]) return;
+    tvt__decode(q, t->density_max, t->bits, &v);
+    n = tvt__voxel_points(S->o.proportion * v.density, &s);
+    if (S->out) {
+        unsigned blade = t->blade_of_voxel ? t->blade_of_voxel[slot] : TVT_NO_BLADE;
+        for (i = 0; i < n; i++) {
+            float pos[3];
+            pos[0] = (float)x + tvt__rand(&s);
+            pos[1] = (float)y + tvt__rand(&s);
+            pos[2] = (float)z + tvt__rand(&s);
+            tvt__point_init(t, &v, blade, pos, S->green_lum, &s, S->out + S->count + i);
+        }
+    }
+    S->count += n;
+}
+
+static int tvt__sample_pass(tvt__sampler *S, float done0, float done1)
+{
+    const tvt_texel *t = S->t;
+    size_t nb = (size_t)t->bricks_per_side, b, total = nb * nb * nb;
+    for (b = 0; b < total; b++) {
+        uint32_t k = t->brick_index[b];
+        long bx = (long)(b % nb) * 4, by = (long)(b / nb % nb) * 4, bz = (long)(b / (nb * nb)) * 4;
+        int i;
+        if (k == TVT_EMPTY_BRICK) continue;
+        for (i = 0; i < TVT__BV; i++)
+            tvt__sample_voxel(S, bx + (i & 3), by + ((i >> 2) & 3), bz + (i >> 4), (size_t)k * TVT__BV + (size_t)i);
+        if ((b & 1023) == 1023 &&
+            tvt__report(S->o.progress, S->o.progress_user, done0 + (done1 - done0) * (float)b / (float)total))
+            return 0;
+    }
+    return 1;
+}
+
+TVTDEF tvt_result tvt_sample(const tvt_texel *t, const tvt_sample_options *options, tvt_points *out)
+{
+    tvt__sampler S;
+    tvt_allocator a;
+    tvt_result r;
+    float green[3];
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!t || !t->brick_index) return TVT_ERR_INVALID_ARGUMENT;
+    memset(&S, 0, sizeof(S));
+    r = tvt__sample_resolve(options, &S.o);
+    if (r != TVT_OK) return r;
+    a = tvt__resolve_allocator(S.o.allocator);
+    S.t = t;
+    tvt_pigment_color(1.0f, 0.0f, green);
+    S.green_lum = tvt__luminance(green);
+    if (!tvt__sample_pass(&S, 0.0f, 0.3f)) return TVT_CANCELLED;
+    if (S.count == 0) return TVT_ERR_EMPTY;
+    if (S.count > 0xFFFFFFFFu) return TVT_ERR_TOO_LARGE;
+    S.out = (tvt_point *)tvt__alloc(&a, S.count, sizeof(tvt_point));
+    if (!S.out) return TVT_ERR_OUT_OF_MEMORY;
+    out->count = S.count;
+    S.count = 0;
+    if (!tvt__sample_pass(&S, 0.3f, 1.0f) || tvt__report(S.o.progress, S.o.progress_user, 1.0f)) {
+        tvt__free(&a, S.out);
+        memset(out, 0, sizeof(*out));
+        return TVT_CANCELLED;
+    }
+    out->p = S.out;
+    out->res = t->res;
+    out->proportion = S.o.proportion;
+    out->wd = 0.0f;
+    out->allocator = a;
+    return TVT_OK;
+}
+
+TVTDEF void tvt_points_free(tvt_points *pts)
+{
+    if (!pts) return;
+    if (pts->allocator.free) tvt__free(&pts->allocator, pts->p);
+    memset(pts, 0, sizeof(*pts));
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Ageing (PIPELINE step 4, MODEL)
+   --------------------------------------------------------------------------------------------- */
+enum { TVT__BEND_N = 768, TVT__COLOR_N = 64 };
+
+/* The bent centre line in units of L: G(u) = integral_0^u (cos phi, sin phi), phi(u) =
+   Theta min(u, 1)^beta, tabulated at u = k / 512 for k = 0..768 (midpoint rule). */
+typedef struct tvt__ageing {
+    tvt_model_state st;
+    float theta, beta, jitter, length;
+    float gc[TVT__BEND_N + 1], gs[TVT__BEND_N + 1];
+    float color[TVT__COLOR_N + 1][3];
+} tvt__ageing;
+
+static float tvt__phi(const tvt__ageing *A, float u) { return A->theta * powf(u < 1 ? u : 1.0f, A->beta); }
+
+static void tvt__ageing_init(const tvt_model_options *o, float wd, tvt__ageing *A)
+{
+    const float h = 1.0f / 512.0f;
+    float lost1 = 1.0f - tvt__water(o->water_curve, 1.0f);
+    double c = 0, s = 0;
+    int k;
+    tvt__model_at(o, wd, &A->st);
+    A->theta = A->st.droop;
+    A->beta = o->droop_exponent;
+    A->length = o->droop_length;
+    A->jitter = o->colour_jitter;
+    A->gc[0] = A->gs[0] = 0.0f;
+    for (k = 0; k < TVT__BEND_N; k++) {
+        float phi = tvt__phi(A, ((float)k + 0.5f) * h);
+        c += h * cos(phi);
+        s += h * sin(phi);
+        A->gc[k + 1] = (float)c;
+        A->gs[k + 1] = (float)s;
+    }
+    for (k = 0; k <= TVT__COLOR_N; k++) {
+        float w = (float)k / (float)TVT__COLOR_N;
+        tvt_pigment_color(tvt__chlorophyll(w), (1.0f - tvt__water(o->water_curve, w)) / lost1, A->color[k]);
+    }
+}
+
+static void tvt__bend_at(const tvt__ageing *A, float u, float *gc, float *gs)
+{
+    float f = u * 512.0f, t;
+    int k;
+    if (f >= (float)TVT__BEND_N) {
+        float phi = tvt__phi(A, 1.0f), extra = (f - (float)TVT__BEND_N) / 512.0f;
+        *gc = A->gc[TVT__BEND_N] + extra * cosf(phi);
+        *gs = A->gs[TVT__BEND_N] + extra * sinf(phi);
+        return;
+    }
+    k = (int)f;
+    t = f - (float)k;
+    *gc = A->gc[k] + t * (A->gc[k + 1] - A->gc[k]);
+    *gs = A->gs[k] + t * (A->gs[k + 1] - A->gs[k]);
+}
+
+/* v turned by angle (c, s) in the plane (axis, bend), toward bend */
+static void tvt__turn(const float *v, const float *axis, const float *bend, float c, float s, float *out)
+{
+    float va = tvt__dot(v, axis), vb = tvt__dot(v, bend);
+    int i;
+    for (i = 0; i < 3; i++) {
+        float h = v[i] - va * axis[i] - vb * bend[i];
+        out[i] = va * (c * axis[i] + s * bend[i]) + vb * (c * bend[i] - s * axis[i]) + h;
+    }
+}
+
+static void tvt__age_point(const tvt__ageing *A, float wd, int res, tvt_point *p)
+{
+    float L = A->length * (float)res, u = p->ell * (1.0f - A->st.axial_shrink) / L, gc, gs, phi, c, s, r[3], rr[3], w, f;
+    int i, k;
+    tvt__bend_at(A, u, &gc, &gs);
+    phi = tvt__phi(A, u);
+    c = cosf(phi);
+    s = sinf(phi);
+    for (i = 0; i < 3; i++) r[i] = p->radial[i] * (1.0f - A->st.radial_shrink);
+    tvt__turn(r, p->axis, p->bend, c, s, rr);
+    for (i = 0; i < 3; i++) {
+        p->pos[i] = p->root[i] + L * (gc * p->axis[i] + gs * p->bend[i]) + rr[i];
+        p->tangent[i] = c * p->axis[i] + s * p->bend[i];
+    }
+    if (p->pos[2] < 0) p->pos[2] = 0;
+    if (p->pos[2] >= (float)res) p->pos[2] = (float)res - 1e-3f;
+    for (i = 0; i < 2; i++) p->pos[i] -= (float)res * floorf(p->pos[i] / (float)res);
+    for (i = 0; i < 2; i++) if (p->pos[i] >= (float)res) p->pos[i] = 0.0f;
+    tvt__turn(p->normal0, p->axis, p->bend, c, s, p->normal);
+    w = wd + A->jitter * p->wd_delay;
+    w = w < 0 ? 0 : w > 1 ? 1 : w;
+    f = w * (float)TVT__COLOR_N;
+    k = (int)f;
+    if (k >= TVT__COLOR_N) k = TVT__COLOR_N - 1;
+    f -= (float)k;
+    for (i = 0; i < 3; i++) {
+        float col = p->brightness * (A->color[k][i] + f * (A->color[k + 1][i] - A->color[k][i]));
+        p->color[i] = col < 1 ? col : 1.0f;
+    }
+    p->specular = p->specular0 * A->st.specular_factor;
+}
+
+/* ---- merging: a hash grid of 2 * threshold cells; a point within threshold of p lies in one of
+   the 8 cells around the corner of p's cell nearest to p. Pairs across the side borders are not
+   merged (the cells do not wrap). */
+typedef struct tvt__grid {
+    uint32_t *head, *next;
+    size_t mask;
+    float cell;
+} tvt__grid;
+
+static size_t tvt__cell_hash(long x, long y, long z, size_t mask)
+{
+    return (size_t)tvt__mix(((uint64_t)(uint32_t)x << 42) ^ ((uint64_t)(uint32_t)y << 21) ^ (uint64_t)(uint32_t)z) & mask;
+}
+
+static void tvt__cell_of(const tvt__grid *g, const float *p, long *c)
+{
+    c[0] = (long)floorf(p[0] / g->cell);
+    c[1] = (long)floorf(p[1] / g->cell);
+    c[2] = (long)floorf(p[2] / g->cell);
+}
+
+/* nearest j > i (not dead) closer than thr; (size_t)-1 if none; ties go to the smaller j */
+static size_t tvt__merge_partner(const tvt__grid *g, const tvt_points *pts, const uint8_t *dead, size_t i, float thr)
+{
+    const float *p = pts->p[i].pos;
+    long c[3], o[3];
+    size_t best = (size_t)-1;
+    float best_d2 = thr * thr;
+    int k, n;
+    tvt__cell_of(g, p, c);
+    for (k = 0; k < 3; k++) o[k] = (p[k] - (float)c[k] * g->cell < 0.5f * g->cell) ? -1 : 1;
+    for (n = 0; n < 8; n++) {
+        long x = c[0] + ((n & 1) ? o[0] : 0), y = c[1] + ((n & 2) ? o[1] : 0), z = c[2] + ((n & 4) ? o[2] : 0);
+        uint32_t j = g->head[tvt__cell_hash(x, y, z, g->mask)];
+        for (; j != 0xFFFFFFFFu; j = g->next[j]) {
+            const float *q = pts->p[j].pos;
+            float d[3], d2;
+            if (j <= i || dead[j]) continue;
+            d[0] = q[0] - p[0]; d[1] = q[1] - p[1]; d[2] = q[2] - p[2];
+            d2 = tvt__dot(d, d);
+            if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && j < best)) {
+                long cj[3];
+                tvt__cell_of(g, q, cj);
+                if (cj[0] != x || cj[1] != y || cj[2] != z) continue; /* a hash collision */
+                best = j;
+                best_d2 = d2;
+            }
+        }
+    }
+    return best;
+}
+
+/* b merged into a: every field the mass-weighted mean, masses added, directions renormalised */
+static void tvt__merge_into(tvt_point *a, const tvt_point *b)
+{
+    float m = a->mass + b->mass, wa = a->mass / m, wb = b->mass / m, *fa = &a->pos[0], d;
+    const float *fb = &b->pos[0];
+    size_t k, n = sizeof(tvt_point) / sizeof(float);
+    for (k = 0; k < n; k++) fa[k] = wa * fa[k] + wb * fb[k];
+    a->mass = m;
+    tvt__normalize(a->tangent);
+    tvt__normalize(a->axis);
+    d = tvt__dot(a->bend, a->axis);
+    for (k = 0; k < 3; k++) a->bend[k] -= d * a->axis[k];
+    tvt__normalize(a->bend);
+}
+
+static tvt_result tvt__merge(tvt_points *pts, float thr)
+{
+    const tvt_allocator *a = &pts->allocator;
+    tvt__grid g;
+    uint8_t *dead;
+    size_t n = pts->count, size = 1, i, kept = 0;
+    while (size < 2 * n) size *= 2;
+    g.cell = 2.0f * thr;
+    g.mask = size - 1;
+    g.head = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
+    g.next = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    dead = (uint8_t *)tvt__alloc(a, n, 1);
+    if (!g.head || !g.next || !dead) {
+        tvt__free(a, g.head); tvt__free(a, g.next); tvt__free(a, dead);
+        return TVT_ERR_OUT_OF_MEMORY;
+    }
+    memset(g.head, 0xFF, size * sizeof(uint32_t));
+    memset(dead, 0, n);
+    for (i = n; i-- > 0;) { /* chains in index order */
+        long c[3];
+        size_t h;
+        tvt__cell_of(&g, pts->p[i].pos, c);
+        h = tvt__cell_hash(c[0], c[1], c[2], g.mask);
+        g.next[i] = g.head[h];
+        g.head[h] = (uint32_t)i;
+    }
+    for (i = 0; i < n; i++) {
+        size_t j;
+        if (dead[i]) continue;
+        j = tvt__merge_partner(&g, pts, dead, i, thr);
+        if (j == (size_t)-1) continue;
+        tvt__merge_into(pts->p + i, pts->p + j);
+        dead[j] = 1;
+    }
+    for (i = 0; i < n; i++)
+        if (!dead[i]) pts->p[kept++] = pts->p[i];
+    pts->count = kept;
+    tvt__free(a, g.head); tvt__free(a, g.next); tvt__free(a, dead);
+    return TVT_OK;
+}
+
+TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *options)
+{
+    tvt_model_options o;
+    tvt__ageing *A;
+    size_t i;
+    tvt_result r = TVT_OK;
+    if (!pts || (!pts->p && pts->count)) return TVT_ERR_INVALID_ARGUMENT;
+    if (!(wd >= 0.0f && wd <= 1.0f)) return TVT_ERR_BAD_WD;
+    if (!tvt__model_resolve(options, &o)) return TVT_ERR_BAD_PARAMETER;
+    if (pts->count == 0) { pts->wd = wd; return TVT_OK; }
+    A = (tvt__ageing *)tvt__alloc(&pts->allocator, 1, sizeof(tvt__ageing));
+    if (!A) return TVT_ERR_OUT_OF_MEMORY;
+    tvt__ageing_init(&o, wd, A);
+    if (tvt__report(o.progress, o.progress_user, 0.0f)) r = TVT_CANCELLED;
+    for (i = 0; r == TVT_OK && i < pts->count; i++) tvt__age_point(A, wd, pts->res, pts->p + i);
+    tvt__free(&pts->allocator, A);
+    if (r != TVT_OK) return r;
+    pts->wd = wd;
+    if (tvt__report(o.progress, o.progress_user, 0.5f)) return TVT_CANCELLED;
+    if (!o.no_merge) r = tvt__merge(pts, o.merge_threshold);
+    if (r == TVT_OK && tvt__report(o.progress, o.progress_user, 1.0f)) r = TVT_CANCELLED;
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Points -> texel (PIPELINE step 5)
+   --------------------------------------------------------------------------------------------- */
+/* Gaussian weights of the 2R + 1 voxel centres around coordinate x along one axis; centres
+   outside 0..res-1 get 0 unless the axis wraps. Returns their sum. */
+static float tvt__axis_weights(float x, int res, int wraps, int R, float inv2s2, int *idx, float *w)
+{
+    int base = (int)floorf(x), k;
+    float sum = 0.0f;
+    for (k = -R; k <= R; k++) {
+        int v = base + k;
+        float d = (float)v + 0.5f - x;
+        w[k + R] = expf(-d * d * inv2s2);
+        if (wraps) v = (v % res + res) % res;
+        else if (v < 0 || v >= res) w[k + R] = 0.0f;
+        idx[k + R] = v;
+        sum += w[k + R];
+    }
+    return sum;
+}
+
+static int tvt__splat_point(tvt__acc *g, const tvt_point *p, int R, float inv2s2)
+{
+    int ix[5], iy[5], iz[5], i, j, k, c;
+    float wx[5], wy[5], wz[5], norm;
+    norm = tvt__axis_weights(p->pos[0], g->res, 1, R, inv2s2, ix, wx) *
+           tvt__axis_weights(p->pos[1], g->res, 1, R, inv2s2, iy, wy) *
+           tvt__axis_weights(p->pos[2], g->res, 0, R, inv2s2, iz, wz);
+    if (!(norm > 0)) return 1;
+    norm = p->mass / norm;
+    for (k = 0; k <= 2 * R; k++) {
+        if (wz[k] == 0.0f) continue;
+        for (j = 0; j <= 2 * R; j++)
+            for (i = 0; i <= 2 * R; i++) {
+                float w = wx[i] * wy[j] * wz[k] * norm, *a = tvt__acc_voxel(g, ix[i], iy[j], iz[k]);
+                if (!a) return 0;
+                a[0] += w;
+                for (c = 0; c < 3; c++) {
+                    a[1 + c] += w * p->normal[c];
+                    a[4 + c] += w * p->tangent[c];
+                    a[7 + c] += w * p->color[c];
+                }
+                a[10] += w * p->specular;
+            }
+    }
+    return 1;
+}
+
+TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *options, tvt_texel *out)
+{
+    tvt_splat_options o = tvt_splat_default_options();
+    tvt_allocator a;
+    tvt__acc g;
+    tvt_result r;
+    size_t i;
+    int R;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!pts || (!pts->p && pts->count)) return TVT_ERR_INVALID_ARGUMENT;
+    if (options) {
+        o = *options;
+        if (o.bits == 0) o.bits = 8;
+        if (o.sigma == 0) o.sigma = 0.5f;
+    }
+    if (!tvt__check_res(pts->res) || (o.bits != 8 && o.bits != 16)) return TVT_ERR_BAD_RESOLUTION;
+    if (!tvt__finite(o.sigma) || o.sigma < 0.25f || o.sigma > 1.0f || !tvt__finite(pts->proportion) ||
+        !(pts->proportion > 0))
+        return TVT_ERR_BAD_PARAMETER;
+    a = tvt__resolve_allocator(o.allocator ? o.allocator : (pts->allocator.alloc ? &pts->allocator : NULL));
+    R = o.sigma <= 0.5f ? 1 : 2;
+    r = tvt__acc_init(&g, pts->res, &a);
+    for (i = 0; r == TVT_OK && i < pts->count; i++) {
+        if (!tvt__splat_point(&g, pts->p + i, R, 0.5f / (o.sigma * o.sigma))) r = TVT_ERR_OUT_OF_MEMORY;
+        else if ((i & 65535) == 65535 &&
+                 tvt__report(o.progress, o.progress_user, 0.9f * (float)i / (float)pts->count))
+            r = TVT_CANCELLED;
+    }
+    if (r == TVT_OK) r = tvt__acc_to_texel(&g, 1.0f / pts->proportion, o.bits, 0, out);
+    tvt__acc_free(&g);
+    if (r == TVT_OK && tvt__report(o.progress, o.progress_user, 1.0f)) { tvt_texel_free(out); r = TVT_CANCELLED; }
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Defaults and names
+   --------------------------------------------------------------------------------------------- */
+TVTDEF tvt_grass_desc tvt_grass_default_desc(void)
+{
+    tvt_grass_desc d;
+    memset(&d, 0, sizeof(d));
+    d.res = 64;
+    d.blade_count = 100;
+    d.height_min = 0.55f; d.height_max = 0.9f;
+    d.radius_min = 1.5f; d.radius_max = 1.5f;
+    d.lean_min_deg = 3.0f; d.lean_max_deg = 12.0f;
+    d.supersample = 3;
+    d.bits = 8;
+    d.specular = 0.3f;
+    return d;
+}
+
+TVTDEF tvt_sample_options tvt_sample_default_options(void)
+{
+    tvt_sample_options o;
+    memset(&o, 0, sizeof(o));
+    o.proportion = 6.0f;
+    return o;
+}
+
+TVTDEF tvt_model_options tvt_model_default_options(void)
+{
+    tvt_model_options o;
+    memset(&o, 0, sizeof(o));
+    o.water_curve = TVT_WATER_STANDARD;
+    o.k_vein = 0.10f; o.k_mesophyll = 0.40f;
+    o.vein_stiffness = 2.0f; o.stiffening = 4.0f; o.area_ratio = 3.0f;
+    o.droop_max_deg = 80.0f; o.droop_exponent = 2.0f; o.droop_length = 0.6f;
+    o.merge_threshold = 0.15f;
+    o.colour_jitter = 0.05f;
+    return o;
+}
+
+TVTDEF tvt_splat_options tvt_splat_default_options(void)
+{
+    tvt_splat_options o;
+    memset(&o, 0, sizeof(o));
+    o.bits = 8;
+    o.sigma = 0.5f;
+    return o;
+}
+
+TVTDEF const char *tvt_result_string(tvt_result r)
+{
+    switch (r) {
+    case TVT_OK: return "TVT_OK";
+    case TVT_ERR_INVALID_ARGUMENT: return "TVT_ERR_INVALID_ARGUMENT";
+    case TVT_ERR_BAD_RESOLUTION: return "TVT_ERR_BAD_RESOLUTION";
+    case TVT_ERR_BAD_PARAMETER: return "TVT_ERR_BAD_PARAMETER";
+    case TVT_ERR_BAD_WD: return "TVT_ERR_BAD_WD";
+    case TVT_ERR_EMPTY: return "TVT_ERR_EMPTY";
+    case TVT_ERR_TOO_LARGE: return "TVT_ERR_TOO_LARGE";
+    case TVT_ERR_OUT_OF_MEMORY: return "TVT_ERR_OUT_OF_MEMORY";
+    case TVT_CANCELLED: return "TVT_CANCELLED";
+    }
+    return "TVT_ERR_?";
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TVT_IMPLEMENTATION_DONE */
+#endif /* TVT_IMPLEMENTATION */
+
+/*
+------------------------------------------------------------------------------
+This software is available under 2 licences -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT Licence
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright law, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication in favor of the public domain for the benefit
+of our descendants and successors in perpetuity of all present and future
+rights to this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+*/
