@@ -1,6 +1,7 @@
 /* render.h - v0.1 - MIT licence or public domain (see end of file)
-   A minimal software rasterizer, height-field and volume ray marcher, and image writers
-   (PNG, PPM, PFM, contact sheets) for the examples of this project. libc + libm only.
+   A minimal software rasterizer, height-field and volume ray marcher, image readers (PNG, PGM,
+   PPM, PFM) and writers (PNG 8 / 16-bit, PPM, PFM, contact sheets) for the examples of this
+   project. libc + libm only.
 
    WHAT
      - Framebuffer: float RGBA colour + float depth (GL convention: 0 near, 1 far, cleared to 1),
@@ -19,8 +20,17 @@
        of a box-bounded volume given by callbacks (front-to-back compositing, early termination,
        shadow rays, Kajiya-Kay hair/grass lighting). All of them write depth and so composite
        with rasterized geometry in either order (opaque ones; draw volumes last).
-     - PNG (real deflate: fixed Huffman codes + LZ77), PPM, PFM writers; contact sheets with a
-       built-in 3x5 bitmap font for captions.
+     - PNG (real deflate: fixed Huffman codes + LZ77; 8- and 16-bit), PPM, PFM writers; contact
+       sheets with a built-in 3x5 bitmap font for captions.
+     - Strict readers: PNG (every colour type and bit depth, palettes with tRNS, Adam7
+       interlacing, stored / fixed / dynamic Huffman deflate blocks, all five row filters), PGM and
+       PPM (ASCII and binary, maxval up to 65535), PFM (grey and colour, either byte order).
+       Samples come back unscaled (sr_picture) and sr_picture_channel turns one channel into
+       floats in [0, 1]:
+           sr_picture pic;  float *h;
+           if (sr_read_image("height.png", NULL, &pic) != SR_OK) ...;   // sr_result_string(r)
+           h = malloc(sizeof(float) * pic.width * pic.height);
+           sr_picture_channel(&pic, 0, h);  sr_picture_free(&pic);
 
    HOW TO USE (in ten lines)
        #define SR_IMPLEMENTATION          // in exactly one C or C++ file, followed by
@@ -45,11 +55,24 @@
      scratch for the deferred shading. sr_draw_mesh also needs about 40 bytes per vertex of
      scratch, which it allocates through the same allocator the first time and keeps in the
      framebuffer (grown when a bigger mesh comes) until sr_framebuffer_free. Encoders return
-     buffers that must be released with sr_free(allocator, p).
+     buffers that must be released with sr_free(allocator, p). Readers allocate the picture's
+     samples (2 bytes each, 4 for PFM) through the given allocator, kept in pic.allocator for
+     sr_picture_free; while decoding a PNG they also hold its compressed data and its filtered
+     rows (about one more byte per sample) and free them before returning. sr_read_image reads
+     the whole file into memory first.
 
    ERRORS
      Functions return sr_result (SR_OK = 0); sr_result_string() names it. Invalid arguments give
-     SR_ERR_INVALID_ARGUMENT and leave the framebuffer untouched.
+     SR_ERR_INVALID_ARGUMENT and leave the framebuffer untouched. Readers never crash on bad
+     data and hold no memory after a failure: SR_ERR_TRUNCATED (the data ends early),
+     SR_ERR_CORRUPT (a malformed header, chunk order, deflate stream, filter type, palette index,
+     a sample above maxval, a NaN or infinity in a PFM), SR_ERR_CHECKSUM (any chunk's CRC-32, or
+     the Adler-32), SR_ERR_UNSUPPORTED (not one of the formats; a PNG with an unknown critical
+     chunk or a zlib preset dictionary), SR_ERR_TOO_LARGE (past the limits below),
+     SR_ERR_OUT_OF_MEMORY, SR_ERR_IO. The readers are stricter than libpng on purpose: the CRC
+     of every chunk, ancillary ones too, is checked, so that a damaged file is reported rather
+     than half read. They are lenient where libpng is: bytes after the zlib stream and chunks
+     after IEND are ignored.
 
    THREAD SAFETY
      No global state. Different framebuffers may be drawn from different threads at once.
@@ -70,7 +93,10 @@
    LIMITS
      Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
      triangles per draw. Vertices must be finite (checked). One draw is opaque (no blending);
-     volumes blend over what is in the framebuffer.
+     volumes blend over what is in the framebuffer. Read images up to 32768 on a side and 2^28
+     samples (width x height x channels). PNG ancillary chunks are skipped, so gamma, colour
+     profiles and a grey / RGB tRNS colour key are not applied: samples are as stored (height
+     maps want exactly that); a palette's tRNS does become an alpha channel.
 
    REFERENCES
      Pineda, "A parallel algorithm for polygon rasterization", SIGGRAPH 1988 (edge functions).
@@ -109,7 +135,11 @@ typedef enum sr_result {
     SR_ERR_INVALID_ARGUMENT, /* NULL pointer, bad size, index out of range, non-finite input */
     SR_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
     SR_ERR_IO,               /* fopen / fwrite / fclose failed */
-    SR_ERR_TOO_LARGE         /* sizes past the documented limits */
+    SR_ERR_TOO_LARGE,        /* sizes past the documented limits */
+    SR_ERR_TRUNCATED,        /* readers: the data ends before the image does */
+    SR_ERR_CORRUPT,          /* readers: a malformed header, chunk, deflate stream or sample */
+    SR_ERR_CHECKSUM,         /* readers: a PNG chunk's CRC-32 or the zlib stream's Adler-32 is wrong */
+    SR_ERR_UNSUPPORTED       /* readers: not a PNG / PNM / PFM file, or a feature this reader lacks */
 } sr_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -257,6 +287,18 @@ typedef struct sr_volume_desc {
     sr_material material;
 } sr_volume_desc;
 
+/* A decoded image file (sr_read_image, sr_decode_*). Integer formats (PNG, PGM, PPM) fill
+   samples, PFM fills floats; the other pointer is NULL. Release with sr_picture_free. */
+typedef struct sr_picture {
+    int width, height;
+    int channels;       /* 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; a PNG palette becomes 3 (4 with tRNS) */
+    int bit_depth;      /* the file's: PNG 1, 2, 4, 8 or 16 (8 for a palette), PGM the bits of maxval, PFM 32 */
+    int max_value;      /* the largest sample value: 2^bit_depth - 1 (PNG), maxval (PGM / PPM), 0 (PFM) */
+    uint16_t *samples;  /* width*height*channels, row 0 = the top row, unscaled */
+    float *floats;      /* PFM: width*height*channels, row 0 = the file's first row (which PFM shows at the bottom) */
+    sr_allocator allocator;
+} sr_picture;
+
 /* An 8-bit image for writers and contact sheets: row 0 is the top row. */
 typedef struct sr_image8 {
     int width, height, channels; /* channels 1, 3 or 4 */
@@ -343,6 +385,23 @@ SRDEF sr_result sr_write_ppm(const char *path, const uint8_t *pixels, int width,
 SRDEF sr_result sr_write_pfm(const char *path, const float *data, int width, int height, int channels);
 /* The framebuffer as an RGB PNG (flip_y as sr_encode_png). */
 SRDEF sr_result sr_write_framebuffer_png(const sr_framebuffer *fb, const char *path, int flip_y);
+/* 16-bit PNG of samples (channels 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; host-order uint16_t). */
+SRDEF sr_result sr_encode_png16(const uint16_t *samples, int width, int height, int channels, int flip_y,
+                                const sr_allocator *allocator, uint8_t **out, size_t *out_size);
+SRDEF sr_result sr_write_png16(const char *path, const uint16_t *samples, int width, int height, int channels, int flip_y);
+
+/* Readers. Each fills *out (zeroed first; on failure it holds no memory) with memory from the
+   allocator (NULL = SR_MALLOC). sr_decode_png: PNG of every colour type and bit depth, Adam7
+   interlaced or not; sr_decode_pnm: P2 / P5 (PGM), P3 / P6 (PPM), maxval up to 65535, and PFM
+   (Pf grey, PF colour, either byte order); sr_decode_image picks by the first bytes;
+   sr_read_image reads a file (SR_ERR_IO when it cannot). */
+SRDEF sr_result sr_decode_png(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out);
+SRDEF sr_result sr_decode_pnm(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out);
+SRDEF sr_result sr_decode_image(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out);
+SRDEF sr_result sr_read_image(const char *path, const sr_allocator *allocator, sr_picture *out);
+SRDEF void sr_picture_free(sr_picture *p);
+/* One channel as width*height floats into out: sample / max_value (so [0, 1]), or PFM's value. */
+SRDEF sr_result sr_picture_channel(const sr_picture *p, int channel, float *out);
 
 /* Draws text with the built-in 3x5 font (letters drawn upper case) at pixel (x, y) = top left,
    each font pixel scale x scale. Characters without a glyph draw as a box. Clipped to the image. */
@@ -404,6 +463,10 @@ SRDEF const char *sr_result_string(sr_result r)
     case SR_ERR_OUT_OF_MEMORY: return "SR_ERR_OUT_OF_MEMORY";
     case SR_ERR_IO: return "SR_ERR_IO";
     case SR_ERR_TOO_LARGE: return "SR_ERR_TOO_LARGE";
+    case SR_ERR_TRUNCATED: return "SR_ERR_TRUNCATED";
+    case SR_ERR_CORRUPT: return "SR_ERR_CORRUPT";
+    case SR_ERR_CHECKSUM: return "SR_ERR_CHECKSUM";
+    case SR_ERR_UNSUPPORTED: return "SR_ERR_UNSUPPORTED";
     }
     return "SR_ERR_?";
 }
@@ -1915,21 +1978,23 @@ static void sr__fixed_literal(sr__buf *b, int sym)
     else sr__huff(b, 0xC0u + (uint32_t)(sym - 280), 8);
 }
 
+/* RFC 1951 3.2.5: length and distance codes */
+static const unsigned short sr__len_base[29] = {3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31,
+                                               35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+static const unsigned char sr__len_extra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+static const unsigned short sr__dist_base[30] = {1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385,
+                                                513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+static const unsigned char sr__dist_extra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+
 static void sr__deflate_match(sr__buf *b, int len, int dist)
 {
-    static const unsigned short lbase[29] = {3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31,
-                                             35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
-    static const unsigned char lextra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-    static const unsigned short dbase[30] = {1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385,
-                                             513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
-    static const unsigned char dextra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
     int li = 28, di = 29;
-    while (lbase[li] > len) li--;
-    while (dbase[di] > dist) di--;
+    while (sr__len_base[li] > len) li--;
+    while (sr__dist_base[di] > dist) di--;
     sr__fixed_literal(b, 257 + li);
-    if (lextra[li]) sr__bits(b, (uint32_t)(len - lbase[li]), lextra[li]);
+    if (sr__len_extra[li]) sr__bits(b, (uint32_t)(len - sr__len_base[li]), sr__len_extra[li]);
     sr__huff(b, (uint32_t)di, 5);
-    if (dextra[di]) sr__bits(b, (uint32_t)(dist - dbase[di]), dextra[di]);
+    if (sr__dist_extra[di]) sr__bits(b, (uint32_t)(dist - sr__dist_base[di]), sr__dist_extra[di]);
 }
 
 #define SR__HASH_BITS 15
@@ -2001,11 +2066,14 @@ static sr_result sr__zlib(const uint8_t *in, size_t n, sr__buf *b)
 static uint32_t sr__crc(const uint8_t *p, size_t n, uint32_t crc)
 {
     size_t i;
-    int k;
+    static const uint32_t nibble[16] = { /* CRC-32 of each 4-bit value (polynomial 0xEDB88320) */
+        0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u, 0x4DB26158u, 0x5005713Cu,
+        0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu, 0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
     crc = ~crc;
     for (i = 0; i < n; i++) {
         crc ^= p[i];
-        for (k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+        crc = (crc >> 4) ^ nibble[crc & 15u];
+        crc = (crc >> 4) ^ nibble[crc & 15u];
     }
     return ~crc;
 }
@@ -2056,34 +2124,29 @@ static void sr__filter_rows(const uint8_t *pixels, int w, int h, int ch, int fli
     }
 }
 
-SRDEF sr_result sr_encode_png(const uint8_t *pixels, int width, int height, int channels, int flip_y,
-                              const sr_allocator *allocator, uint8_t **out, size_t *out_size)
+/* PNG of rows of bpp-byte pixels (already in file order: big-endian 16-bit samples) */
+static sr_result sr__png_encode(const uint8_t *bytes, int width, int height, int bpp, int depth, int color, int flip_y,
+                                const sr_allocator *a, uint8_t **out, size_t *out_size)
 {
     static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     sr__buf b, z;
     uint8_t ihdr[13], *filtered;
     size_t raw;
     sr_result res;
-    if (out) *out = NULL;
-    if (out_size) *out_size = 0;
-    if (!pixels || !out || !out_size || width < 1 || height < 1 || (channels != 1 && channels != 3 && channels != 4))
-        return SR_ERR_INVALID_ARGUMENT;
-    if (width > 1000000 || height > 1000000 || (size_t)width * (size_t)channels + 1 > ((size_t)-1) / (size_t)height)
-        return SR_ERR_TOO_LARGE;
     memset(&b, 0, sizeof b);
-    b.a = sr__resolve_allocator(allocator);
+    b.a = *a;
     z = b;
-    raw = ((size_t)width * (size_t)channels + 1) * (size_t)height;
+    raw = ((size_t)width * (size_t)bpp + 1) * (size_t)height;
     filtered = (uint8_t *)sr__alloc(&b.a, raw);
     if (!filtered) return SR_ERR_OUT_OF_MEMORY;
-    sr__filter_rows(pixels, width, height, channels, flip_y, filtered);
+    sr__filter_rows(bytes, width, height, bpp, flip_y, filtered);
     res = sr__zlib(filtered, raw, &z);
     b.a.free(b.a.user, filtered);
     if (res != SR_OK) { if (z.data) z.a.free(z.a.user, z.data); return res; }
     ihdr[0] = (uint8_t)(width >> 24); ihdr[1] = (uint8_t)(width >> 16); ihdr[2] = (uint8_t)(width >> 8); ihdr[3] = (uint8_t)width;
     ihdr[4] = (uint8_t)(height >> 24); ihdr[5] = (uint8_t)(height >> 16); ihdr[6] = (uint8_t)(height >> 8); ihdr[7] = (uint8_t)height;
-    ihdr[8] = 8;
-    ihdr[9] = (uint8_t)(channels == 1 ? 0 : channels == 3 ? 2 : 6);
+    ihdr[8] = (uint8_t)depth;
+    ihdr[9] = (uint8_t)color;
     ihdr[10] = 0; ihdr[11] = 0; ihdr[12] = 0;
     sr__put(&b, sig, 8);
     sr__chunk(&b, "IHDR", ihdr, 13);
@@ -2094,6 +2157,20 @@ SRDEF sr_result sr_encode_png(const uint8_t *pixels, int width, int height, int 
     *out = b.data;
     *out_size = b.size;
     return SR_OK;
+}
+
+SRDEF sr_result sr_encode_png(const uint8_t *pixels, int width, int height, int channels, int flip_y,
+                              const sr_allocator *allocator, uint8_t **out, size_t *out_size)
+{
+    sr_allocator a;
+    if (out) *out = NULL;
+    if (out_size) *out_size = 0;
+    if (!pixels || !out || !out_size || width < 1 || height < 1 || (channels != 1 && channels != 3 && channels != 4))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (width > 1000000 || height > 1000000 || (size_t)width * (size_t)channels + 1 > ((size_t)-1) / (size_t)height)
+        return SR_ERR_TOO_LARGE;
+    a = sr__resolve_allocator(allocator);
+    return sr__png_encode(pixels, width, height, channels, 8, channels == 1 ? 0 : channels == 3 ? 2 : 6, flip_y, &a, out, out_size);
 }
 
 static sr_result sr__write_file(const char *path, const void *head, size_t head_n, const void *data, size_t n)
@@ -2178,6 +2255,732 @@ SRDEF sr_result sr_write_framebuffer_png(const sr_framebuffer *fb, const char *p
     sr_framebuffer_to_rgb8(fb, rgb, 3);
     r = sr_write_png(path, rgb, fb->width, fb->height, 3, flip_y);
     a.free(a.user, rgb);
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: image readers (zlib inflate, PNG decoder, PGM / PPM / PFM) and the 16-bit PNG writer
+   --------------------------------------------------------------------------------------------- */
+
+#define SR__IMG_MAX_SIDE 32768
+#define SR__IMG_MAX_SAMPLES ((size_t)1 << 28)
+#define SR__FAST_BITS 9
+
+/* a canonical Huffman code (RFC 1951 3.2.2) with a table for codes of up to SR__FAST_BITS bits */
+typedef struct sr__huffman {
+    uint16_t count[16];                  /* codes of each length */
+    uint16_t symbol[288];                /* symbols ordered by (length, value) */
+    uint16_t fast[1 << SR__FAST_BITS];   /* (length << 9) | symbol for short codes; 0 = take the long way */
+} sr__huffman;
+
+typedef struct sr__inflate {
+    const uint8_t *in;
+    size_t n, pos, over;                 /* over: zero bytes fed past the end of the input */
+    uint64_t bits;                       /* LSB first */
+    int cnt;
+    uint8_t *out;
+    size_t out_n, out_pos;
+} sr__inflate;
+
+static void sr__z_refill(sr__inflate *z)
+{
+    while (z->cnt <= 56) {
+        uint64_t b = 0;
+        if (z->pos < z->n) b = z->in[z->pos++];
+        else z->over++;
+        z->bits |= b << z->cnt;
+        z->cnt += 8;
+    }
+}
+
+/* n <= 32 bits, after a refill that guarantees them */
+static uint32_t sr__z_get(sr__inflate *z, int n)
+{
+    uint32_t v = (uint32_t)(z->bits & ((((uint64_t)1) << n) - 1u));
+    z->bits >>= n;
+    z->cnt -= n;
+    return v;
+}
+
+/* nonzero when bits past the end of the input have been consumed */
+static int sr__z_overrun(const sr__inflate *z) { return (size_t)z->cnt < 8 * z->over; }
+
+/* Builds the code from its lengths. Over-subscribed codes are corrupt; an incomplete code is
+   accepted only as zlib does: a code-length code never, the others when no code is longer than 1
+   bit (one code, or none: then every use is corrupt). */
+static sr_result sr__huff_build(sr__huffman *h, const uint8_t *lengths, int n, int is_code_lengths)
+{
+    int offs[16], next[16], len, sym, left = 1, maxlen = 0, code = 0;
+    memset(h->count, 0, sizeof h->count);
+    memset(h->fast, 0, sizeof h->fast);
+    for (sym = 0; sym < n; sym++) h->count[lengths[sym]]++;
+    h->count[0] = 0;
+    for (len = 1; len <= 15; len++) {
+        left = 2 * left - h->count[len];
+        if (left < 0) return SR_ERR_CORRUPT;
+        if (h->count[len]) maxlen = len;
+    }
+    if (left > 0 && (is_code_lengths ? maxlen > 0 : maxlen > 1)) return SR_ERR_CORRUPT;
+    offs[1] = 0;
+    for (len = 1; len < 15; len++) offs[len + 1] = offs[len] + h->count[len];
+    for (len = 1; len <= 15; len++) { code = (code + h->count[len - 1]) << 1; next[len] = code; }
+    for (sym = 0; sym < n; sym++) {
+        int l = lengths[sym];
+        if (!l) continue;
+        h->symbol[offs[l]++] = (uint16_t)sym;
+        if (l <= SR__FAST_BITS) {
+            int c = next[l]++, rev = 0, k;
+            for (k = 0; k < l; k++) rev |= ((c >> k) & 1) << (l - 1 - k);
+            for (k = rev; k < (1 << SR__FAST_BITS); k += 1 << l) h->fast[k] = (uint16_t)((l << 9) | sym);
+        } else {
+            next[l]++;
+        }
+    }
+    return SR_OK;
+}
+
+/* one symbol (at least 15 bits must be buffered), or -1 for a bit pattern that is no code */
+static int sr__huff_decode(sr__inflate *z, const sr__huffman *h)
+{
+    int e = h->fast[z->bits & ((1u << SR__FAST_BITS) - 1u)], len, code = 0, first = 0, index = 0;
+    if (e) { sr__z_get(z, e >> 9); return e & 511; }
+    for (len = 1; len <= 15; len++) {
+        int count = h->count[len];
+        code |= (int)((z->bits >> (len - 1)) & 1u);
+        if (code - first < count) { sr__z_get(z, len); return h->symbol[index + code - first]; }
+        index += count;
+        first = (first + count) << 1;
+        code <<= 1;
+    }
+    return -1;
+}
+
+/* the symbols of one Huffman block up to end-of-block; output past out_n is corrupt */
+static sr_result sr__inflate_codes(sr__inflate *z, const sr__huffman *lit, const sr__huffman *dist)
+{
+    for (;;) {
+        int sym;
+        sr__z_refill(z);
+        if (sr__z_overrun(z)) return SR_ERR_TRUNCATED;
+        sym = sr__huff_decode(z, lit);
+        if (sym < 0) return sr__z_overrun(z) ? SR_ERR_TRUNCATED : SR_ERR_CORRUPT;
+        if (sym < 256) {
+            if (z->out_pos >= z->out_n) return SR_ERR_CORRUPT;
+            z->out[z->out_pos++] = (uint8_t)sym;
+        } else if (sym == 256) {
+            return sr__z_overrun(z) ? SR_ERR_TRUNCATED : SR_OK;
+        } else {
+            size_t len, d, k;
+            uint8_t *o;
+            const uint8_t *src;
+            sym -= 257;
+            if (sym >= 29) return SR_ERR_CORRUPT;
+            len = sr__len_base[sym] + sr__z_get(z, sr__len_extra[sym]);
+            sym = sr__huff_decode(z, dist);
+            if (sym < 0 || sym >= 30) return sr__z_overrun(z) ? SR_ERR_TRUNCATED : SR_ERR_CORRUPT;
+            d = sr__dist_base[sym] + sr__z_get(z, sr__dist_extra[sym]);
+            if (sr__z_overrun(z)) return SR_ERR_TRUNCATED;
+            if (d > z->out_pos || len > z->out_n - z->out_pos) return SR_ERR_CORRUPT;
+            o = z->out + z->out_pos;
+            src = o - d;
+            for (k = 0; k < len; k++) o[k] = src[k]; /* overlapping copies repeat the pattern */
+            z->out_pos += len;
+        }
+    }
+}
+
+static sr_result sr__inflate_stored(sr__inflate *z)
+{
+    uint32_t len, nlen, k;
+    sr__z_get(z, z->cnt & 7);
+    sr__z_refill(z);
+    len = sr__z_get(z, 16);
+    nlen = sr__z_get(z, 16);
+    if (sr__z_overrun(z)) return SR_ERR_TRUNCATED;
+    if ((len ^ 0xFFFFu) != nlen) return SR_ERR_CORRUPT;
+    if (len > z->out_n - z->out_pos) return SR_ERR_CORRUPT;
+    for (k = 0; k < len; k++) {
+        if (z->cnt < 8) sr__z_refill(z);
+        z->out[z->out_pos++] = (uint8_t)sr__z_get(z, 8);
+    }
+    return sr__z_overrun(z) ? SR_ERR_TRUNCATED : SR_OK;
+}
+
+static sr_result sr__inflate_fixed(sr__inflate *z, sr__huffman *lit, sr__huffman *dist)
+{
+    uint8_t l[288];
+    int i;
+    for (i = 0; i < 288; i++) l[i] = (uint8_t)(i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8);
+    sr__huff_build(lit, l, 288, 0);
+    for (i = 0; i < 32; i++) l[i] = 5;
+    sr__huff_build(dist, l, 32, 0);
+    return sr__inflate_codes(z, lit, dist);
+}
+
+/* the code lengths of a dynamic block (RFC 1951 3.2.7), then its symbols */
+static sr_result sr__inflate_dynamic(sr__inflate *z, sr__huffman *lit, sr__huffman *dist)
+{
+    static const unsigned char order[19] = {16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15};
+    uint8_t lens[286 + 30];
+    int hlit, hdist, hclen, i = 0;
+    sr_result r;
+    sr__z_refill(z);
+    hlit = (int)sr__z_get(z, 5) + 257;
+    hdist = (int)sr__z_get(z, 5) + 1;
+    hclen = (int)sr__z_get(z, 4) + 4;
+    if (hlit > 286 || hdist > 30) return SR_ERR_CORRUPT;
+    memset(lens, 0, sizeof lens);
+    for (i = 0; i < hclen; i++) {
+        if (z->cnt < 3) sr__z_refill(z);
+        lens[order[i]] = (uint8_t)sr__z_get(z, 3);
+    }
+    if (sr__z_overrun(z)) return SR_ERR_TRUNCATED;
+    if ((r = sr__huff_build(lit, lens, 19, 1)) != SR_OK) return r;
+    for (i = 0; i < hlit + hdist;) {
+        int sym, rep = 0, val = 0;
+        sr__z_refill(z);
+        sym = sr__huff_decode(z, lit);
+        if (sym < 0) return sr__z_overrun(z) ? SR_ERR_TRUNCATED : SR_ERR_CORRUPT;
+        if (sym < 16) { lens[i++] = (uint8_t)sym; continue; }
+        if (sym == 16) {
+            if (i == 0) return SR_ERR_CORRUPT;
+            val = lens[i - 1];
+            rep = 3 + (int)sr__z_get(z, 2);
+        } else if (sym == 17) {
+            rep = 3 + (int)sr__z_get(z, 3);
+        } else {
+            rep = 11 + (int)sr__z_get(z, 7);
+        }
+        if (rep > hlit + hdist - i) return SR_ERR_CORRUPT;
+        while (rep--) lens[i++] = (uint8_t)val;
+    }
+    if (sr__z_overrun(z)) return SR_ERR_TRUNCATED;
+    if (lens[256] == 0) return SR_ERR_CORRUPT; /* no end-of-block code */
+    if ((r = sr__huff_build(lit, lens, hlit, 0)) != SR_OK) return r;
+    if ((r = sr__huff_build(dist, lens + hlit, hdist, 0)) != SR_OK) return r;
+    return sr__inflate_codes(z, lit, dist);
+}
+
+static uint32_t sr__adler(const uint8_t *p, size_t n)
+{
+    uint32_t s1 = 1, s2 = 0;
+    while (n) {
+        size_t k = n < 5552 ? n : 5552; /* the longest run whose sums cannot overflow 32 bits */
+        n -= k;
+        while (k--) { s1 += *p++; s2 += s1; }
+        s1 %= 65521u;
+        s2 %= 65521u;
+    }
+    return (s2 << 16) | s1;
+}
+
+/* A zlib stream (RFC 1950) that must inflate to exactly out_n bytes; bytes after the Adler-32
+   are ignored (libpng also accepts them). */
+static sr_result sr__zlib_decode(const uint8_t *in, size_t n, uint8_t *out, size_t out_n)
+{
+    sr__inflate z;
+    sr__huffman lit, dist;
+    uint32_t adler = 0;
+    int final = 0, k;
+    sr_result r = SR_OK;
+    if (n < 2) return SR_ERR_TRUNCATED;
+    if ((in[0] & 15) != 8 || (in[0] >> 4) > 7 || ((unsigned)in[0] * 256u + in[1]) % 31u != 0) return SR_ERR_CORRUPT;
+    if (in[1] & 0x20) return SR_ERR_UNSUPPORTED; /* preset dictionary */
+    memset(&z, 0, sizeof z);
+    z.in = in; z.n = n; z.pos = 2; z.out = out; z.out_n = out_n;
+    while (!final && r == SR_OK) {
+        uint32_t type;
+        sr__z_refill(&z);
+        final = (int)sr__z_get(&z, 1);
+        type = sr__z_get(&z, 2);
+        if (sr__z_overrun(&z)) return SR_ERR_TRUNCATED;
+        if (type == 0) r = sr__inflate_stored(&z);
+        else if (type == 1) r = sr__inflate_fixed(&z, &lit, &dist);
+        else if (type == 2) r = sr__inflate_dynamic(&z, &lit, &dist);
+        else r = SR_ERR_CORRUPT;
+    }
+    if (r != SR_OK) return r;
+    sr__z_get(&z, z.cnt & 7);
+    sr__z_refill(&z);
+    for (k = 0; k < 4; k++) adler = (adler << 8) | sr__z_get(&z, 8);
+    if (sr__z_overrun(&z)) return SR_ERR_TRUNCATED;
+    if (z.out_pos != out_n) return SR_ERR_CORRUPT; /* a complete stream with too little image data */
+    return adler == sr__adler(out, out_n) ? SR_OK : SR_ERR_CHECKSUM;
+}
+
+SRDEF void sr_picture_free(sr_picture *p)
+{
+    if (!p) return;
+    if (p->samples) p->allocator.free(p->allocator.user, p->samples);
+    if (p->floats) p->allocator.free(p->allocator.user, p->floats);
+    p->samples = NULL;
+    p->floats = NULL;
+}
+
+/* checks the size limits and allocates the picture's array */
+static sr_result sr__picture_alloc(sr_picture *p, uint32_t w, uint32_t h, int channels, int floats)
+{
+    size_t n;
+    if (w < 1 || h < 1) return SR_ERR_CORRUPT;
+    if (w > SR__IMG_MAX_SIDE || h > SR__IMG_MAX_SIDE) return SR_ERR_TOO_LARGE;
+    n = (size_t)w * (size_t)h * (size_t)channels;
+    if (n > SR__IMG_MAX_SAMPLES) return SR_ERR_TOO_LARGE;
+    p->width = (int)w;
+    p->height = (int)h;
+    p->channels = channels;
+    if (floats) p->floats = (float *)sr__alloc(&p->allocator, n * sizeof(float));
+    else p->samples = (uint16_t *)sr__alloc(&p->allocator, n * sizeof(uint16_t));
+    return (p->floats || p->samples) ? SR_OK : SR_ERR_OUT_OF_MEMORY;
+}
+
+static uint32_t sr__get_u32be(const uint8_t *p)
+{
+    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
+}
+
+typedef struct sr__png {
+    uint32_t width, height;
+    int depth, color, interlace, channels; /* channels in the file: palette = 1 */
+    uint8_t palette[256][4];
+    int palette_n, have_trns;
+    sr__buf idat;                          /* the IDAT chunks' data, concatenated */
+} sr__png;
+
+static sr_result sr__png_ihdr(sr__png *p, const uint8_t *d, uint32_t n)
+{
+    static const int ch[7] = {1, 0, 3, 1, 2, 0, 4};
+    int dp;
+    if (n != 13) return SR_ERR_CORRUPT;
+    p->width = sr__get_u32be(d);
+    p->height = sr__get_u32be(d + 4);
+    p->depth = d[8];
+    p->color = d[9];
+    p->interlace = d[12];
+    dp = p->depth;
+    if (p->width == 0 || p->height == 0 || p->width > 0x7FFFFFFFu || p->height > 0x7FFFFFFFu) return SR_ERR_CORRUPT;
+    if (p->color > 6 || ch[p->color] == 0) return SR_ERR_CORRUPT;
+    p->channels = ch[p->color];
+    if (dp != 1 && dp != 2 && dp != 4 && dp != 8 && dp != 16) return SR_ERR_CORRUPT;
+    if ((p->color == 3 && dp == 16) || (p->color != 0 && p->color != 3 && dp < 8)) return SR_ERR_CORRUPT;
+    if (d[10] != 0 || d[11] != 0 || d[12] > 1) return SR_ERR_CORRUPT;
+    if (p->width > SR__IMG_MAX_SIDE || p->height > SR__IMG_MAX_SIDE) return SR_ERR_TOO_LARGE;
+    if ((size_t)p->width * p->height * (size_t)(p->color == 3 ? 4 : p->channels) > SR__IMG_MAX_SAMPLES) return SR_ERR_TOO_LARGE;
+    return SR_OK;
+}
+
+static sr_result sr__png_plte(sr__png *p, const uint8_t *d, uint32_t n)
+{
+    uint32_t i;
+    if (p->color == 0 || p->color == 4 || p->palette_n || p->idat.size) return SR_ERR_CORRUPT;
+    if (n == 0 || n % 3 || n / 3 > 256 || (p->color == 3 && n / 3 > (1u << p->depth))) return SR_ERR_CORRUPT;
+    for (i = 0; i < n / 3; i++) {
+        p->palette[i][0] = d[3 * i]; p->palette[i][1] = d[3 * i + 1]; p->palette[i][2] = d[3 * i + 2];
+        p->palette[i][3] = 255;
+    }
+    p->palette_n = (int)(n / 3);
+    return SR_OK;
+}
+
+/* tRNS: palette alpha is applied (the picture gets 4 channels); a grey or RGB colour key is ignored */
+static sr_result sr__png_trns(sr__png *p, const uint8_t *d, uint32_t n)
+{
+    uint32_t i;
+    if (p->color != 3) return (p->color == 0 || p->color == 2) ? SR_OK : SR_ERR_CORRUPT;
+    if (!p->palette_n || p->idat.size || n > (uint32_t)p->palette_n) return SR_ERR_CORRUPT;
+    for (i = 0; i < n; i++) p->palette[i][3] = d[i];
+    p->have_trns = 1;
+    return SR_OK;
+}
+
+/* Walks the chunks: signature, lengths, CRCs, order; keeps IHDR, PLTE, tRNS and gathers IDAT. */
+static sr_result sr__png_chunks(sr__png *p, const uint8_t *data, size_t size)
+{
+    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    size_t pos = 8;
+    int seen_ihdr = 0, idat_done = 0;
+    if (size < 8) return memcmp(data, sig, size) == 0 ? SR_ERR_TRUNCATED : SR_ERR_UNSUPPORTED;
+    if (memcmp(data, sig, 8) != 0) return SR_ERR_UNSUPPORTED;
+    for (;;) {
+        uint32_t n, k;
+        const uint8_t *type, *d;
+        sr_result r = SR_OK;
+        if (size - pos < 12) return SR_ERR_TRUNCATED;
+        n = sr__get_u32be(data + pos);
+        type = data + pos + 4;
+        d = type + 4;
+        if (n > 0x7FFFFFFFu) return SR_ERR_CORRUPT;
+        if (size - pos - 12 < n) return SR_ERR_TRUNCATED;
+        for (k = 0; k < 4; k++)
+            if (!((type[k] >= 'A' && type[k] <= 'Z') || (type[k] >= 'a' && type[k] <= 'z'))) return SR_ERR_CORRUPT;
+        if (sr__crc(type, 4 + (size_t)n, 0) != sr__get_u32be(d + n)) return SR_ERR_CHECKSUM;
+        pos += 12 + (size_t)n;
+        if (!seen_ihdr) {
+            if (memcmp(type, "IHDR", 4) != 0) return SR_ERR_CORRUPT;
+            if ((r = sr__png_ihdr(p, d, n)) != SR_OK) return r;
+            seen_ihdr = 1;
+            continue;
+        }
+        if (p->idat.size && memcmp(type, "IDAT", 4) != 0) idat_done = 1;
+        if (memcmp(type, "IEND", 4) == 0) break;
+        if (memcmp(type, "IDAT", 4) == 0) {
+            if (idat_done || (p->color == 3 && !p->palette_n)) return SR_ERR_CORRUPT;
+            sr__put(&p->idat, d, n);
+            if (p->idat.failed) return SR_ERR_OUT_OF_MEMORY;
+        } else if (memcmp(type, "PLTE", 4) == 0) r = sr__png_plte(p, d, n);
+        else if (memcmp(type, "tRNS", 4) == 0) r = sr__png_trns(p, d, n);
+        else if (memcmp(type, "IHDR", 4) == 0) r = SR_ERR_CORRUPT;
+        else if (!(type[0] & 0x20)) r = SR_ERR_UNSUPPORTED; /* an unknown critical chunk */
+        if (r != SR_OK) return r;
+    }
+    return p->idat.size ? SR_OK : SR_ERR_CORRUPT;
+}
+
+/* bytes of one filtered row of a pass w pixels wide (without the filter byte) */
+static size_t sr__png_row_bytes(const sr__png *p, uint32_t w)
+{
+    return ((size_t)w * (size_t)(p->channels * p->depth) + 7) / 8;
+}
+
+static const uint8_t sr__adam7[7][4] = { /* x0, y0, dx, dy */
+    {0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4}, {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+
+static void sr__png_pass_size(const sr__png *p, int pass, uint32_t *w, uint32_t *h)
+{
+    const uint8_t *a = sr__adam7[p->interlace ? pass : 6];
+    if (!p->interlace) { *w = p->width; *h = p->height; return; }
+    *w = p->width > a[0] ? (p->width - a[0] + a[2] - 1) / a[2] : 0;
+    *h = p->height > a[1] ? (p->height - a[1] + a[3] - 1) / a[3] : 0;
+    if (*w == 0) *h = 0;
+    if (*h == 0) *w = 0;
+}
+
+/* undoes the row filters of one pass in place: each row is its filter byte and rb bytes */
+static sr_result sr__png_unfilter(uint8_t *rows, size_t rb, uint32_t h, size_t bpp)
+{
+    uint32_t y;
+    size_t x;
+    for (y = 0; y < h; y++) {
+        uint8_t *r = rows + (size_t)y * (rb + 1);
+        const uint8_t *up = y ? r - (rb + 1) + 1 : NULL;
+        int f = r[0];
+        r++;
+        if (f > 4) return SR_ERR_CORRUPT;
+        if (!up && (f == 2 || f == 4)) f = f == 2 ? 0 : 1; /* the row above is zero */
+        switch (f) {
+        case 1: for (x = bpp; x < rb; x++) r[x] = (uint8_t)(r[x] + r[x - bpp]); break;
+        case 2: for (x = 0; x < rb; x++) r[x] = (uint8_t)(r[x] + up[x]); break;
+        case 3:
+            for (x = 0; x < rb; x++) {
+                int a = x >= bpp ? r[x - bpp] : 0, b = up ? up[x] : 0;
+                r[x] = (uint8_t)(r[x] + ((a + b) >> 1));
+            }
+            break;
+        case 4:
+            for (x = 0; x < bpp; x++) r[x] = (uint8_t)(r[x] + up[x]);
+            for (x = bpp; x < rb; x++) r[x] = (uint8_t)(r[x] + sr__paeth(r[x - bpp], up[x], up[x - bpp]));
+            break;
+        default: break;
+        }
+    }
+    return SR_OK;
+}
+
+/* one pass's unfiltered rows to the picture's samples (palette expanded) */
+static sr_result sr__png_unpack(const sr__png *p, int pass, const uint8_t *rows, uint32_t w, uint32_t h, sr_picture *out)
+{
+    const uint8_t *a = sr__adam7[p->interlace ? pass : 6];
+    uint32_t x0 = p->interlace ? a[0] : 0, y0 = p->interlace ? a[1] : 0, dx = p->interlace ? a[2] : 1, dy = p->interlace ? a[3] : 1;
+    size_t rb = sr__png_row_bytes(p, w), oc = (size_t)out->channels;
+    int c, nc = p->channels, depth = p->depth;
+    uint32_t x, y;
+    for (y = 0; y < h; y++) {
+        const uint8_t *r = rows + (size_t)y * (rb + 1) + 1;
+        uint16_t *o = out->samples + ((size_t)(y0 + y * dy) * p->width + x0) * oc;
+        for (x = 0; x < w; x++, o += dx * oc)
+            for (c = 0; c < nc; c++) {
+                size_t i = (size_t)x * (size_t)nc + (size_t)c;
+                unsigned v;
+                if (depth == 16) v = ((unsigned)r[2 * i] << 8) | r[2 * i + 1];
+                else if (depth == 8) v = r[i];
+                else v = (r[i * (size_t)depth / 8] >> (8 - depth - (int)(i * (size_t)depth % 8))) & ((1u << depth) - 1u);
+                if (p->color == 3) {
+                    int k;
+                    if ((int)v >= p->palette_n) return SR_ERR_CORRUPT;
+                    for (k = 0; k < (int)oc; k++) o[k] = p->palette[v][k];
+                } else {
+                    o[c] = (uint16_t)v;
+                }
+            }
+    }
+    return SR_OK;
+}
+
+/* inflates the IDAT stream into every pass's filtered rows, then unfilters and unpacks the passes */
+static sr_result sr__png_pixels(sr__png *p, sr_allocator *al, sr_picture *out)
+{
+    size_t total = 0, off = 0, bpp = (size_t)(p->channels * p->depth + 7) / 8;
+    uint32_t w, h;
+    uint8_t *raw;
+    sr_result r;
+    int pass, passes = p->interlace ? 7 : 1;
+    for (pass = 0; pass < passes; pass++) {
+        sr__png_pass_size(p, pass, &w, &h);
+        if (h) total += (sr__png_row_bytes(p, w) + 1) * h;
+    }
+    raw = (uint8_t *)sr__alloc(al, total);
+    if (!raw) return SR_ERR_OUT_OF_MEMORY;
+    r = sr__zlib_decode(p->idat.data, p->idat.size, raw, total);
+    if (r == SR_OK) r = sr__picture_alloc(out, p->width, p->height, p->color == 3 ? (p->have_trns ? 4 : 3) : p->channels, 0);
+    for (pass = 0; pass < passes && r == SR_OK; pass++) {
+        sr__png_pass_size(p, pass, &w, &h);
+        if (!h) continue;
+        r = sr__png_unfilter(raw + off, sr__png_row_bytes(p, w), h, bpp);
+        if (r == SR_OK) r = sr__png_unpack(p, pass, raw + off, w, h, out);
+        off += (sr__png_row_bytes(p, w) + 1) * h;
+    }
+    al->free(al->user, raw);
+    return r;
+}
+
+SRDEF sr_result sr_decode_png(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out)
+{
+    sr__png p;
+    sr_result r;
+    if (!out) return SR_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    out->allocator = sr__resolve_allocator(allocator);
+    if (!data && size) return SR_ERR_INVALID_ARGUMENT;
+    if (!data) return SR_ERR_TRUNCATED;
+    memset(&p, 0, sizeof p);
+    p.idat.a = out->allocator;
+    r = sr__png_chunks(&p, data, size);
+    if (r == SR_OK) r = sr__png_pixels(&p, &out->allocator, out);
+    if (p.idat.data) p.idat.a.free(p.idat.a.user, p.idat.data);
+    if (r != SR_OK) { sr_picture_free(out); return r; }
+    out->bit_depth = p.color == 3 ? 8 : p.depth;
+    out->max_value = (1 << out->bit_depth) - 1;
+    return SR_OK;
+}
+
+/* ---- PGM / PPM / PFM ---- */
+
+typedef struct sr__text {
+    const uint8_t *d;
+    size_t n, pos;
+} sr__text;
+
+/* skips white space and '#' comments (to the end of the line) */
+static void sr__pnm_space(sr__text *t)
+{
+    while (t->pos < t->n) {
+        uint8_t c = t->d[t->pos];
+        if (c == '#') {
+            while (t->pos < t->n && t->d[t->pos] != '\n' && t->d[t->pos] != '\r') t->pos++;
+        } else if (c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f') {
+            t->pos++;
+        } else {
+            break;
+        }
+    }
+}
+
+/* an unsigned decimal number up to max after optional space; TRUNCATED at the end of the data */
+static sr_result sr__pnm_uint(sr__text *t, uint32_t max, uint32_t *v)
+{
+    uint32_t x = 0;
+    size_t start;
+    sr__pnm_space(t);
+    start = t->pos;
+    while (t->pos < t->n && t->d[t->pos] >= '0' && t->d[t->pos] <= '9') {
+        x = x * 10u + (uint32_t)(t->d[t->pos++] - '0');
+        if (x > max) return SR_ERR_CORRUPT;
+    }
+    if (t->pos == start) return t->pos == t->n ? SR_ERR_TRUNCATED : SR_ERR_CORRUPT;
+    *v = x;
+    return SR_OK;
+}
+
+/* PFM's scale: only its sign matters (negative: little-endian); parsed here rather than with
+   strtod, whose decimal separator follows the locale */
+static sr_result sr__pfm_scale(sr__text *t, int *little)
+{
+    int neg = 0, digits = 0, nonzero = 0;
+    sr__pnm_space(t);
+    if (t->pos < t->n && (t->d[t->pos] == '-' || t->d[t->pos] == '+')) neg = t->d[t->pos++] == '-';
+    while (t->pos < t->n && ((t->d[t->pos] >= '0' && t->d[t->pos] <= '9') || t->d[t->pos] == '.')) {
+        uint8_t c = t->d[t->pos++];
+        if (c != '.') { digits++; nonzero |= c != '0'; }
+    }
+    if (t->pos < t->n && (t->d[t->pos] == 'e' || t->d[t->pos] == 'E') && digits) {
+        t->pos++;
+        if (t->pos < t->n && (t->d[t->pos] == '-' || t->d[t->pos] == '+')) t->pos++;
+        while (t->pos < t->n && t->d[t->pos] >= '0' && t->d[t->pos] <= '9') t->pos++;
+    }
+    if (t->pos >= t->n) return SR_ERR_TRUNCATED;
+    if (!digits || !nonzero) return SR_ERR_CORRUPT;
+    *little = neg;
+    return SR_OK;
+}
+
+static sr_result sr__pnm_samples(sr__text *t, int ascii, uint32_t maxval, sr_picture *out)
+{
+    size_t i, n = (size_t)out->width * (size_t)out->height * (size_t)out->channels;
+    size_t bytes = maxval > 255 ? 2 : 1;
+    if (ascii) {
+        for (i = 0; i < n; i++) {
+            uint32_t v = 0;
+            sr_result r = sr__pnm_uint(t, maxval, &v);
+            if (r != SR_OK) return r;
+            out->samples[i] = (uint16_t)v;
+        }
+        return SR_OK;
+    }
+    if ((t->n - t->pos) / bytes < n) return SR_ERR_TRUNCATED;
+    for (i = 0; i < n; i++) {
+        const uint8_t *s = t->d + t->pos + i * bytes;
+        uint32_t v = bytes == 2 ? ((uint32_t)s[0] << 8) | s[1] : s[0];
+        if (v > maxval) return SR_ERR_CORRUPT;
+        out->samples[i] = (uint16_t)v;
+    }
+    return SR_OK;
+}
+
+static sr_result sr__pfm_samples(sr__text *t, int little, sr_picture *out)
+{
+    size_t i, n = (size_t)out->width * (size_t)out->height * (size_t)out->channels;
+    if ((t->n - t->pos) / 4 < n) return SR_ERR_TRUNCATED;
+    for (i = 0; i < n; i++) {
+        const uint8_t *s = t->d + t->pos + 4 * i;
+        uint32_t u = little ? ((uint32_t)s[3] << 24) | ((uint32_t)s[2] << 16) | ((uint32_t)s[1] << 8) | s[0] : sr__get_u32be(s);
+        float f;
+        memcpy(&f, &u, 4);
+        if (!(f - f == 0.0f)) return SR_ERR_CORRUPT; /* NaN or infinity */
+        out->floats[i] = f;
+    }
+    return SR_OK;
+}
+
+SRDEF sr_result sr_decode_pnm(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out)
+{
+    sr__text t;
+    uint32_t w = 0, h = 0, maxval = 0;
+    int kind, ascii, pfm, little = 0;
+    sr_result r;
+    if (!out) return SR_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    out->allocator = sr__resolve_allocator(allocator);
+    if (!data && size) return SR_ERR_INVALID_ARGUMENT;
+    if (size < 2) return (size == 0 || data[0] == 'P') ? SR_ERR_TRUNCATED : SR_ERR_UNSUPPORTED;
+    kind = data[1];
+    if (data[0] != 'P' || !(kind == '2' || kind == '3' || kind == '5' || kind == '6' || kind == 'f' || kind == 'F'))
+        return SR_ERR_UNSUPPORTED;
+    ascii = kind == '2' || kind == '3';
+    pfm = kind == 'f' || kind == 'F';
+    t.d = data; t.n = size; t.pos = 2;
+    if ((r = sr__pnm_uint(&t, 100000000u, &w)) != SR_OK) return r;
+    if ((r = sr__pnm_uint(&t, 100000000u, &h)) != SR_OK) return r;
+    r = pfm ? sr__pfm_scale(&t, &little) : sr__pnm_uint(&t, 65535, &maxval);
+    if (r != SR_OK) return r;
+    if (!pfm && maxval == 0) return SR_ERR_CORRUPT;
+    if (!ascii) { /* exactly one white-space byte before the binary samples */
+        if (t.pos >= t.n) return SR_ERR_TRUNCATED;
+        if (!(t.d[t.pos] == ' ' || t.d[t.pos] == '\t' || t.d[t.pos] == '\n' || t.d[t.pos] == '\r')) return SR_ERR_CORRUPT;
+        t.pos++;
+    }
+    r = sr__picture_alloc(out, w, h, (kind == '3' || kind == '6' || kind == 'F') ? 3 : 1, pfm);
+    if (r == SR_OK) r = pfm ? sr__pfm_samples(&t, little, out) : sr__pnm_samples(&t, ascii, maxval, out);
+    if (r != SR_OK) { sr_picture_free(out); return r; }
+    out->max_value = (int)maxval;
+    for (out->bit_depth = pfm ? 32 : 1; !pfm && (1u << out->bit_depth) - 1u < maxval; out->bit_depth++) {}
+    return SR_OK;
+}
+
+SRDEF sr_result sr_decode_image(const uint8_t *data, size_t size, const sr_allocator *allocator, sr_picture *out)
+{
+    if (data && size >= 1 && data[0] == 0x89) return sr_decode_png(data, size, allocator, out);
+    return sr_decode_pnm(data, size, allocator, out);
+}
+
+SRDEF sr_result sr_read_image(const char *path, const sr_allocator *allocator, sr_picture *out)
+{
+    sr__buf b;
+    FILE *f;
+    sr_result r;
+    int err;
+    if (!out) return SR_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    out->allocator = sr__resolve_allocator(allocator);
+    if (!path) return SR_ERR_INVALID_ARGUMENT;
+    f = fopen(path, "rb");
+    if (!f) return SR_ERR_IO;
+    memset(&b, 0, sizeof b);
+    b.a = out->allocator;
+    for (;;) {
+        uint8_t chunk[16384];
+        size_t got = fread(chunk, 1, sizeof chunk, f);
+        if (got) sr__put(&b, chunk, got);
+        if (got < sizeof chunk || b.failed) break;
+        if (b.size > SR__IMG_MAX_SAMPLES * 4) { b.failed = 2; break; }
+    }
+    err = ferror(f);
+    fclose(f);
+    if (b.failed || err) {
+        if (b.data) b.a.free(b.a.user, b.data);
+        return err ? SR_ERR_IO : b.failed == 2 ? SR_ERR_TOO_LARGE : SR_ERR_OUT_OF_MEMORY;
+    }
+    r = sr_decode_image(b.data, b.size, &b.a, out);
+    if (b.data) b.a.free(b.a.user, b.data);
+    return r;
+}
+
+SRDEF sr_result sr_picture_channel(const sr_picture *p, int channel, float *out)
+{
+    size_t i, n, ch;
+    if (!p || !out || channel < 0 || channel >= p->channels || (!p->samples && !p->floats)) return SR_ERR_INVALID_ARGUMENT;
+    n = (size_t)p->width * (size_t)p->height;
+    ch = (size_t)p->channels;
+    if (p->floats) {
+        for (i = 0; i < n; i++) out[i] = p->floats[i * ch + (size_t)channel];
+    } else {
+        float m = (float)p->max_value;
+        for (i = 0; i < n; i++) out[i] = (float)p->samples[i * ch + (size_t)channel] / m;
+    }
+    return SR_OK;
+}
+
+SRDEF sr_result sr_encode_png16(const uint16_t *samples, int width, int height, int channels, int flip_y,
+                                const sr_allocator *allocator, uint8_t **out, size_t *out_size)
+{
+    static const uint8_t color[5] = {0, 0, 4, 2, 6};
+    sr_allocator a = sr__resolve_allocator(allocator);
+    uint8_t *bytes;
+    size_t n, i;
+    sr_result r;
+    if (out) *out = NULL;
+    if (out_size) *out_size = 0;
+    if (!samples || !out || !out_size || width < 1 || height < 1 || channels < 1 || channels > 4)
+        return SR_ERR_INVALID_ARGUMENT;
+    if (width > 1000000 || height > 1000000 || (size_t)width * (size_t)channels * 2 + 1 > ((size_t)-1) / 2 / (size_t)height)
+        return SR_ERR_TOO_LARGE;
+    n = (size_t)width * (size_t)height * (size_t)channels;
+    bytes = (uint8_t *)sr__alloc(&a, n * 2);
+    if (!bytes) return SR_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) { bytes[2 * i] = (uint8_t)(samples[i] >> 8); bytes[2 * i + 1] = (uint8_t)samples[i]; }
+    r = sr__png_encode(bytes, width, height, 2 * channels, 16, color[channels], flip_y, &a, out, out_size);
+    a.free(a.user, bytes);
+    return r;
+}
+
+SRDEF sr_result sr_write_png16(const char *path, const uint16_t *samples, int width, int height, int channels, int flip_y)
+{
+    uint8_t *png;
+    size_t n;
+    sr_result r;
+    if (!path) return SR_ERR_INVALID_ARGUMENT;
+    r = sr_encode_png16(samples, width, height, channels, flip_y, NULL, &png, &n);
+    if (r != SR_OK) return r;
+    r = sr__write_file(path, png, n, NULL, 0);
+    sr_free(NULL, png);
     return r;
 }
 

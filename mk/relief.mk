@@ -1,0 +1,9 @@
+# examples/render.h's image readers and examples/relief.h (issue 17 point 5, issue 20): tests, the PNG
+# fuzz target (built by the Makefile's fuzz_% rules through FUZZ_FMTS), the libpng reference test.
+HAVE_LIBPNG := $(wildcard /usr/include/png.h)
+C_TESTS   += $(B)/test_image
+FUZZ_FMTS += png
+REF_TESTS += $(if $(and $(HAVE_CXX),$(HAVE_LIBPNG)),$(B)/ref_png)
+
+$(B)/ref_png: tests/ref_png.cpp $(ALLDEPS) | $(B)
+	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lpng -lz -lm
