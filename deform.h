@@ -187,7 +187,13 @@ typedef enum dfm_result {
     DFM_ERR_PATTERN_MISMATCH,      /* refactorization with a pattern other than the analysed one */
     DFM_ERR_TOO_LARGE,             /* sizes overflow size_t, or more than 2^31 - 1 rows */
     DFM_ERR_OUT_OF_MEMORY,         /* the allocator returned NULL */
-    DFM_CANCELLED                  /* the progress callback returned nonzero */
+    DFM_CANCELLED,                 /* the progress callback returned nonzero */
+    DFM_ERR_EMPTY_ROI,             /* no vertex of the ROI may move (all are handle, or none) */
+    DFM_ERR_HANDLE_OUTSIDE_ROI,    /* a handle vertex is not in the ROI */
+    DFM_ERR_UNCONSTRAINED,         /* a connected part of the ROI touches no fixed or handle vertex */
+    DFM_ERR_DEGENERATE_TRIANGLE,   /* a zero-area triangle (or repeated index) touches the ROI */
+    DFM_ERR_NON_MANIFOLD,          /* an edge shared by more than two triangles */
+    DFM_ERR_UNWELDED               /* two used vertices at the same position (a triangle soup) */
 } dfm_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -331,6 +337,90 @@ DFMDEF const dfm_chol *dfm_constrained_chol(const dfm_constrained *c);
 
 DFMDEF void dfm_constrained_free(dfm_constrained *c);
 
+/* ---- deformation (part 2): Laplacian, transformation fitting, LRI ---------------------------- */
+
+enum { DFM_METHOD_LAPLACIAN = 0, DFM_METHOD_FITTING = 1, DFM_METHOD_LRI = 2 };
+enum { DFM_WEIGHTS_UNIFORM = 0, DFM_WEIGHTS_COTAN = 1 };
+enum { DFM_HANDLE_HARD = 0, DFM_HANDLE_SOFT = 1 };
+enum { DFM_FRAMES_FIRST_EDGE = 0, DFM_FRAMES_MAX_ELEVATION = 1 };
+enum { DFM_ORTHO_NONE = 0, DFM_ORTHO_POLAR = 1, DFM_ORTHO_GRAM_SCHMIDT = 2 };
+
+typedef struct dfm_deform_options {
+    int method;            /* DFM_METHOD_LAPLACIAN (0), DFM_METHOD_FITTING or DFM_METHOD_LRI */
+    int weights;           /* DFM_WEIGHTS_UNIFORM (0, the thesis's) or DFM_WEIGHTS_COTAN */
+    int handle_constraint; /* DFM_HANDLE_HARD (0: eliminated) or DFM_HANDLE_SOFT (weighted rows) */
+    double handle_weight;  /* soft constraints: the weight w of the handle rows (0 = 1) */
+    int frames;            /* LRI: DFM_FRAMES_FIRST_EDGE (0) or DFM_FRAMES_MAX_ELEVATION (ch. 4) */
+    int orthonormalize;    /* LRI: DFM_ORTHO_NONE (0), DFM_ORTHO_POLAR, DFM_ORTHO_GRAM_SCHMIDT */
+    int refine_steps;      /* iterative refinement steps per solve (0 = none) */
+    const dfm_allocator *allocator;
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} dfm_deform_options;
+
+typedef struct dfm_deform dfm_deform; /* opaque: the factored systems of one ROI and handle */
+
+typedef struct dfm_deform_info {
+    size_t n_free;       /* ROI vertices that are not handle vertices */
+    size_t n_unknown;    /* vertices solved for (free, plus handle with soft constraints) */
+    size_t nnz_l;        /* entries of the factors (all systems) */
+    size_t bytes;        /* memory held by the object */
+} dfm_deform_info;
+
+DFMDEF dfm_deform_options dfm_deform_default_options(void);
+
+/* Builds and factors the systems for one ROI and handle. positions: 3 doubles a vertex; indices:
+   3 a triangle. roi[v] != 0: v may move; handle[v] != 0: v is moved by the caller (must be in the
+   ROI); every vertex outside the ROI is fixed. */
+DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count, const uint32_t *indices,
+                                   size_t triangle_count, const unsigned char *roi, const unsigned char *handle,
+                                   const dfm_deform_options *options, dfm_deform **out);
+
+/* One frame. targets: 3 doubles a vertex, read at the handle and fixed vertices (a copy of the
+   positions with the handle moved, see dfm_pose_*). rotations: NULL (identity), or 9 doubles a
+   vertex (row-major), read at the handle and fixed vertices: LRI's frame targets (R times the
+   original frame). out: 3 doubles a vertex, every vertex written (may alias targets). */
+DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const double *rotations, double *out);
+
+DFMDEF void dfm_deform_get_info(const dfm_deform *d, dfm_deform_info *info);
+DFMDEF void dfm_deform_free(dfm_deform *d);
+
+/* ---- ROI and pose helpers ------------------------------------------------------------------------ */
+
+/* Grows mask (nonzero = member) by k rings of mesh neighbours. */
+DFMDEF dfm_result dfm_roi_rings(const uint32_t *indices, size_t triangle_count, size_t vertex_count, unsigned k,
+                                unsigned char *mask, const dfm_allocator *allocator);
+
+/* mask[v] = 1 where the shortest path along mesh edges from a seed (seeds[v] != 0) is <= radius,
+   else 0 (the edge-path distance approximates the geodesic one from above). */
+DFMDEF dfm_result dfm_roi_geodesic(const double *positions, size_t vertex_count, const uint32_t *indices,
+                                   size_t triangle_count, const unsigned char *seeds, double radius,
+                                   unsigned char *mask, const dfm_allocator *allocator);
+
+/* R (row-major 3x3) = rotation by angle (radians, right hand) about axis (any length > 0). */
+DFMDEF void dfm_rotation(const double axis[3], double angle, double R[9]);
+
+/* targets = positions (3 per vertex) and rotations = identity (9 per vertex; may be NULL). */
+DFMDEF void dfm_pose_identity(const double *positions, size_t vertex_count, double *targets, double *rotations);
+
+/* For mask[v] != 0: targets[v] = R (positions[v] - center) + center + t, rotations[v] = R. R NULL
+   means identity (a translation), t NULL means zero; rotations may be NULL. */
+DFMDEF void dfm_pose_rigid(const double *positions, size_t vertex_count, const unsigned char *mask,
+                           const double R[9], const double center[3], const double t[3], double *targets,
+                           double *rotations);
+
+/* Twist: rotation by angle about the line through point along axis. */
+DFMDEF void dfm_pose_twist(const double *positions, size_t vertex_count, const unsigned char *mask,
+                           const double point[3], const double axis[3], double angle, double *targets,
+                           double *rotations);
+
+/* Bend: the part of a bar from base along axis, of length len, bent by angle towards toward
+   (made perpendicular to axis) into a circular arc of the same length: the handle moves rigidly,
+   turned by angle, so that the point base + len axis lands at the end of the arc. */
+DFMDEF void dfm_pose_bend(const double *positions, size_t vertex_count, const unsigned char *mask,
+                          const double base[3], const double axis[3], const double toward[3], double len,
+                          double angle, double *targets, double *rotations);
+
 /* "DFM_OK", "DFM_ERR_BAD_INDEX", ... (the enum name); "DFM_ERR_?" outside the enum. */
 DFMDEF const char *dfm_result_string(dfm_result r);
 
@@ -380,6 +470,12 @@ DFMDEF const char *dfm_result_string(dfm_result r)
     case DFM_ERR_TOO_LARGE: return "DFM_ERR_TOO_LARGE";
     case DFM_ERR_OUT_OF_MEMORY: return "DFM_ERR_OUT_OF_MEMORY";
     case DFM_CANCELLED: return "DFM_CANCELLED";
+    case DFM_ERR_EMPTY_ROI: return "DFM_ERR_EMPTY_ROI";
+    case DFM_ERR_HANDLE_OUTSIDE_ROI: return "DFM_ERR_HANDLE_OUTSIDE_ROI";
+    case DFM_ERR_UNCONSTRAINED: return "DFM_ERR_UNCONSTRAINED";
+    case DFM_ERR_DEGENERATE_TRIANGLE: return "DFM_ERR_DEGENERATE_TRIANGLE";
+    case DFM_ERR_NON_MANIFOLD: return "DFM_ERR_NON_MANIFOLD";
+    case DFM_ERR_UNWELDED: return "DFM_ERR_UNWELDED";
     }
     return "DFM_ERR_?";
 }
@@ -3124,6 +3220,1371 @@ DFMDEF dfm_result dfm_constrained_solve(const dfm_constrained *c, const double *
         }
     dfm__free(&c->al, w);
     return err;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - mesh topology, weights and checks
+   --------------------------------------------------------------------------------------------- */
+
+/* The vertex graph of a triangle mesh: sorted neighbour lists with a weight per directed edge. */
+typedef struct dfm__graph {
+    size_t nv;
+    size_t *start; /* nv + 1 */
+    int32_t *adj;  /* start[nv]: neighbours, sorted */
+    double *w;     /* start[nv]: edge weights (symmetric) */
+} dfm__graph;
+
+static void dfm__graph_free(dfm__graph *g, const dfm_allocator *al)
+{
+    dfm__free(al, g->start);
+    dfm__free(al, g->adj);
+    dfm__free(al, g->w);
+    memset(g, 0, sizeof *g);
+}
+
+/* position of neighbour j in i's list, or (size_t)-1 */
+static size_t dfm__graph_find(const dfm__graph *g, size_t i, int32_t j)
+{
+    size_t lo = g->start[i], hi = g->start[i + 1];
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (g->adj[mid] < j) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < g->start[i + 1] && g->adj[lo] == j ? lo : (size_t)-1;
+}
+
+static void dfm__sort_i32(int32_t *a, size_t n) { qsort(a, n, sizeof(int32_t), dfm__cmp_i32); }
+
+/* Neighbour lists from the triangles (an index pair repeated in a triangle gives no edge). */
+static dfm_result dfm__graph_build(const uint32_t *idx, size_t nt, size_t nv, const dfm_allocator *al,
+                                   dfm__graph *g)
+{
+    dfm_result err = DFM_OK;
+    size_t t, k, v, total = 0, *fill = NULL;
+    memset(g, 0, sizeof *g);
+    g->nv = nv;
+    g->start = (size_t *)dfm__alloc(al, nv + 1, sizeof(size_t), &err);
+    fill = (size_t *)dfm__alloc(al, nv + 1, sizeof(size_t), &err);
+    if (err != DFM_OK) goto done;
+    memset(g->start, 0, (nv + 1) * sizeof(size_t));
+    for (t = 0; t < 3 * nt; t++) g->start[idx[t] + 1] += 2;
+    for (v = 0; v < nv; v++) g->start[v + 1] += g->start[v];
+    g->adj = (int32_t *)dfm__alloc(al, g->start[nv] + 1, sizeof(int32_t), &err);
+    if (err != DFM_OK) goto done;
+    memcpy(fill, g->start, (nv + 1) * sizeof(size_t));
+    for (t = 0; t < nt; t++)
+        for (k = 0; k < 3; k++) {
+            uint32_t a = idx[3 * t + k], b = idx[3 * t + (k + 1) % 3], c = idx[3 * t + (k + 2) % 3];
+            if (b != a) g->adj[fill[a]++] = (int32_t)b;
+            if (c != a) g->adj[fill[a]++] = (int32_t)c;
+        }
+    for (v = 0; v < nv; v++) { /* sort, drop duplicates, compact */
+        size_t s = g->start[v], e = fill[v], p;
+        dfm__sort_i32(g->adj + s, e - s);
+        g->start[v] = total;
+        for (p = s; p < e; p++)
+            if (p == s || g->adj[p] != g->adj[p - 1]) g->adj[total++] = g->adj[p];
+    }
+    g->start[nv] = total;
+    g->w = (double *)dfm__alloc(al, total + 1, sizeof(double), &err);
+done:
+    dfm__free(al, fill);
+    if (err != DFM_OK) dfm__graph_free(g, al);
+    return err;
+}
+
+/* An edge in more than two triangles is non-manifold; counts kept in g->w (then reset). */
+static dfm_result dfm__check_manifold(const uint32_t *idx, size_t nt, dfm__graph *g)
+{
+    size_t t, k;
+    for (k = 0; k < g->start[g->nv]; k++) g->w[k] = 0.0;
+    for (t = 0; t < nt; t++)
+        for (k = 0; k < 3; k++) {
+            uint32_t a = idx[3 * t + k], b = idx[3 * t + (k + 1) % 3];
+            size_t p;
+            if (a == b) continue;
+            p = dfm__graph_find(g, a < b ? a : b, (int32_t)(a < b ? b : a));
+            if ((g->w[p] += 1.0) > 2.0) return DFM_ERR_NON_MANIFOLD;
+        }
+    return DFM_OK;
+}
+
+
+typedef struct dfm__vkey {
+    double p[3];
+    int32_t v;
+} dfm__vkey;
+
+static int dfm__cmp_vkey(const void *x, const void *y)
+{
+    const dfm__vkey *a = (const dfm__vkey *)x, *b = (const dfm__vkey *)y;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
+    return (a->v > b->v) - (a->v < b->v);
+}
+
+/* Two used vertices at exactly the same position: an unwelded mesh (a triangle soup). */
+static dfm_result dfm__check_welded(const double *pos, const dfm__graph *g, const dfm_allocator *al)
+{
+    dfm_result err = DFM_OK;
+    size_t v, n = 0;
+    dfm__vkey *keys = (dfm__vkey *)dfm__alloc(al, g->nv, sizeof(dfm__vkey), &err);
+    if (!keys) return err;
+    for (v = 0; v < g->nv; v++)
+        if (g->start[v + 1] > g->start[v]) {
+            memcpy(keys[n].p, pos + 3 * v, 3 * sizeof(double));
+            keys[n++].v = (int32_t)v;
+        }
+    qsort(keys, n, sizeof *keys, dfm__cmp_vkey);
+    for (v = 1; v < n && err == DFM_OK; v++)
+        if (!memcmp(keys[v].p, keys[v - 1].p, 3 * sizeof(double))) err = DFM_ERR_UNWELDED;
+    dfm__free(al, keys);
+    return err;
+}
+
+static void dfm__sub3(const double *a, const double *b, double *r)
+{
+    r[0] = a[0] - b[0];
+    r[1] = a[1] - b[1];
+    r[2] = a[2] - b[2];
+}
+static double dfm__dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void dfm__cross3(const double *a, const double *b, double *r)
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* cot of the angle at corner o of a triangle with (non-degenerate) corners o, a, b */
+static double dfm__cot_d(const double *o, const double *a, const double *b)
+{
+    double u[3], v[3], c[3];
+    dfm__sub3(a, o, u);
+    dfm__sub3(b, o, v);
+    dfm__cross3(u, v, c);
+    return dfm__dot3(u, v) / sqrt(dfm__dot3(c, c));
+}
+
+/* A triangle is degenerate when an index repeats or its area is below 1e-12 of |e1| |e2|. */
+static int dfm__degenerate(const double *pos, const uint32_t *f)
+{
+    double u[3], v[3], c[3];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) return 1;
+    dfm__sub3(pos + 3 * (size_t)f[1], pos + 3 * (size_t)f[0], u);
+    dfm__sub3(pos + 3 * (size_t)f[2], pos + 3 * (size_t)f[0], v);
+    dfm__cross3(u, v, c);
+    return !(sqrt(dfm__dot3(c, c)) > 1e-12 * sqrt(dfm__dot3(u, u) * dfm__dot3(v, v)));
+}
+
+#define DFM__COTAN_FLOOR 1e-3
+
+/* Edge weights: 1 (uniform), or (cot a + cot b) / 2 clamped below at DFM__COTAN_FLOOR. */
+static void dfm__edge_weights(const double *pos, const uint32_t *idx, size_t nt, int kind, dfm__graph *g)
+{
+    size_t t, k, p;
+    for (p = 0; p < g->start[g->nv]; p++) g->w[p] = kind == DFM_WEIGHTS_COTAN ? 0.0 : 1.0;
+    if (kind != DFM_WEIGHTS_COTAN) return;
+    for (t = 0; t < nt; t++) {
+        const uint32_t *f = idx + 3 * t;
+        if (dfm__degenerate(pos, f)) continue; /* far from the ROI (checked near it) */
+        for (k = 0; k < 3; k++) {
+            uint32_t o = f[k], a = f[(k + 1) % 3], b = f[(k + 2) % 3];
+            double c = 0.5 * dfm__cot_d(pos + 3 * (size_t)o, pos + 3 * (size_t)a, pos + 3 * (size_t)b);
+            g->w[dfm__graph_find(g, a, (int32_t)b)] += c;
+            g->w[dfm__graph_find(g, b, (int32_t)a)] += c;
+        }
+    }
+    for (p = 0; p < g->start[g->nv]; p++)
+        if (!(g->w[p] >= DFM__COTAN_FLOOR)) g->w[p] = DFM__COTAN_FLOOR;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - a linear least-squares system on mesh vertices
+   Energy sum_r |sum_{terms t of r} C_t x_{v(t)} - b_r|^2 + sum_{soft u} w^2 |x_u - target_u|^2,
+   x_v a block of bs values per vertex and right-hand side. Known vertices are eliminated; the
+   normal matrix over the unknowns is assembled from the rows (never forming the rectangular
+   matrix) and factored once.
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct dfm__lsq {
+    size_t bs, nrhs, nv;
+    size_t nrows;
+    size_t *row_start;   /* nrows + 1: into the terms */
+    int32_t *term_v;     /* vertex of each term */
+    double *term_c;      /* bs x bs coefficients of each term, row-major */
+    unsigned char *row_known; /* nrows: the row has a known vertex */
+    size_t nu;           /* unknown vertices */
+    const int32_t *unk;  /* nv: compact index of each unknown, -1 for known (shared) */
+    const int32_t *unk_v; /* nu: vertex of each unknown (shared) */
+    double soft_w2;      /* weight^2 of the soft rows (for unknowns with soft[v]) */
+    const unsigned char *soft; /* nv or NULL: soft-constrained unknowns (shared) */
+    dfm_csc normal;      /* the normal matrix, (bs nu) x (bs nu), lower */
+    dfm_chol *chol;
+    double *rhs, *x;     /* bs nu nrhs each: solve workspace */
+} dfm__lsq;
+
+static void dfm__lsq_free(dfm__lsq *s, const dfm_allocator *al)
+{
+    dfm__free(al, s->row_start);
+    dfm__free(al, s->term_v);
+    dfm__free(al, s->term_c);
+    dfm__free(al, s->row_known);
+    dfm_csc_free(&s->normal);
+    dfm_chol_free(s->chol);
+    dfm__free(al, s->rhs);
+    dfm__free(al, s->x);
+    memset(s, 0, sizeof *s);
+}
+
+/* Room for nrows rows of nterms terms in all. */
+static dfm_result dfm__lsq_alloc_rows(dfm__lsq *s, size_t nrows, size_t nterms, const dfm_allocator *al)
+{
+    dfm_result err = DFM_OK;
+    s->nrows = nrows;
+    s->row_start = (size_t *)dfm__alloc(al, nrows + 1, sizeof(size_t), &err);
+    s->term_v = (int32_t *)dfm__alloc(al, nterms + 1, sizeof(int32_t), &err);
+    s->term_c = (double *)dfm__alloc(al, (nterms + 1) * s->bs, s->bs * sizeof(double), &err);
+    s->row_known = (unsigned char *)dfm__alloc(al, nrows + 1, 1, &err);
+    if (err == DFM_OK) s->row_start[0] = 0;
+    return err;
+}
+
+/* Vertex-level lower pattern of the normal matrix over the unknowns (the rows' cliques). */
+static dfm_result dfm__lsq_pattern(const dfm__lsq *s, const dfm_allocator *al, dfm_csc *g)
+{
+    dfm_result err = DFM_OK;
+    size_t nu = s->nu, r, t, u, cnt = 0, *vr_start = NULL;
+    int32_t *vr = NULL, *mark = NULL, *list = NULL;
+    memset(g, 0, sizeof *g);
+    vr_start = (size_t *)dfm__alloc(al, nu + 2, sizeof(size_t), &err);
+    mark = (int32_t *)dfm__alloc(al, nu + 1, sizeof(int32_t), &err);
+    list = (int32_t *)dfm__alloc(al, nu + 1, sizeof(int32_t), &err);
+    if (err != DFM_OK) goto done;
+    memset(vr_start, 0, (nu + 2) * sizeof(size_t));
+    for (t = 0; t < s->row_start[s->nrows]; t++)
+        if (s->unk[s->term_v[t]] >= 0) vr_start[s->unk[s->term_v[t]] + 2]++;
+    for (u = 0; u < nu; u++) vr_start[u + 2] += vr_start[u + 1];
+    vr = (int32_t *)dfm__alloc(al, vr_start[nu + 1] + 1, sizeof(int32_t), &err);
+    if (err != DFM_OK) goto done;
+    for (r = 0; r < s->nrows; r++) /* vertex -> rows incidence */
+        for (t = s->row_start[r]; t < s->row_start[r + 1]; t++)
+            if (s->unk[s->term_v[t]] >= 0) vr[vr_start[s->unk[s->term_v[t]] + 1]++] = (int32_t)r;
+    for (u = 0; u < nu; u++) mark[u] = -1;
+    for (u = 0; u < nu; u++) { /* first pass: count column u's rows a >= u */
+        size_t q;
+        mark[u] = (int32_t)u;
+        cnt++;
+        for (q = vr_start[u]; q < vr_start[u + 1]; q++)
+            for (t = s->row_start[vr[q]]; t < s->row_start[vr[q] + 1]; t++) {
+                int32_t a = s->unk[s->term_v[t]];
+                if (a > (int32_t)u && mark[a] != (int32_t)u) {
+                    mark[a] = (int32_t)u;
+                    cnt++;
+                }
+            }
+    }
+    err = dfm_csc_alloc(nu, nu, cnt, DFM_CSC_SYMMETRIC_LOWER, al, g);
+    if (err != DFM_OK) goto done;
+    for (u = 0; u < nu; u++) mark[u] = -1;
+    cnt = 0;
+    for (u = 0; u < nu; u++) { /* second pass: fill and sort */
+        size_t q, m = 0;
+        mark[u] = (int32_t)u;
+        list[m++] = (int32_t)u;
+        for (q = vr_start[u]; q < vr_start[u + 1]; q++)
+            for (t = s->row_start[vr[q]]; t < s->row_start[vr[q] + 1]; t++) {
+                int32_t a = s->unk[s->term_v[t]];
+                if (a > (int32_t)u && mark[a] != (int32_t)u) {
+                    mark[a] = (int32_t)u;
+                    list[m++] = a;
+                }
+            }
+        dfm__sort_i32(list, m);
+        memcpy(g->row_index + cnt, list, m * sizeof(int32_t));
+        memset(g->values + cnt, 0, m * sizeof(double));
+        cnt += m;
+        g->col_start[u + 1] = cnt;
+    }
+done:
+    dfm__free(al, vr_start);
+    dfm__free(al, vr);
+    dfm__free(al, mark);
+    dfm__free(al, list);
+    if (err != DFM_OK) dfm_csc_free(g);
+    return err;
+}
+
+/* position of row a in column b of a sorted CSC matrix (present by construction) */
+static size_t dfm__csc_find(const dfm_csc *g, size_t b, int32_t a)
+{
+    size_t lo = g->col_start[b], hi = g->col_start[b + 1];
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (g->row_index[mid] < a) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* blocks[k] += C_p^T C_q (bs x bs, row-major), the contribution of one row to entry (a, b). */
+static void dfm__add_ctc(size_t bs, const double *cp, const double *cq, double *blk)
+{
+    size_t i, j, k;
+    for (i = 0; i < bs; i++)
+        for (j = 0; j < bs; j++) {
+            double sum = 0.0;
+            for (k = 0; k < bs; k++) sum += cp[k * bs + i] * cq[k * bs + j];
+            blk[i * bs + j] += sum;
+        }
+}
+
+/* The normal matrix's values (vertex blocks) from the rows, the soft rows on the diagonal, then
+   the block expansion for bs > 1. */
+static dfm_result dfm__lsq_normal(dfm__lsq *s, const dfm_allocator *al)
+{
+    dfm_result err;
+    dfm_csc g;
+    size_t r, p, q, bs = s->bs, bb = bs * bs, u, k;
+    double *blocks = NULL;
+    err = dfm__lsq_pattern(s, al, &g);
+    if (err != DFM_OK) return err;
+    blocks = (double *)dfm__alloc(al, g.col_start[s->nu] + 1, bb * sizeof(double), &err);
+    if (err != DFM_OK) goto done;
+    memset(blocks, 0, g.col_start[s->nu] * bb * sizeof(double));
+    for (r = 0; r < s->nrows; r++)
+        for (p = s->row_start[r]; p < s->row_start[r + 1]; p++) {
+            int32_t a = s->unk[s->term_v[p]];
+            if (a < 0) continue;
+            for (q = s->row_start[r]; q < s->row_start[r + 1]; q++) {
+                int32_t b = s->unk[s->term_v[q]];
+                if (b < 0 || b > a) continue;
+                dfm__add_ctc(bs, s->term_c + p * bb, s->term_c + q * bb,
+                             blocks + dfm__csc_find(&g, (size_t)b, a) * bb);
+            }
+        }
+    for (u = 0; u < s->nu; u++)
+        if (s->soft && s->soft[s->unk_v[u]])
+            for (k = 0; k < bs; k++) blocks[g.col_start[u] * bb + k * bs + k] += s->soft_w2;
+    if (bs == 1) {
+        memcpy(g.values, blocks, g.col_start[s->nu] * sizeof(double));
+        s->normal = g;
+        memset(&g, 0, sizeof g);
+    } else {
+        err = dfm_block_expand(&g, bs, blocks, al, &s->normal);
+    }
+done:
+    dfm__free(al, blocks);
+    dfm_csc_free(&g);
+    return err;
+}
+
+/* Progress of one step mapped into [base, base + span] of the whole call. */
+typedef struct dfm__span {
+    int (*progress)(void *user, float done);
+    void *user;
+    float base, span, last; /* last: what was reported, kept monotone */
+} dfm__span;
+
+static int dfm__span_call(void *user, float done)
+{
+    dfm__span *sp = (dfm__span *)user;
+    float f = sp->base + sp->span * done;
+    if (f > 1.0f) f = 1.0f;
+    if (f > sp->last) sp->last = f;
+    return sp->progress(sp->user, sp->last);
+}
+
+/* Normal matrix, analysis (nested dissection tried with the unknowns' positions) and factor. */
+static dfm_result dfm__lsq_factor(dfm__lsq *s, const double *pos, const dfm_allocator *al, dfm__span *sp)
+{
+    dfm_result err = dfm__lsq_normal(s, al);
+    dfm_chol_options co = dfm_chol_default_options();
+    double *coords = NULL;
+    size_t u, n = s->bs * s->nu;
+    if (err != DFM_OK) return err;
+    coords = (double *)dfm__alloc(al, s->nu, 3 * sizeof(double), &err);
+    s->rhs = (double *)dfm__alloc(al, n, s->nrhs * sizeof(double), &err);
+    s->x = (double *)dfm__alloc(al, n, s->nrhs * sizeof(double), &err);
+    if (err != DFM_OK) goto done;
+    for (u = 0; u < s->nu; u++) memcpy(coords + 3 * u, pos + 3 * (size_t)s->unk_v[u], 3 * sizeof(double));
+    co.block_size = s->bs;
+    co.coords = coords;
+    co.allocator = al;
+    if (sp->progress) {
+        co.progress = dfm__span_call;
+        co.progress_user = sp;
+    }
+    sp->span *= 0.5f;
+    err = dfm_chol_analyze(&s->normal, &co, &s->chol);
+    sp->base += sp->span;
+    if (err == DFM_OK) err = dfm_chol_factor(s->chol, &s->normal);
+    if (s->chol) s->chol->progress = NULL; /* sp lives only during the setup */
+    sp->base += sp->span;
+done:
+    dfm__free(al, coords);
+    return err;
+}
+
+/* One solve. X holds bs values per vertex and right-hand side, X[(q nv + v) bs + c]: read at the
+   known vertices (their displacement) and at soft unknowns (their target), written at the
+   unknowns. rowb: NULL (every b_r = 0) or bs x nrhs values per row, [(r nrhs + q) bs + c]. */
+static dfm_result dfm__lsq_solve(dfm__lsq *s, const double *rowb, double *X, int refine)
+{
+    size_t bs = s->bs, bb = bs * bs, nr = s->nrhs, n = bs * s->nu, nv = s->nv, r, t, q, i, k, u;
+    double e[9];
+    dfm_result err;
+    memset(s->rhs, 0, n * nr * sizeof(double));
+    for (u = 0; u < s->nu; u++)
+        if (s->soft && s->soft[s->unk_v[u]])
+            for (q = 0; q < nr; q++)
+                for (k = 0; k < bs; k++)
+                    s->rhs[q * n + u * bs + k] += s->soft_w2 * X[(q * nv + (size_t)s->unk_v[u]) * bs + k];
+    for (r = 0; r < s->nrows; r++) {
+        if (!rowb && !s->row_known[r]) continue;
+        for (q = 0; q < nr; q++) {
+            for (k = 0; k < bs; k++) e[k] = rowb ? rowb[(r * nr + q) * bs + k] : 0.0;
+            for (t = s->row_start[r]; t < s->row_start[r + 1]; t++) {
+                const double *c = s->term_c + t * bb, *xk = X + (q * nv + (size_t)s->term_v[t]) * bs;
+                if (s->unk[s->term_v[t]] >= 0) continue;
+                for (i = 0; i < bs; i++)
+                    for (k = 0; k < bs; k++) e[i] -= c[i * bs + k] * xk[k];
+            }
+            for (t = s->row_start[r]; t < s->row_start[r + 1]; t++) {
+                const double *c = s->term_c + t * bb;
+                int32_t a = s->unk[s->term_v[t]];
+                if (a < 0) continue;
+                for (i = 0; i < bs; i++)
+                    for (k = 0; k < bs; k++) s->rhs[q * n + (size_t)a * bs + k] += c[i * bs + k] * e[i];
+            }
+        }
+    }
+    if (refine > 0) {
+        err = dfm_chol_solve_refined(s->chol, &s->normal, s->rhs, s->x, nr, refine);
+    } else {
+        memcpy(s->x, s->rhs, n * nr * sizeof(double));
+        err = dfm_chol_solve(s->chol, s->x, nr);
+    }
+    if (err != DFM_OK) return err;
+    for (q = 0; q < nr; q++)
+        for (u = 0; u < s->nu; u++)
+            memcpy(X + (q * nv + (size_t)s->unk_v[u]) * bs, s->x + q * n + u * bs, bs * sizeof(double));
+    return DFM_OK;
+}
+
+/* Appends a term to the row being built (s->row_start[r] .. terms so far). */
+static void dfm__lsq_term(dfm__lsq *s, size_t *nterms, int32_t v, const double *c)
+{
+    s->term_v[*nterms] = v;
+    memcpy(s->term_c + *nterms * s->bs * s->bs, c, s->bs * s->bs * sizeof(double));
+    (*nterms)++;
+}
+
+/* Closes row r: its terms end at nterms; notes whether a term is on a known vertex. */
+static void dfm__lsq_end_row(dfm__lsq *s, size_t r, size_t nterms)
+{
+    size_t t;
+    s->row_start[r + 1] = nterms;
+    s->row_known[r] = 0;
+    for (t = s->row_start[r]; t < nterms; t++)
+        if (s->unk[s->term_v[t]] < 0) s->row_known[r] = 1;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - the object, its checks and the vertex sets
+   --------------------------------------------------------------------------------------------- */
+
+/* An allocator that counts the bytes held (and their peak) in front of the user's one. */
+typedef struct dfm__meter {
+    dfm_allocator inner;
+    size_t bytes, peak;
+} dfm__meter;
+
+static void *dfm__meter_alloc(void *user, size_t size)
+{
+    dfm__meter *m = (dfm__meter *)user;
+    unsigned char *p;
+    if (size > (size_t)-1 - 16) return NULL;
+    p = (unsigned char *)m->inner.alloc(m->inner.user, size + 16);
+    if (!p) return NULL;
+    memcpy(p, &size, sizeof size);
+    m->bytes += size;
+    if (m->bytes > m->peak) m->peak = m->bytes;
+    return p + 16;
+}
+
+static void dfm__meter_free(void *user, void *ptr)
+{
+    dfm__meter *m = (dfm__meter *)user;
+    size_t size;
+    if (!ptr) return;
+    memcpy(&size, (unsigned char *)ptr - 16, sizeof size);
+    m->bytes -= size;
+    m->inner.free(m->inner.user, (unsigned char *)ptr - 16);
+}
+
+struct dfm_deform {
+    dfm__meter meter;
+    dfm_allocator al;      /* the meter in front of the user's allocator */
+    dfm_deform_options opt;
+    size_t nv, nfree, nu, ne;
+    double *pos;           /* nv x 3: the original positions */
+    dfm__graph g;
+    unsigned char *soft;   /* nv: soft-constrained unknowns (the handle with DFM_HANDLE_SOFT) */
+    unsigned char *touched; /* nv: unknown, or a neighbour of one */
+    int32_t *unk, *unk_v;  /* nv: compact unknown index or -1; nu: vertex of each unknown */
+    dfm__lsq sys;          /* Laplacian or fitting system, or LRI's positions system */
+    dfm__lsq fsys;         /* LRI's frames system */
+    int32_t *edge;         /* LRI: 2 per edge with an unknown end (i < j) */
+    double *edge_c;        /* LRI: 6 per edge, c_ij = F_i^T (x_j - x_i) and c_ji */
+    double *frame;         /* LRI: nv x 9, the original frames (row-major, columns b1 b2 N) */
+    double *X, *G, *rowb;  /* per-frame work: displacements, frame changes, position rows' b */
+};
+
+DFMDEF dfm_deform_options dfm_deform_default_options(void)
+{
+    dfm_deform_options o;
+    memset(&o, 0, sizeof o);
+    o.handle_weight = 1.0;
+    return o;
+}
+
+DFMDEF void dfm_deform_free(dfm_deform *d)
+{
+    dfm_allocator user;
+    if (!d) return;
+    user = d->meter.inner;
+    dfm__lsq_free(&d->sys, &d->al);
+    dfm__lsq_free(&d->fsys, &d->al);
+    dfm__graph_free(&d->g, &d->al);
+    dfm__free(&d->al, d->pos);
+    dfm__free(&d->al, d->soft);
+    dfm__free(&d->al, d->touched);
+    dfm__free(&d->al, d->unk);
+    dfm__free(&d->al, d->unk_v);
+    dfm__free(&d->al, d->edge);
+    dfm__free(&d->al, d->edge_c);
+    dfm__free(&d->al, d->frame);
+    dfm__free(&d->al, d->X);
+    dfm__free(&d->al, d->G);
+    dfm__free(&d->al, d->rowb);
+    dfm__free(&user, d);
+}
+
+DFMDEF void dfm_deform_get_info(const dfm_deform *d, dfm_deform_info *info)
+{
+    dfm_chol_info ci;
+    memset(info, 0, sizeof *info);
+    if (!d) return;
+    info->n_free = d->nfree;
+    info->n_unknown = d->nu;
+    info->bytes = d->meter.bytes + sizeof *d;
+    dfm_chol_get_info(d->sys.chol, &ci);
+    info->nnz_l = d->sys.chol ? ci.nnz_l : 0;
+    if (d->fsys.chol) {
+        dfm_chol_get_info(d->fsys.chol, &ci);
+        info->nnz_l += ci.nnz_l;
+    }
+}
+
+/* Step 1: the arguments. */
+static dfm_result dfm__deform_check(const double *pos, size_t nv, const uint32_t *idx, size_t nt,
+                                    const unsigned char *roi, const unsigned char *handle,
+                                    const dfm_deform_options *o)
+{
+    size_t v, nfree = 0;
+    if (!pos || !idx || !roi || !handle || nv == 0 || nt == 0) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->method < DFM_METHOD_LAPLACIAN || o->method > DFM_METHOD_LRI) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->weights < DFM_WEIGHTS_UNIFORM || o->weights > DFM_WEIGHTS_COTAN) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->handle_constraint < DFM_HANDLE_HARD || o->handle_constraint > DFM_HANDLE_SOFT) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->frames < DFM_FRAMES_FIRST_EDGE || o->frames > DFM_FRAMES_MAX_ELEVATION) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->orthonormalize < DFM_ORTHO_NONE || o->orthonormalize > DFM_ORTHO_GRAM_SCHMIDT) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->refine_steps < 0) return DFM_ERR_INVALID_ARGUMENT;
+    if (!dfm__finite(o->handle_weight) || o->handle_weight < 0.0) return DFM_ERR_BAD_VALUE;
+    if (nv > DFM__MAX_N / 9 || nt > ((size_t)-1 >> 4) / 6) return DFM_ERR_TOO_LARGE;
+    for (v = 0; v < 3 * nt; v++)
+        if (idx[v] >= nv) return DFM_ERR_BAD_INDEX;
+    for (v = 0; v < 3 * nv; v++)
+        if (!dfm__finite(pos[v])) return DFM_ERR_BAD_VALUE;
+    for (v = 0; v < nv; v++) {
+        if (handle[v] && !roi[v]) return DFM_ERR_HANDLE_OUTSIDE_ROI;
+        nfree += roi[v] && !handle[v];
+    }
+    return nfree == 0 ? DFM_ERR_EMPTY_ROI : DFM_OK;
+}
+
+/* Step 3: the unknowns (free vertices, and the handle's with soft constraints), and the vertices
+   they touch (the rows that are not constant). */
+static dfm_result dfm__deform_unknowns(dfm_deform *d, const unsigned char *roi, const unsigned char *handle)
+{
+    dfm_result err = DFM_OK;
+    size_t v, p, nv = d->nv;
+    int soft = d->opt.handle_constraint == DFM_HANDLE_SOFT;
+    d->unk = (int32_t *)dfm__alloc(&d->al, nv, sizeof(int32_t), &err);
+    d->unk_v = (int32_t *)dfm__alloc(&d->al, nv, sizeof(int32_t), &err);
+    d->soft = (unsigned char *)dfm__alloc(&d->al, nv, 1, &err);
+    d->touched = (unsigned char *)dfm__alloc(&d->al, nv, 1, &err);
+    if (err != DFM_OK) return err;
+    d->nu = d->nfree = 0;
+    for (v = 0; v < nv; v++) {
+        int u = roi[v] && (!handle[v] || soft);
+        d->nfree += roi[v] && !handle[v];
+        d->soft[v] = (unsigned char)(u && handle[v]);
+        d->unk[v] = u ? (int32_t)d->nu : -1;
+        if (u) d->unk_v[d->nu++] = (int32_t)v;
+    }
+    memset(d->touched, 0, nv);
+    for (v = 0; v < nv; v++)
+        if (d->unk[v] >= 0) {
+            d->touched[v] = 1;
+            for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) d->touched[d->g.adj[p]] = 1;
+        }
+    return DFM_OK;
+}
+
+/* Step 4: no zero-area triangle may touch the system (its cotangents and normal are undefined). */
+static dfm_result dfm__deform_check_triangles(const dfm_deform *d, const uint32_t *idx, size_t nt)
+{
+    size_t t;
+    for (t = 0; t < nt; t++) {
+        const uint32_t *f = idx + 3 * t;
+        if ((d->touched[f[0]] || d->touched[f[1]] || d->touched[f[2]]) && dfm__degenerate(d->pos, f))
+            return DFM_ERR_DEGENERATE_TRIANGLE;
+    }
+    return DFM_OK;
+}
+
+/* Step 5: every connected part of the unknowns must reach a known vertex or hold a soft one,
+   else the energy has a null space (a free translation of that part). */
+static dfm_result dfm__deform_check_constrained(const dfm_deform *d)
+{
+    dfm_result err = DFM_OK;
+    size_t u, p;
+    int32_t *stack = (int32_t *)dfm__alloc(&d->al, d->nu + 1, sizeof(int32_t), &err);
+    unsigned char *seen = (unsigned char *)dfm__alloc(&d->al, d->nu + 1, 1, &err);
+    if (err != DFM_OK) goto done;
+    memset(seen, 0, d->nu);
+    for (u = 0; u < d->nu && err == DFM_OK; u++) {
+        size_t top = 0;
+        int anchored = 0;
+        if (seen[u]) continue;
+        seen[u] = 1;
+        stack[top++] = (int32_t)u;
+        while (top > 0) {
+            int32_t v = d->unk_v[stack[--top]];
+            anchored |= d->soft[v];
+            for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) {
+                int32_t a = d->unk[d->g.adj[p]];
+                if (a < 0) anchored = 1;
+                else if (!seen[a]) {
+                    seen[a] = 1;
+                    stack[top++] = a;
+                }
+            }
+        }
+        if (!anchored) err = DFM_ERR_UNCONSTRAINED;
+    }
+done:
+    dfm__free(&d->al, stack);
+    dfm__free(&d->al, seen);
+    return err;
+}
+
+/* The system's shared vertex sets. */
+static void dfm__lsq_init(dfm__lsq *s, const dfm_deform *d, size_t bs, size_t nrhs)
+{
+    memset(s, 0, sizeof *s);
+    s->bs = bs;
+    s->nrhs = nrhs;
+    s->nv = d->nv;
+    s->nu = d->nu;
+    s->unk = d->unk;
+    s->unk_v = d->unk_v;
+    s->soft = d->soft;
+    s->soft_w2 = d->opt.handle_weight * d->opt.handle_weight;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - the three methods' rows
+   --------------------------------------------------------------------------------------------- */
+
+/* delta_i = x_i - sum_j w_ij x_j / W_i, the Laplacian coordinate with normalized weights. */
+static void dfm__delta(const dfm_deform *d, size_t i, double *delta, double *wsum)
+{
+    size_t p, k;
+    double W = 0.0;
+    for (p = d->g.start[i]; p < d->g.start[i + 1]; p++) W += d->g.w[p];
+    for (k = 0; k < 3; k++) delta[k] = d->pos[3 * i + k];
+    for (p = d->g.start[i]; p < d->g.start[i + 1]; p++)
+        for (k = 0; k < 3; k++) delta[k] -= d->g.w[p] / W * d->pos[3 * (size_t)d->g.adj[p] + k];
+    *wsum = W;
+}
+
+/* Terms in the touched vertices' rows: a row per vertex with neighbours (closed 1-ring). */
+static dfm_result dfm__ring_rows_alloc(dfm_deform *d, dfm__lsq *s)
+{
+    size_t v, rows = 0, terms = 0;
+    for (v = 0; v < d->nv; v++)
+        if (d->touched[v] && d->g.start[v + 1] > d->g.start[v]) {
+            rows++;
+            terms += 1 + d->g.start[v + 1] - d->g.start[v];
+        }
+    return dfm__lsq_alloc_rows(s, rows, terms, &d->al);
+}
+
+/* Method 1, plain Laplacian: row i is (L x')_i = delta_i, i.e. L d = 0 on the displacement. */
+static dfm_result dfm__laplacian_rows(dfm_deform *d)
+{
+    size_t v, p, r = 0, nt = 0;
+    dfm_result err;
+    dfm__lsq_init(&d->sys, d, 1, 3);
+    err = dfm__ring_rows_alloc(d, &d->sys);
+    if (err != DFM_OK) return err;
+    for (v = 0; v < d->nv; v++) {
+        double W = 0.0, one = 1.0, c;
+        if (!d->touched[v] || d->g.start[v + 1] == d->g.start[v]) continue;
+        for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) W += d->g.w[p];
+        dfm__lsq_term(&d->sys, &nt, (int32_t)v, &one);
+        for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) {
+            c = -d->g.w[p] / W;
+            dfm__lsq_term(&d->sys, &nt, d->g.adj[p], &c);
+        }
+        dfm__lsq_end_row(&d->sys, r++, nt);
+    }
+    return DFM_OK;
+}
+
+static void dfm__skew(const double *a, double *m)
+{
+    m[0] = 0.0;   m[1] = -a[2]; m[2] = a[1];
+    m[3] = a[2];  m[4] = 0.0;   m[5] = -a[0];
+    m[6] = -a[1]; m[7] = a[0];  m[8] = 0.0;
+}
+
+static void dfm__mul33(const double *a, const double *b, double *r)
+{
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) r[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+}
+
+/* inverse of a symmetric positive definite 3x3 matrix (adjugate / determinant) */
+static void dfm__inv33(const double *m, double *r)
+{
+    double det;
+    int k;
+    r[0] = m[4] * m[8] - m[5] * m[7];
+    r[1] = m[2] * m[7] - m[1] * m[8];
+    r[2] = m[1] * m[5] - m[2] * m[4];
+    r[3] = m[5] * m[6] - m[3] * m[8];
+    r[4] = m[0] * m[8] - m[2] * m[6];
+    r[5] = m[2] * m[3] - m[0] * m[5];
+    r[6] = m[3] * m[7] - m[4] * m[6];
+    r[7] = m[1] * m[6] - m[0] * m[7];
+    r[8] = m[0] * m[4] - m[1] * m[3];
+    det = m[0] * r[0] + m[1] * r[3] + m[2] * r[6];
+    for (k = 0; k < 9; k++) r[k] /= det;
+}
+
+/* The fit of vertex i's similarity, on centred coordinates q_j = x_j - c_i over J_i = {i} + N(i):
+   s = sum q_j . x'_j / Q and h = S^-1 sum q_j x x'_j, S = sum (|q|^2 I - q q^T) (+ 1e-9 Q I
+   against a collinear ring). Row block of x'_j: l_ij I - delta q_j^T / Q + [delta]x S^-1 [q_j]x. */
+static void dfm__fit_block(const double *delta, const double *q, double Q, const double *Sinv, double lij,
+                           double *blk)
+{
+    double a[9], b[9], t[9];
+    int i, j;
+    dfm__skew(delta, a);
+    dfm__skew(q, b);
+    dfm__mul33(a, Sinv, t);
+    dfm__mul33(t, b, blk);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) blk[3 * i + j] += (i == j ? lij : 0.0) - delta[i] * q[j] / Q;
+}
+
+/* Method 2, transformation fitting: row i is (L x')_i - T_i(x') delta_i = 0, coupled x, y, z. */
+static dfm_result dfm__fitting_rows(dfm_deform *d)
+{
+    size_t v, p, r = 0, nt = 0, k, m;
+    dfm_result err;
+    dfm__lsq_init(&d->sys, d, 3, 1);
+    err = dfm__ring_rows_alloc(d, &d->sys);
+    if (err != DFM_OK) return err;
+    for (v = 0; v < d->nv; v++) {
+        double delta[3], W, c[3] = {0, 0, 0}, q[3], Q = 0.0, S[9] = {0}, Sinv[9], blk[9];
+        size_t nj = d->g.start[v + 1] - d->g.start[v] + 1;
+        if (!d->touched[v] || nj == 1) continue;
+        dfm__delta(d, v, delta, &W);
+        for (k = 0; k < 3; k++) c[k] = d->pos[3 * v + k];
+        for (p = d->g.start[v]; p < d->g.start[v + 1]; p++)
+            for (k = 0; k < 3; k++) c[k] += d->pos[3 * (size_t)d->g.adj[p] + k];
+        for (k = 0; k < 3; k++) c[k] /= (double)nj;
+        for (m = 0; m < nj; m++) { /* m = 0: i itself, then the neighbours */
+            size_t j = m == 0 ? v : (size_t)d->g.adj[d->g.start[v] + m - 1];
+            dfm__sub3(d->pos + 3 * j, c, q);
+            Q += dfm__dot3(q, q);
+            for (k = 0; k < 9; k++) S[k] += (k % 4 == 0 ? dfm__dot3(q, q) : 0.0) - q[k / 3] * q[k % 3];
+        }
+        for (k = 0; k < 9; k += 4) S[k] += 1e-9 * Q;
+        dfm__inv33(S, Sinv);
+        for (m = 0; m < nj; m++) {
+            size_t j = m == 0 ? v : (size_t)d->g.adj[d->g.start[v] + m - 1];
+            double lij = m == 0 ? 1.0 : -d->g.w[d->g.start[v] + m - 1] / W;
+            dfm__sub3(d->pos + 3 * j, c, q);
+            dfm__fit_block(delta, q, Q, Sinv, lij, blk);
+            dfm__lsq_term(&d->sys, &nt, (int32_t)j, blk);
+        }
+        dfm__lsq_end_row(&d->sys, r++, nt);
+    }
+    return DFM_OK;
+}
+
+/* Unit normals (area-weighted: the sum of the incident faces' cross products). */
+static void dfm__normals(const dfm_deform *d, const uint32_t *idx, size_t nt, double *nrm)
+{
+    size_t t, v, k;
+    memset(nrm, 0, 3 * d->nv * sizeof(double));
+    for (t = 0; t < nt; t++) {
+        const uint32_t *f = idx + 3 * t;
+        double u[3], w[3], c[3];
+        dfm__sub3(d->pos + 3 * (size_t)f[1], d->pos + 3 * (size_t)f[0], u);
+        dfm__sub3(d->pos + 3 * (size_t)f[2], d->pos + 3 * (size_t)f[0], w);
+        dfm__cross3(u, w, c);
+        for (k = 0; k < 3; k++)
+            for (v = 0; v < 3; v++) nrm[3 * (size_t)f[k] + v] += c[v];
+    }
+    for (v = 0; v < d->nv; v++) {
+        double l = sqrt(dfm__dot3(nrm + 3 * v, nrm + 3 * v));
+        for (k = 0; k < 3; k++) nrm[3 * v + k] = l > 0.0 ? nrm[3 * v + k] / l : (k == 2);
+    }
+}
+
+/* The frame of vertex v: N, b1 = the unit tangent projection of the chosen neighbour edge (the
+   first with a projection longer than 1e-6 of its edge; DFM_FRAMES_MAX_ELEVATION: the largest
+   elevation angle, i.e. the most negative <e, N> / |e|, ties to the first), b2 = N x b1. */
+static void dfm__frame(const dfm_deform *d, size_t v, const double *N, double *F)
+{
+    size_t p;
+    double best = 2.0, b1[3] = {0, 0, 0}, b2[3];
+    int k, found = 0;
+    for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) {
+        double e[3], t[3], le, lt, key;
+        dfm__sub3(d->pos + 3 * (size_t)d->g.adj[p], d->pos + 3 * v, e);
+        le = sqrt(dfm__dot3(e, e));
+        for (k = 0; k < 3; k++) t[k] = e[k] - dfm__dot3(e, N) * N[k];
+        lt = sqrt(dfm__dot3(t, t));
+        if (!(lt > 1e-6 * le)) continue;
+        key = d->opt.frames == DFM_FRAMES_MAX_ELEVATION ? dfm__dot3(e, N) / le : 0.0;
+        if (found && key >= best) continue;
+        best = key;
+        found = 1;
+        for (k = 0; k < 3; k++) b1[k] = t[k] / lt;
+    }
+    if (!found) { /* no usable edge (not reached: such a vertex has a degenerate fan) */
+        double a[3] = {1, 0, 0}, l;
+        if (fabs(N[0]) > 0.9) a[0] = 0, a[1] = 1;
+        for (k = 0; k < 3; k++) b1[k] = a[k] - dfm__dot3(a, N) * N[k];
+        l = sqrt(dfm__dot3(b1, b1));
+        for (k = 0; k < 3; k++) b1[k] /= l;
+    }
+    dfm__cross3(N, b1, b2);
+    for (k = 0; k < 3; k++) {
+        F[3 * k] = b1[k];
+        F[3 * k + 1] = b2[k];
+        F[3 * k + 2] = N[k];
+    }
+}
+
+/* LRI's constants: the frames, the edges with an unknown end, c_ij = F_i^T (x_j - x_i), c_ji. */
+static dfm_result dfm__lri_frames(dfm_deform *d, const uint32_t *idx, size_t nt)
+{
+    dfm_result err = DFM_OK;
+    size_t v, p, e = 0, k;
+    double *nrm = (double *)dfm__alloc(&d->al, d->nv, 3 * sizeof(double), &err);
+    d->frame = (double *)dfm__alloc(&d->al, d->nv, 9 * sizeof(double), &err);
+    if (err != DFM_OK) goto done;
+    dfm__normals(d, idx, nt, nrm);
+    for (v = 0; v < d->nv; v++) dfm__frame(d, v, nrm + 3 * v, d->frame + 9 * v);
+    d->ne = 0;
+    for (v = 0; v < d->nv; v++)
+        for (p = d->g.start[v]; p < d->g.start[v + 1]; p++)
+            d->ne += (size_t)d->g.adj[p] > v && (d->unk[v] >= 0 || d->unk[d->g.adj[p]] >= 0);
+    d->edge = (int32_t *)dfm__alloc(&d->al, d->ne + 1, 2 * sizeof(int32_t), &err);
+    d->edge_c = (double *)dfm__alloc(&d->al, d->ne + 1, 6 * sizeof(double), &err);
+    d->rowb = (double *)dfm__alloc(&d->al, d->ne + 1, 3 * sizeof(double), &err);
+    if (err != DFM_OK) goto done;
+    for (v = 0; v < d->nv; v++)
+        for (p = d->g.start[v]; p < d->g.start[v + 1]; p++) {
+            size_t j = (size_t)d->g.adj[p];
+            const double *Fi = d->frame + 9 * v, *Fj = d->frame + 9 * j;
+            double x[3];
+            if (j <= v || (d->unk[v] < 0 && d->unk[j] < 0)) continue;
+            d->edge[2 * e] = (int32_t)v;
+            d->edge[2 * e + 1] = (int32_t)j;
+            dfm__sub3(d->pos + 3 * j, d->pos + 3 * v, x);
+            for (k = 0; k < 3; k++) {
+                d->edge_c[6 * e + k] = Fi[k] * x[0] + Fi[3 + k] * x[1] + Fi[6 + k] * x[2];
+                d->edge_c[6 * e + 3 + k] = -(Fj[k] * x[0] + Fj[3 + k] * x[1] + Fj[6 + k] * x[2]);
+            }
+            e++;
+        }
+done:
+    dfm__free(&d->al, nrm);
+    return err;
+}
+
+/* Method 3, LRI: the frames system (row per edge: f_j - R_ij^T f_i = 0 for each row f of the
+   frames, R_ij = F_i^T F_j) and the positions system (row per edge: sqrt(w_ij) (x'_j - x'_i) =
+   sqrt(w_ij) (F'_i c_ij - F'_j c_ji) / 2, both directions of the edge in one row). */
+static dfm_result dfm__lri_rows(dfm_deform *d)
+{
+    dfm_result err;
+    size_t e, ntf = 0, ntp = 0, a, b;
+    dfm__lsq_init(&d->fsys, d, 3, 3);
+    dfm__lsq_init(&d->sys, d, 1, 3);
+    err = dfm__lsq_alloc_rows(&d->fsys, d->ne, 2 * d->ne, &d->al);
+    if (err == DFM_OK) err = dfm__lsq_alloc_rows(&d->sys, d->ne, 2 * d->ne, &d->al);
+    if (err != DFM_OK) return err;
+    for (e = 0; e < d->ne; e++) {
+        size_t i = (size_t)d->edge[2 * e], j = (size_t)d->edge[2 * e + 1];
+        const double *Fi = d->frame + 9 * i, *Fj = d->frame + 9 * j;
+        double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, mr[9], s, ms;
+        for (a = 0; a < 3; a++) /* -R_ij^T: entry (a, b) = -(F_i^T F_j)(b, a) = -F_j col a . F_i col b */
+            for (b = 0; b < 3; b++) mr[3 * a + b] = -(Fi[b] * Fj[a] + Fi[3 + b] * Fj[3 + a] + Fi[6 + b] * Fj[6 + a]);
+        dfm__lsq_term(&d->fsys, &ntf, (int32_t)j, id);
+        dfm__lsq_term(&d->fsys, &ntf, (int32_t)i, mr);
+        dfm__lsq_end_row(&d->fsys, e, ntf);
+        s = sqrt(d->g.w[dfm__graph_find(&d->g, i, (int32_t)j)]);
+        ms = -s;
+        dfm__lsq_term(&d->sys, &ntp, (int32_t)j, &s);
+        dfm__lsq_term(&d->sys, &ntp, (int32_t)i, &ms);
+        dfm__lsq_end_row(&d->sys, e, ntp);
+    }
+    return DFM_OK;
+}
+
+/* The closest rotation (polar factor) by Newton's iteration X <- (X + X^-T) / 2. */
+static void dfm__polar(double *X)
+{
+    int it, k;
+    for (it = 0; it < 30; it++) {
+        double inv[9], det, nx[9], diff = 0.0, size = 0.0;
+        inv[0] = X[4] * X[8] - X[5] * X[7];
+        inv[1] = X[5] * X[6] - X[3] * X[8];
+        inv[2] = X[3] * X[7] - X[4] * X[6];
+        inv[3] = X[2] * X[7] - X[1] * X[8];
+        inv[4] = X[0] * X[8] - X[2] * X[6];
+        inv[5] = X[1] * X[6] - X[0] * X[7];
+        inv[6] = X[1] * X[5] - X[2] * X[4];
+        inv[7] = X[2] * X[3] - X[0] * X[5];
+        inv[8] = X[0] * X[4] - X[1] * X[3];
+        det = X[0] * inv[0] + X[1] * inv[1] + X[2] * inv[2];
+        if (!(fabs(det) > 1e-300)) return; /* singular: left as it is */
+        for (k = 0; k < 9; k++) { /* inv holds the cofactors: X^-T = cof / det */
+            nx[k] = 0.5 * (X[k] + inv[k] / det);
+            diff += (nx[k] - X[k]) * (nx[k] - X[k]);
+            size += nx[k] * nx[k];
+        }
+        memcpy(X, nx, sizeof nx);
+        if (diff <= 1e-30 * size) return;
+    }
+}
+
+/* Gram-Schmidt with N first: N' = N / |N|, b1' = b1 minus its N' part, normalized, b2' = N' x b1'. */
+static void dfm__gram_schmidt(double *F)
+{
+    double b1[3], n[3], b2[3], l, dn;
+    int k;
+    for (k = 0; k < 3; k++) {
+        b1[k] = F[3 * k];
+        n[k] = F[3 * k + 2];
+    }
+    l = sqrt(dfm__dot3(n, n));
+    if (!(l > 0.0)) return;
+    for (k = 0; k < 3; k++) n[k] /= l;
+    dn = dfm__dot3(b1, n);
+    for (k = 0; k < 3; k++) b1[k] -= dn * n[k];
+    l = sqrt(dfm__dot3(b1, b1));
+    if (!(l > 0.0)) return;
+    for (k = 0; k < 3; k++) b1[k] /= l;
+    dfm__cross3(n, b1, b2);
+    for (k = 0; k < 3; k++) {
+        F[3 * k] = b1[k];
+        F[3 * k + 1] = b2[k];
+        F[3 * k + 2] = n[k];
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - setup and solve
+   --------------------------------------------------------------------------------------------- */
+
+static int dfm__report(const dfm_deform_options *o, float done)
+{
+    return o->progress && o->progress(o->progress_user, done);
+}
+
+/* Steps 2-5: the mesh graph and every check, then the weights. */
+static dfm_result dfm__deform_mesh(dfm_deform *d, const uint32_t *idx, size_t nt, const unsigned char *roi,
+                                   const unsigned char *handle)
+{
+    dfm_result err = dfm__graph_build(idx, nt, d->nv, &d->al, &d->g);
+    if (err == DFM_OK) err = dfm__check_manifold(idx, nt, &d->g);
+    if (err == DFM_OK) err = dfm__check_welded(d->pos, &d->g, &d->al);
+    if (err == DFM_OK) err = dfm__deform_unknowns(d, roi, handle);
+    if (err == DFM_OK) err = dfm__deform_check_triangles(d, idx, nt);
+    if (err == DFM_OK) err = dfm__deform_check_constrained(d);
+    if (err == DFM_OK) dfm__edge_weights(d->pos, idx, nt, d->opt.weights, &d->g);
+    return err;
+}
+
+DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count, const uint32_t *indices,
+                                   size_t triangle_count, const unsigned char *roi, const unsigned char *handle,
+                                   const dfm_deform_options *options, dfm_deform **out)
+{
+    dfm_deform_options o = options ? *options : dfm_deform_default_options();
+    dfm_allocator user = dfm__resolve_allocator(o.allocator);
+    dfm_result err;
+    dfm_deform *d;
+    dfm__span sp;
+    if (!out) return DFM_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (o.handle_weight == 0.0) o.handle_weight = 1.0;
+    err = dfm__deform_check(positions, vertex_count, indices, triangle_count, roi, handle, &o); /* 1 */
+    if (err != DFM_OK) return err;
+    d = (dfm_deform *)dfm__alloc(&user, 1, sizeof *d, &err);
+    if (!d) return err;
+    memset(d, 0, sizeof *d);
+    d->meter.inner = user;
+    d->al.alloc = dfm__meter_alloc;
+    d->al.free = dfm__meter_free;
+    d->al.user = &d->meter;
+    d->opt = o;
+    d->nv = vertex_count;
+    d->pos = (double *)dfm__alloc(&d->al, vertex_count, 3 * sizeof(double), &err);
+    if (err == DFM_OK) {
+        memcpy(d->pos, positions, vertex_count * 3 * sizeof(double));
+        err = dfm__deform_mesh(d, indices, triangle_count, roi, handle); /* 2-5 */
+    }
+    if (err == DFM_OK && dfm__report(&o, 0.05f)) err = DFM_CANCELLED;
+    if (err == DFM_OK) { /* 6: the method's rows */
+        if (o.method == DFM_METHOD_LAPLACIAN) err = dfm__laplacian_rows(d);
+        else if (o.method == DFM_METHOD_FITTING) err = dfm__fitting_rows(d);
+        else {
+            err = dfm__lri_frames(d, indices, triangle_count);
+            if (err == DFM_OK) err = dfm__lri_rows(d);
+        }
+    }
+    if (err == DFM_OK && dfm__report(&o, 0.1f)) err = DFM_CANCELLED;
+    sp.progress = o.progress;
+    sp.user = o.progress_user;
+    sp.base = 0.1f;
+    sp.last = 0.1f;
+    sp.span = o.method == DFM_METHOD_LRI ? 0.45f : 0.9f;
+    if (err == DFM_OK) err = dfm__lsq_factor(&d->sys, d->pos, &d->al, &sp); /* 7: factor once */
+    sp.span = 0.45f;
+    if (err == DFM_OK && o.method == DFM_METHOD_LRI) err = dfm__lsq_factor(&d->fsys, d->pos, &d->al, &sp);
+    if (err == DFM_OK) {
+        d->X = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
+        d->G = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
+    }
+    if (err == DFM_OK && dfm__report(&o, 1.0f)) err = DFM_CANCELLED;
+    if (err != DFM_OK) {
+        dfm_deform_free(d);
+        return err;
+    }
+    *out = d;
+    return DFM_OK;
+}
+
+/* The targets (and rotations) at the vertices the rows read must be finite. */
+static dfm_result dfm__check_pose(const dfm_deform *d, const double *targets, const double *rot)
+{
+    size_t v, k;
+    for (v = 0; v < d->nv; v++) {
+        if (d->unk[v] >= 0 && !d->soft[v]) continue;
+        for (k = 0; k < 3; k++)
+            if (!dfm__finite(targets[3 * v + k])) return DFM_ERR_BAD_VALUE;
+        if (rot)
+            for (k = 0; k < 9; k++)
+                if (!dfm__finite(rot[9 * v + k])) return DFM_ERR_BAD_VALUE;
+    }
+    return DFM_OK;
+}
+
+/* Known (and soft-target) displacements, bs = 1 (X[q nv + v]) or bs = 3 (X[3 v + q]). */
+static void dfm__known_displacements(const dfm_deform *d, const double *targets, size_t bs)
+{
+    size_t v, q, nv = d->nv;
+    for (v = 0; v < nv; v++) {
+        if (d->unk[v] >= 0 && !d->soft[v]) continue;
+        for (q = 0; q < 3; q++) {
+            double x = targets[3 * v + q] - d->pos[3 * v + q];
+            if (bs == 1) d->X[q * nv + v] = x;
+            else d->X[3 * v + q] = x;
+        }
+    }
+}
+
+/* LRI, step 1: the frames solve; known frames are R F (displacement (R - I) F); the new frames
+   of the unknowns orthonormalized as asked. d->G gets F' - F of every touched vertex. */
+static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
+{
+    size_t v, c, k, m, nv = d->nv;
+    dfm_result err;
+    for (v = 0; v < nv; v++) {
+        const double *F = d->frame + 9 * v, *R = rot ? rot + 9 * v : NULL;
+        if (d->unk[v] >= 0 && !d->soft[v]) continue;
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++) {
+                double g = 0.0;
+                if (R)
+                    for (m = 0; m < 3; m++) g += R[3 * c + m] * F[3 * m + k];
+                d->X[(c * nv + v) * 3 + k] = R ? g - F[3 * c + k] : 0.0;
+            }
+    }
+    err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
+    if (err != DFM_OK) return err;
+    for (v = 0; v < nv; v++) {
+        double Fp[9];
+        if (!d->touched[v]) continue;
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++) Fp[3 * c + k] = d->frame[9 * v + 3 * c + k] + d->X[(c * nv + v) * 3 + k];
+        if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_POLAR) dfm__polar(Fp);
+        if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_GRAM_SCHMIDT) dfm__gram_schmidt(Fp);
+        for (k = 0; k < 9; k++) d->G[9 * v + k] = Fp[k] - d->frame[9 * v + k];
+    }
+    return DFM_OK;
+}
+
+/* LRI, step 2: each edge row's right-hand side s (G_i c_ij - G_j c_ji) / 2 (the displacement
+   form: the original frames reproduce x_j - x_i exactly). */
+static void dfm__lri_position_rhs(dfm_deform *d)
+{
+    size_t e, q, m;
+    for (e = 0; e < d->ne; e++) {
+        size_t i = (size_t)d->edge[2 * e], j = (size_t)d->edge[2 * e + 1];
+        const double *Gi = d->G + 9 * i, *Gj = d->G + 9 * j, *cij = d->edge_c + 6 * e, *cji = cij + 3;
+        double s = d->sys.term_c[2 * e];
+        for (q = 0; q < 3; q++) {
+            double a = 0.0;
+            for (m = 0; m < 3; m++) a += Gi[3 * q + m] * cij[m] - Gj[3 * q + m] * cji[m];
+            d->rowb[3 * e + q] = 0.5 * s * a;
+        }
+    }
+}
+
+DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const double *rotations, double *out)
+{
+    dfm_result err;
+    size_t v, q, nv, bs;
+    if (!d || !targets || !out) return DFM_ERR_INVALID_ARGUMENT;
+    nv = d->nv;
+    bs = d->sys.bs;
+    err = dfm__check_pose(d, targets, rotations);
+    if (err == DFM_OK && d->opt.method == DFM_METHOD_LRI) {
+        err = dfm__lri_solve_frames(d, rotations);
+        if (err == DFM_OK) dfm__lri_position_rhs(d);
+    }
+    if (err != DFM_OK) return err;
+    dfm__known_displacements(d, targets, bs);
+    err = dfm__lsq_solve(&d->sys, d->opt.method == DFM_METHOD_LRI ? d->rowb : NULL, d->X, d->opt.refine_steps);
+    if (err != DFM_OK) return err;
+    for (v = 0; v < nv; v++)
+        for (q = 0; q < 3; q++) {
+            if (d->unk[v] < 0) out[3 * v + q] = targets[3 * v + q];
+            else out[3 * v + q] = d->pos[3 * v + q] + (bs == 1 ? d->X[q * nv + v] : d->X[3 * v + q]);
+        }
+    return DFM_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: deformation - ROI and pose helpers
+   --------------------------------------------------------------------------------------------- */
+
+DFMDEF dfm_result dfm_roi_rings(const uint32_t *indices, size_t triangle_count, size_t vertex_count, unsigned k,
+                                unsigned char *mask, const dfm_allocator *allocator)
+{
+    dfm_allocator al = dfm__resolve_allocator(allocator);
+    dfm_result err;
+    dfm__graph g;
+    unsigned char *next;
+    size_t v, p, t;
+    unsigned ring;
+    if (!indices || !mask || vertex_count == 0) return DFM_ERR_INVALID_ARGUMENT;
+    if (vertex_count > DFM__MAX_N || triangle_count > ((size_t)-1 >> 4) / 6) return DFM_ERR_TOO_LARGE;
+    for (t = 0; t < 3 * triangle_count; t++)
+        if (indices[t] >= vertex_count) return DFM_ERR_BAD_INDEX;
+    err = dfm__graph_build(indices, triangle_count, vertex_count, &al, &g);
+    if (err != DFM_OK) return err;
+    next = (unsigned char *)dfm__alloc(&al, vertex_count, 1, &err);
+    for (ring = 0; ring < k && err == DFM_OK; ring++) {
+        memcpy(next, mask, vertex_count);
+        for (v = 0; v < vertex_count; v++)
+            if (mask[v])
+                for (p = g.start[v]; p < g.start[v + 1]; p++) next[g.adj[p]] = 1;
+        memcpy(mask, next, vertex_count);
+    }
+    dfm__free(&al, next);
+    dfm__graph_free(&g, &al);
+    return err;
+}
+
+/* binary min-heap of (distance, vertex) with lazy deletion */
+static void dfm__heap_push(double *hd, int32_t *hv, size_t *n, double dist, int32_t v)
+{
+    size_t i = (*n)++;
+    while (i > 0 && hd[(i - 1) / 2] > dist) {
+        hd[i] = hd[(i - 1) / 2];
+        hv[i] = hv[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    hd[i] = dist;
+    hv[i] = v;
+}
+
+static void dfm__heap_pop(double *hd, int32_t *hv, size_t *n)
+{
+    size_t i = 0, m = --(*n);
+    double dist = hd[m];
+    int32_t v = hv[m];
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= m) break;
+        if (c + 1 < m && hd[c + 1] < hd[c]) c++;
+        if (hd[c] >= dist) break;
+        hd[i] = hd[c];
+        hv[i] = hv[c];
+        i = c;
+    }
+    hd[i] = dist;
+    hv[i] = v;
+}
+
+DFMDEF dfm_result dfm_roi_geodesic(const double *positions, size_t vertex_count, const uint32_t *indices,
+                                   size_t triangle_count, const unsigned char *seeds, double radius,
+                                   unsigned char *mask, const dfm_allocator *allocator)
+{
+    dfm_allocator al = dfm__resolve_allocator(allocator);
+    dfm_result err;
+    dfm__graph g;
+    double *dist = NULL, *hd = NULL;
+    int32_t *hv = NULL;
+    size_t v, p, n = 0;
+    if (!positions || !indices || !seeds || !mask || vertex_count == 0) return DFM_ERR_INVALID_ARGUMENT;
+    if (!(radius == radius)) return DFM_ERR_BAD_VALUE;
+    if (vertex_count > DFM__MAX_N || triangle_count > ((size_t)-1 >> 4) / 6) return DFM_ERR_TOO_LARGE;
+    for (v = 0; v < 3 * triangle_count; v++)
+        if (indices[v] >= vertex_count) return DFM_ERR_BAD_INDEX;
+    for (v = 0; v < 3 * vertex_count; v++)
+        if (!dfm__finite(positions[v])) return DFM_ERR_BAD_VALUE;
+    err = dfm__graph_build(indices, triangle_count, vertex_count, &al, &g);
+    if (err != DFM_OK) return err;
+    dist = (double *)dfm__alloc(&al, vertex_count, sizeof(double), &err);
+    hd = (double *)dfm__alloc(&al, g.start[vertex_count] + vertex_count, sizeof(double), &err);
+    hv = (int32_t *)dfm__alloc(&al, g.start[vertex_count] + vertex_count, sizeof(int32_t), &err);
+    if (err == DFM_OK) {
+        for (v = 0; v < vertex_count; v++) {
+            dist[v] = seeds[v] ? 0.0 : HUGE_VAL;
+            if (seeds[v]) dfm__heap_push(hd, hv, &n, 0.0, (int32_t)v);
+        }
+        while (n > 0) { /* Dijkstra along the edges */
+            double dv = hd[0];
+            size_t u = (size_t)hv[0];
+            dfm__heap_pop(hd, hv, &n);
+            if (dv > dist[u] || dv > radius) continue;
+            for (p = g.start[u]; p < g.start[u + 1]; p++) {
+                double e[3], nd;
+                size_t w = (size_t)g.adj[p];
+                dfm__sub3(positions + 3 * w, positions + 3 * u, e);
+                nd = dv + sqrt(dfm__dot3(e, e));
+                if (nd < dist[w]) {
+                    dist[w] = nd;
+                    dfm__heap_push(hd, hv, &n, nd, (int32_t)w);
+                }
+            }
+        }
+        for (v = 0; v < vertex_count; v++) mask[v] = dist[v] <= radius;
+    }
+    dfm__free(&al, dist);
+    dfm__free(&al, hd);
+    dfm__free(&al, hv);
+    dfm__graph_free(&g, &al);
+    return err;
+}
+
+DFMDEF void dfm_rotation(const double axis[3], double angle, double R[9])
+{
+    double l = sqrt(dfm__dot3(axis, axis)), x, y, z, c = cos(angle), s = sin(angle), t = 1.0 - c;
+    x = axis[0] / l;
+    y = axis[1] / l;
+    z = axis[2] / l;
+    R[0] = t * x * x + c;     R[1] = t * x * y - s * z; R[2] = t * x * z + s * y;
+    R[3] = t * x * y + s * z; R[4] = t * y * y + c;     R[5] = t * y * z - s * x;
+    R[6] = t * x * z - s * y; R[7] = t * y * z + s * x; R[8] = t * z * z + c;
+}
+
+DFMDEF void dfm_pose_identity(const double *positions, size_t vertex_count, double *targets, double *rotations)
+{
+    size_t v;
+    memcpy(targets, positions, 3 * vertex_count * sizeof(double));
+    if (rotations)
+        for (v = 0; v < vertex_count; v++) {
+            double *r = rotations + 9 * v;
+            memset(r, 0, 9 * sizeof(double));
+            r[0] = r[4] = r[8] = 1.0;
+        }
+}
+
+DFMDEF void dfm_pose_rigid(const double *positions, size_t vertex_count, const unsigned char *mask,
+                           const double R[9], const double center[3], const double t[3], double *targets,
+                           double *rotations)
+{
+    static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double zero[3] = {0, 0, 0}, *M = R ? R : id, *c = center ? center : zero, *tt = t ? t : zero;
+    size_t v;
+    int k;
+    for (v = 0; v < vertex_count; v++) {
+        double p[3];
+        if (!mask[v]) continue;
+        dfm__sub3(positions + 3 * v, c, p);
+        for (k = 0; k < 3; k++) targets[3 * v + k] = dfm__dot3(M + 3 * k, p) + c[k] + tt[k];
+        if (rotations) memcpy(rotations + 9 * v, M, 9 * sizeof(double));
+    }
+}
+
+DFMDEF void dfm_pose_twist(const double *positions, size_t vertex_count, const unsigned char *mask,
+                           const double point[3], const double axis[3], double angle, double *targets,
+                           double *rotations)
+{
+    double R[9];
+    dfm_rotation(axis, angle, R);
+    dfm_pose_rigid(positions, vertex_count, mask, R, point, NULL, targets, rotations);
+}
+
+DFMDEF void dfm_pose_bend(const double *positions, size_t vertex_count, const unsigned char *mask,
+                          const double base[3], const double axis[3], const double toward[3], double len,
+                          double angle, double *targets, double *rotations)
+{
+    double a[3], b[3], n[3], R[9], h[3], t[3], la, lb, si, ve;
+    int k;
+    la = sqrt(dfm__dot3(axis, axis));
+    for (k = 0; k < 3; k++) a[k] = axis[k] / la;
+    for (k = 0; k < 3; k++) b[k] = toward[k] - dfm__dot3(toward, a) * a[k];
+    lb = sqrt(dfm__dot3(b, b));
+    for (k = 0; k < 3; k++) b[k] /= lb;
+    dfm__cross3(a, b, n); /* turning a towards b is a rotation about a x b */
+    dfm_rotation(n, angle, R);
+    /* the arc's end: base + len (sin(angle) / angle) a + len ((1 - cos(angle)) / angle) b */
+    si = fabs(angle) < 1e-8 ? 1.0 : sin(angle) / angle;
+    ve = fabs(angle) < 1e-8 ? 0.5 * angle : (1.0 - cos(angle)) / angle;
+    for (k = 0; k < 3; k++) {
+        h[k] = base[k] + len * a[k];
+        t[k] = base[k] + len * (si * a[k] + ve * b[k]) - h[k];
+    }
+    dfm_pose_rigid(positions, vertex_count, mask, R, h, t, targets, rotations);
 }
 
 #ifdef __cplusplus
