@@ -99,6 +99,32 @@
        merged grass thinner). A hash grid of 0.3-voxel cells makes it O(n). Time is the outer
        loop (the paper's Algorithm 1 loops over points outside time, which cannot merge).
 
+   KEY FRAMES AND MINGLING (paper sections 2.2, 4.1)
+     tvt_build_tvt samples the static texel once, ages the points to wd = k / (frames - 1) in
+     steps_per_frame steps per frame (each step merges), splats each frame and builds its
+     pyramid. Between key frames a TVT is interpolated linearly in wd: density linear,
+     attributes density-weighted (interpolating rho and rho * A, then dividing), so a blend of
+     two frames is what a mix of their blades would give. Mingling (Algorithm 2) sums K samples,
+     each seen at its own age Mg_i(wd) = clamp((wd - delay_i) rate_i, 0, 1) (the paper leaves
+     the form to the user; delay and rate are the two knobs its Fig 11 shows): density adds
+     (not clamped: it is an extinction density), attributes density-weighted.
+
+   LOD (paper section 4.2: 256 -> 128 -> 64 -> 32, no filter given)
+     Each level is the 2x2x2 box filter of the one above: density the mean (the integral of
+     density along a line is kept on average), attributes density-weighted. The mean keeps the
+     optical depth, but not the opacity: blades are thin, nearly opaque fibres, and a coarse
+     voxel that spreads one over 8 times the volume is more opaque on average (Jensen's
+     inequality, 1 - exp(-tau) being concave), the more so along the blades, where the fine
+     level's rays either hit a blade all the way or miss it. So each coarse level gets an
+     extinction model of fibres (Kajiya and Kay's: a fibre's projected area grows with the sine
+     of the angle between ray and fibre):
+         sigma = extinction * density_scale * density * (1 - a + a |t x d|),
+     and density_scale and a are fitted per level (a on a grid of 21 values, the scale by a
+     ternary search) so that the mean opacity of calibration rays from the top of the tile to
+     the ground at elevations 15, 45 and 90 degrees matches level 0's: the largest relative
+     error over the three is minimised. Level 0 keeps a = 0, scale 1: its blades are resolved.
+     tvt_lod_level_for picks the level whose voxel is no larger than a pixel's footprint.
+
    OPTIONS
      Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
      Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options. Zero
@@ -113,6 +139,10 @@
                         merge_threshold (0.15 voxel;
                         no_merge = 1 turns merging off), colour_jitter (0.05), progress.
        tvt_splat_options   bits (8), sigma (0.5 voxel), allocator, progress.
+       tvt_lod_options     levels (down to 32^3), extinction (1 per level-0 voxel at density 1),
+                        calibration_rays (1024 per elevation), seed, allocator, progress.
+       tvt_tvt_options     frames (8), steps_per_frame (2), the sample / model / splat / lod
+                        options (NULL = defaults), allocator, progress.
 
    MEMORY
      A tvt_texel owns its brick index, brick data, per-voxel blade indices (static texels
@@ -120,8 +150,10 @@
      frees them. Per voxel of an occupied brick: 11 bytes at 8 bits, 22 at 16 bits, +2 for the
      blade index of a static texel. 8-bit density is stored as the square root of density /
      density_max (fine steps for the faint voxels a splat makes; 16-bit is linear); vectors map
-     [-1, 1] and colours [0, 1] linearly. A tvt_points holds 140 bytes per point. Building and
-     splatting use a float scratch grid of 52 bytes per voxel of each touched brick.
+     [-1, 1] and colours [0, 1] linearly. A tvt_points holds 140 bytes per point. Building,
+     splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
+     each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
+     tvt_lod_free / tvt_tvt_free free them; tvt_lod_bytes / tvt_tvt_bytes count them.
 
    ERRORS
      Functions return tvt_result (TVT_OK = 0); tvt_result_string() names it.
@@ -143,9 +175,11 @@
      bits on every run (random numbers from seeded hashes, sums in a fixed order).
 
    LIMITS
-     res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points.
-     Not in this version (paper section 4): key frames and interpolation, mingling, the LOD
-     pyramid, tiling over a terrain, sampling and ray marching.
+     res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points; 64 key frames;
+     8 LOD levels, the coarsest at least 8^3. Merging does not pair points across the side
+     borders (the hash cells do not wrap), which leaves a few more points there.
+     Not in this version: ray marching with shading, and tiling over a terrain (a renderer maps
+     world points into a tile's texel coordinates itself and calls tvt_tvt_voxel).
 
    REFERENCES
      Jiao Shao-Hui, Yang Gang, Heng Pheng-Ann, Wu En-Hua, "Realistic grass withering simulation
@@ -361,6 +395,106 @@ TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *op
 TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *options, tvt_texel *out);
 
 TVTDEF void tvt_points_free(tvt_points *pts);
+
+/* ---- LOD pyramid (paper section 4.2) -------------------------------------------------------- */
+#define TVT_MAX_LEVELS 8
+
+/* Level l has res >> l voxels per side, each 2^l level-0 voxels wide. Densities are in the
+   level-0 scale: a ray of direction d through level l accumulates optical depth
+       tau = extinction * density_scale[l] * sum(density * (1 - a + a |t x d|) * step),
+   a = anisotropy[l], t the unit tangent, step in level-0 voxels (see LOD). */
+typedef struct tvt_lod {
+    int levels;
+    tvt_texel level[TVT_MAX_LEVELS];
+    float density_scale[TVT_MAX_LEVELS]; /* the opacity correction of each level (1 at level 0) */
+    float anisotropy[TVT_MAX_LEVELS];    /* the fibre share of each level's extinction (0 at 0) */
+    float extinction;                    /* kappa */
+} tvt_lod;
+
+typedef struct tvt_lod_options {
+    int levels;              /* 0 = down to 32^3 (1..8 levels, the coarsest at least 8^3) */
+    float extinction;        /* kappa: optical depth of density 1 over one level-0 voxel; 0 = 1 */
+    int calibration_rays;    /* rays per elevation for density_scale; 0 = 1024 */
+    uint64_t seed;
+    const tvt_allocator *allocator; /* NULL = the texel's */
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_lod_options;
+
+TVTDEF tvt_lod_options tvt_lod_default_options(void);
+
+/* The pyramid of t (a copy of t is its level 0). See LOD in the doc block. */
+TVTDEF tvt_result tvt_build_lod(const tvt_texel *t, const tvt_lod_options *options, tvt_lod *out);
+TVTDEF size_t tvt_lod_bytes(const tvt_lod *l);
+TVTDEF void tvt_lod_free(tvt_lod *l);
+
+/* Density (scaled by the level's density_scale) at point p, in level-0 voxel units,
+   trilinear between the level's voxel centres; x and y wrap, outside 0 <= z < res is 0. */
+TVTDEF float tvt_lod_density(const tvt_lod *l, int level, const float p[3]);
+
+/* Every channel at p, trilinear, the attributes density-weighted (as mingling and LOD do). */
+TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_voxel *out);
+
+/* Optical depth tau along origin + s dir, 0 <= s <= length (level-0 units; dir unit), midpoint
+   samples every half voxel of the level. Transmittance = exp(-tau). */
+TVTDEF float tvt_optical_depth(const tvt_lod *l, int level, const float origin[3], const float dir[3], float length);
+
+/* Level for a footprint (the world size of a pixel, in level-0 voxels): floor(log2), clamped. */
+TVTDEF int tvt_lod_level_for(const tvt_lod *l, float footprint);
+
+/* ---- TVT: key frames over wd, mingling (paper sections 2.2 and 4.1) ------------------------- */
+#define TVT_MAX_FRAMES 64
+
+typedef struct tvt_tvt {
+    int frame_count;
+    float wd[TVT_MAX_FRAMES]; /* ascending: k / (frame_count - 1) */
+    tvt_lod *frames;          /* frame_count pyramids */
+    tvt_allocator allocator;
+} tvt_tvt;
+
+typedef struct tvt_tvt_options {
+    int frames;               /* key frames, 2..64; 0 = 8 */
+    int steps_per_frame;      /* ageing steps (each with merging) between frames, 1..64; 0 = 2 */
+    const tvt_sample_options *sample; /* NULL = defaults (each may be NULL) */
+    const tvt_model_options *model;
+    const tvt_splat_options *splat;
+    const tvt_lod_options *lod;
+    const tvt_allocator *allocator;   /* NULL = TVT_MALLOC/TVT_FREE */
+    int (*progress)(void *user, float done);
+    void *progress_user;
+} tvt_tvt_options;
+
+/* A mingling function (the paper's Mg_i): the sample is seen at clamp((wd - delay) * rate, 0, 1);
+   rate 0 means 1. */
+typedef struct tvt_ageing_fn { float delay, rate; } tvt_ageing_fn;
+
+TVTDEF tvt_tvt_options tvt_tvt_default_options(void);
+
+/* Static texel -> points -> aged and splatted at each key frame -> one LOD pyramid per frame. */
+TVTDEF tvt_result tvt_build_tvt(const tvt_texel *grass, const tvt_tvt_options *options, tvt_tvt *out);
+
+/* The frames around wd (clamped to [0, 1]): wd lies at weight w between frame f and f + 1. */
+TVTDEF void tvt_tvt_frames_at(const tvt_tvt *t, float wd, int *f, float *w);
+
+/* A voxel of the TVT at wd, level and point p (level-0 units), interpolated in wd between key
+   frames and trilinearly in space: density linear, attributes density-weighted. */
+TVTDEF void tvt_tvt_voxel(const tvt_tvt *t, float wd, int level, const float p[3], tvt_voxel *out);
+
+TVTDEF size_t tvt_tvt_bytes(const tvt_tvt *t);
+TVTDEF void tvt_tvt_free(tvt_tvt *t);
+
+/* The age a mingling function gives wd. fn NULL = identity. */
+TVTDEF float tvt_ageing_apply(const tvt_ageing_fn *fn, float wd);
+
+/* Mingling (Algorithm 2) at one wd: sample i seen at Mg_i(wd), interpolated between its level-0
+   key frames; density summed, attributes density-weighted. fns NULL = all identity. All samples
+   must have the same res (else TVT_ERR_BAD_RESOLUTION). bits 8 or 16 (0 = 8). */
+TVTDEF tvt_result tvt_mingle(const tvt_tvt *samples, const tvt_ageing_fn *fns, size_t count, float wd, int bits,
+                             const tvt_allocator *allocator, tvt_texel *out);
+
+/* A mingled TVT: tvt_mingle at each of options->frames key frames, then their pyramids. */
+TVTDEF tvt_result tvt_mingle_tvt(const tvt_tvt *samples, const tvt_ageing_fn *fns, size_t count,
+                                 const tvt_tvt_options *options, tvt_tvt *out);
 
 /* ---- model -------------------------------------------------------------------------------------- */
 
@@ -1592,6 +1726,578 @@ TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *opti
 }
 
 /* ---------------------------------------------------------------------------------------------
+   LOD pyramid (paper section 4.2)
+   --------------------------------------------------------------------------------------------- */
+/* Deep copy of a texel (the pyramid owns its level 0). */
+static tvt_result tvt__texel_copy(const tvt_texel *t, const tvt_allocator *a, tvt_texel *out)
+{
+    size_t nb = (size_t)t->bricks_per_side;
+    tvt_result r = tvt__texel_alloc(out, t->res, t->bits, t->brick_count, t->blade_of_voxel != NULL, a);
+    if (r != TVT_OK) return r;
+    out->density_max = t->density_max;
+    memcpy(out->brick_index, t->brick_index, nb * nb * nb * sizeof(uint32_t));
+    memcpy(out->data, t->data, t->brick_count * TVT__BV * TVT_CHANNELS * (size_t)(t->bits / 8));
+    if (t->blade_of_voxel) memcpy(out->blade_of_voxel, t->blade_of_voxel, t->brick_count * TVT__BV * sizeof(uint16_t));
+    return TVT_OK;
+}
+
+/* 2x2x2 box filter: density the mean of the children (so that the integral of density along
+   any line is kept on average), attributes density-weighted means. */
+static tvt_result tvt__downsample(const tvt_texel *t, const tvt_allocator *a, tvt_texel *out)
+{
+    size_t nb = (size_t)t->bricks_per_side, b;
+    tvt__acc g;
+    tvt_result r = tvt__acc_init(&g, t->res / 2, a);
+    for (b = 0; r == TVT_OK && b < nb * nb * nb; b++) {
+        uint32_t k = t->brick_index[b];
+        int bx = (int)(b % nb) * 4, by = (int)(b / nb % nb) * 4, bz = (int)(b / (nb * nb)) * 4, i, c;
+        if (k == TVT_EMPTY_BRICK) continue;
+        for (i = 0; i < TVT__BV; i++) {
+            unsigned q[TVT_CHANNELS];
+            tvt_voxel v;
+            float *acc, w;
+            tvt__load(t, (size_t)k * TVT__BV + (size_t)i, q);
+            if (!q[0]) continue;
+            tvt__decode(q, t->density_max, t->bits, &v);
+            acc = tvt__acc_voxel(&g, (bx + (i & 3)) / 2, (by + ((i >> 2) & 3)) / 2, (bz + (i >> 4)) / 2);
+            if (!acc) { r = TVT_ERR_OUT_OF_MEMORY; break; }
+            w = v.density * 0.125f;
+            acc[0] += w;
+            for (c = 0; c < 3; c++) {
+                acc[1 + c] += w * v.normal[c];
+                acc[4 + c] += w * v.tangent[c];
+                acc[7 + c] += w * v.color[c];
+            }
+            acc[10] += w * v.specular;
+        }
+    }
+    if (r == TVT_OK) r = tvt__acc_to_texel(&g, 1.0f, t->bits, 0, out);
+    tvt__acc_free(&g);
+    return r;
+}
+
+static float tvt__voxel_density(const tvt_texel *t, long x, long y, long z)
+{
+    int ok;
+    size_t slot = tvt__slot(t, x, y, z, &ok);
+    float d;
+    if (!ok) return 0.0f;
+    if (t->bits == 8) {
+        d = (float)((const uint8_t *)t->data)[slot * TVT_CHANNELS] * (1.0f / 255.0f);
+        return t->density_max * d * d;
+    }
+    return t->density_max * (float)((const uint16_t *)t->data)[slot * TVT_CHANNELS] * (1.0f / 65535.0f);
+}
+
+/* trilinear corner weights of p (level units, voxel centres at k + 1/2) */
+static void tvt__trilinear(const float *p, long *base, float *f)
+{
+    int c;
+    for (c = 0; c < 3; c++) {
+        float x = p[c] - 0.5f, fl = floorf(x);
+        base[c] = (long)fl;
+        f[c] = x - fl;
+    }
+}
+
+static float tvt__level_density(const tvt_texel *t, const float *p)
+{
+    long b[3];
+    float f[3], sum = 0.0f;
+    int n;
+    tvt__trilinear(p, b, f);
+    for (n = 0; n < 8; n++) {
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
+        if (w > 0) sum += w * tvt__voxel_density(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1));
+    }
+    return sum;
+}
+
+TVTDEF float tvt_lod_density(const tvt_lod *l, int level, const float p[3])
+{
+    float s = 1.0f / (float)(1 << level), q[3];
+    q[0] = p[0] * s; q[1] = p[1] * s; q[2] = p[2] * s;
+    return l->density_scale[level] * tvt__level_density(&l->level[level], q);
+}
+
+TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_voxel *out)
+{
+    const tvt_texel *t = &l->level[level];
+    float s = 1.0f / (float)(1 << level), q[3], f[3], wsum = 0.0f;
+    long b[3];
+    int n, c;
+    q[0] = p[0] * s; q[1] = p[1] * s; q[2] = p[2] * s;
+    tvt__trilinear(q, b, f);
+    memset(out, 0, sizeof(*out));
+    for (n = 0; n < 8; n++) {
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), wd;
+        tvt_voxel v;
+        if (!(w > 0)) continue;
+        tvt_texel_voxel(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &v);
+        wd = w * v.density;
+        out->density += wd;
+        for (c = 0; c < 3; c++) {
+            out->normal[c] += wd * v.normal[c];
+            out->tangent[c] += wd * v.tangent[c];
+            out->color[c] += wd * v.color[c];
+        }
+        out->specular += wd * v.specular;
+        wsum += wd;
+    }
+    if (wsum > 0) {
+        for (c = 0; c < 3; c++) { out->normal[c] /= wsum; out->tangent[c] /= wsum; out->color[c] /= wsum; }
+        out->specular /= wsum;
+    }
+    out->density *= l->density_scale[level];
+}
+
+/* density and the density-weighted tangent at p (level units), trilinear */
+static float tvt__level_density_tangent(const tvt_texel *t, const float *p, float *tangent)
+{
+    long b[3];
+    float f[3], sum = 0.0f;
+    int n, c;
+    tvt__trilinear(p, b, f);
+    tangent[0] = tangent[1] = tangent[2] = 0.0f;
+    for (n = 0; n < 8; n++) {
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
+        int ok;
+        size_t slot;
+        unsigned q[TVT_CHANNELS];
+        tvt_voxel v;
+        if (!(w > 0)) continue;
+        slot = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok);
+        if (!ok) continue;
+        tvt__load(t, slot, q);
+        if (!q[0]) continue;
+        tvt__decode(q, t->density_max, t->bits, &v);
+        sum += w * v.density;
+        for (c = 0; c < 3; c++) tangent[c] += w * v.density * v.tangent[c];
+    }
+    return sum;
+}
+
+/* the two parts of the optical depth at scale 1: isotropic sum(rho) and fibre sum(rho |t x d|) */
+static void tvt__depth_parts(const tvt_lod *l, int level, const float *origin, const float *dir, float length,
+                             float *iso, float *fibre)
+{
+    float step = 0.5f * (float)(1 << level), inv = 1.0f / (float)(1 << level), si = 0.0f, sf = 0.0f;
+    int n = (int)ceilf(length / step), i;
+    *iso = *fibre = 0.0f;
+    if (n <= 0) return;
+    step = length / (float)n;
+    for (i = 0; i < n; i++) {
+        float p[3], t[3], rho, tl, cosang, s = ((float)i + 0.5f) * step;
+        p[0] = (origin[0] + s * dir[0]) * inv; p[1] = (origin[1] + s * dir[1]) * inv;
+        p[2] = (origin[2] + s * dir[2]) * inv;
+        rho = tvt__level_density_tangent(&l->level[level], p, t);
+        if (!(rho > 0)) continue;
+        si += rho;
+        tl = sqrtf(tvt__dot(t, t));
+        cosang = tl > 0 ? tvt__dot(t, dir) / tl : 0.0f;
+        sf += rho * sqrtf(fmaxf(0.0f, 1.0f - cosang * cosang));
+    }
+    *iso = l->extinction * si * step;
+    *fibre = l->extinction * sf * step;
+}
+
+TVTDEF float tvt_optical_depth(const tvt_lod *l, int level, const float origin[3], const float dir[3], float length)
+{
+    float iso, fibre, a = l->anisotropy[level];
+    tvt__depth_parts(l, level, origin, dir, length, &iso, &fibre);
+    return l->density_scale[level] * ((1.0f - a) * iso + a * fibre);
+}
+
+TVTDEF int tvt_lod_level_for(const tvt_lod *l, float footprint)
+{
+    int level = 0;
+    while (level + 1 < l->levels && footprint >= (float)(2 << level)) level++;
+    return level;
+}
+
+/* The calibration rays: from the top of the texel down to the ground at elevation e, from a
+   uniform point of the top face in a uniform azimuth. */
+static void tvt__calibration_ray(uint64_t seed, int res, float elevation, int i, float *o, float *d, float *len)
+{
+    uint64_t s = tvt__mix(seed ^ tvt__mix((uint64_t)i * 3 + 1 + (uint64_t)(elevation * 1000.0f)));
+    float az = (float)(2.0 * TVT__PI) * tvt__rand(&s), ce = cosf(elevation), se = sinf(elevation);
+    o[0] = (float)res * tvt__rand(&s);
+    o[1] = (float)res * tvt__rand(&s);
+    o[2] = (float)res;
+    d[0] = ce * cosf(az); d[1] = ce * sinf(az); d[2] = -se;
+    *len = (float)res / se;
+}
+
+/* Largest relative error of the mean opacity over the three elevations for scale c and
+   anisotropy a; iso / fibre hold 3 * n ray depths of the level, target the level-0 means. */
+static double tvt__fit_error(const float *iso, const float *fibre, int n, const double *target, double c, double a)
+{
+    double worst = 0.0;
+    int e, i;
+    for (e = 0; e < 3; e++) {
+        double sum = 0.0, err;
+        for (i = 0; i < n; i++) sum += 1.0 - exp(-c * ((1.0 - a) * iso[e * n + i] + a * fibre[e * n + i]));
+        err = fabs(sum / n / (target[e] > 1e-9 ? target[e] : 1e-9) - 1.0);
+        if (err > worst) worst = err;
+    }
+    return worst;
+}
+
+/* Scale c and anisotropy a of a level: for each a on a grid of 21 values in [0, 1], the c that
+   minimises the largest relative error (the mean opacity grows with c, so each error is
+   unimodal in c and so is their maximum: a ternary search on log c); the best pair wins. */
+static void tvt__fit_level(const float *tau0, const float *iso, const float *fibre, int n, float *scale, float *aniso)
+{
+    double target[3], best = 1e30;
+    int e, i, k, it;
+    for (e = 0; e < 3; e++) {
+        double sum = 0.0;
+        for (i = 0; i < n; i++) sum += 1.0 - exp(-(double)tau0[e * n + i]);
+        target[e] = sum / n;
+    }
+    *scale = 1.0f;
+    *aniso = 0.0f;
+    for (k = 0; k <= 20; k++) {
+        double a = k / 20.0, lo = log(1.0 / 64), hi = log(8.0), err;
+        for (it = 0; it < 40; it++) {
+            double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+            if (tvt__fit_error(iso, fibre, n, target, exp(m1), a) <= tvt__fit_error(iso, fibre, n, target, exp(m2), a))
+                hi = m2;
+            else
+                lo = m1;
+        }
+        err = tvt__fit_error(iso, fibre, n, target, exp(0.5 * (lo + hi)), a);
+        if (err < best) { best = err; *scale = (float)exp(0.5 * (lo + hi)); *aniso = (float)a; }
+    }
+}
+
+static void tvt__level_depths(const tvt_lod *l, int level, uint64_t seed, int n, float *iso, float *fibre)
+{
+    static const float elev[3] = {15.0f, 45.0f, 90.0f};
+    int e, i;
+    for (e = 0; e < 3; e++)
+        for (i = 0; i < n; i++) {
+            float o[3], d[3], len;
+            tvt__calibration_ray(seed, l->level[0].res, elev[e] * (float)(TVT__PI / 180.0), i, o, d, &len);
+            tvt__depth_parts(l, level, o, d, len, iso + e * n + i, fibre + e * n + i);
+        }
+}
+
+static tvt_result tvt__lod_resolve(const tvt_lod_options *in, int res, tvt_lod_options *o)
+{
+    tvt_lod_options d = tvt_lod_default_options();
+    int max_levels = 1;
+    *o = in ? *in : d;
+    while (max_levels < TVT_MAX_LEVELS && (res >> max_levels) >= 8) max_levels++;
+    if (o->levels == 0) {
+        o->levels = 1;
+        while (o->levels < max_levels && (res >> o->levels) >= 32) o->levels++;
+    }
+    if (o->extinction == 0) o->extinction = d.extinction;
+    if (o->calibration_rays == 0) o->calibration_rays = d.calibration_rays;
+    if (o->levels < 1 || o->levels > max_levels) return TVT_ERR_BAD_RESOLUTION;
+    if (!tvt__finite(o->extinction) || o->extinction <= 0 || o->calibration_rays < 16 ||
+        o->calibration_rays > (1 << 20))
+        return TVT_ERR_BAD_PARAMETER;
+    return TVT_OK;
+}
+
+TVTDEF tvt_result tvt_build_lod(const tvt_texel *t, const tvt_lod_options *options, tvt_lod *out)
+{
+    tvt_lod_options o;
+    tvt_allocator a;
+    tvt_result r;
+    float *depth = NULL;
+    int l, n;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!t || !t->brick_index) return TVT_ERR_INVALID_ARGUMENT;
+    r = tvt__lod_resolve(options, t->res, &o);
+    if (r != TVT_OK) return r;
+    a = tvt__resolve_allocator(o.allocator ? o.allocator : &t->allocator);
+    n = o.calibration_rays;
+    out->extinction = o.extinction;
+    r = tvt__texel_copy(t, &a, &out->level[0]);
+    if (r == TVT_OK) {
+        out->levels = 1;
+        out->density_scale[0] = 1.0f;
+        if (o.levels > 1) {
+            depth = (float *)tvt__alloc(&a, 12 * (size_t)n, sizeof(float)); /* level 0, then the level's two parts */
+            if (!depth) r = TVT_ERR_OUT_OF_MEMORY;
+            else tvt__level_depths(out, 0, o.seed, n, depth, depth + 3 * n);
+        }
+    }
+    for (l = 1; r == TVT_OK && l < o.levels; l++) {
+        r = tvt__downsample(&out->level[l - 1], &a, &out->level[l]);
+        if (r != TVT_OK) break;
+        out->levels = l + 1;
+        tvt__level_depths(out, l, o.seed, n, depth + 6 * n, depth + 9 * n);
+        tvt__fit_level(depth, depth + 6 * n, depth + 9 * n, n, &out->density_scale[l], &out->anisotropy[l]);
+        if (tvt__report(o.progress, o.progress_user, (float)l / (float)(o.levels - 1))) r = TVT_CANCELLED;
+    }
+    tvt__free(&a, depth);
+    if (r != TVT_OK) tvt_lod_free(out);
+    return r;
+}
+
+TVTDEF size_t tvt_lod_bytes(const tvt_lod *l)
+{
+    size_t sum = 0;
+    int i;
+    for (i = 0; i < l->levels; i++) sum += tvt_texel_bytes(&l->level[i]);
+    return sum;
+}
+
+TVTDEF void tvt_lod_free(tvt_lod *l)
+{
+    int i;
+    if (!l) return;
+    for (i = 0; i < TVT_MAX_LEVELS; i++) tvt_texel_free(&l->level[i]);
+    memset(l, 0, sizeof(*l));
+}
+
+/* ---------------------------------------------------------------------------------------------
+   TVT: key frames, interpolation, mingling
+   --------------------------------------------------------------------------------------------- */
+static tvt_result tvt__tvt_resolve(const tvt_tvt_options *in, tvt_tvt_options *o)
+{
+    tvt_tvt_options d = tvt_tvt_default_options();
+    *o = in ? *in : d;
+    if (o->frames == 0) o->frames = d.frames;
+    if (o->steps_per_frame == 0) o->steps_per_frame = d.steps_per_frame;
+    if (o->frames < 2 || o->frames > TVT_MAX_FRAMES || o->steps_per_frame < 1 || o->steps_per_frame > 64)
+        return TVT_ERR_BAD_PARAMETER;
+    return TVT_OK;
+}
+
+static tvt_result tvt__tvt_alloc(tvt_tvt *t, int frames, const tvt_allocator *a)
+{
+    int k;
+    memset(t, 0, sizeof(*t));
+    t->allocator = *a;
+    t->frames = (tvt_lod *)tvt__alloc(a, (size_t)frames, sizeof(tvt_lod));
+    if (!t->frames) return TVT_ERR_OUT_OF_MEMORY;
+    memset(t->frames, 0, (size_t)frames * sizeof(tvt_lod));
+    t->frame_count = frames;
+    for (k = 0; k < frames; k++) t->wd[k] = (float)k / (float)(frames - 1);
+    return TVT_OK;
+}
+
+/* progress of one stage of a long call, mapped into [done0, done1] of the caller's */
+typedef struct tvt__subprogress {
+    int (*progress)(void *user, float done);
+    void *user;
+    float done0, done1;
+} tvt__subprogress;
+
+static int tvt__sub_report(void *user, float done)
+{
+    tvt__subprogress *s = (tvt__subprogress *)user;
+    return tvt__report(s->progress, s->user, s->done0 + (s->done1 - s->done0) * done);
+}
+
+/* One key frame: the points' splat and its pyramid. */
+static tvt_result tvt__key_frame(const tvt_points *pts, const tvt_tvt_options *o, const tvt_allocator *a,
+                                 tvt__subprogress *sub, tvt_lod *out)
+{
+    tvt_splat_options sp = o->splat ? *o->splat : tvt_splat_default_options();
+    tvt_lod_options lo = o->lod ? *o->lod : tvt_lod_default_options();
+    tvt_texel frame;
+    tvt_result r;
+    sp.allocator = a;
+    lo.allocator = a;
+    lo.progress = o->progress ? tvt__sub_report : NULL;
+    lo.progress_user = sub;
+    r = tvt_splat(pts, &sp, &frame);
+    if (r != TVT_OK) return r;
+    r = tvt_build_lod(&frame, &lo, out);
+    tvt_texel_free(&frame);
+    return r;
+}
+
+TVTDEF tvt_result tvt_build_tvt(const tvt_texel *grass, const tvt_tvt_options *options, tvt_tvt *out)
+{
+    tvt_tvt_options o;
+    tvt_sample_options so;
+    tvt_allocator a;
+    tvt_points pts;
+    tvt_result r;
+    int k, s;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!grass) return TVT_ERR_INVALID_ARGUMENT;
+    r = tvt__tvt_resolve(options, &o);
+    if (r != TVT_OK) return r;
+    a = tvt__resolve_allocator(o.allocator);
+    so = o.sample ? *o.sample : tvt_sample_default_options();
+    so.allocator = &a;
+    r = tvt_sample(grass, &so, &pts);
+    if (r != TVT_OK) return r;
+    r = tvt__tvt_alloc(out, o.frames, &a);
+    for (k = 0; r == TVT_OK && k < o.frames; k++) {
+        tvt__subprogress sub;
+        sub.progress = o.progress; sub.user = o.progress_user;
+        sub.done0 = (float)k / (float)o.frames; sub.done1 = (float)(k + 1) / (float)o.frames;
+        for (s = 1; k > 0 && r == TVT_OK && s <= o.steps_per_frame; s++) {
+            float wd = out->wd[k - 1] + (out->wd[k] - out->wd[k - 1]) * (float)s / (float)o.steps_per_frame;
+            r = tvt_age(&pts, s == o.steps_per_frame ? out->wd[k] : wd, o.model);
+        }
+        if (r == TVT_OK) r = tvt__key_frame(&pts, &o, &a, &sub, &out->frames[k]);
+        if (r == TVT_OK && tvt__report(o.progress, o.progress_user, sub.done1)) r = TVT_CANCELLED;
+    }
+    tvt_points_free(&pts);
+    if (r != TVT_OK) tvt_tvt_free(out);
+    return r;
+}
+
+TVTDEF void tvt_tvt_frames_at(const tvt_tvt *t, float wd, int *f, float *w)
+{
+    float x;
+    if (!(wd > 0)) wd = 0;
+    if (wd > 1) wd = 1;
+    x = wd * (float)(t->frame_count - 1);
+    *f = (int)x;
+    if (*f >= t->frame_count - 1) *f = t->frame_count - 2;
+    *w = x - (float)*f;
+}
+
+/* acc += weight * (density, density * attributes) of v */
+static void tvt__acc_add_voxel(float *acc, const tvt_voxel *v, float weight)
+{
+    float w = weight * v->density;
+    int c;
+    acc[0] += w;
+    for (c = 0; c < 3; c++) {
+        acc[1 + c] += w * v->normal[c];
+        acc[4 + c] += w * v->tangent[c];
+        acc[7 + c] += w * v->color[c];
+    }
+    acc[10] += w * v->specular;
+}
+
+TVTDEF void tvt_tvt_voxel(const tvt_tvt *t, float wd, int level, const float p[3], tvt_voxel *out)
+{
+    tvt_voxel a, b;
+    float acc[TVT__ACC], w;
+    int f;
+    tvt_tvt_frames_at(t, wd, &f, &w);
+    tvt_lod_voxel(&t->frames[f], level, p, &a);
+    tvt_lod_voxel(&t->frames[f + 1], level, p, &b);
+    memset(acc, 0, sizeof(acc));
+    tvt__acc_add_voxel(acc, &a, 1.0f - w);
+    tvt__acc_add_voxel(acc, &b, w);
+    tvt__acc_resolve(acc, 1.0f, out);
+}
+
+TVTDEF size_t tvt_tvt_bytes(const tvt_tvt *t)
+{
+    size_t sum = 0;
+    int k;
+    for (k = 0; k < t->frame_count; k++) sum += tvt_lod_bytes(&t->frames[k]);
+    return sum;
+}
+
+TVTDEF void tvt_tvt_free(tvt_tvt *t)
+{
+    int k;
+    if (!t) return;
+    for (k = 0; t->frames && k < t->frame_count; k++) tvt_lod_free(&t->frames[k]);
+    if (t->frames) tvt__free(&t->allocator, t->frames);
+    memset(t, 0, sizeof(*t));
+}
+
+TVTDEF float tvt_ageing_apply(const tvt_ageing_fn *fn, float wd)
+{
+    float x = wd;
+    if (fn) x = (wd - fn->delay) * (fn->rate != 0 ? fn->rate : 1.0f);
+    return x > 0 ? (x < 1 ? x : 1.0f) : 0.0f;
+}
+
+/* Adds sample s at its own wd (between frames f and f + 1 at weight w) into the accumulator. */
+static int tvt__mingle_add(tvt__acc *g, const tvt_tvt *s, int f, float w)
+{
+    const tvt_texel *t0 = &s->frames[f].level[0], *t1 = &s->frames[f + 1].level[0];
+    size_t nb = (size_t)t0->bricks_per_side, b;
+    for (b = 0; b < nb * nb * nb; b++) {
+        long bx = (long)(b % nb) * 4, by = (long)(b / nb % nb) * 4, bz = (long)(b / (nb * nb)) * 4;
+        int i;
+        if (t0->brick_index[b] == TVT_EMPTY_BRICK && t1->brick_index[b] == TVT_EMPTY_BRICK) continue;
+        for (i = 0; i < TVT__BV; i++) {
+            long x = bx + (i & 3), y = by + ((i >> 2) & 3), z = bz + (i >> 4);
+            tvt_voxel a, c;
+            float *acc;
+            tvt_texel_voxel(t0, x, y, z, &a);
+            tvt_texel_voxel(t1, x, y, z, &c);
+            if (!(a.density > 0) && !(c.density > 0)) continue;
+            acc = tvt__acc_voxel(g, (int)x, (int)y, (int)z);
+            if (!acc) return 0;
+            tvt__acc_add_voxel(acc, &a, 1.0f - w);
+            tvt__acc_add_voxel(acc, &c, w);
+        }
+    }
+    return 1;
+}
+
+TVTDEF tvt_result tvt_mingle(const tvt_tvt *samples, const tvt_ageing_fn *fns, size_t count, float wd, int bits,
+                             const tvt_allocator *allocator, tvt_texel *out)
+{
+    tvt_allocator a = tvt__resolve_allocator(allocator);
+    tvt__acc g;
+    tvt_result r;
+    size_t i;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!samples || count == 0) return count == 0 ? TVT_ERR_EMPTY : TVT_ERR_INVALID_ARGUMENT;
+    if (!(wd >= 0.0f && wd <= 1.0f)) return TVT_ERR_BAD_WD;
+    if (bits == 0) bits = 8;
+    if (bits != 8 && bits != 16) return TVT_ERR_BAD_RESOLUTION;
+    for (i = 0; i < count; i++) {
+        if (!samples[i].frames || samples[i].frame_count < 2) return TVT_ERR_INVALID_ARGUMENT;
+        if (samples[i].frames[0].level[0].res != samples[0].frames[0].level[0].res) return TVT_ERR_BAD_RESOLUTION;
+        if (fns && (!tvt__finite(fns[i].delay) || !tvt__finite(fns[i].rate) || fns[i].rate < 0))
+            return TVT_ERR_BAD_PARAMETER;
+    }
+    r = tvt__acc_init(&g, samples[0].frames[0].level[0].res, &a);
+    for (i = 0; r == TVT_OK && i < count; i++) {
+        int f;
+        float w;
+        tvt_tvt_frames_at(samples + i, tvt_ageing_apply(fns ? fns + i : NULL, wd), &f, &w);
+        if (!tvt__mingle_add(&g, samples + i, f, w)) r = TVT_ERR_OUT_OF_MEMORY;
+    }
+    if (r == TVT_OK) r = tvt__acc_to_texel(&g, 1.0f, bits, 0, out);
+    tvt__acc_free(&g);
+    return r;
+}
+
+TVTDEF tvt_result tvt_mingle_tvt(const tvt_tvt *samples, const tvt_ageing_fn *fns, size_t count,
+                                 const tvt_tvt_options *options, tvt_tvt *out)
+{
+    tvt_tvt_options o;
+    tvt_allocator a;
+    tvt_result r;
+    int k;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    r = tvt__tvt_resolve(options, &o);
+    if (r != TVT_OK) return r;
+    a = tvt__resolve_allocator(o.allocator);
+    r = tvt__tvt_alloc(out, o.frames, &a);
+    for (k = 0; r == TVT_OK && k < o.frames; k++) {
+        tvt_lod_options lo = o.lod ? *o.lod : tvt_lod_default_options();
+        tvt_texel m;
+        int bits = o.splat ? o.splat->bits : 8;
+        r = tvt_mingle(samples, fns, count, out->wd[k], bits, &a, &m);
+        if (r != TVT_OK) break;
+        lo.allocator = &a;
+        r = tvt_build_lod(&m, &lo, &out->frames[k]);
+        tvt_texel_free(&m);
+        if (r == TVT_OK && tvt__report(o.progress, o.progress_user, (float)(k + 1) / (float)o.frames)) r = TVT_CANCELLED;
+    }
+    if (r != TVT_OK) tvt_tvt_free(out);
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
    Defaults and names
    --------------------------------------------------------------------------------------------- */
 TVTDEF tvt_grass_desc tvt_grass_default_desc(void)
@@ -1627,6 +2333,24 @@ TVTDEF tvt_model_options tvt_model_default_options(void)
     o.droop_max_deg = 80.0f; o.droop_exponent = 2.0f; o.droop_length = 0.6f;
     o.merge_threshold = 0.15f;
     o.colour_jitter = 0.05f;
+    return o;
+}
+
+TVTDEF tvt_tvt_options tvt_tvt_default_options(void)
+{
+    tvt_tvt_options o;
+    memset(&o, 0, sizeof(o));
+    o.frames = 8;
+    o.steps_per_frame = 2;
+    return o;
+}
+
+TVTDEF tvt_lod_options tvt_lod_default_options(void)
+{
+    tvt_lod_options o;
+    memset(&o, 0, sizeof(o));
+    o.extinction = 1.0f;
+    o.calibration_rays = 1024;
     return o;
 }
 

@@ -1,2 +1,2 @@
 # texel.h (issue 19): tests
-C_TESTS += $(B)/test_texel
+C_TESTS += $(B)/test_texel $(B)/test_texel_tvt
