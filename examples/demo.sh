@@ -33,6 +33,19 @@ fi
 for scene in desert vegetation mountain5 mountain6; do
   "$B/terrain" --preset "$scene" -o "$OUT/terrain_$scene.png" && rendered=$((rendered + 1))
 done
+# deform.h: paper 004's figures, the three methods side by side (original | Laplacian | fitting | LRI):
+# the cylinder bent 90 and 180 degrees (Fig 4-4), the box twisted through two turns (the second Fig 4-4),
+# the bunny's ear dragged (Fig 2-3). 180 degrees and more take several steps (see deform --help).
+"$B/deform" --cylinder --case bend --angle 90 -o "$OUT/deform_fig4-4_cylinder_bend90.png"
+"$B/deform" --cylinder --case bend --angle 180 --steps 4 -o "$OUT/deform_fig4-4_cylinder_bend180.png"
+"$B/deform" --box --case twist --angle 720 --steps 16 -o "$OUT/deform_fig4-4b_box_twist720.png"
+rendered=$((rendered + 3))
+if [ -f "$bunny" ]; then
+  "$B/deform" "$bunny" --up y --region ball --case drag --shift 0.15 -o "$OUT/deform_fig2-3_bunny_ear.png"
+  rendered=$((rendered + 1))
+else
+  echo "demo: $bunny not found (apt-get install glmark2-data): deform bunny ear skipped"
+fi
 for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done

@@ -5,3 +5,4 @@ BENCHES += $(if $(and $(HAVE_CXX),$(HAVE_CGAL),$(HAVE_EIGEN)),$(B)/bench_deform)
 # CGAL's side with assertions off (-DNDEBUG); Eigen's headers for its solver
 BENCH_FLAGS_deform = -DNDEBUG -DCGAL_NDEBUG -isystem /usr/include/eigen3
 BENCH_LIBS_deform =
+EXAMPLES += $(B)/deform

@@ -1,0 +1,538 @@
+/* deform - drag a handle inside a region of interest with deform.h's three methods, side by side.
+
+   usage: deform MESH|--cylinder|--box [options] [-o OUT.png]
+     MESH           OBJ / OFF / PLY / STL (examples/meshio.h); --cylinder and --box generate a
+                    tube of radius 1 and height 8 (round, or square with side 2), closed by caps
+     --case C       bend (default), twist or drag
+     --angle DEG    bend or twist angle in degrees (default 90)
+     --shift F      drag: the handle's shift, as a share of the height (default 0.25)
+     --up x|y|z     the "height" axis (default: the bounding box's longest)
+     --region R     top (default): the ROI is the top --roi share of the height, the handle the
+                    top --handle share; ball: geodesic balls of those radii (shares of the
+                    height) around the highest vertex (a bunny's ear tip)
+     --roi F        default 0.5 (top), 0.3 (ball)
+     --handle F     default 0.08 (top), 0.06 (ball)
+     --method M     laplacian, fitting, lri or all (default: all, side by side)
+     --weights W    uniform (default) or cotan
+     --frames F     LRI frames: first (default) or elevation (the thesis's ch. 4)
+     --ortho O      LRI orthonormalization: polar (default), none, gs
+     --soft W       soft handle constraints of weight W (default: hard)
+     --steps K      reach the pose in K steps, each a new setup on the previous step's result
+                    with the rotation since the previous step (default 1). One step cannot turn
+                    the handle by 180 degrees or more: a rotation matrix has no turn count, and
+                    LRI's linear frames solve averages I and R (singular at 180 degrees)
+     --obj PREFIX   also write PREFIX_<method>.obj
+     --size S       pixels of each view (default 360)
+     -o OUT.png     default deform.png: the original with the ROI (red) and handle (yellow),
+                    then each method's result, with captions
+   Prints one line a method: "RESULT deform_example method=... init_ms=... frame_ms=...
+   edge_distortion=..." and the setup's progress on stderr. Exit status 0, 1 on failure, 2 on a
+   bad argument. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime under -std=c99 */
+#define DFM_IMPLEMENTATION
+#include "deform.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
+#define SR_IMPLEMENTATION
+#include "render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define PI 3.14159265358979323846
+
+typedef struct args {
+    const char *mesh, *out, *obj;
+    int gen;           /* 0 file, 1 cylinder, 2 box */
+    int kase;          /* 0 bend, 1 twist, 2 drag */
+    double angle, shift, roi, handle, soft;
+    int up, region, method, weights, frames, ortho, size, steps;
+} args;
+
+typedef struct scene {
+    size_t nv, nt;
+    double *pos;
+    uint32_t *idx;
+    unsigned char *roi, *handle;
+    double lo[3], hi[3];
+} scene;
+
+/* ---- generated meshes: a tube of rings x segs vertices and two fan caps ----------------------- */
+
+static void ring_point(int square, double a, double *x, double *y)
+{
+    if (!square) {
+        *x = cos(a);
+        *y = sin(a);
+    } else { /* the square of side 2, same angle */
+        double c = cos(a), s = sin(a), m = fabs(c) > fabs(s) ? fabs(c) : fabs(s);
+        *x = c / m;
+        *y = s / m;
+    }
+}
+
+static int make_tube(scene *S, int square)
+{
+    const size_t rings = 81, segs = 32;
+    size_t r, s, t = 0, c0 = rings * segs, c1 = c0 + 1;
+    S->nv = rings * segs + 2;
+    S->nt = 2 * (rings - 1) * segs + 2 * segs;
+    S->pos = (double *)malloc(3 * S->nv * sizeof(double));
+    S->idx = (uint32_t *)malloc(3 * S->nt * sizeof(uint32_t));
+    if (!S->pos || !S->idx) return 0;
+    for (r = 0; r < rings; r++)
+        for (s = 0; s < segs; s++) {
+            double *p = S->pos + 3 * (r * segs + s);
+            ring_point(square, 2.0 * PI * (double)s / (double)segs, &p[0], &p[1]);
+            p[2] = 8.0 * (double)r / (double)(rings - 1);
+        }
+    S->pos[3 * c0] = S->pos[3 * c0 + 1] = S->pos[3 * c0 + 2] = 0.0;
+    S->pos[3 * c1] = S->pos[3 * c1 + 1] = 0.0;
+    S->pos[3 * c1 + 2] = 8.0;
+    for (r = 0; r + 1 < rings; r++)
+        for (s = 0; s < segs; s++) {
+            uint32_t a = (uint32_t)(r * segs + s), b = (uint32_t)(r * segs + (s + 1) % segs);
+            uint32_t c = a + (uint32_t)segs, d = b + (uint32_t)segs, *f = S->idx + 6 * t++;
+            f[0] = a; f[1] = b; f[2] = d; f[3] = a; f[4] = d; f[5] = c;
+        }
+    for (s = 0; s < segs; s++) {
+        uint32_t *f = S->idx + 3 * (2 * (rings - 1) * segs + 2 * s);
+        f[0] = (uint32_t)c0; f[1] = (uint32_t)((s + 1) % segs); f[2] = (uint32_t)s;
+        f[3] = (uint32_t)c1; f[4] = (uint32_t)((rings - 1) * segs + s);
+        f[5] = (uint32_t)((rings - 1) * segs + (s + 1) % segs);
+    }
+    return 1;
+}
+
+static int load_mesh(scene *S, const char *path)
+{
+    mio_mesh m;
+    mio_error err;
+    size_t i;
+    if (mio_read_file(path, NULL, &m, &err) != MIO_OK) {
+        fprintf(stderr, "deform: %s: %s\n", path, err.message);
+        return 0;
+    }
+    S->nv = m.vertex_count;
+    S->nt = m.triangle_count;
+    S->pos = (double *)malloc(3 * S->nv * sizeof(double) + 1);
+    S->idx = (uint32_t *)malloc(3 * S->nt * sizeof(uint32_t) + 1);
+    if (S->pos && S->idx) {
+        for (i = 0; i < 3 * S->nv; i++) S->pos[i] = m.positions[i];
+        memcpy(S->idx, m.indices, 3 * S->nt * sizeof(uint32_t));
+    }
+    mio_free_mesh(&m);
+    return S->pos && S->idx;
+}
+
+/* ---- selection and pose --------------------------------------------------------------------- */
+
+static int select_region(scene *S, const args *A, int up)
+{
+    double h = S->hi[up] - S->lo[up];
+    size_t v, top = 0;
+    S->roi = (unsigned char *)calloc(S->nv, 1);
+    S->handle = (unsigned char *)calloc(S->nv, 1);
+    if (!S->roi || !S->handle) return 0;
+    if (A->region == 0) {
+        for (v = 0; v < S->nv; v++) {
+            double t = (S->pos[3 * v + up] - S->lo[up]) / h;
+            S->roi[v] = t >= 1.0 - A->roi;
+            S->handle[v] = t >= 1.0 - A->handle;
+        }
+        return 1;
+    }
+    for (v = 1; v < S->nv; v++)
+        if (S->pos[3 * v + up] > S->pos[3 * top + up]) top = v;
+    {
+        unsigned char *seed = (unsigned char *)calloc(S->nv, 1);
+        int ok = seed != NULL;
+        if (ok) seed[top] = 1;
+        ok = ok && dfm_roi_geodesic(S->pos, S->nv, S->idx, S->nt, seed, A->roi * h, S->roi, NULL) == DFM_OK;
+        ok = ok && dfm_roi_geodesic(S->pos, S->nv, S->idx, S->nt, seed, A->handle * h, S->handle, NULL) == DFM_OK;
+        free(seed);
+        return ok;
+    }
+}
+
+/* The handle's targets and rotations for the case: bend about the ROI's base, twist about the
+   box's axis line, drag along the second-longest axis. */
+static void make_pose(const scene *S, const args *A, int up, double frac, double *tg, double *rot)
+{
+    double axis[3] = {0, 0, 0}, toward[3] = {0, 0, 0}, base[3], h = S->hi[up] - S->lo[up], ext = -1.0;
+    int k, side = (up + 1) % 3;
+    for (k = 0; k < 3; k++)
+        if (k != up && S->hi[k] - S->lo[k] > ext) {
+            ext = S->hi[k] - S->lo[k];
+            side = k;
+        }
+    axis[up] = 1.0;
+    toward[side] = 1.0;
+    for (k = 0; k < 3; k++) base[k] = 0.5 * (S->lo[k] + S->hi[k]);
+    dfm_pose_identity(S->pos, S->nv, tg, rot);
+    if (A->kase == 0) {
+        base[up] = S->lo[up] + (1.0 - A->roi) * h;
+        dfm_pose_bend(S->pos, S->nv, S->handle, base, axis, toward, (A->roi - A->handle) * h,
+                      frac * A->angle * PI / 180.0, tg, rot);
+    } else if (A->kase == 1) {
+        dfm_pose_twist(S->pos, S->nv, S->handle, base, axis, frac * A->angle * PI / 180.0, tg, rot);
+    } else {
+        double t[3] = {0, 0, 0};
+        t[side] = frac * A->shift * h;
+        dfm_pose_rigid(S->pos, S->nv, S->handle, NULL, NULL, t, tg, rot);
+    }
+}
+
+/* ---- rendering ------------------------------------------------------------------------------ */
+
+static double seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+typedef struct progress_state {
+    const char *name;
+    int shown; /* last tenth printed */
+} progress_state;
+
+static int progress(void *user, float done)
+{
+    progress_state *ps = (progress_state *)user;
+    int tenth = (int)(10.0f * done);
+    if (tenth > ps->shown) {
+        ps->shown = tenth;
+        fprintf(stderr, "\rdeform: %s setup %3d%%", ps->name, 10 * tenth);
+    }
+    return 0;
+}
+
+/* renders positions (double) into img with one camera for every view */
+static int render_view(const scene *S, const double *p, const sr_camera *cam, int size, const float *colors,
+                       sr_image8 *img)
+{
+    sr_framebuffer fb;
+    sr_draw_desc d;
+    float bg[4] = {0.93f, 0.94f, 0.96f, 1.0f}, *fp = (float *)malloc(3 * S->nv * sizeof(float) + 1);
+    float *nrm = (float *)malloc(3 * S->nv * sizeof(float) + 1);
+    size_t i;
+    int ok = 0;
+    img->pixels = (uint8_t *)malloc((size_t)size * (size_t)size * 3);
+    if (!fp || !nrm || !img->pixels || sr_framebuffer_create(&fb, size, size, NULL) != SR_OK) goto done;
+    for (i = 0; i < 3 * S->nv; i++) fp[i] = (float)p[i];
+    sr_compute_vertex_normals(fp, S->nv, S->idx, S->nt, nrm);
+    sr_framebuffer_clear(&fb, bg, 1.0f);
+    sr_draw_desc_default(&d);
+    d.positions = fp;
+    d.vertex_count = S->nv;
+    d.indices = S->idx;
+    d.triangle_count = S->nt;
+    d.normals = nrm;
+    d.colors = colors;
+    d.cull = SR_CULL_NONE;
+    ok = sr_draw_mesh(&fb, cam, &d) == SR_OK;
+    img->width = img->height = size;
+    img->channels = 3;
+    sr_framebuffer_to_rgb8(&fb, img->pixels, 3);
+    sr_framebuffer_free(&fb);
+done:
+    free(fp);
+    free(nrm);
+    return ok;
+}
+
+/* a camera looking along the third axis at the box of every result */
+static void frame_camera(const scene *S, double *const *res, int nres, int up, sr_camera *cam)
+{
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f}, c[3], eye[3], upv[3] = {0, 0, 0}, r = 0;
+    int k, j, view = (up + 2) % 3;
+    size_t v;
+    for (j = 0; j < nres; j++)
+        for (v = 0; v < S->nv; v++)
+            for (k = 0; k < 3; k++) {
+                lo[k] = fminf(lo[k], (float)res[j][3 * v + k]);
+                hi[k] = fmaxf(hi[k], (float)res[j][3 * v + k]);
+            }
+    for (k = 0; k < 3; k++) {
+        c[k] = 0.5f * (lo[k] + hi[k]);
+        r = fmaxf(r, 0.5f * (hi[k] - lo[k]));
+    }
+    for (k = 0; k < 3; k++) eye[k] = c[k];
+    eye[view] += 4.0f * r;
+    eye[up] += 1.2f * r;
+    eye[(up + 1) % 3] += 1.5f * r;
+    upv[up] = 1.0f;
+    sr_camera_look_at(cam, eye, c, upv, 30.0f, 1.0f, 0.5f * r, 12.0f * r);
+}
+
+/* ---- arguments ------------------------------------------------------------------------------ */
+
+static int usage(FILE *to, int status)
+{
+    fprintf(to, "usage: deform MESH|--cylinder|--box [--case bend|twist|drag] [--angle DEG] [--shift F]\n"
+                "       [--up x|y|z] [--region top|ball] [--roi F] [--handle F] [--method laplacian|fitting|lri|all]\n"
+                "       [--weights uniform|cotan] [--frames first|elevation] [--ortho polar|none|gs] [--soft W]\n"
+                "       [--steps K] [--obj PREFIX] [--size S] [-o OUT.png]\n");
+    return status;
+}
+
+static int pick(const char *v, const char *const *names, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (v && strcmp(v, names[i]) == 0) return i;
+    return -1;
+}
+
+static int parse(int argc, char **argv, args *A)
+{
+    static const char *cases[] = {"bend", "twist", "drag"}, *ups[] = {"x", "y", "z"}, *regions[] = {"top", "ball"};
+    static const char *methods[] = {"laplacian", "fitting", "lri", "all"}, *weights[] = {"uniform", "cotan"};
+    static const char *frames[] = {"first", "elevation"}, *orthos[] = {"none", "polar", "gs"};
+    int i;
+    memset(A, 0, sizeof *A);
+    A->out = "deform.png";
+    A->angle = 90.0;
+    A->shift = 0.25;
+    A->up = -1;
+    A->roi = A->handle = -1.0;
+    A->method = 3;
+    A->ortho = 1;
+    A->size = 360;
+    A->steps = 1;
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int *slot = NULL, k = -2;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout, 0) - 1;
+        if (!strcmp(a, "--cylinder")) { A->gen = 1; continue; }
+        if (!strcmp(a, "--box")) { A->gen = 2; continue; }
+        if (a[0] != '-') { A->mesh = a; continue; }
+        if (!v) return 0;
+        i++;
+        if (!strcmp(a, "-o")) A->out = v;
+        else if (!strcmp(a, "--obj")) A->obj = v;
+        else if (!strcmp(a, "--angle")) A->angle = atof(v);
+        else if (!strcmp(a, "--shift")) A->shift = atof(v);
+        else if (!strcmp(a, "--roi")) A->roi = atof(v);
+        else if (!strcmp(a, "--handle")) A->handle = atof(v);
+        else if (!strcmp(a, "--soft")) A->soft = atof(v);
+        else if (!strcmp(a, "--size")) A->size = atoi(v);
+        else if (!strcmp(a, "--steps")) A->steps = atoi(v);
+        else if (!strcmp(a, "--case")) { slot = &A->kase; k = pick(v, cases, 3); }
+        else if (!strcmp(a, "--up")) { slot = &A->up; k = pick(v, ups, 3); }
+        else if (!strcmp(a, "--region")) { slot = &A->region; k = pick(v, regions, 2); }
+        else if (!strcmp(a, "--method")) { slot = &A->method; k = pick(v, methods, 4); }
+        else if (!strcmp(a, "--weights")) { slot = &A->weights; k = pick(v, weights, 2); }
+        else if (!strcmp(a, "--frames")) { slot = &A->frames; k = pick(v, frames, 2); }
+        else if (!strcmp(a, "--ortho")) { slot = &A->ortho; k = pick(v, orthos, 3); }
+        else return 0;
+        if (slot) {
+            if (k < 0) return 0;
+            *slot = k;
+        }
+    }
+    if (A->roi < 0) A->roi = A->region ? 0.3 : 0.5;
+    if (A->handle < 0) A->handle = A->region ? 0.06 : 0.08;
+    if ((A->gen == 0) == (A->mesh == NULL) || !(A->roi > A->handle) || !(A->handle > 0.0) || A->roi > 1.0 ||
+        A->size < 32 || A->size > 4096 || !(A->soft >= 0.0) || A->steps < 1 || A->steps > 1000)
+        return 0;
+    return 1;
+}
+
+/* ---- main ------------------------------------------------------------------------------------- */
+
+static double edge_distortion(const scene *S, const double *out)
+{
+    size_t t, k, n = 0;
+    double s = 0.0;
+    for (t = 0; t < S->nt; t++)
+        for (k = 0; k < 3; k++) {
+            uint32_t a = S->idx[3 * t + k], b = S->idx[3 * t + (k + 1) % 3];
+            double l0 = 0, l1 = 0, r;
+            int c;
+            if (!S->roi[a] && !S->roi[b]) continue;
+            for (c = 0; c < 3; c++) {
+                l0 += (S->pos[3 * a + c] - S->pos[3 * b + c]) * (S->pos[3 * a + c] - S->pos[3 * b + c]);
+                l1 += (out[3 * a + c] - out[3 * b + c]) * (out[3 * a + c] - out[3 * b + c]);
+            }
+            r = sqrt(l1 / l0) - 1.0;
+            s += r * r;
+            n++;
+        }
+    return n ? sqrt(s / (double)n) : 0.0;
+}
+
+static int write_obj(const char *prefix, const char *method, const scene *S, const double *p)
+{
+    char path[1024];
+    float *fp = (float *)malloc(3 * S->nv * sizeof(float) + 1);
+    size_t i;
+    int ok;
+    if (!fp) return 0;
+    for (i = 0; i < 3 * S->nv; i++) fp[i] = (float)p[i];
+    snprintf(path, sizeof path, "%s_%s.obj", prefix, method);
+    ok = mio_write_obj(path, fp, S->nv, S->idx, S->nt, NULL) == MIO_OK;
+    free(fp);
+    if (!ok) fprintf(stderr, "deform: cannot write %s\n", path);
+    return ok;
+}
+
+/* rot = the rotation from pose a to pose b at the vertices the solve reads (b a^T) */
+static void step_rotation(size_t nv, const double *ra, const double *rb, double *rot)
+{
+    size_t v;
+    int i, j, k;
+    for (v = 0; v < nv; v++)
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                double sum = 0.0;
+                for (k = 0; k < 3; k++) sum += rb[9 * v + 3 * i + k] * ra[9 * v + 3 * j + k];
+                rot[9 * v + 3 * i + j] = sum;
+            }
+}
+
+/* runs one method in A->steps steps; res receives the result (malloc'd) */
+static int run_method(const scene *S, const args *A, int up, int method, double **res)
+{
+    static const char *names[] = {"laplacian", "fitting", "lri"};
+    dfm_deform_options o = dfm_deform_default_options();
+    dfm_result r = DFM_OK;
+    progress_state ps;
+    double t_init = 0.0, t_frame = 0.0, *cur = (double *)malloc(3 * S->nv * sizeof(double));
+    double *tg = (double *)malloc(3 * S->nv * sizeof(double)), *rot = (double *)malloc(9 * S->nv * sizeof(double));
+    double *prev = (double *)malloc(9 * S->nv * sizeof(double)), *step = (double *)malloc(9 * S->nv * sizeof(double));
+    int k, ok = 0;
+    o.method = method;
+    o.weights = A->weights;
+    o.frames = A->frames;
+    o.orthonormalize = A->ortho;
+    if (A->soft > 0.0) {
+        o.handle_constraint = DFM_HANDLE_SOFT;
+        o.handle_weight = A->soft;
+    }
+    ps.name = names[method];
+    o.progress = progress;
+    o.progress_user = &ps;
+    *res = (double *)malloc(3 * S->nv * sizeof(double));
+    if (!*res || !cur || !tg || !rot || !prev || !step) goto done;
+    memcpy(cur, S->pos, 3 * S->nv * sizeof(double));
+    dfm_pose_identity(S->pos, S->nv, tg, prev);
+    for (k = 1; k <= A->steps && r == DFM_OK; k++) {
+        dfm_deform *d = NULL;
+        double t0 = seconds(), t1, t2;
+        ps.shown = -1;
+        make_pose(S, A, up, (double)k / (double)A->steps, tg, rot);
+        step_rotation(S->nv, prev, rot, step);
+        memcpy(prev, rot, 9 * S->nv * sizeof(double));
+        r = dfm_deform_setup(cur, S->nv, S->idx, S->nt, S->roi, S->handle, &o, &d);
+        t1 = seconds();
+        if (r == DFM_OK) r = dfm_deform_solve(d, tg, step, *res);
+        t2 = seconds();
+        t_init += t1 - t0;
+        t_frame += t2 - t1;
+        dfm_deform_free(d);
+        memcpy(cur, *res, 3 * S->nv * sizeof(double));
+    }
+    fprintf(stderr, "\n");
+    if (r != DFM_OK) {
+        fprintf(stderr, "deform: %s: %s\n", names[method], dfm_result_string(r));
+        goto done;
+    }
+    printf("RESULT deform_example method=%s n=%zu steps=%d init_ms=%.1f frame_ms=%.2f edge_distortion=%.4f\n",
+           names[method], S->nv, A->steps, 1e3 * t_init / A->steps, 1e3 * t_frame / A->steps,
+           edge_distortion(S, *res));
+    ok = !A->obj || write_obj(A->obj, names[method], S, *res);
+done:
+    free(cur);
+    free(tg);
+    free(rot);
+    free(prev);
+    free(step);
+    return ok;
+}
+
+static int render_all(const scene *S, const args *A, int up, double **res, const int *methods, int nm)
+{
+    static const char *names[] = {"LAPLACIAN", "FITTING", "LRI"};
+    sr_image8 img[4], sheet;
+    const char *caps[4];
+    char cap0[96];
+    double *all[4];
+    float *col = (float *)malloc(3 * S->nv * sizeof(float) + 1);
+    sr_camera cam;
+    size_t v;
+    int i, ok = col != NULL;
+    memset(img, 0, sizeof img);
+    memset(&sheet, 0, sizeof sheet);
+    all[0] = S->pos;
+    for (i = 0; i < nm; i++) all[i + 1] = res[i];
+    frame_camera(S, all, nm + 1, up, &cam);
+    for (v = 0; ok && v < S->nv; v++) { /* grey, the ROI red, the handle yellow */
+        col[3 * v] = S->handle[v] ? 0.95f : S->roi[v] ? 0.85f : 0.72f;
+        col[3 * v + 1] = S->handle[v] ? 0.85f : S->roi[v] ? 0.35f : 0.72f;
+        col[3 * v + 2] = S->handle[v] ? 0.2f : S->roi[v] ? 0.3f : 0.72f;
+    }
+    for (i = 0; ok && i <= nm; i++) ok = render_view(S, all[i], &cam, A->size, col, &img[i]);
+    snprintf(cap0, sizeof cap0, "ORIGINAL %zu VERTICES", S->nv);
+    caps[0] = cap0;
+    for (i = 0; i < nm; i++) caps[i + 1] = names[methods[i]];
+    if (ok) ok = sr_contact_sheet(img, caps, nm + 1, nm + 1, NULL, &sheet) == SR_OK;
+    if (ok) ok = sr_write_png(A->out, sheet.pixels, sheet.width, sheet.height, 3, 0) == SR_OK;
+    if (!ok) fprintf(stderr, "deform: cannot render or write %s\n", A->out);
+    for (i = 0; i < 4; i++) free(img[i].pixels);
+    sr_free(NULL, sheet.pixels);
+    free(col);
+    return ok;
+}
+
+int main(int argc, char **argv)
+{
+    args A;
+    scene S;
+    double *res[3] = {NULL, NULL, NULL};
+    int methods[3], nm = 0, i, up, status = 1, p = parse(argc, argv, &A);
+    size_t v;
+    if (p < 0) return 0;
+    if (!p) return usage(stderr, 2);
+    memset(&S, 0, sizeof S);
+    if (!(A.gen ? make_tube(&S, A.gen == 2) : load_mesh(&S, A.mesh))) goto done;
+    for (i = 0; i < 3; i++) {
+        S.lo[i] = HUGE_VAL;
+        S.hi[i] = -HUGE_VAL;
+    }
+    for (v = 0; v < S.nv; v++)
+        for (i = 0; i < 3; i++) {
+            S.lo[i] = fmin(S.lo[i], S.pos[3 * v + i]);
+            S.hi[i] = fmax(S.hi[i], S.pos[3 * v + i]);
+        }
+    up = A.up;
+    if (up < 0) {
+        up = 0;
+        for (i = 1; i < 3; i++)
+            if (S.hi[i] - S.lo[i] > S.hi[up] - S.lo[up]) up = i;
+    }
+    if (!select_region(&S, &A, up)) {
+        fprintf(stderr, "deform: out of memory or bad selection\n");
+        goto done;
+    }
+    if (A.method == 3)
+        for (i = 0; i < 3; i++) methods[nm++] = i;
+    else
+        methods[nm++] = A.method;
+    for (i = 0; i < nm; i++)
+        if (!run_method(&S, &A, up, methods[i], &res[i])) goto done;
+    if (!render_all(&S, &A, up, res, methods, nm)) goto done;
+    fprintf(stderr, "deform: wrote %s\n", A.out);
+    status = 0;
+done:
+    for (i = 0; i < 3; i++) free(res[i]);
+    free(S.pos);
+    free(S.idx);
+    free(S.roi);
+    free(S.handle);
+    return status;
+}
