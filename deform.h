@@ -3702,7 +3702,7 @@ static int dfm__span_call(void *user, float done)
 }
 
 /* Normal matrix, analysis (nested dissection tried with the unknowns' positions) and factor. */
-static dfm_result dfm__lsq_factor(dfm__lsq *s, const double *pos, const dfm_allocator *al, dfm__span *sp)
+static dfm_result dfm__lsq_factor(dfm__lsq *s, const double *pos, int refine, const dfm_allocator *al, dfm__span *sp)
 {
     dfm_result err = dfm__lsq_normal(s, al);
     dfm_chol_options co = dfm_chol_default_options();
@@ -3726,6 +3726,7 @@ static dfm_result dfm__lsq_factor(dfm__lsq *s, const double *pos, const dfm_allo
     sp->base += sp->span;
     if (err == DFM_OK) err = dfm_chol_factor(s->chol, &s->normal);
     if (s->chol) s->chol->progress = NULL; /* sp lives only during the setup */
+    if (!refine) dfm_csc_free(&s->normal); /* kept only for iterative refinement */
     sp->base += sp->span;
 done:
     dfm__free(al, coords);
@@ -3845,6 +3846,8 @@ struct dfm_deform {
     double *edge_c;        /* LRI: 6 per edge, c_ij = F_i^T (x_j - x_i) and c_ji */
     double *frame;         /* LRI: nv x 9, the original frames (row-major, columns b1 b2 N) */
     double *X, *G, *rowb;  /* per-frame work: displacements, frame changes, position rows' b */
+    int32_t *active;       /* the vertices in some row (unknowns and the known ones read) */
+    size_t nactive;
 };
 
 DFMDEF dfm_deform_options dfm_deform_default_options(void)
@@ -3874,6 +3877,7 @@ DFMDEF void dfm_deform_free(dfm_deform *d)
     dfm__free(&d->al, d->X);
     dfm__free(&d->al, d->G);
     dfm__free(&d->al, d->rowb);
+    dfm__free(&d->al, d->active);
     dfm__free(&user, d);
 }
 
@@ -4325,6 +4329,31 @@ static void dfm__gram_schmidt(double *F)
    Section: deformation - setup and solve
    --------------------------------------------------------------------------------------------- */
 
+/* Step 8: the vertices the rows touch, so that a frame costs O(ROI), not O(mesh). */
+static dfm_result dfm__active_list(dfm_deform *d)
+{
+    dfm_result err = DFM_OK;
+    const dfm__lsq *sys[2];
+    size_t k, t, v;
+    unsigned char *mark = (unsigned char *)dfm__alloc(&d->al, d->nv, 1, &err);
+    d->active = (int32_t *)dfm__alloc(&d->al, d->nv, sizeof(int32_t), &err);
+    if (err != DFM_OK) {
+        dfm__free(&d->al, mark);
+        return err;
+    }
+    memset(mark, 0, d->nv);
+    sys[0] = &d->sys;
+    sys[1] = &d->fsys;
+    for (k = 0; k < 2; k++)
+        if (sys[k]->row_start)
+            for (t = 0; t < sys[k]->row_start[sys[k]->nrows]; t++) mark[sys[k]->term_v[t]] = 1;
+    d->nactive = 0;
+    for (v = 0; v < d->nv; v++)
+        if (mark[v]) d->active[d->nactive++] = (int32_t)v;
+    dfm__free(&d->al, mark);
+    return DFM_OK;
+}
+
 static int dfm__report(const dfm_deform_options *o, float done)
 {
     return o->progress && o->progress(o->progress_user, done);
@@ -4387,9 +4416,10 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
     sp.base = 0.1f;
     sp.last = 0.1f;
     sp.span = o.method == DFM_METHOD_LRI ? 0.45f : 0.9f;
-    if (err == DFM_OK) err = dfm__lsq_factor(&d->sys, d->pos, &d->al, &sp); /* 7: factor once */
+    if (err == DFM_OK) err = dfm__lsq_factor(&d->sys, d->pos, o.refine_steps, &d->al, &sp); /* 7: factor once */
     sp.span = 0.45f;
-    if (err == DFM_OK && o.method == DFM_METHOD_LRI) err = dfm__lsq_factor(&d->fsys, d->pos, &d->al, &sp);
+    if (err == DFM_OK && o.method == DFM_METHOD_LRI) err = dfm__lsq_factor(&d->fsys, d->pos, o.refine_steps, &d->al, &sp);
+    if (err == DFM_OK) err = dfm__active_list(d); /* 8 */
     if (err == DFM_OK) {
         d->X = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
         d->G = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
@@ -4406,8 +4436,9 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
 /* The targets (and rotations) at the vertices the rows read must be finite. */
 static dfm_result dfm__check_pose(const dfm_deform *d, const double *targets, const double *rot)
 {
-    size_t v, k;
-    for (v = 0; v < d->nv; v++) {
+    size_t a, v, k;
+    for (a = 0; a < d->nactive; a++) {
+        v = (size_t)d->active[a];
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
         for (k = 0; k < 3; k++)
             if (!dfm__finite(targets[3 * v + k])) return DFM_ERR_BAD_VALUE;
@@ -4421,8 +4452,9 @@ static dfm_result dfm__check_pose(const dfm_deform *d, const double *targets, co
 /* Known (and soft-target) displacements, bs = 1 (X[q nv + v]) or bs = 3 (X[3 v + q]). */
 static void dfm__known_displacements(const dfm_deform *d, const double *targets, size_t bs)
 {
-    size_t v, q, nv = d->nv;
-    for (v = 0; v < nv; v++) {
+    size_t a, v, q, nv = d->nv;
+    for (a = 0; a < d->nactive; a++) {
+        v = (size_t)d->active[a];
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
         for (q = 0; q < 3; q++) {
             double x = targets[3 * v + q] - d->pos[3 * v + q];
@@ -4436,10 +4468,13 @@ static void dfm__known_displacements(const dfm_deform *d, const double *targets,
    of the unknowns orthonormalized as asked. d->G gets F' - F of every touched vertex. */
 static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
 {
-    size_t v, c, k, m, nv = d->nv;
+    size_t a, v, c, k, m, nv = d->nv;
     dfm_result err;
-    for (v = 0; v < nv; v++) {
-        const double *F = d->frame + 9 * v, *R = rot ? rot + 9 * v : NULL;
+    for (a = 0; a < d->nactive; a++) {
+        const double *F, *R;
+        v = (size_t)d->active[a];
+        F = d->frame + 9 * v;
+        R = rot ? rot + 9 * v : NULL;
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
         for (c = 0; c < 3; c++)
             for (k = 0; k < 3; k++) {
@@ -4451,9 +4486,9 @@ static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
     }
     err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
     if (err != DFM_OK) return err;
-    for (v = 0; v < nv; v++) {
+    for (a = 0; a < d->nactive; a++) {
         double Fp[9];
-        if (!d->touched[v]) continue;
+        v = (size_t)d->active[a];
         for (c = 0; c < 3; c++)
             for (k = 0; k < 3; k++) Fp[3 * c + k] = d->frame[9 * v + 3 * c + k] + d->X[(c * nv + v) * 3 + k];
         if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_POLAR) dfm__polar(Fp);
@@ -4483,7 +4518,7 @@ static void dfm__lri_position_rhs(dfm_deform *d)
 DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const double *rotations, double *out)
 {
     dfm_result err;
-    size_t v, q, nv, bs;
+    size_t a, v, q, nv, bs;
     if (!d || !targets || !out) return DFM_ERR_INVALID_ARGUMENT;
     nv = d->nv;
     bs = d->sys.bs;
@@ -4496,11 +4531,11 @@ DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const d
     dfm__known_displacements(d, targets, bs);
     err = dfm__lsq_solve(&d->sys, d->opt.method == DFM_METHOD_LRI ? d->rowb : NULL, d->X, d->opt.refine_steps);
     if (err != DFM_OK) return err;
-    for (v = 0; v < nv; v++)
-        for (q = 0; q < 3; q++) {
-            if (d->unk[v] < 0) out[3 * v + q] = targets[3 * v + q];
-            else out[3 * v + q] = d->pos[3 * v + q] + (bs == 1 ? d->X[q * nv + v] : d->X[3 * v + q]);
-        }
+    if (out != targets) memcpy(out, targets, 3 * nv * sizeof(double)); /* the known vertices */
+    for (a = 0; a < d->nu; a++) {
+        v = (size_t)d->unk_v[a];
+        for (q = 0; q < 3; q++) out[3 * v + q] = d->pos[3 * v + q] + (bs == 1 ? d->X[q * nv + v] : d->X[3 * v + q]);
+    }
     return DFM_OK;
 }
 
