@@ -38,6 +38,11 @@ static const expected table[] = {
     {"torus parameterize", 0x2841cd17a18e6cd6ull},
     {"torus bake", 0x697a9b877b0914e5ull},
     {"torus reconstruct", 0x9b403ea1d1e6465eull},
+    {"thin torus simplify", 0xcd39fba057e9cf67ull},
+    {"thin torus simplify shell", 0x66667c1d4b60d9a6ull},
+    {"thin torus parameterize", 0x570b6cdd789406faull},
+    {"thin torus bake", 0x6756796f79210135ull},
+    {"thin torus reconstruct", 0xa7413d5819545a2cull},
 };
 
 #define STAGES 5
@@ -255,6 +260,10 @@ int main(int argc, char **argv)
     torus = make_torus(64, 32, 0.5, 0.05);
     pipeline("torus", &torus, 300, 128, 1, d);
     test_weld("torus", &torus, 300, 128);
+    mesh_free(&torus);
+    /* a narrow hole: the shell stops on its inner side and the constraint vetoes there */
+    torus = make_torus(96, 48, 0.9, 0.05);
+    pipeline("thin torus", &torus, 400, 128, 1, d);
     mesh_free(&sphere);
     mesh_free(&torus);
     return T_END();
