@@ -125,6 +125,22 @@
      error over the three is minimised. Level 0 keeps a = 0, scale 1: its blades are resolved.
      tvt_lod_level_for picks the level whose voxel is no larger than a pixel's footprint.
 
+   RENDERING (the paper: "volume rendering inside ray tracing", nothing more)
+     Coordinates are level-0 voxels of one tile, z up, x and y wrapping, so a renderer maps a
+     world point to its tile (i, j) and to (frac(x / S) res, frac(y / S) res, (z - h) / S res)
+     for tiles of size S over a height field h (a vertical shear: blades stay upright on
+     slopes), with the ray's direction sheared the same way. tvt_tvt_density (density only)
+     finds empty space; tvt_shade_point gives one step's opacity 1 - exp(-sigma step) and its
+     colour: Kajiya-Kay diffuse kd sin(t, l) and specular ks ms (sin(t,l) sin(t,e) - (t.l)(t.e))^p
+     with the fibre tangent t (Lambert with the normal where there is no tangent), the light
+     scaled by the self-shadowing of tvt_build_shadow: per key frame, the transmittance toward a
+     directional light on one level's grid, propagated layer by layer from the top of the tile
+     (each voxel's light ray crosses the layer above between voxel centres, interpolated; the
+     step's optical depth by the trapezoid rule), so it costs one lookup per voxel. tvt_march
+     composites front to back along a straight segment in one tile, half a voxel of the level
+     per step, skipping space the coarsest level calls empty, stopping at transmittance 0.005.
+     The level comes from the pixel's footprint: tvt_lod_level_for.
+
    OPTIONS
      Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
      Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options. Zero
@@ -140,7 +156,7 @@
                         no_merge = 1 turns merging off), colour_jitter (0.05), progress.
        tvt_splat_options   bits (8), sigma (0.5 voxel), allocator, progress.
        tvt_lod_options     levels (down to 32^3), extinction (1 per level-0 voxel at density 1),
-                        calibration_rays (1024 per elevation), seed, allocator, progress.
+                        calibration_rays (512 per elevation), seed, allocator, progress.
        tvt_tvt_options     frames (8), steps_per_frame (2), the sample / model / splat / lod
                         options (NULL = defaults), allocator, progress.
 
@@ -178,8 +194,8 @@
      res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points; 64 key frames;
      8 LOD levels, the coarsest at least 8^3. Merging does not pair points across the side
      borders (the hash cells do not wrap), which leaves a few more points there.
-     Not in this version: ray marching with shading, and tiling over a terrain (a renderer maps
-     world points into a tile's texel coordinates itself and calls tvt_tvt_voxel).
+     Tiling over a terrain is the renderer's: it maps a world point to its tile and to texel
+     coordinates (see RENDERING) and calls the functions below with each tile's own wd.
 
    REFERENCES
      Jiao Shao-Hui, Yang Gang, Heng Pheng-Ann, Wu En-Hua, "Realistic grass withering simulation
@@ -414,7 +430,7 @@ typedef struct tvt_lod {
 typedef struct tvt_lod_options {
     int levels;              /* 0 = down to 32^3 (1..8 levels, the coarsest at least 8^3) */
     float extinction;        /* kappa: optical depth of density 1 over one level-0 voxel; 0 = 1 */
-    int calibration_rays;    /* rays per elevation for density_scale; 0 = 1024 */
+    int calibration_rays;    /* rays per elevation for density_scale; 0 = 512 */
     uint64_t seed;
     const tvt_allocator *allocator; /* NULL = the texel's */
     int (*progress)(void *user, float done);
@@ -495,6 +511,49 @@ TVTDEF tvt_result tvt_mingle(const tvt_tvt *samples, const tvt_ageing_fn *fns, s
 /* A mingled TVT: tvt_mingle at each of options->frames key frames, then their pyramids. */
 TVTDEF tvt_result tvt_mingle_tvt(const tvt_tvt *samples, const tvt_ageing_fn *fns, size_t count,
                                  const tvt_tvt_options *options, tvt_tvt *out);
+
+/* ---- sampling, shading and ray marching (for a renderer; see RENDERING) --------------------- */
+
+/* Density only (cheap), interpolated in wd and trilinear, scaled as tvt_lod_density. */
+TVTDEF float tvt_tvt_density(const tvt_tvt *t, float wd, int level, const float p[3]);
+
+/* Light transmittance toward a directional light, per key frame, on the voxel grid of one level:
+   exp(-tau) from each voxel centre to the top of the tile (x and y wrap). */
+typedef struct tvt_shadow {
+    int res, level, frames;
+    float light[3];
+    float *transmittance;    /* frames * res^3, x fastest */
+    tvt_allocator allocator;
+} tvt_shadow;
+
+/* level -1 = the coarsest. light_dir: unit, toward the light, light_dir[2] > 0.05. */
+TVTDEF tvt_result tvt_build_shadow(const tvt_tvt *t, int level, const float light_dir[3],
+                                   const tvt_allocator *allocator, tvt_shadow *out);
+/* Transmittance at p (level-0 units) at wd: trilinear, interpolated between frames; 1 above the
+   tile. */
+TVTDEF float tvt_shadow_at(const tvt_shadow *s, float wd, const float p[3]);
+TVTDEF void tvt_shadow_free(tvt_shadow *s);
+
+typedef struct tvt_shade_desc {
+    float light_dir[3];      /* unit, toward the light; zero = normalize(0.45, 0.3, 0.84) */
+    float light_rgb[3];      /* zero = (1, 1, 1) */
+    float ambient_rgb[3];    /* zero = (0.22, 0.25, 0.3) */
+    float kd, ks, shininess; /* Kajiya-Kay: 0 = 1, 0.35, 24 */
+    const tvt_shadow *shadow;/* NULL = no self-shadowing */
+} tvt_shade_desc;
+
+TVTDEF tvt_shade_desc tvt_shade_default_desc(void);
+
+/* One step of length step (level-0 units) at p along unit dir: returns its opacity
+   alpha = 1 - exp(-sigma step) and writes its colour (not premultiplied) to rgb. */
+TVTDEF float tvt_shade_point(const tvt_tvt *t, float wd, int level, const tvt_shade_desc *s, const float p[3],
+                             const float dir[3], float step, float rgb[3]);
+
+/* Front-to-back march from origin along unit dir for length (level-0 units) through one tile
+   (x, y wrap), half-voxel steps of the level, empty space skipped with the coarsest level.
+   rgb receives the premultiplied colour, *transmittance what is left (stops below 0.005). */
+TVTDEF void tvt_march(const tvt_tvt *t, float wd, int level, const tvt_shade_desc *s, const float origin[3],
+                      const float dir[3], float length, float rgb[3], float *transmittance);
 
 /* ---- model -------------------------------------------------------------------------------------- */
 
@@ -714,6 +773,18 @@ static void tvt__store(tvt_texel *t, size_t slot, const unsigned *q)
     } else {
         uint16_t *d = (uint16_t *)t->data + slot * TVT_CHANNELS;
         for (c = 0; c < TVT_CHANNELS; c++) d[c] = (uint16_t)q[c];
+    }
+}
+
+/* channels 0 (density) and 4..6 (tangent) only; the others are left as they were */
+static void tvt__load_density_tangent(const tvt_texel *t, size_t slot, unsigned *q)
+{
+    if (t->bits == 8) {
+        const uint8_t *d = (const uint8_t *)t->data + slot * TVT_CHANNELS;
+        q[0] = d[0]; q[4] = d[4]; q[5] = d[5]; q[6] = d[6];
+    } else {
+        const uint16_t *d = (const uint16_t *)t->data + slot * TVT_CHANNELS;
+        q[0] = d[0]; q[4] = d[4]; q[5] = d[5]; q[6] = d[6];
     }
 }
 
@@ -1182,8 +1253,8 @@ static size_t tvt__slot(const tvt_texel *t, long x, long y, long z, int *ok)
     uint32_t k;
     *ok = 0;
     if (z < 0 || z >= res || !t->brick_index) return 0;
-    x = ((x % res) + res) % res;
-    y = ((y % res) + res) % res;
+    x &= res - 1; /* res is a power of two: the wrap, also for negative x */
+    y &= res - 1;
     b = ((size_t)(z >> 2) * (size_t)t->bricks_per_side + (size_t)(y >> 2)) * (size_t)t->bricks_per_side + (size_t)(x >> 2);
     k = t->brick_index[b];
     if (k == TVT_EMPTY_BRICK) return 0;
@@ -1863,12 +1934,12 @@ static float tvt__level_density_tangent(const tvt_texel *t, const float *p, floa
         float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
         int ok;
         size_t slot;
-        unsigned q[TVT_CHANNELS];
+        unsigned q[TVT_CHANNELS] = {0};
         tvt_voxel v;
         if (!(w > 0)) continue;
         slot = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok);
         if (!ok) continue;
-        tvt__load(t, slot, q);
+        tvt__load_density_tangent(t, slot, q);
         if (!q[0]) continue;
         tvt__decode(q, t->density_max, t->bits, &v);
         sum += w * v.density;
@@ -2181,6 +2252,10 @@ TVTDEF void tvt_tvt_voxel(const tvt_tvt *t, float wd, int level, const float p[3
     float acc[TVT__ACC], w;
     int f;
     tvt_tvt_frames_at(t, wd, &f, &w);
+    if (w <= 0.0f || w >= 1.0f) { /* on a key frame */
+        tvt_lod_voxel(&t->frames[w <= 0.0f ? f : f + 1], level, p, out);
+        return;
+    }
     tvt_lod_voxel(&t->frames[f], level, p, &a);
     tvt_lod_voxel(&t->frames[f + 1], level, p, &b);
     memset(acc, 0, sizeof(acc));
@@ -2298,6 +2373,214 @@ TVTDEF tvt_result tvt_mingle_tvt(const tvt_tvt *samples, const tvt_ageing_fn *fn
 }
 
 /* ---------------------------------------------------------------------------------------------
+   Sampling, shading, ray marching
+   --------------------------------------------------------------------------------------------- */
+TVTDEF float tvt_tvt_density(const tvt_tvt *t, float wd, int level, const float p[3])
+{
+    int f;
+    float w, a, b;
+    tvt_tvt_frames_at(t, wd, &f, &w);
+    a = w < 1.0f ? tvt_lod_density(&t->frames[f], level, p) : 0.0f;
+    b = w > 0.0f ? tvt_lod_density(&t->frames[f + 1], level, p) : 0.0f;
+    return (1.0f - w) * a + w * b;
+}
+
+/* extinction sigma of a sample (density, unit-ish tangent) along dir at a level */
+static float tvt__sigma(const tvt_lod *l, int level, const tvt_voxel *v, const float *dir)
+{
+    float a = l->anisotropy[level], tl = sqrtf(tvt__dot(v->tangent, v->tangent)), c, sin_td;
+    c = tl > 0 ? tvt__dot(v->tangent, dir) / tl : 0.0f;
+    sin_td = sqrtf(fmaxf(0.0f, 1.0f - c * c));
+    return l->extinction * v->density * (1.0f - a + a * sin_td);
+}
+
+/* Light transmittance of one frame by layers from the top down: a voxel centre's ray toward the
+   light crosses the layer above at (x + lx / lz, y + ly / lz) (in voxels of the level), whose
+   transmittance is interpolated there (x, y wrap), times exp(-tau) of the step between, tau
+   from the two ends' extinction (trapezoid rule). */
+static void tvt__shadow_frame(const tvt_tvt *t, int k, int level, const float *light, float *out)
+{
+    const tvt_lod *l = &t->frames[k];
+    const tvt_texel *tx = &l->level[level];
+    int res = tx->res, x, y, z;
+    float vox = (float)(1 << level), ox = light[0] / light[2], oy = light[1] / light[2];
+    float len = vox / light[2]; /* level-0 length of one layer's step */
+    size_t plane = (size_t)res * res;
+    for (z = res - 1; z >= 0; z--)
+        for (y = 0; y < res; y++)
+            for (x = 0; x < res; x++) {
+                float p[3], pa[3], T_above = 1.0f, sig, sig_a = 0.0f;
+                tvt_voxel v;
+                p[0] = ((float)x + 0.5f) * vox; p[1] = ((float)y + 0.5f) * vox; p[2] = ((float)z + 0.5f) * vox;
+                tvt_lod_voxel(l, level, p, &v);
+                sig = tvt__sigma(l, level, &v, light);
+                if (z + 1 < res) {
+                    float fx = (float)x + ox, fy = (float)y + oy, gx = floorf(fx), gy = floorf(fy), ax = fx - gx, ay = fy - gy;
+                    long ix = (long)gx, iy = (long)gy;
+                    const float *up = out + plane * (size_t)(z + 1);
+                    size_t x0 = (size_t)(ix & (res - 1)), x1 = (size_t)((ix + 1) & (res - 1));
+                    size_t y0 = (size_t)(iy & (res - 1)), y1 = (size_t)((iy + 1) & (res - 1));
+                    T_above = (1 - ay) * ((1 - ax) * up[y0 * res + x0] + ax * up[y0 * res + x1]) +
+                              ay * ((1 - ax) * up[y1 * res + x0] + ax * up[y1 * res + x1]);
+                    pa[0] = p[0] + ox * vox; pa[1] = p[1] + oy * vox; pa[2] = p[2] + vox;
+                    tvt_lod_voxel(l, level, pa, &v);
+                    sig_a = tvt__sigma(l, level, &v, light);
+                } else
+                    len = 0.5f * vox / light[2], sig_a = 0.0f; /* half a voxel to the top */
+                out[plane * (size_t)z + (size_t)y * res + (size_t)x] = T_above * expf(-0.5f * (sig + sig_a) * len);
+                len = vox / light[2];
+            }
+}
+
+TVTDEF tvt_result tvt_build_shadow(const tvt_tvt *t, int level, const float light_dir[3],
+                                   const tvt_allocator *allocator, tvt_shadow *out)
+{
+    tvt_allocator a;
+    size_t n;
+    int k;
+    if (!out) return TVT_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof(*out));
+    if (!t || !t->frames || !light_dir) return TVT_ERR_INVALID_ARGUMENT;
+    if (level < 0) level = t->frames[0].levels - 1;
+    if (level >= t->frames[0].levels) return TVT_ERR_BAD_RESOLUTION;
+    if (!tvt__finite(light_dir[0]) || !tvt__finite(light_dir[1]) || !tvt__finite(light_dir[2]) ||
+        light_dir[2] <= 0.05f || fabsf(tvt__dot(light_dir, light_dir) - 1.0f) > 1e-3f)
+        return TVT_ERR_BAD_PARAMETER;
+    a = tvt__resolve_allocator(allocator ? allocator : &t->allocator);
+    out->res = t->frames[0].level[level].res;
+    n = (size_t)out->res * out->res * out->res;
+    out->transmittance = (float *)tvt__alloc(&a, n * (size_t)t->frame_count, sizeof(float));
+    if (!out->transmittance) return TVT_ERR_OUT_OF_MEMORY;
+    out->level = level;
+    out->frames = t->frame_count;
+    memcpy(out->light, light_dir, sizeof(out->light));
+    out->allocator = a;
+    for (k = 0; k < t->frame_count; k++) tvt__shadow_frame(t, k, level, light_dir, out->transmittance + n * (size_t)k);
+    return TVT_OK;
+}
+
+static float tvt__shadow_grid(const float *g, int res, const float *q)
+{
+    long b[3];
+    float f[3], sum = 0.0f;
+    int n;
+    tvt__trilinear(q, b, f);
+    for (n = 0; n < 8; n++) {
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
+        long x = b[0] + (n & 1), y = b[1] + ((n >> 1) & 1), z = b[2] + ((n >> 2) & 1);
+        x &= res - 1;
+        y &= res - 1;
+        if (z < 0) z = 0;
+        sum += w * (z >= res ? 1.0f : g[((size_t)z * res + (size_t)y) * res + (size_t)x]);
+    }
+    return sum;
+}
+
+TVTDEF float tvt_shadow_at(const tvt_shadow *s, float wd, const float p[3])
+{
+    float q[3], inv = 1.0f / (float)(1 << s->level), x, w;
+    size_t n = (size_t)s->res * s->res * s->res;
+    int f;
+    if (!(wd > 0)) wd = 0;
+    if (wd > 1) wd = 1;
+    x = wd * (float)(s->frames - 1);
+    f = (int)x;
+    if (f >= s->frames - 1) f = s->frames - 2;
+    w = x - (float)f;
+    q[0] = p[0] * inv; q[1] = p[1] * inv; q[2] = p[2] * inv;
+    return (1.0f - w) * tvt__shadow_grid(s->transmittance + n * (size_t)f, s->res, q) +
+           w * tvt__shadow_grid(s->transmittance + n * (size_t)(f + 1), s->res, q);
+}
+
+TVTDEF void tvt_shadow_free(tvt_shadow *s)
+{
+    if (!s) return;
+    if (s->transmittance) tvt__free(&s->allocator, s->transmittance);
+    memset(s, 0, sizeof(*s));
+}
+
+static void tvt__shade_resolve(const tvt_shade_desc *in, tvt_shade_desc *o)
+{
+    tvt_shade_desc d = tvt_shade_default_desc();
+    *o = in ? *in : d;
+    if (o->light_dir[0] == 0 && o->light_dir[1] == 0 && o->light_dir[2] == 0) memcpy(o->light_dir, d.light_dir, sizeof(d.light_dir));
+    if (o->light_rgb[0] == 0 && o->light_rgb[1] == 0 && o->light_rgb[2] == 0) memcpy(o->light_rgb, d.light_rgb, sizeof(d.light_rgb));
+    if (o->ambient_rgb[0] == 0 && o->ambient_rgb[1] == 0 && o->ambient_rgb[2] == 0)
+        memcpy(o->ambient_rgb, d.ambient_rgb, sizeof(d.ambient_rgb));
+    if (o->kd == 0) o->kd = d.kd;
+    if (o->ks == 0) o->ks = d.ks;
+    if (o->shininess == 0) o->shininess = d.shininess;
+}
+
+/* Kajiya-Kay (1989): diffuse kd sin(t, l), specular ks (sin(t,l) sin(t,e) - (t.l)(t.e))^p with e
+   toward the eye; a voxel without a tangent (|t| ~ 0) is lit as Lambert with its normal. */
+static void tvt__kajiya_kay(const tvt_shade_desc *s, const tvt_voxel *v, const float *dir, float shadow, float *rgb)
+{
+    float t[3], e[3], tl = sqrtf(tvt__dot(v->tangent, v->tangent)), diff, spec = 0.0f;
+    int c;
+    e[0] = -dir[0]; e[1] = -dir[1]; e[2] = -dir[2];
+    if (tl > 0.1f) {
+        float tdl, tde, sl, se, k;
+        t[0] = v->tangent[0] / tl; t[1] = v->tangent[1] / tl; t[2] = v->tangent[2] / tl;
+        tdl = tvt__dot(t, s->light_dir);
+        tde = tvt__dot(t, e);
+        sl = sqrtf(fmaxf(0.0f, 1.0f - tdl * tdl));
+        se = sqrtf(fmaxf(0.0f, 1.0f - tde * tde));
+        diff = s->kd * sl;
+        k = sl * se - tdl * tde;
+        if (k > 0) spec = s->ks * v->specular * powf(k, s->shininess);
+    } else {
+        float n[3];
+        memcpy(n, v->normal, sizeof(n));
+        tvt__normalize(n);
+        diff = s->kd * fmaxf(0.0f, tvt__dot(n, s->light_dir));
+    }
+    for (c = 0; c < 3; c++)
+        rgb[c] = v->color[c] * (s->ambient_rgb[c] + s->light_rgb[c] * shadow * diff) + s->light_rgb[c] * shadow * spec;
+}
+
+TVTDEF float tvt_shade_point(const tvt_tvt *t, float wd, int level, const tvt_shade_desc *s, const float p[3],
+                             const float dir[3], float step, float rgb[3])
+{
+    tvt_shade_desc sd;
+    tvt_voxel v;
+    float sigma, shadow = 1.0f;
+    int f;
+    float w;
+    tvt__shade_resolve(s, &sd);
+    tvt_tvt_voxel(t, wd, level, p, &v);
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (!(v.density > 0)) return 0.0f;
+    tvt_tvt_frames_at(t, wd, &f, &w);
+    sigma = tvt__sigma(&t->frames[w < 0.5f ? f : f + 1], level, &v, dir);
+    if (sd.shadow) shadow = tvt_shadow_at(sd.shadow, wd, p);
+    tvt__kajiya_kay(&sd, &v, dir, shadow, rgb);
+    return 1.0f - expf(-sigma * step);
+}
+
+TVTDEF void tvt_march(const tvt_tvt *t, float wd, int level, const tvt_shade_desc *s, const float origin[3],
+                      const float dir[3], float length, float rgb[3], float *transmittance)
+{
+    int coarse = t->frames[0].levels - 1;
+    float step = 0.5f * (float)(1 << level), skip = 0.5f * (float)(1 << coarse), T = 1.0f, x = 0.0f;
+    tvt_shade_desc sd;
+    tvt__shade_resolve(s, &sd);
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    while (x < length && T > 0.005f) {
+        float p[3], c[3], alpha, h = fminf(step, length - x);
+        p[0] = origin[0] + (x + 0.5f * h) * dir[0];
+        p[1] = origin[1] + (x + 0.5f * h) * dir[1];
+        p[2] = origin[2] + (x + 0.5f * h) * dir[2];
+        if (skip > step && tvt_tvt_density(t, wd, coarse, p) <= 0.0f) { x += skip; continue; }
+        alpha = tvt_shade_point(t, wd, level, &sd, p, dir, h, c);
+        rgb[0] += T * alpha * c[0]; rgb[1] += T * alpha * c[1]; rgb[2] += T * alpha * c[2];
+        T *= 1.0f - alpha;
+        x += h;
+    }
+    *transmittance = T;
+}
+
+/* ---------------------------------------------------------------------------------------------
    Defaults and names
    --------------------------------------------------------------------------------------------- */
 TVTDEF tvt_grass_desc tvt_grass_default_desc(void)
@@ -2336,6 +2619,18 @@ TVTDEF tvt_model_options tvt_model_default_options(void)
     return o;
 }
 
+TVTDEF tvt_shade_desc tvt_shade_default_desc(void)
+{
+    tvt_shade_desc d;
+    float l = sqrtf(0.45f * 0.45f + 0.3f * 0.3f + 0.84f * 0.84f);
+    memset(&d, 0, sizeof(d));
+    d.light_dir[0] = 0.45f / l; d.light_dir[1] = 0.3f / l; d.light_dir[2] = 0.84f / l;
+    d.light_rgb[0] = d.light_rgb[1] = d.light_rgb[2] = 1.0f;
+    d.ambient_rgb[0] = 0.22f; d.ambient_rgb[1] = 0.25f; d.ambient_rgb[2] = 0.3f;
+    d.kd = 1.0f; d.ks = 0.35f; d.shininess = 24.0f;
+    return d;
+}
+
 TVTDEF tvt_tvt_options tvt_tvt_default_options(void)
 {
     tvt_tvt_options o;
@@ -2350,7 +2645,7 @@ TVTDEF tvt_lod_options tvt_lod_default_options(void)
     tvt_lod_options o;
     memset(&o, 0, sizeof(o));
     o.extinction = 1.0f;
-    o.calibration_rays = 1024;
+    o.calibration_rays = 512;
     return o;
 }
 

@@ -286,6 +286,75 @@ static void test_allocation_failure(void)
     T_CHECK(failed > 20);
 }
 
+/* A TVT made of one uniform slab (density 0.1 for 8 <= z < 24, tangent along x): the march's
+   transmittance is exp(-kappa rho L) for the path length L inside the slab (level 0: isotropic;
+   the half-voxel midpoint steps integrate a constant exactly, the trilinear edges of the slab
+   are symmetric, so 1e-3); the shadow volume's transmittance at the voxel centres below the
+   slab is exp(-kappa rho 16 / l_z) (the trapezoid rule is exact on the slab's linear edges; the
+   light's horizontal shift is interpolated in a constant layer: 1e-3);
+   Kajiya-Kay lights the fibres more with the light across them than along them. */
+static void test_march(void)
+{
+    const int res = 32;
+    tvt_voxel *vox = (tvt_voxel *)calloc((size_t)res * res * res, sizeof(tvt_voxel));
+    tvt_texel slab, empty;
+    tvt_tvt t;
+    tvt_lod_options lo = tvt_lod_default_options();
+    tvt_shadow sh;
+    tvt_shade_desc sd = tvt_shade_default_desc();
+    float o[3] = {3.3f, 7.1f, 30.0f}, d[3] = {0, 0, -1}, rgb[3], T, across[3], along[3];
+    float light[3] = {0.6f, 0.0f, 0.8f}, p[3] = {16.5f, 16.5f, 7.5f};
+    int x, y, z;
+    for (z = 8; z < 24; z++)
+        for (y = 0; y < res; y++)
+            for (x = 0; x < res; x++) {
+                tvt_voxel *v = vox + ((size_t)z * res + y) * res + x;
+                v->density = 0.1f; v->tangent[0] = 1.0f; v->color[1] = 0.6f; v->specular = 0.3f;
+            }
+    T_CHECK(tvt_texel_from_voxels(res, vox, 16, NULL, &slab) == TVT_OK);
+    lo.levels = 1;
+    memset(&t, 0, sizeof(t));
+    t.frame_count = 2; t.wd[0] = 0; t.wd[1] = 1;
+    t.frames = (tvt_lod *)calloc(2, sizeof(tvt_lod));
+    T_CHECK(tvt_build_lod(&slab, &lo, &t.frames[0]) == TVT_OK);
+    T_CHECK(tvt_build_lod(&slab, &lo, &t.frames[1]) == TVT_OK);
+    tvt_march(&t, 0.5f, 0, &sd, o, d, 30.0f, rgb, &T);
+    T_NEAR(T, exp(-0.1 * 16), 1e-3 * exp(-0.1 * 16));
+    T_CHECK(rgb[1] > rgb[0] && rgb[1] > rgb[2]); /* green fibres */
+    d[0] = 0.6f; d[2] = -0.8f; /* slanted: 16 / 0.8 = 20 voxels inside */
+    tvt_march(&t, 0.5f, 0, &sd, o, d, 37.5f, rgb, &T);
+    T_NEAR(T, exp(-0.1 * 20), 1e-3 * exp(-0.1 * 20));
+    T_CHECK(tvt_build_shadow(&t, 0, light, NULL, &sh) == TVT_OK);
+    T_NEAR(tvt_shadow_at(&sh, 0.3f, p) / exp(-0.1 * 16 / 0.8), 1.0, 1e-3);
+    p[2] = 30.0f;
+    T_NEAR(tvt_shadow_at(&sh, 0.3f, p), 1.0, 1e-6);
+    tvt_shadow_free(&sh);
+    /* light across the fibres (tangent x, light z) against along them (light x) */
+    {
+        float q[3] = {16, 16, 16}, e[3] = {0, 0.6f, -0.8f};
+        tvt_shade_desc a = tvt_shade_default_desc(), b = a;
+        a.light_dir[0] = 0; a.light_dir[1] = 0; a.light_dir[2] = 1;
+        b.light_dir[0] = 1; b.light_dir[1] = 0; b.light_dir[2] = 0;
+        tvt_shade_point(&t, 0.0f, 0, &a, q, e, 1.0f, across);
+        tvt_shade_point(&t, 0.0f, 0, &b, q, e, 1.0f, along);
+        T_CHECK(across[1] > along[1] + 0.3f);
+    }
+    tvt_lod_free(&t.frames[0]); tvt_lod_free(&t.frames[1]);
+    /* an empty TVT: nothing seen */
+    memset(vox, 0, (size_t)res * res * res * sizeof(tvt_voxel));
+    T_CHECK(tvt_texel_from_voxels(res, vox, 8, NULL, &empty) == TVT_OK);
+    T_CHECK(tvt_build_lod(&empty, &lo, &t.frames[0]) == TVT_OK);
+    T_CHECK(tvt_build_lod(&empty, &lo, &t.frames[1]) == TVT_OK);
+    d[0] = 0; d[2] = -1;
+    tvt_march(&t, 0.2f, 0, &sd, o, d, 30.0f, rgb, &T);
+    T_CHECK(T == 1.0f && rgb[0] == 0 && rgb[1] == 0 && rgb[2] == 0);
+    T_EQ_INT(tvt_build_shadow(&t, 0, d, NULL, &sh), TVT_ERR_BAD_PARAMETER); /* light from below */
+    tvt_lod_free(&t.frames[0]); tvt_lod_free(&t.frames[1]);
+    free(t.frames);
+    tvt_texel_free(&slab); tvt_texel_free(&empty);
+    free(vox);
+}
+
 int main(int argc, char **argv)
 {
     int sanitize = getenv("TEST_SANITIZE") != NULL;
@@ -295,6 +364,7 @@ int main(int argc, char **argv)
     test_lod_opacity(sanitize ? 64 : 128, sanitize ? 2000 : 10000, 0.917f);
     test_key_frames();
     test_mingling();
+    test_march();
     test_bad_input();
     test_allocation_failure();
     return T_END();
