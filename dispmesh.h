@@ -386,9 +386,11 @@
      offset interpolated at their closest original point. Deviation: the paper's smoothing pass
      (concave vertices pushed out) is not done; the volume test never needs it.
      dm_shell_constraint, per candidate collapse, in order:
-       1. Enclosure. The paper's text does not say how; ours: the original's vertices within 1.5
-          thicknesses whose closest feature of the old one-ring touches keep or remove (not its
-          rim) must stay on the inner side (signed distance with the angle-weighted pseudonormal,
+       1. Enclosure. The paper's text does not say how; ours: the original's vertices that the
+          collapse can sweep over (in the bounding box of the old one-ring and the proposed
+          position, grown by a tenth of its size; a position corrected beyond it is a veto),
+          within 1.5 thicknesses, whose closest feature of the old one-ring touches keep or remove
+          (not its rim), must stay on the inner side (signed distance with the angle-weighted pseudonormal,
           Baerentzen-Aanaes 2005) of the new one-ring. Nearest new triangle (keep, u, w) gives an
           exact linear condition on keep: outside the plane through p, u, w. The proposed (QEM)
           position is projected onto those half-spaces (Dykstra), rounded to float, and every
@@ -396,8 +398,10 @@
           progressive hulls (outside every old face's plane, which encloses each previous level
           and so piles up the offsets), this encloses the original itself: on the bunny at 500
           faces RMS 5.6e-3 against 1.13e-2 (and 602 faces reached instead of 500).
-       2. Shell: keep and 15 points of each new triangle (off the old rim) inside the shell volume.
-       3. Overlap: from 4 points of each new triangle (overlap_samples, at most 7) a ray along the
+       2. Shell: keep inside the shell volume, and along each ray of the overlap check (3.) the
+          depth to the original no more than the offset grown at the hit.
+       3. Overlap: from 4 points of each new triangle (overlap_samples, at most 7) and the middle
+          of its edge from keep, a ray along the
           inverted interpolated normal, started a quarter thickness outside, must meet a front
           face of the original first, within 2.25 thicknesses, and must not go out and in again
           within that depth (the fold of the paper's Fig 4.1.3: three depths for one texel, and
@@ -423,9 +427,7 @@
           leave (smallest angle 5 degrees down to 0.5) fold elsewhere.
      Measured (tests/test_dispmesh_shell.c, brute-force checks): bunny to 500 faces, no original
      vertex on the outer side (worst signed distance 0), every sampled base point inside the shell,
-     every bake ray's first hit front-facing; 0.7 s for the shell and about 15 s for the
-     constrained simplification (the enclosure's point gathering and the re-queued candidates;
-     the unconstrained one takes 0.1 s). An enclosing base is farther from the original than a
+     every bake ray's first hit front-facing. An enclosing base is farther from the original than a
      least-squares one: RMS 2.06x our unconstrained simplification at the same face count on the
      bunny, 1.97x on a bumpy sphere, 2.64x on a fat torus (2.5x, 2.1x, 3.3x before candidates
      were re-queued at their constrained cost). That is near what geometry allows: a facet
@@ -6804,7 +6806,7 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
        position is the point nearest the proposed one that meets all of them (Dykstra's
        alternating projections), then everything is checked again at the rounded position. */
     {
-        double lo[3], hi[3], reach = 1.5 * (double)sh->thickness;
+        double lo[3], hi[3], reach = 1.5 * (double)sh->thickness, grow = 0.0;
         int cl[3], ch[3], cx, cy, cz;
         size_t npts = 0;
         for (k = 0; k < 3; k++) {
@@ -6822,10 +6824,11 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             double span = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                (hi[2] - lo[2]) * (hi[2] - lo[2]));
             if (span < reach) reach = span;
+            grow = 0.1 * span + 4.0 * in->margin;
         }
         for (k = 0; k < 3; k++) {
-            cl[k] = dm__sh_coord(in, lo[k] - reach, k);
-            ch[k] = dm__sh_coord(in, hi[k] + reach, k);
+            cl[k] = dm__sh_coord(in, lo[k] - grow, k);
+            ch[k] = dm__sh_coord(in, hi[k] + grow, k);
         }
         if (no + nr > in->tri_cap) {
             int of = 0;
@@ -6851,8 +6854,8 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
                         double pp[3], sd, dist;
                         int feat;
                         dm__pz_load(in->pos, v, pp);
-                        if (pp[0] < lo[0] - reach || pp[0] > hi[0] + reach || pp[1] < lo[1] - reach ||
-                            pp[1] > hi[1] + reach || pp[2] < lo[2] - reach || pp[2] > hi[2] + reach)
+                        if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
+                            pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                             continue;
                         sd = dm__sh_signed(c, c->old_triangles, in->tri, no, pp, reach, 1, &feat, &dist, NULL);
                         if (!feat || dist > reach) continue;
@@ -6927,6 +6930,10 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             corrected[k] = (float)x[k];
             x[k] = corrected[k];
             if (corrected[k] != c->position[k]) moved = 1;
+            if (x[k] < lo[k] - grow || x[k] > hi[k] + grow) { /* beyond the gathered box */
+                sh->vetoed_enclose++;
+                return DM_COLLAPSE_VETO;
+            }
         }
         /* the check at the rounded position: no relevant vertex ends outside */
         dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
@@ -6945,33 +6952,12 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
         np = 0;
         yv = pl;
     }
-    /* (2) Inside the shell: keep and a barycentric grid of each new triangle (the points with
-       coordinates in quarters, the old rim excepted) lie within the offset grown at their
-       closest point of the original. */
+    /* (2) Inside the shell: keep lies within the offset grown at its closest point of the
+       original; the points of the new triangles are checked along the overlap rays below, where
+       the depth to the original must not exceed the offset grown at the hit. */
     if (!dm__sh_in_shell(sh, in, x)) {
         sh->vetoed_shell++;
         return DM_COLLAPSE_VETO;
-    }
-    for (i = 0; i < nr; i++) {
-        const uint32_t *t = c->triangles + 3 * i;
-        double p[3][3], y[3];
-        int gi, gj, kc;
-        for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
-        for (kc = 0; kc < 3 && t[kc] != c->keep; kc++) {}
-        for (gi = 0; gi <= 4; gi++)
-            for (gj = 0; gi + gj <= 4; gj++) {
-                double w[3];
-                w[0] = (4 - gi - gj) / 4.0;
-                w[1] = gi / 4.0;
-                w[2] = gj / 4.0;
-                if (kc < 3 && w[kc] == 0.0) continue; /* on the old rim edge, or keep itself */
-                if (kc < 3 && w[kc] == 1.0) continue;
-                for (k = 0; k < 3; k++) y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
-                if (!dm__sh_in_shell(sh, in, y)) {
-                    sh->vetoed_shell++;
-                    return DM_COLLAPSE_VETO;
-                }
-            }
     }
     /* (3) No height-field overlap: rays from points of each new triangle along the inverted
        interpolated normal meet the original's front side first, within twice the shell's
@@ -7024,15 +7010,21 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
         double p[3][3];
         int s;
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
-        for (s = 0; s < in->samples; s++) {
-            double y[3], n[3], len, fn[3], q[3][3];
+        int kc;
+        for (kc = 0; kc < 2 && t[kc] != c->keep; kc++) {}
+        for (s = 0; s <= in->samples; s++) {
+            double y[3], n[3], len, fn[3], q[3][3], w[3] = {0.0, 0.0, 0.0};
             dm_ray ray;
             dm_hit hit;
             const uint32_t *ot;
+            if (s < in->samples) { /* the triangle's samples, then the middle of its edge from keep */
+                for (k = 0; k < 3; k++) w[k] = dm__sh_bary[s][k];
+            } else {
+                w[kc] = w[(kc + 1) % 3] = 0.5;
+            }
             for (k = 0; k < 3; k++) {
-                y[k] = dm__sh_bary[s][0] * p[0][k] + dm__sh_bary[s][1] * p[1][k] + dm__sh_bary[s][2] * p[2][k];
-                n[k] = dm__sh_bary[s][0] * vn[9 * i + (size_t)k] + dm__sh_bary[s][1] * vn[9 * i + 3 + (size_t)k] +
-                       dm__sh_bary[s][2] * vn[9 * i + 6 + (size_t)k];
+                y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
+                n[k] = w[0] * vn[9 * i + (size_t)k] + w[1] * vn[9 * i + 3 + (size_t)k] + w[2] * vn[9 * i + 6 + (size_t)k];
             }
             len = dm__pz_len(n);
             if (!(len > 0.0)) {
@@ -7055,6 +7047,13 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
+            }
+            { /* the shell along the ray: no deeper than the offset grown at the hit */
+                double h = (1.0 - hit.u - hit.v) * sh->offset[ot[0]] + hit.u * sh->offset[ot[1]] + hit.v * sh->offset[ot[2]];
+                if ((double)hit.t - 0.25 * sh->thickness > h + in->margin) {
+                    sh->vetoed_shell++;
+                    return DM_COLLAPSE_VETO;
+                }
             }
             /* and no re-entry within the same depth: in (this hit), out, in again is the fold of
                the paper's Fig 4.1.3, where one texel would have three depths and the part of the

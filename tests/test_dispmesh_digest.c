@@ -39,10 +39,10 @@ static const expected table[] = {
     {"torus bake", 0x697a9b877b0914e5ull},
     {"torus reconstruct", 0x9b403ea1d1e6465eull},
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
-    {"thin torus simplify shell", 0x66667c1d4b60d9a6ull},
-    {"thin torus parameterize", 0x570b6cdd789406faull},
-    {"thin torus bake", 0x6756796f79210135ull},
-    {"thin torus reconstruct", 0xa7413d5819545a2cull},
+    {"thin torus simplify shell", 0x3167e15b4de99db8ull},
+    {"thin torus parameterize", 0xbc84ade9b16799d7ull},
+    {"thin torus bake", 0x940e3c06407b7381ull},
+    {"thin torus reconstruct", 0x965f81cc3ca6ed70ull},
 };
 
 #define STAGES 5
