@@ -1111,6 +1111,9 @@ typedef struct dfm__amd {
     int32_t level;                  /* the set pivots are taken from */
     unsigned char *inlist;          /* 1 while in a degree list (0: parked, later set) */
     const dfm_allocator *al;
+    int64_t wflg, stamp;            /* the w[] offset and the mark[] stamp of the step */
+    int64_t dense_limit;            /* rows denser than this are ordered last */
+    int32_t nel, mindeg, dense_count; /* variables eliminated, the minimum degree, dense rows */
 } dfm__amd;
 
 static void dfm__amd_remove(dfm__amd *s, int32_t i)
@@ -1204,18 +1207,34 @@ static void dfm__amd_join(dfm__amd *s, int32_t i, int32_t j)
     s->first[j] = s->tail[j] = -1;
 }
 
-/* AMD on the pattern of a symmetric graph given by full adjacency (both directions, no
-   diagonal): adj_start[n+1], adj. perm[k] = node eliminated k-th. With cset (constrained
-   minimum degree, as in CAMD), pivots come from the lowest constraint set that has variables
-   left; supervariables never mix sets. */
-static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const int32_t *cset,
-                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
+static void dfm__amd_free(dfm__amd *s)
 {
-    dfm__amd S, *s = &S;
+    const dfm_allocator *al = s->al;
+    dfm__free(al, s->iw);
+    dfm__free(al, s->pe);
+    dfm__free(al, s->len);
+    dfm__free(al, s->elen);
+    dfm__free(al, s->nv);
+    dfm__free(al, s->degree);
+    dfm__free(al, s->status);
+    dfm__free(al, s->head);
+    dfm__free(al, s->next);
+    dfm__free(al, s->last);
+    dfm__free(al, s->w);
+    dfm__free(al, s->hhead);
+    dfm__free(al, s->hnext);
+    dfm__free(al, s->hash);
+    dfm__free(al, s->mark);
+    dfm__free(al, s->first);
+    dfm__free(al, s->tail);
+    dfm__free(al, s->follow);
+    dfm__free(al, s->order_pivot);
+    dfm__free(al, s->inlist);
+}
+
+static dfm_result dfm__amd_alloc(dfm__amd *s, int32_t n, size_t nnz, const dfm_allocator *al)
+{
     dfm_result err = DFM_OK;
-    int32_t i, k, nel = 0, npivots = 0, mindeg = 0, dense_count = 0;
-    int64_t wflg, dense_limit, stamp = 0;
-    size_t nnz = adj_start[n];
     memset(s, 0, sizeof *s);
     s->n = n;
     s->al = al;
@@ -1240,8 +1259,15 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
     s->follow = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
     s->order_pivot = (int32_t *)dfm__alloc(al, (size_t)n, sizeof(int32_t), &err);
     s->inlist = (unsigned char *)dfm__alloc(al, (size_t)n, 1, &err);
-    if (err != DFM_OK) goto done;
-    memset(s->inlist, 0, (size_t)n);
+    if (err == DFM_OK) memset(s->inlist, 0, (size_t)n);
+    return err;
+}
+
+/* The quotient graph at the start: every node a variable with its adjacency list; dense rows
+   (degree > 10 sqrt(n), at least 16) are taken out and ordered last. */
+static void dfm__amd_init(dfm__amd *s, const size_t *adj_start, const int32_t *adj, const int32_t *cset)
+{
+    int32_t i, n = s->n;
     s->cset = cset;
     s->level = 0;
     if (cset) {
@@ -1249,13 +1275,11 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         for (i = 0; i < n; i++)
             if (cset[i] < s->level) s->level = cset[i];
     }
-
-    /* dense rows (degree > 10 sqrt(n), at least 16) are taken out and ordered last */
-    dense_limit = (int64_t)(10.0 * sqrt((double)n));
-    if (dense_limit < 16) dense_limit = 16;
+    s->dense_limit = (int64_t)(10.0 * sqrt((double)n));
+    if (s->dense_limit < 16) s->dense_limit = 16;
     for (i = 0; i < n; i++) {
         int64_t d = (int64_t)(adj_start[i + 1] - adj_start[i]);
-        s->status[i] = d > dense_limit ? DFM__DEAD : DFM__VAR;
+        s->status[i] = d > s->dense_limit ? DFM__DEAD : DFM__VAR;
     }
     s->pfree = 0;
     for (i = 0; i < n; i++) {
@@ -1271,7 +1295,7 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         s->follow[i] = -1;
         s->next[i] = s->last[i] = -1;
         if (s->status[i] == DFM__DEAD) {
-            dense_count++;
+            s->dense_count++;
             s->pe[i] = -1;
             continue;
         }
@@ -1284,264 +1308,295 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
     for (i = 0; i <= n; i++) s->head[i] = -1;
     for (i = 0; i < n; i++)
         if (s->status[i] == DFM__VAR) dfm__amd_insert(s, i, s->len[i]);
-    wflg = 2;
+    s->wflg = 2;
+}
 
-    while (nel < n - dense_count) {
-        int32_t p, e = -1, pme_count = 0, lp_nv = 0, nvp;
-        int64_t need, pme1, pme2, q;
-        /* 1. the variable of minimum approximate degree */
-        while (mindeg < n && s->head[mindeg] < 0) mindeg++;
-        if (mindeg >= n && cset) {
-            /* this set is done: the next set's variables enter the degree lists */
-            int32_t next_level = INT32_MAX;
-            for (i = 0; i < n; i++)
-                if (s->status[i] == DFM__VAR && s->nv[i] > 0 && cset[i] > s->level && cset[i] < next_level) next_level = cset[i];
-            s->level = next_level;
-            mindeg = n;
-            for (i = 0; i < n; i++)
-                if (s->status[i] == DFM__VAR && s->nv[i] > 0 && cset[i] == next_level) {
-                    dfm__amd_insert(s, i, s->degree[i]);
-                    if (s->degree[i] < mindeg) mindeg = s->degree[i];
-                }
-            continue;
+/* Constrained ordering: the current set is done, the next set's variables enter the lists. */
+static void dfm__amd_next_set(dfm__amd *s)
+{
+    int32_t i, n = s->n, next_level = INT32_MAX;
+    for (i = 0; i < n; i++)
+        if (s->status[i] == DFM__VAR && s->nv[i] > 0 && s->cset[i] > s->level && s->cset[i] < next_level)
+            next_level = s->cset[i];
+    s->level = next_level;
+    s->mindeg = n;
+    for (i = 0; i < n; i++)
+        if (s->status[i] == DFM__VAR && s->nv[i] > 0 && s->cset[i] == next_level) {
+            dfm__amd_insert(s, i, s->degree[i]);
+            if (s->degree[i] < s->mindeg) s->mindeg = s->degree[i];
         }
-        p = s->head[mindeg];
-        dfm__amd_remove(s, p);
-        nvp = s->nv[p];
-        s->order_pivot[npivots++] = p;
-        nel += nvp;
-        if (progress && (npivots & 1023) == 0 && progress(puser, 0.5f * (float)nel / (float)n)) {
-            err = DFM_CANCELLED;
-            goto done;
+}
+
+/* Step 2: L_p = the union of p's elements' lists and A_p, stored as the new element p at pfree
+   (iw[pme1 .. pme2)); the elements are absorbed into p. lp_nv: the variables in L_p. */
+static dfm_result dfm__amd_form_element(dfm__amd *s, int32_t p, int64_t *pme1, int64_t *pme2, int32_t *lp_nv)
+{
+    int32_t e = -1, nvp = s->nv[p];
+    int64_t need = s->len[p] - s->elen[p], q;
+    for (q = s->pe[p]; q < s->pe[p] + s->elen[p]; q++) need += s->len[s->iw[q]];
+    if (s->iwlen - s->pfree < need) {
+        dfm_result err = dfm__amd_compact(s, need);
+        if (err != DFM_OK) return err;
+    }
+    s->nv[p] = -nvp;
+    *pme1 = s->pfree;
+    *lp_nv = 0;
+    for (q = s->pe[p]; q < s->pe[p] + s->len[p]; q++) {
+        int32_t v = s->iw[q];
+        int is_elem = q < s->pe[p] + s->elen[p];
+        int64_t a, b;
+        if (is_elem) {
+            e = v;
+            if (s->status[e] != DFM__ELEM) continue;
+            a = s->pe[e];
+            b = a + s->len[e];
+        } else {
+            a = q;
+            b = q + 1;
         }
-        /* 2. L_p = union of the elements' lists and A_p, stored as new element p at pfree */
-        need = s->len[p] - s->elen[p];
-        for (q = s->pe[p]; q < s->pe[p] + s->elen[p]; q++) need += s->len[s->iw[q]];
-        if (s->iwlen - s->pfree < need) {
-            err = dfm__amd_compact(s, need);
-            if (err != DFM_OK) goto done;
+        for (; a < b; a++) {
+            int32_t j = s->iw[a];
+            if (s->status[j] != DFM__VAR || s->nv[j] <= 0) continue; /* eliminated, merged, or in L_p */
+            s->iw[s->pfree++] = j;
+            *lp_nv += s->nv[j];
+            s->nv[j] = -s->nv[j];
+            dfm__amd_remove(s, j);
         }
-        s->nv[p] = -nvp;
-        pme1 = s->pfree;
-        for (q = s->pe[p]; q < s->pe[p] + s->len[p]; q++) {
-            int32_t v = s->iw[q];
-            int is_elem = q < s->pe[p] + s->elen[p];
-            int64_t a, b;
-            if (is_elem) {
-                e = v;
-                if (s->status[e] != DFM__ELEM) continue;
-                a = s->pe[e];
-                b = a + s->len[e];
-            } else {
-                a = q;
-                b = q + 1;
-            }
-            for (; a < b; a++) {
-                int32_t j = s->iw[a];
-                if (s->status[j] != DFM__VAR || s->nv[j] <= 0) continue; /* eliminated, merged, or in L_p */
-                s->iw[s->pfree++] = j;
-                lp_nv += s->nv[j];
-                s->nv[j] = -s->nv[j];
-                dfm__amd_remove(s, j);
-            }
-            if (is_elem) {
-                /* e is absorbed into p */
+        if (is_elem) { /* e is absorbed into p */
+            s->status[e] = DFM__DEAD;
+            s->pe[e] = -1;
+            s->w[e] = 0;
+        }
+    }
+    *pme2 = s->pfree;
+    s->status[p] = DFM__ELEM;
+    s->pe[p] = *pme1;
+    s->len[p] = (int32_t)(*pme2 - *pme1);
+    s->elen[p] = 0;
+    s->degree[p] = *lp_nv;
+    return DFM_OK;
+}
+
+/* Step 3: |L_e \ L_p| for every element e next to a variable of L_p, as w[e] - wflg. */
+static void dfm__amd_external(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2)
+{
+    int64_t q;
+    int32_t i;
+    if (s->wflg > INT64_MAX / 4) {
+        for (i = 0; i < s->n; i++)
+            if (s->w[i] != 0) s->w[i] = 1;
+        s->wflg = 2;
+    }
+    for (q = pme1; q < pme2; q++) {
+        int32_t v = s->iw[q], nvi = -s->nv[v];
+        int64_t r;
+        for (r = s->pe[v]; r < s->pe[v] + s->elen[v]; r++) {
+            int64_t we;
+            int32_t e = s->iw[r];
+            if (s->status[e] != DFM__ELEM || e == p) continue;
+            we = s->w[e];
+            if (we >= s->wflg) we -= nvi;
+            else we = (int64_t)s->degree[e] + s->wflg - nvi;
+            s->w[e] = we;
+        }
+    }
+}
+
+/* Step 4: prune each variable's lists (aggressive absorption, mass elimination), keep its
+   external degree in w[v] and hash it into the buckets. */
+static void dfm__amd_prune(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2, int32_t *lp_nv)
+{
+    int64_t q;
+    for (q = pme1; q < pme2; q++) {
+        int32_t v = s->iw[q], ne = 0, nvi = -s->nv[v];
+        int64_t r, pos, start = s->pe[v], deg = 0, h = 0;
+        int32_t old_elen = s->elen[v], old_len = s->len[v];
+        pos = start;
+        for (r = start; r < start + old_elen; r++) {
+            int64_t we;
+            int32_t e = s->iw[r];
+            if (s->status[e] != DFM__ELEM || e == p) continue;
+            we = s->w[e] - s->wflg;
+            if (we <= 0) { /* aggressive absorption: L_e is inside L_p */
                 s->status[e] = DFM__DEAD;
                 s->pe[e] = -1;
                 s->w[e] = 0;
-            }
-        }
-        pme2 = s->pfree;
-        pme_count = (int32_t)(pme2 - pme1);
-        s->status[p] = DFM__ELEM;
-        s->pe[p] = pme1;
-        s->len[p] = pme_count;
-        s->elen[p] = 0;
-        s->degree[p] = lp_nv;
-
-        /* 3. |L_e \ L_p| for every element e next to a variable of L_p, as w[e] - wflg */
-        if (wflg > INT64_MAX / 4) {
-            for (i = 0; i < n; i++)
-                if (s->w[i] != 0) s->w[i] = 1;
-            wflg = 2;
-        }
-        for (q = pme1; q < pme2; q++) {
-            int32_t v = s->iw[q], nvi = -s->nv[v];
-            int64_t r;
-            for (r = s->pe[v]; r < s->pe[v] + s->elen[v]; r++) {
-                int64_t we;
-                e = s->iw[r];
-                if (s->status[e] != DFM__ELEM || e == p) continue;
-                we = s->w[e];
-                if (we >= wflg) we -= nvi;
-                else we = (int64_t)s->degree[e] + wflg - nvi;
-                s->w[e] = we;
-            }
-        }
-
-        /* 4. prune each variable's lists, compute its degree bound and hash */
-        for (q = pme1; q < pme2; q++) {
-            int32_t v = s->iw[q], ne = 0, nvi = -s->nv[v];
-            int64_t r, pos = s->pe[v], start = s->pe[v], deg = 0, h = 0;
-            int32_t old_elen = s->elen[v], old_len = s->len[v];
-            pos = start;
-            for (r = start; r < start + old_elen; r++) {
-                int64_t we;
-                e = s->iw[r];
-                if (s->status[e] != DFM__ELEM || e == p) continue;
-                we = s->w[e] - wflg;
-                if (we <= 0) {
-                    /* aggressive absorption: L_e is inside L_p */
-                    s->status[e] = DFM__DEAD;
-                    s->pe[e] = -1;
-                    s->w[e] = 0;
-                    continue;
-                }
-                deg += we;
-                h += e;
-                s->iw[pos++] = e;
-                ne++;
-            }
-            for (r = start + old_elen; r < start + old_len; r++) {
-                int32_t j = s->iw[r];
-                if (s->status[j] != DFM__VAR || s->nv[j] <= 0) continue; /* gone, merged or in L_p */
-                deg += s->nv[j];
-                h += j;
-                s->iw[pos++] = j;
-            }
-            /* p goes first; there is room: the list dropped p itself or an element absorbed
-               into p (adjacency in the quotient graph is symmetric) */
-            memmove(s->iw + start + 1, s->iw + start, (size_t)(pos - start) * sizeof(int32_t));
-            pos++;
-            s->iw[start] = p;
-            s->elen[v] = ne + 1;
-            s->len[v] = (int32_t)(pos - start);
-            if (s->elen[v] == 1 && s->len[v] == 1) {
-                /* mass elimination: v is adjacent to p only, it goes with p */
-                s->nv[v] = 0;
-                s->status[v] = DFM__DEAD;
-                s->pe[v] = -1;
-                nel += nvi;
-                lp_nv -= nvi;
-                dfm__amd_join(s, p, v);
                 continue;
             }
-            /* degree bound (ADD 1996, eq. 4.1): temporarily in degree[] is the old bound */
-            s->w[v] = deg; /* external part, without L_p */
-            h %= n;
-            s->hash[v] = h;
-            s->hnext[v] = s->hhead[h];
-            s->hhead[h] = v;
+            deg += we;
+            h += e;
+            s->iw[pos++] = e;
+            ne++;
         }
-        s->degree[p] = lp_nv;
-
-        /* 5. supervariables: variables of L_p with equal lists (same hash bucket) are merged */
-        for (q = pme1; q < pme2; q++) {
-            int32_t v = s->iw[q], h;
-            if (s->status[v] != DFM__VAR || s->nv[v] == 0) continue;
-            h = (int32_t)s->hash[v];
-            if (s->hhead[h] < 0) continue;
-            {
-                int32_t a = s->hhead[h];
-                s->hhead[h] = -1;
-                while (a >= 0) {
-                    int32_t b = s->hnext[a], prev = a;
-                    int64_t r;
-                    if (s->status[a] != DFM__VAR) {
-                        a = b;
-                        continue;
-                    }
-                    /* mark a's list, then compare each later list of the bucket with it */
-                    stamp++;
-                    for (r = s->pe[a] + 1; r < s->pe[a] + s->len[a]; r++) s->mark[s->iw[r]] = stamp;
-                    while (b >= 0) {
-                        int32_t bn = s->hnext[b];
-                        int same = s->status[b] == DFM__VAR && s->len[b] == s->len[a] && s->elen[b] == s->elen[a] &&
-                                   (!cset || cset[a] == cset[b]);
-                        if (same)
-                            for (r = s->pe[b] + 1; r < s->pe[b] + s->len[b]; r++)
-                                if (s->mark[s->iw[r]] != stamp) {
-                                    same = 0;
-                                    break;
-                                }
-                        if (same) {
-                            /* b joins a */
-                            s->nv[a] += s->nv[b]; /* both negative */
-                            s->nv[b] = 0;
-                            s->status[b] = DFM__DEAD;
-                            s->pe[b] = -1;
-                            dfm__amd_join(s, a, b);
-                            s->hnext[prev] = bn;
-                        } else {
-                            prev = b;
-                        }
-                        b = bn;
-                    }
-                    a = s->hnext[a];
-                }
-            }
+        for (r = start + old_elen; r < start + old_len; r++) {
+            int32_t j = s->iw[r];
+            if (s->status[j] != DFM__VAR || s->nv[j] <= 0) continue; /* gone, merged or in L_p */
+            deg += s->nv[j];
+            h += j;
+            s->iw[pos++] = j;
         }
-
-        /* 6. final degrees, back into the degree lists; compact L_p */
-        {
-            int64_t wpos = pme1;
-            for (q = pme1; q < pme2; q++) {
-                int32_t v = s->iw[q], nvi;
-                int64_t d, d2, rest;
-                if (s->status[v] != DFM__VAR || s->nv[v] == 0) continue;
-                nvi = -s->nv[v];
-                rest = (int64_t)(n - nel) - nvi;
-                d = s->w[v] + lp_nv - nvi;
-                d2 = (int64_t)s->degree[v] + lp_nv - nvi;
-                if (d2 < d) d = d2;
-                if (rest < d) d = rest;
-                if (d < 0) d = 0;
-                s->nv[v] = nvi;
-                s->w[v] = 1;
-                dfm__amd_insert(s, v, (int32_t)d);
-                if (d < mindeg) mindeg = (int32_t)d;
-                s->iw[wpos++] = v;
-            }
-            s->len[p] = (int32_t)(wpos - pme1);
-            s->pfree = wpos;
+        /* p goes first; there is room: the list dropped p itself or an element absorbed into p
+           (adjacency in the quotient graph is symmetric) */
+        memmove(s->iw + start + 1, s->iw + start, (size_t)(pos - start) * sizeof(int32_t));
+        pos++;
+        s->iw[start] = p;
+        s->elen[v] = ne + 1;
+        s->len[v] = (int32_t)(pos - start);
+        if (s->elen[v] == 1 && s->len[v] == 1) { /* mass elimination: v is adjacent to p only */
+            s->nv[v] = 0;
+            s->status[v] = DFM__DEAD;
+            s->pe[v] = -1;
+            s->nel += nvi;
+            *lp_nv -= nvi;
+            dfm__amd_join(s, p, v);
+            continue;
         }
-        s->nv[p] = nvp;
-        if (s->len[p] == 0) {
-            s->status[p] = DFM__DEAD; /* element with nothing left: a root */
-            s->pe[p] = -1;
-        }
-        wflg += n + 1;
+        s->w[v] = deg; /* external part, without L_p; degree[] still holds the old bound */
+        h %= s->n;
+        s->hash[v] = h;
+        s->hnext[v] = s->hhead[h];
+        s->hhead[h] = v;
     }
-    /* the order: each pivot's members (the pivot, its supervariable, mass eliminations) */
-    k = 0;
+    s->degree[p] = *lp_nv;
+}
+
+/* Step 5 for one bucket: the variables with the same lists as a, merged into a. */
+static void dfm__amd_merge_bucket(dfm__amd *s, int32_t a)
+{
+    while (a >= 0) {
+        int32_t b = s->hnext[a], prev = a;
+        int64_t r;
+        if (s->status[a] != DFM__VAR) {
+            a = b;
+            continue;
+        }
+        s->stamp++; /* mark a's list, then compare each later list of the bucket with it */
+        for (r = s->pe[a] + 1; r < s->pe[a] + s->len[a]; r++) s->mark[s->iw[r]] = s->stamp;
+        while (b >= 0) {
+            int32_t bn = s->hnext[b];
+            int same = s->status[b] == DFM__VAR && s->len[b] == s->len[a] && s->elen[b] == s->elen[a] &&
+                       (!s->cset || s->cset[a] == s->cset[b]);
+            if (same)
+                for (r = s->pe[b] + 1; r < s->pe[b] + s->len[b]; r++)
+                    if (s->mark[s->iw[r]] != s->stamp) {
+                        same = 0;
+                        break;
+                    }
+            if (same) { /* b joins a */
+                s->nv[a] += s->nv[b]; /* both negative */
+                s->nv[b] = 0;
+                s->status[b] = DFM__DEAD;
+                s->pe[b] = -1;
+                dfm__amd_join(s, a, b);
+                s->hnext[prev] = bn;
+            } else {
+                prev = b;
+            }
+            b = bn;
+        }
+        a = s->hnext[a];
+    }
+}
+
+/* Step 5: supervariables: variables of L_p with equal lists (same hash bucket) are merged. */
+static void dfm__amd_supervariables(dfm__amd *s, int64_t pme1, int64_t pme2)
+{
+    int64_t q;
+    for (q = pme1; q < pme2; q++) {
+        int32_t v = s->iw[q], h, a;
+        if (s->status[v] != DFM__VAR || s->nv[v] == 0) continue;
+        h = (int32_t)s->hash[v];
+        if (s->hhead[h] < 0) continue;
+        a = s->hhead[h];
+        s->hhead[h] = -1;
+        dfm__amd_merge_bucket(s, a);
+    }
+}
+
+/* Step 6: the approximate degrees (ADD 1996, eq. 4.1), back into the degree lists; L_p
+   compacted to its live variables. */
+static void dfm__amd_degrees(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2, int32_t lp_nv)
+{
+    int64_t q, wpos = pme1;
+    for (q = pme1; q < pme2; q++) {
+        int32_t v = s->iw[q], nvi;
+        int64_t d, d2, rest;
+        if (s->status[v] != DFM__VAR || s->nv[v] == 0) continue;
+        nvi = -s->nv[v];
+        rest = (int64_t)(s->n - s->nel) - nvi;
+        d = s->w[v] + lp_nv - nvi;
+        d2 = (int64_t)s->degree[v] + lp_nv - nvi;
+        if (d2 < d) d = d2;
+        if (rest < d) d = rest;
+        if (d < 0) d = 0;
+        s->nv[v] = nvi;
+        s->w[v] = 1;
+        dfm__amd_insert(s, v, (int32_t)d);
+        if (d < s->mindeg) s->mindeg = (int32_t)d;
+        s->iw[wpos++] = v;
+    }
+    s->len[p] = (int32_t)(wpos - pme1);
+    s->pfree = wpos;
+}
+
+/* The order: each pivot's members (the pivot, its supervariable, mass eliminations), then the
+   dense rows. */
+static dfm_result dfm__amd_permutation(const dfm__amd *s, int32_t npivots, const size_t *adj_start, int32_t *perm)
+{
+    int32_t i, k = 0;
     for (i = 0; i < npivots; i++) {
         int32_t v;
         for (v = s->first[s->order_pivot[i]]; v >= 0; v = s->follow[v]) perm[k++] = v;
     }
-    for (i = 0; i < n; i++)
-        if (s->status[i] == DFM__DEAD && (int64_t)(adj_start[i + 1] - adj_start[i]) > dense_limit) perm[k++] = i;
-    if (k != n) err = DFM_ERR_INVALID_ARGUMENT; /* cannot happen: every node is ordered once */
-done:
-    dfm__free(al, s->iw);
-    dfm__free(al, s->pe);
-    dfm__free(al, s->len);
-    dfm__free(al, s->elen);
-    dfm__free(al, s->nv);
-    dfm__free(al, s->degree);
-    dfm__free(al, s->status);
-    dfm__free(al, s->head);
-    dfm__free(al, s->next);
-    dfm__free(al, s->last);
-    dfm__free(al, s->w);
-    dfm__free(al, s->hhead);
-    dfm__free(al, s->hnext);
-    dfm__free(al, s->hash);
-    dfm__free(al, s->mark);
-    dfm__free(al, s->first);
-    dfm__free(al, s->tail);
-    dfm__free(al, s->follow);
-    dfm__free(al, s->order_pivot);
-    dfm__free(al, s->inlist);
+    for (i = 0; i < s->n; i++)
+        if (s->status[i] == DFM__DEAD && (int64_t)(adj_start[i + 1] - adj_start[i]) > s->dense_limit) perm[k++] = i;
+    return k == s->n ? DFM_OK : DFM_ERR_INVALID_ARGUMENT; /* cannot happen: every node once */
+}
+
+/* AMD on the pattern of a symmetric graph given by full adjacency (both directions, no
+   diagonal): adj_start[n+1], adj. perm[k] = node eliminated k-th. With cset (constrained
+   minimum degree, as in CAMD), pivots come from the lowest constraint set that has variables
+   left; supervariables never mix sets. */
+static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const int32_t *cset,
+                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
+{
+    dfm__amd S, *s = &S;
+    int32_t npivots = 0;
+    dfm_result err = dfm__amd_alloc(s, n, adj_start[n], al);
+    if (err == DFM_OK) dfm__amd_init(s, adj_start, adj, cset);
+    while (err == DFM_OK && s->nel < n - s->dense_count) {
+        int32_t p, nvp, lp_nv;
+        int64_t pme1, pme2;
+        /* 1. the variable of minimum approximate degree */
+        while (s->mindeg < n && s->head[s->mindeg] < 0) s->mindeg++;
+        if (s->mindeg >= n && cset) {
+            dfm__amd_next_set(s);
+            continue;
+        }
+        p = s->head[s->mindeg];
+        dfm__amd_remove(s, p);
+        nvp = s->nv[p];
+        s->order_pivot[npivots++] = p;
+        s->nel += nvp;
+        if (progress && (npivots & 1023) == 0 && progress(puser, 0.5f * (float)s->nel / (float)n)) {
+            err = DFM_CANCELLED;
+            break;
+        }
+        err = dfm__amd_form_element(s, p, &pme1, &pme2, &lp_nv); /* 2 */
+        if (err != DFM_OK) break;
+        dfm__amd_external(s, p, pme1, pme2);                      /* 3 */
+        dfm__amd_prune(s, p, pme1, pme2, &lp_nv);                 /* 4 */
+        dfm__amd_supervariables(s, pme1, pme2);                   /* 5 */
+        dfm__amd_degrees(s, p, pme1, pme2, lp_nv);                /* 6 */
+        s->nv[p] = nvp;
+        if (s->len[p] == 0) { /* an element with nothing left: a root */
+            s->status[p] = DFM__DEAD;
+            s->pe[p] = -1;
+        }
+        s->wflg += n + 1;
+    }
+    if (err == DFM_OK) err = dfm__amd_permutation(s, npivots, adj_start, perm);
+    dfm__amd_free(s);
     return err;
 }
 
