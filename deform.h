@@ -1660,6 +1660,77 @@ static void dfm__select(int32_t *ids, size_t n, size_t k, const double *coords, 
 #undef DFM__KEY_LESS
 }
 
+/* The axis whose median cut of part (m nodes, those with tag == stamp) crosses the fewest
+   edges; side[] is scratch. */
+static int dfm__nd_best_axis(int32_t *part, size_t m, const size_t *adj_start, const int32_t *adj,
+                             const double *coords, const int32_t *tag, int32_t stamp, int32_t *side)
+{
+    size_t best = (size_t)-1, half = m / 2, i, p;
+    int ax, axis = 0;
+    for (ax = 0; ax < 3; ax++) {
+        size_t cut = 0;
+        dfm__select(part, m, half, coords, ax);
+        for (i = 0; i < m; i++) side[part[i]] = i < half ? 0 : 1;
+        for (i = 0; i < half; i++)
+            for (p = adj_start[part[i]]; p < adj_start[part[i] + 1]; p++) cut += tag[adj[p]] == stamp && side[adj[p]] == 1;
+        if (cut < best) {
+            best = cut;
+            axis = ax;
+        }
+    }
+    return axis;
+}
+
+/* The boundary of each side: nodes with a neighbour on the other side get side |= 2; nl and nr
+   count them. */
+static void dfm__nd_boundary(const int32_t *part, size_t m, const size_t *adj_start, const int32_t *adj,
+                             const int32_t *tag, int32_t stamp, int32_t *side, size_t *nl, size_t *nr)
+{
+    size_t i, p;
+    *nl = *nr = 0;
+    for (i = 0; i < m; i++) {
+        int32_t v = part[i];
+        for (p = adj_start[v]; p < adj_start[v + 1]; p++) {
+            int32_t u = adj[p];
+            if (tag[u] == stamp && (side[u] & 1) != (side[v] & 1)) {
+                if (side[v] < 2) {
+                    if (side[v] == 0) (*nl)++;
+                    else (*nr)++;
+                }
+                side[v] |= 2;
+                break;
+            }
+        }
+    }
+}
+
+/* Reorders part as [side 0 without separator][side 1 without separator][separator] (the
+   separator: sep_side's boundary); *a = the first group's size, *s0 = the separator's start. */
+static void dfm__nd_layout(int32_t *part, size_t m, const int32_t *side, int32_t sep_side, int32_t *tmp, size_t *a,
+                           size_t *s0)
+{
+    size_t k, b;
+    *a = 0;
+    for (k = 0; k < m; k++) {
+        int32_t v = part[k];
+        int sd = side[v] & 1, bd = side[v] >> 1;
+        if (sd == 0 && !(bd && sep_side == 0)) tmp[(*a)++] = v;
+    }
+    b = *a;
+    for (k = 0; k < m; k++) {
+        int32_t v = part[k];
+        int sd = side[v] & 1, bd = side[v] >> 1;
+        if (sd == 1 && !(bd && sep_side == 1)) tmp[b++] = v;
+    }
+    *s0 = b;
+    for (k = 0; k < m; k++) {
+        int32_t v = part[k];
+        int sd = side[v] & 1, bd = side[v] >> 1;
+        if (bd && sd == sep_side) tmp[b++] = v;
+    }
+    memcpy(part, tmp, m * sizeof(int32_t));
+}
+
 static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const double *coords,
                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
 {
@@ -1684,9 +1755,9 @@ static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_
     stack[top++].hi = (size_t)n;
     while (top > 0) {
         dfm__nd_task tk = stack[--top];
-        size_t m = tk.hi - tk.lo, half, nl = 0, nr = 0, p, k;
+        size_t m = tk.hi - tk.lo, half = m / 2, nl, nr, a, s0, k;
         int32_t *part = nodes + tk.lo;
-        int axis = 0, ax;
+        int axis;
         stamp++;
         for (i = 0; i < m; i++) tag[part[i]] = stamp;
         if (m <= DFM__ND_LEAF) {
@@ -1697,82 +1768,28 @@ static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_
             }
             continue;
         }
-        half = m / 2;
-        {
-            /* the axis whose median cut crosses the fewest edges */
-            size_t best = (size_t)-1;
-            for (ax = 0; ax < 3; ax++) {
-                size_t cut = 0;
-                dfm__select(part, m, half, coords, ax);
-                for (i = 0; i < m; i++) side[part[i]] = i < half ? 0 : 1;
-                for (i = 0; i < half; i++)
-                    for (p = adj_start[part[i]]; p < adj_start[part[i] + 1]; p++)
-                        cut += tag[adj[p]] == stamp && side[adj[p]] == 1;
-                if (cut < best) {
-                    best = cut;
-                    axis = ax;
-                }
-            }
-        }
+        axis = dfm__nd_best_axis(part, m, adj_start, adj, coords, tag, stamp, side);
         dfm__select(part, m, half, coords, axis);
         for (i = 0; i < m; i++) side[part[i]] = i < half ? 0 : 1;
-        /* boundary of each side: nodes with a neighbour on the other side (side 2 + s marks) */
-        for (i = 0; i < m; i++) {
-            int32_t v = part[i];
-            for (p = adj_start[v]; p < adj_start[v + 1]; p++) {
-                int32_t u = adj[p];
-                if (tag[u] == stamp && (side[u] & 1) != (side[v] & 1)) {
-                    if (side[v] < 2) {
-                        if (side[v] == 0) nl++;
-                        else nr++;
-                    }
-                    side[v] |= 2;
-                    break;
-                }
-            }
+        dfm__nd_boundary(part, m, adj_start, adj, tag, stamp, side, &nl, &nr);
+        /* separator = the smaller boundary; the other boundary's nodes stay in their half */
+        dfm__nd_layout(part, m, side, nl <= nr ? 0 : 1, local, &a, &s0);
+        /* the separator comes after both halves and after every deeper separator */
+        for (k = s0; k < m; k++) cset[part[k]] = INT32_MAX / 2 - tk.depth;
+        done += m - s0;
+        if (top + 2 > cap) { /* cannot happen: each task splits into smaller ones */
+            err = DFM_ERR_INVALID_ARGUMENT;
+            goto done;
         }
-        {
-            /* separator = the smaller boundary; the other boundary's nodes stay in their half */
-            int32_t sep_side = nl <= nr ? 0 : 1;
-            size_t ns = sep_side == 0 ? nl : nr, a = 0, b, s0;
-            int32_t *tmp = local; /* scratch of m entries */
-            /* layout: [side 0 without separator][side 1 without separator][separator] */
-            for (k = 0; k < m; k++) {
-                int32_t v = part[k];
-                int sd = side[v] & 1, bd = side[v] >> 1;
-                if (sd == 0 && !(bd && sep_side == 0)) tmp[a++] = v;
-            }
-            b = a;
-            for (k = 0; k < m; k++) {
-                int32_t v = part[k];
-                int sd = side[v] & 1, bd = side[v] >> 1;
-                if (sd == 1 && !(bd && sep_side == 1)) tmp[b++] = v;
-            }
-            s0 = b;
-            for (k = 0; k < m; k++) {
-                int32_t v = part[k];
-                int sd = side[v] & 1, bd = side[v] >> 1;
-                if (bd && sd == sep_side) tmp[b++] = v;
-            }
-            (void)ns;
-            memcpy(part, tmp, m * sizeof(int32_t));
-            /* the separator comes after both halves and after every deeper separator */
-            for (k = s0; k < m; k++) cset[part[k]] = INT32_MAX / 2 - tk.depth;
-            done += m - s0;
-            if (top + 2 > cap) { /* cannot happen: each task splits into smaller ones */
-                err = DFM_ERR_INVALID_ARGUMENT;
-                goto done;
-            }
-            if (s0 > a) {
-                stack[top].lo = tk.lo + a;
-                stack[top].depth = tk.depth + 1;
-                stack[top++].hi = tk.lo + s0;
-            }
-            if (a > 0) {
-                stack[top].lo = tk.lo;
-                stack[top].depth = tk.depth + 1;
-                stack[top++].hi = tk.lo + a;
-            }
+        if (s0 > a) {
+            stack[top].lo = tk.lo + a;
+            stack[top].depth = tk.depth + 1;
+            stack[top++].hi = tk.lo + s0;
+        }
+        if (a > 0) {
+            stack[top].lo = tk.lo;
+            stack[top].depth = tk.depth + 1;
+            stack[top++].hi = tk.lo + a;
         }
     }
     err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm);
