@@ -2563,6 +2563,7 @@ TVTDEF void tvt_march(const tvt_tvt *t, float wd, int level, const tvt_shade_des
 {
     int coarse = t->frames[0].levels - 1;
     float step = 0.5f * (float)(1 << level), skip = 0.5f * (float)(1 << coarse), T = 1.0f, x = 0.0f;
+    int empty = 1; /* the coarse test only after an empty step: inside grass it would not skip */
     tvt_shade_desc sd;
     tvt__shade_resolve(s, &sd);
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
@@ -2571,8 +2572,9 @@ TVTDEF void tvt_march(const tvt_tvt *t, float wd, int level, const tvt_shade_des
         p[0] = origin[0] + (x + 0.5f * h) * dir[0];
         p[1] = origin[1] + (x + 0.5f * h) * dir[1];
         p[2] = origin[2] + (x + 0.5f * h) * dir[2];
-        if (skip > step && tvt_tvt_density(t, wd, coarse, p) <= 0.0f) { x += skip; continue; }
+        if (skip > step && empty && tvt_tvt_density(t, wd, coarse, p) <= 0.0f) { x += skip; continue; }
         alpha = tvt_shade_point(t, wd, level, &sd, p, dir, h, c);
+        empty = alpha <= 0.0f;
         rgb[0] += T * alpha * c[0]; rgb[1] += T * alpha * c[1]; rgb[2] += T * alpha * c[2];
         T *= 1.0f - alpha;
         x += h;

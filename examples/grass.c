@@ -191,7 +191,7 @@ static void trace(const scene *s, const float *o, const float *d, float pixel_an
     out->grass = 0;
     if (!clip_box(s, o, d, &t0, &t1)) { sky(d, out->rgb); return; }
     t = t0;
-    int ci = -1, cj = -1, v = 0;
+    int ci = -1, cj = -1, v = 0, empty = 1;
     float wd = 0.0f;
     while (t < t1 && T > 0.01f) {
         float p[3], gx, gy, h, zrel, q[3], dt[3], dl, fx, fy, step_w, c[3], alpha;
@@ -229,12 +229,13 @@ static void trace(const scene *s, const float *o, const float *d, float pixel_an
         dl = sqrtf(dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]);
         dt[0] /= dl; dt[1] /= dl; dt[2] /= dl;
         coarse = tv->frames[0].levels - 1;
-        if (coarse > level && tvt_tvt_density(tv, wd, coarse, q) <= 0.0f) {
+        if (coarse > level && empty && tvt_tvt_density(tv, wd, coarse, q) <= 0.0f) { /* only after an empty step */
             t += 0.5f * vox * (float)(1 << coarse) / (dl * vox);
             continue;
         }
         sd.shadow = s->shadow[v];
         alpha = tvt_shade_point(tv, wd, level, &sd, q, dt, step_w * dl, c);
+        empty = alpha <= 0.0f;
         rgb[0] += T * alpha * c[0]; rgb[1] += T * alpha * c[1]; rgb[2] += T * alpha * c[2];
         T *= 1.0f - alpha;
         t += step_w;
@@ -321,16 +322,17 @@ static int build_samples(grass_set *g, int res, int frames, uint64_t seed, int c
     return 1;
 }
 
+/* levels 0 = down to 8^3 (distant tiles are a few pixels) */
 static int build_variant(grass_set *g, int v, const tvt_tvt *samples, const tvt_ageing_fn *fns, int count,
-                         int frames, const float *sun)
+                         int frames, int levels, const float *sun)
 {
     tvt_tvt_options o = tvt_tvt_default_options();
     tvt_lod_options lo = tvt_lod_default_options();
     tvt_result r;
     int res = samples[0].frames[0].level[0].res;
     o.frames = frames;
-    lo.levels = 1; /* down to 8^3: distant tiles are a few pixels */
-    while ((res >> lo.levels) >= 8 && lo.levels < TVT_MAX_LEVELS) lo.levels++;
+    lo.levels = 1;
+    while ((res >> lo.levels) >= 8 && lo.levels < TVT_MAX_LEVELS && (levels == 0 || lo.levels < levels)) lo.levels++;
     o.lod = &lo;
     r = tvt_mingle_tvt(samples, fns, (size_t)count, &o, &g->variant[v]);
     if (r == TVT_OK) {
@@ -362,7 +364,7 @@ static int build_mountain_variants(grass_set *g, int frames, const float *sun)
             fn[k].delay = -0.08f + 0.2f * (float)((v * 4 + k) * 37 % 11) / 10.0f;
             fn[k].rate = 0.9f + 0.4f * (float)((v * 4 + k) * 53 % 7) / 6.0f;
         }
-        if (!build_variant(g, v, pick, fn, 4, frames, sun)) return 0;
+        if (!build_variant(g, v, pick, fn, 4, frames, 0, sun)) return 0;
     }
     return 1;
 }
@@ -449,7 +451,7 @@ static int scene_wither(int w, int h, int res, int frames, uint64_t seed, const 
     memset(&s, 0, sizeof(s));
     close_up(&s, res);
     ok = build_samples(&g, res, frames, seed, 4);
-    if (ok) ok = build_variant(&g, 0, g.sample, NULL, 4, frames, s.sun);
+    if (ok) ok = build_variant(&g, 0, g.sample, NULL, 4, frames, 2, s.sun);
     s.variant[0] = &g.variant[0]; s.shadow[0] = &g.shadow[0]; s.variant_count = 1;
     for (k = 0; ok && k < 6; k++) {
         s.wd = (float)k / 5.0f;
@@ -483,9 +485,9 @@ static int scene_mingle(int w, int h, int res, int frames, uint64_t seed, const 
         f1[k].delay = -0.2f + 0.4f * (float)k / (SAMPLES - 1); f1[k].rate = 1.0f;
         f2[k].delay = 0.0f; f2[k].rate = 0.6f + 1.2f * (float)k / (SAMPLES - 1);
     }
-    if (ok) ok = build_variant(&g, 0, g.sample, f1, SAMPLES, frames, s.sun);
-    if (ok) ok = build_variant(&g, 1, g.sample, f2, SAMPLES, frames, s.sun);
-    if (ok) ok = build_variant(&g, 2, g.sample, f1, 3, frames, s.sun);
+    if (ok) ok = build_variant(&g, 0, g.sample, f1, SAMPLES, frames, 2, s.sun);
+    if (ok) ok = build_variant(&g, 1, g.sample, f2, SAMPLES, frames, 2, s.sun);
+    if (ok) ok = build_variant(&g, 2, g.sample, f1, 3, frames, 2, s.sun);
     s.variant_count = 1;
     for (k = 0; ok && k < 9; k++) {
         int v = k < 3 ? 0 : k < 6 ? 1 : (k == 6 ? 0 : 2);
