@@ -2845,278 +2845,300 @@ static void dfm__solve_generic(const dfm_chol *c, double *w, size_t q)
 }
 
 #ifdef DFM__V2
+/* dfm__solve3, forward substitution L y = b for supernode s */
+static void dfm__solve3_forward(const dfm_chol *c, size_t s, double *w, double *tmp)
+{
+    size_t cc, r, k;
+    size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
+    size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
+    const int32_t *rs = c->rows + c->sup_rowptr[s];
+    const double *Ls = c->values + c->sup_valptr[s];
+    double *y = tmp;
+    memcpy(y, w + 3 * f, 3 * nc * sizeof(double));
+    memset(y + 3 * nc, 0, 3 * (nr - nc) * sizeof(double));
+    for (cc = 0; cc + 4 <= nc; cc += 4) {
+        const double *l[4];
+        dfm__v2 xy[4];
+        double z[4];
+        size_t i2;
+        for (k = 0; k < 4; k++) l[k] = Ls + (cc + k) * nr;
+        /* the 4 x 4 triangle */
+        for (k = 0; k < 4; k++) {
+            dfm__v2 t = dfm__ld2(y + 3 * (cc + k));
+            double tz = y[3 * (cc + k) + 2], d = l[k][cc + k];
+            dfm__v2 dv = {d, d};
+            for (i2 = 0; i2 < k; i2++) {
+                double e = l[i2][cc + k];
+                dfm__v2 ev = {e, e};
+                t -= ev * xy[i2];
+                tz -= e * z[i2];
+            }
+            xy[k] = t / dv;
+            z[k] = tz / d;
+            dfm__st2(y + 3 * (cc + k), xy[k]);
+            y[3 * (cc + k) + 2] = z[k];
+        }
+        for (r = cc + 4; r < nr; r++) {
+            double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
+            double *yr = y + 3 * r;
+            dfm__v2 w0 = {v0, v0}, w1 = {v1, v1}, w2 = {v2, v2}, w3 = {v3, v3};
+            dfm__st2(yr, dfm__ld2(yr) - ((w0 * xy[0] + w1 * xy[1]) + (w2 * xy[2] + w3 * xy[3])));
+            yr[2] -= (v0 * z[0] + v1 * z[1]) + (v2 * z[2] + v3 * z[3]);
+        }
+    }
+    for (; cc < nc; cc++) {
+        const double *l0 = Ls + cc * nr;
+        double d0 = l0[cc], z0;
+        dfm__v2 dv = {d0, d0}, xy0 = dfm__ld2(y + 3 * cc) / dv;
+        z0 = y[3 * cc + 2] / d0;
+        dfm__st2(y + 3 * cc, xy0);
+        y[3 * cc + 2] = z0;
+        for (r = cc + 1; r < nr; r++) {
+            double v0 = l0[r];
+            double *yr = y + 3 * r;
+            dfm__v2 w0 = {v0, v0};
+            dfm__st2(yr, dfm__ld2(yr) - w0 * xy0);
+            yr[2] -= v0 * z0;
+        }
+    }
+    memcpy(w + 3 * f, y, 3 * nc * sizeof(double));
+    for (r = nc; r < nr; r++) {
+        double *xr = w + 3 * (size_t)rs[r];
+        const double *yr = y + 3 * r;
+        xr[0] += yr[0];
+        xr[1] += yr[1];
+        xr[2] += yr[2];
+    }
+}
+
+/* dfm__solve3, backward substitution L^T x = y for supernode s */
+static void dfm__solve3_backward(const dfm_chol *c, size_t s, double *w, double *tmp)
+{
+    size_t cc, r, k;
+    size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
+    size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
+    const int32_t *rs = c->rows + c->sup_rowptr[s];
+    const double *Ls = c->values + c->sup_valptr[s];
+    double *y = tmp;
+    size_t nb = nc & ~(size_t)3; /* columns [0, nb) go in blocks of 4, the rest one by one */
+    memcpy(y, w + 3 * f, 3 * nc * sizeof(double));
+    for (r = nc; r < nr; r++) {
+        const double *xr = w + 3 * (size_t)rs[r];
+        double *yr = y + 3 * r;
+        yr[0] = xr[0];
+        yr[1] = xr[1];
+        yr[2] = xr[2];
+    }
+    for (cc = nc; cc-- > nb;) {
+        const double *l0 = Ls + cc * nr;
+        dfm__v2 xy0 = dfm__ld2(y + 3 * cc);
+        double z0 = y[3 * cc + 2], d0 = l0[cc];
+        dfm__v2 dv = {d0, d0};
+        for (r = cc + 1; r < nr; r++) {
+            double v0 = l0[r];
+            const double *yr = y + 3 * r;
+            dfm__v2 w0 = {v0, v0};
+            xy0 -= w0 * dfm__ld2(yr);
+            z0 -= v0 * yr[2];
+        }
+        dfm__st2(y + 3 * cc, xy0 / dv);
+        y[3 * cc + 2] = z0 / d0;
+    }
+    for (cc = nb; cc >= 4; cc -= 4) {
+        size_t c0 = cc - 4, i2;
+        const double *l[4];
+        dfm__v2 xy[4];
+        double z[4];
+        for (k = 0; k < 4; k++) {
+            l[k] = Ls + (c0 + k) * nr;
+            xy[k] = dfm__ld2(y + 3 * (c0 + k));
+            z[k] = y[3 * (c0 + k) + 2];
+        }
+        for (r = cc; r < nr; r++) {
+            double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
+            const double *yr = y + 3 * r;
+            dfm__v2 pq = dfm__ld2(yr), w0 = {v0, v0}, w1 = {v1, v1}, w2 = {v2, v2}, w3 = {v3, v3};
+            double u = yr[2];
+            xy[0] -= w0 * pq;
+            xy[1] -= w1 * pq;
+            xy[2] -= w2 * pq;
+            xy[3] -= w3 * pq;
+            z[0] -= v0 * u;
+            z[1] -= v1 * u;
+            z[2] -= v2 * u;
+            z[3] -= v3 * u;
+        }
+        /* the 4 x 4 block of L^T, bottom up */
+        for (k = 4; k-- > 0;) {
+            double d = l[k][c0 + k];
+            dfm__v2 dv = {d, d};
+            for (i2 = k + 1; i2 < 4; i2++) {
+                double e = l[k][c0 + i2];
+                dfm__v2 ev = {e, e};
+                xy[k] -= ev * xy[i2];
+                z[k] -= e * z[i2];
+            }
+            xy[k] /= dv;
+            z[k] /= d;
+            dfm__st2(y + 3 * (c0 + k), xy[k]);
+            y[3 * (c0 + k) + 2] = z[k];
+        }
+    }
+    memcpy(w + 3 * f, y, 3 * nc * sizeof(double));
+}
+
 /* The same for exactly 3 right-hand sides (x, y, z), the common case, with the supernode's rows
    gathered into the dense tmp (3 x nrows, interleaved) so that the indirect row accesses happen
    once a row per supernode, and columns taken four at a time (a quarter of the traffic on tmp).
    x and y of a row travel in one two-lane vector, z beside it. */
 static void dfm__solve3(const dfm_chol *c, double *w, double *tmp)
 {
-    size_t s, ns = c->nsuper, cc, r, k;
-    for (s = 0; s < ns; s++) {
-        size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
-        size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
-        const int32_t *rs = c->rows + c->sup_rowptr[s];
-        const double *Ls = c->values + c->sup_valptr[s];
-        double *y = tmp;
-        memcpy(y, w + 3 * f, 3 * nc * sizeof(double));
-        memset(y + 3 * nc, 0, 3 * (nr - nc) * sizeof(double));
-        for (cc = 0; cc + 4 <= nc; cc += 4) {
-            const double *l[4];
-            dfm__v2 xy[4];
-            double z[4];
-            size_t i2;
-            for (k = 0; k < 4; k++) l[k] = Ls + (cc + k) * nr;
-            /* the 4 x 4 triangle */
-            for (k = 0; k < 4; k++) {
-                dfm__v2 t = dfm__ld2(y + 3 * (cc + k));
-                double tz = y[3 * (cc + k) + 2], d = l[k][cc + k];
-                dfm__v2 dv = {d, d};
-                for (i2 = 0; i2 < k; i2++) {
-                    double e = l[i2][cc + k];
-                    dfm__v2 ev = {e, e};
-                    t -= ev * xy[i2];
-                    tz -= e * z[i2];
-                }
-                xy[k] = t / dv;
-                z[k] = tz / d;
-                dfm__st2(y + 3 * (cc + k), xy[k]);
-                y[3 * (cc + k) + 2] = z[k];
-            }
-            for (r = cc + 4; r < nr; r++) {
-                double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
-                double *yr = y + 3 * r;
-                dfm__v2 w0 = {v0, v0}, w1 = {v1, v1}, w2 = {v2, v2}, w3 = {v3, v3};
-                dfm__st2(yr, dfm__ld2(yr) - ((w0 * xy[0] + w1 * xy[1]) + (w2 * xy[2] + w3 * xy[3])));
-                yr[2] -= (v0 * z[0] + v1 * z[1]) + (v2 * z[2] + v3 * z[3]);
-            }
-        }
-        for (; cc < nc; cc++) {
-            const double *l0 = Ls + cc * nr;
-            double d0 = l0[cc], z0;
-            dfm__v2 dv = {d0, d0}, xy0 = dfm__ld2(y + 3 * cc) / dv;
-            z0 = y[3 * cc + 2] / d0;
-            dfm__st2(y + 3 * cc, xy0);
-            y[3 * cc + 2] = z0;
-            for (r = cc + 1; r < nr; r++) {
-                double v0 = l0[r];
-                double *yr = y + 3 * r;
-                dfm__v2 w0 = {v0, v0};
-                dfm__st2(yr, dfm__ld2(yr) - w0 * xy0);
-                yr[2] -= v0 * z0;
-            }
-        }
-        memcpy(w + 3 * f, y, 3 * nc * sizeof(double));
-        for (r = nc; r < nr; r++) {
-            double *xr = w + 3 * (size_t)rs[r];
-            const double *yr = y + 3 * r;
-            xr[0] += yr[0];
-            xr[1] += yr[1];
-            xr[2] += yr[2];
-        }
-    }
-    for (s = ns; s-- > 0;) {
-        size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
-        size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
-        const int32_t *rs = c->rows + c->sup_rowptr[s];
-        const double *Ls = c->values + c->sup_valptr[s];
-        double *y = tmp;
-        size_t nb = nc & ~(size_t)3; /* columns [0, nb) go in blocks of 4, the rest one by one */
-        memcpy(y, w + 3 * f, 3 * nc * sizeof(double));
-        for (r = nc; r < nr; r++) {
-            const double *xr = w + 3 * (size_t)rs[r];
-            double *yr = y + 3 * r;
-            yr[0] = xr[0];
-            yr[1] = xr[1];
-            yr[2] = xr[2];
-        }
-        for (cc = nc; cc-- > nb;) {
-            const double *l0 = Ls + cc * nr;
-            dfm__v2 xy0 = dfm__ld2(y + 3 * cc);
-            double z0 = y[3 * cc + 2], d0 = l0[cc];
-            dfm__v2 dv = {d0, d0};
-            for (r = cc + 1; r < nr; r++) {
-                double v0 = l0[r];
-                const double *yr = y + 3 * r;
-                dfm__v2 w0 = {v0, v0};
-                xy0 -= w0 * dfm__ld2(yr);
-                z0 -= v0 * yr[2];
-            }
-            dfm__st2(y + 3 * cc, xy0 / dv);
-            y[3 * cc + 2] = z0 / d0;
-        }
-        for (cc = nb; cc >= 4; cc -= 4) {
-            size_t c0 = cc - 4, i2;
-            const double *l[4];
-            dfm__v2 xy[4];
-            double z[4];
-            for (k = 0; k < 4; k++) {
-                l[k] = Ls + (c0 + k) * nr;
-                xy[k] = dfm__ld2(y + 3 * (c0 + k));
-                z[k] = y[3 * (c0 + k) + 2];
-            }
-            for (r = cc; r < nr; r++) {
-                double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
-                const double *yr = y + 3 * r;
-                dfm__v2 pq = dfm__ld2(yr), w0 = {v0, v0}, w1 = {v1, v1}, w2 = {v2, v2}, w3 = {v3, v3};
-                double u = yr[2];
-                xy[0] -= w0 * pq;
-                xy[1] -= w1 * pq;
-                xy[2] -= w2 * pq;
-                xy[3] -= w3 * pq;
-                z[0] -= v0 * u;
-                z[1] -= v1 * u;
-                z[2] -= v2 * u;
-                z[3] -= v3 * u;
-            }
-            /* the 4 x 4 block of L^T, bottom up */
-            for (k = 4; k-- > 0;) {
-                double d = l[k][c0 + k];
-                dfm__v2 dv = {d, d};
-                for (i2 = k + 1; i2 < 4; i2++) {
-                    double e = l[k][c0 + i2];
-                    dfm__v2 ev = {e, e};
-                    xy[k] -= ev * xy[i2];
-                    z[k] -= e * z[i2];
-                }
-                xy[k] /= dv;
-                z[k] /= d;
-                dfm__st2(y + 3 * (c0 + k), xy[k]);
-                y[3 * (c0 + k) + 2] = z[k];
-            }
-        }
-        memcpy(w + 3 * f, y, 3 * nc * sizeof(double));
-    }
+    size_t s, ns = c->nsuper;
+    for (s = 0; s < ns; s++) dfm__solve3_forward(c, s, w, tmp);
+    for (s = ns; s-- > 0;)
+        dfm__solve3_backward(c, s, w, tmp);
 }
 #endif
 
 #if defined(DFM__V2) && defined(DFM__AVX)
+/* dfm__solve3_avx, forward substitution L y = b for supernode s */
+__attribute__((target("avx"))) static void dfm__solve3_avx_forward(const dfm_chol *c, size_t s, double *w, double *tmp)
+{
+    size_t cc, r, k, i2;
+    dfm__v4 zero = {0.0, 0.0, 0.0, 0.0};
+    size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
+    size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
+    const int32_t *rs = c->rows + c->sup_rowptr[s];
+    const double *Ls = c->values + c->sup_valptr[s];
+    dfm__v4 *y = (dfm__v4 *)(void *)tmp;
+    for (r = 0; r < nc; r++) {
+        const double *x = w + 3 * (f + r);
+        dfm__v4 v = {x[0], x[1], x[2], 0.0};
+        y[r] = v;
+    }
+    for (r = nc; r < nr; r++) y[r] = zero;
+    for (cc = 0; cc + 4 <= nc; cc += 4) {
+        const double *l[4];
+        dfm__v4 x[4];
+        for (k = 0; k < 4; k++) l[k] = Ls + (cc + k) * nr;
+        for (k = 0; k < 4; k++) {
+            dfm__v4 t = y[cc + k];
+            double d = l[k][cc + k];
+            dfm__v4 dv = {d, d, d, d};
+            for (i2 = 0; i2 < k; i2++) {
+                double e = l[i2][cc + k];
+                dfm__v4 ev = {e, e, e, e};
+                t -= ev * x[i2];
+            }
+            x[k] = t / dv;
+            y[cc + k] = x[k];
+        }
+        for (r = cc + 4; r < nr; r++) {
+            double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
+            dfm__v4 w0 = {v0, v0, v0, v0}, w1 = {v1, v1, v1, v1}, w2 = {v2, v2, v2, v2}, w3 = {v3, v3, v3, v3};
+            y[r] -= (w0 * x[0] + w1 * x[1]) + (w2 * x[2] + w3 * x[3]);
+        }
+    }
+    for (; cc < nc; cc++) {
+        const double *l0 = Ls + cc * nr;
+        double d0 = l0[cc];
+        dfm__v4 dv = {d0, d0, d0, d0}, x0 = y[cc] / dv;
+        y[cc] = x0;
+        for (r = cc + 1; r < nr; r++) {
+            double v0 = l0[r];
+            dfm__v4 w0 = {v0, v0, v0, v0};
+            y[r] -= w0 * x0;
+        }
+    }
+    for (r = 0; r < nc; r++) {
+        double *x = w + 3 * (f + r);
+        x[0] = y[r][0];
+        x[1] = y[r][1];
+        x[2] = y[r][2];
+    }
+    for (r = nc; r < nr; r++) {
+        double *x = w + 3 * (size_t)rs[r];
+        x[0] += y[r][0];
+        x[1] += y[r][1];
+        x[2] += y[r][2];
+    }
+}
+
+/* dfm__solve3_avx, backward substitution L^T x = y for supernode s */
+__attribute__((target("avx"))) static void dfm__solve3_avx_backward(const dfm_chol *c, size_t s, double *w, double *tmp)
+{
+    size_t cc, r, k, i2;
+    size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
+    size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
+    const int32_t *rs = c->rows + c->sup_rowptr[s];
+    const double *Ls = c->values + c->sup_valptr[s];
+    dfm__v4 *y = (dfm__v4 *)(void *)tmp;
+    size_t nb = nc & ~(size_t)3;
+    for (r = 0; r < nr; r++) {
+        const double *x = w + 3 * (r < nc ? f + r : (size_t)rs[r]);
+        dfm__v4 v = {x[0], x[1], x[2], 0.0};
+        y[r] = v;
+    }
+    for (cc = nc; cc-- > nb;) {
+        const double *l0 = Ls + cc * nr;
+        dfm__v4 x0 = y[cc];
+        double d0 = l0[cc];
+        dfm__v4 dv = {d0, d0, d0, d0};
+        for (r = cc + 1; r < nr; r++) {
+            double v0 = l0[r];
+            dfm__v4 w0 = {v0, v0, v0, v0};
+            x0 -= w0 * y[r];
+        }
+        y[cc] = x0 / dv;
+    }
+    for (cc = nb; cc >= 4; cc -= 4) {
+        size_t c0 = cc - 4;
+        const double *l[4];
+        dfm__v4 x[4];
+        for (k = 0; k < 4; k++) {
+            l[k] = Ls + (c0 + k) * nr;
+            x[k] = y[c0 + k];
+        }
+        for (r = cc; r < nr; r++) {
+            double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
+            dfm__v4 pq = y[r], w0 = {v0, v0, v0, v0}, w1 = {v1, v1, v1, v1}, w2 = {v2, v2, v2, v2};
+            dfm__v4 w3 = {v3, v3, v3, v3};
+            x[0] -= w0 * pq;
+            x[1] -= w1 * pq;
+            x[2] -= w2 * pq;
+            x[3] -= w3 * pq;
+        }
+        for (k = 4; k-- > 0;) {
+            double d = l[k][c0 + k];
+            dfm__v4 dv = {d, d, d, d};
+            for (i2 = k + 1; i2 < 4; i2++) {
+                double e = l[k][c0 + i2];
+                dfm__v4 ev = {e, e, e, e};
+                x[k] -= ev * x[i2];
+            }
+            x[k] /= dv;
+            y[c0 + k] = x[k];
+        }
+    }
+    for (r = 0; r < nc; r++) {
+        double *x = w + 3 * (f + r);
+        x[0] = y[r][0];
+        x[1] = y[r][1];
+        x[2] = y[r][2];
+    }
+}
+
 /* dfm__solve3 with the row's x, y, z in one four-lane vector (tmp rows padded to 4 doubles),
    compiled for AVX and chosen at run time; the same operations in the same order per lane, so
    the same bits as dfm__solve3. */
 __attribute__((target("avx"))) static void dfm__solve3_avx(const dfm_chol *c, double *w, double *tmp)
 {
-    size_t s, ns = c->nsuper, cc, r, k, i2;
-    dfm__v4 zero = {0.0, 0.0, 0.0, 0.0};
+    size_t s, ns = c->nsuper;
     /* the vectors need 32-byte alignment: the caller left 4 spare doubles */
     tmp = (double *)(void *)(((uintptr_t)tmp + 31u) & ~(uintptr_t)31u);
-    for (s = 0; s < ns; s++) {
-        size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
-        size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
-        const int32_t *rs = c->rows + c->sup_rowptr[s];
-        const double *Ls = c->values + c->sup_valptr[s];
-        dfm__v4 *y = (dfm__v4 *)(void *)tmp;
-        for (r = 0; r < nc; r++) {
-            const double *x = w + 3 * (f + r);
-            dfm__v4 v = {x[0], x[1], x[2], 0.0};
-            y[r] = v;
-        }
-        for (r = nc; r < nr; r++) y[r] = zero;
-        for (cc = 0; cc + 4 <= nc; cc += 4) {
-            const double *l[4];
-            dfm__v4 x[4];
-            for (k = 0; k < 4; k++) l[k] = Ls + (cc + k) * nr;
-            for (k = 0; k < 4; k++) {
-                dfm__v4 t = y[cc + k];
-                double d = l[k][cc + k];
-                dfm__v4 dv = {d, d, d, d};
-                for (i2 = 0; i2 < k; i2++) {
-                    double e = l[i2][cc + k];
-                    dfm__v4 ev = {e, e, e, e};
-                    t -= ev * x[i2];
-                }
-                x[k] = t / dv;
-                y[cc + k] = x[k];
-            }
-            for (r = cc + 4; r < nr; r++) {
-                double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
-                dfm__v4 w0 = {v0, v0, v0, v0}, w1 = {v1, v1, v1, v1}, w2 = {v2, v2, v2, v2}, w3 = {v3, v3, v3, v3};
-                y[r] -= (w0 * x[0] + w1 * x[1]) + (w2 * x[2] + w3 * x[3]);
-            }
-        }
-        for (; cc < nc; cc++) {
-            const double *l0 = Ls + cc * nr;
-            double d0 = l0[cc];
-            dfm__v4 dv = {d0, d0, d0, d0}, x0 = y[cc] / dv;
-            y[cc] = x0;
-            for (r = cc + 1; r < nr; r++) {
-                double v0 = l0[r];
-                dfm__v4 w0 = {v0, v0, v0, v0};
-                y[r] -= w0 * x0;
-            }
-        }
-        for (r = 0; r < nc; r++) {
-            double *x = w + 3 * (f + r);
-            x[0] = y[r][0];
-            x[1] = y[r][1];
-            x[2] = y[r][2];
-        }
-        for (r = nc; r < nr; r++) {
-            double *x = w + 3 * (size_t)rs[r];
-            x[0] += y[r][0];
-            x[1] += y[r][1];
-            x[2] += y[r][2];
-        }
-    }
-    for (s = ns; s-- > 0;) {
-        size_t f = (size_t)c->sup_first[s], nc = (size_t)c->sup_first[s + 1] - f;
-        size_t nr = c->sup_rowptr[s + 1] - c->sup_rowptr[s];
-        const int32_t *rs = c->rows + c->sup_rowptr[s];
-        const double *Ls = c->values + c->sup_valptr[s];
-        dfm__v4 *y = (dfm__v4 *)(void *)tmp;
-        size_t nb = nc & ~(size_t)3;
-        for (r = 0; r < nr; r++) {
-            const double *x = w + 3 * (r < nc ? f + r : (size_t)rs[r]);
-            dfm__v4 v = {x[0], x[1], x[2], 0.0};
-            y[r] = v;
-        }
-        for (cc = nc; cc-- > nb;) {
-            const double *l0 = Ls + cc * nr;
-            dfm__v4 x0 = y[cc];
-            double d0 = l0[cc];
-            dfm__v4 dv = {d0, d0, d0, d0};
-            for (r = cc + 1; r < nr; r++) {
-                double v0 = l0[r];
-                dfm__v4 w0 = {v0, v0, v0, v0};
-                x0 -= w0 * y[r];
-            }
-            y[cc] = x0 / dv;
-        }
-        for (cc = nb; cc >= 4; cc -= 4) {
-            size_t c0 = cc - 4;
-            const double *l[4];
-            dfm__v4 x[4];
-            for (k = 0; k < 4; k++) {
-                l[k] = Ls + (c0 + k) * nr;
-                x[k] = y[c0 + k];
-            }
-            for (r = cc; r < nr; r++) {
-                double v0 = l[0][r], v1 = l[1][r], v2 = l[2][r], v3 = l[3][r];
-                dfm__v4 pq = y[r], w0 = {v0, v0, v0, v0}, w1 = {v1, v1, v1, v1}, w2 = {v2, v2, v2, v2};
-                dfm__v4 w3 = {v3, v3, v3, v3};
-                x[0] -= w0 * pq;
-                x[1] -= w1 * pq;
-                x[2] -= w2 * pq;
-                x[3] -= w3 * pq;
-            }
-            for (k = 4; k-- > 0;) {
-                double d = l[k][c0 + k];
-                dfm__v4 dv = {d, d, d, d};
-                for (i2 = k + 1; i2 < 4; i2++) {
-                    double e = l[k][c0 + i2];
-                    dfm__v4 ev = {e, e, e, e};
-                    x[k] -= ev * x[i2];
-                }
-                x[k] /= dv;
-                y[c0 + k] = x[k];
-            }
-        }
-        for (r = 0; r < nc; r++) {
-            double *x = w + 3 * (f + r);
-            x[0] = y[r][0];
-            x[1] = y[r][1];
-            x[2] = y[r][2];
-        }
-    }
+    for (s = 0; s < ns; s++) dfm__solve3_avx_forward(c, s, w, tmp);
+    for (s = ns; s-- > 0;)
+        dfm__solve3_avx_backward(c, s, w, tmp);
 }
 #endif
 
