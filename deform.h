@@ -19,7 +19,7 @@
      WHAT
        positions are 3 doubles a vertex, triangles 3 uint32_t indices. The ROI's vertices move;
        the handle's (a subset of the ROI) follow the caller's targets; every other vertex is fixed
-       where the caller's targets put it (usually where it is). All three methods solve for the
+       where the caller's targets put it (usually where it is), and so is a vertex in no triangle. All three methods solve for the
        displacement x' - x, in the least-squares sense, of
          LAPLACIAN  (L x')_i = delta_i = (L x)_i for every vertex whose 1-ring holds an unknown,
                     L_i x = x_i - sum_j w_ij x_j / sum_j w_ij (the thesis's L for uniform weights);
@@ -62,9 +62,11 @@
        frame choice alone; this header offers it for fidelity.
      MEMORY
        The object holds the positions, the mesh graph, the rows (LAPLACIAN: 12 bytes a term,
-       about 7 terms a vertex; FITTING: 76 bytes a term; LRI: two rows an edge), the normal
-       matrices and their factors (dfm_deform_get_info: bytes, nnz_l), and 18 doubles a vertex of
-       per-frame workspace. dfm_deform_solve allocates only inside dfm_chol_solve.
+       about 7 terms a vertex; FITTING: 76 bytes a term; LRI: two rows an edge), the factors
+       (dfm_deform_get_info: bytes, nnz_l; the normal matrices only with refine_steps > 0), and
+       18 doubles a vertex of per-frame workspace. During the setup a normal matrix and its
+       factor are held at once. dfm_deform_solve allocates only inside dfm_chol_solve; its cost
+       follows the ROI and its neighbours, not the mesh (but for one copy of the targets).
      ERRORS
        dfm_deform_setup: DFM_ERR_INVALID_ARGUMENT (NULL, an option out of range, no triangles),
        DFM_ERR_BAD_INDEX (an index >= vertex_count), DFM_ERR_BAD_VALUE (NaN/Inf position, negative
@@ -85,7 +87,10 @@
      LIMITS
        Linear methods: the Laplacian keeps its delta_i unturned (rotations shrink and shear the
        detail), fitting handles small rotations only (s I + [h]x is not a rotation; large angles
-       scale), LRI needs the handle's rotation given. At most (2^31 - 1) / 9 vertices. The whole
+       scale), LRI needs the handle's rotation given. One solve cannot turn the handle by 180
+       degrees or more: a rotation matrix carries no turn count (720 degrees is I), and LRI's
+       linear frames solve averages the fixed frames and the turned ones, which is singular at
+       180 degrees; larger turns need several solves, each set up on the previous result. At most (2^31 - 1) / 9 vertices. The whole
        mesh is checked for non-manifold edges and unwelded vertices, the ROI's neighbourhood for
        degenerate triangles.
      DECISIONS
@@ -4031,7 +4036,7 @@ static dfm_result dfm__deform_unknowns(dfm_deform *d, const unsigned char *roi, 
     if (err != DFM_OK) return err;
     d->nu = d->nfree = 0;
     for (v = 0; v < nv; v++) {
-        int u = roi[v] && (!handle[v] || soft);
+        int u = roi[v] && (!handle[v] || soft) && d->g.start[v + 1] > d->g.start[v]; /* in a triangle */
         d->nfree += roi[v] && !handle[v];
         d->soft[v] = (unsigned char)(u && handle[v]);
         d->unk[v] = u ? (int32_t)d->nu : -1;
