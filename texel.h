@@ -96,7 +96,8 @@
        nearest later point closer than merge_threshold (0.15 voxel): position, normal, tangent,
        colour, specular and rest state are mass-weighted means and masses add. Density counts
        mass, so merging keeps the grass (the paper counts each point as 1, which would make
-       merged grass thinner). A hash grid of 0.3-voxel cells makes it O(n). Time is the outer
+       merged grass thinner). Points sorted by voxel (radix sort) and a hash table of voxels make
+       it O(n); pairs across the side borders merge too (nearest periodic image). Time is the outer
        loop (the paper's Algorithm 1 loops over points outside time, which cannot merge).
 
    KEY FRAMES AND MINGLING (paper sections 2.2, 4.1)
@@ -192,8 +193,7 @@
 
    LIMITS
      res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points; 64 key frames;
-     8 LOD levels, the coarsest at least 8^3. Merging does not pair points across the side
-     borders (the hash cells do not wrap), which leaves a few more points there.
+     8 LOD levels, the coarsest at least 8^3.
      Tiling over a terrain is the renderer's: it maps a world point to its tile and to texel
      coordinates (see RENDERING) and calls the functions below with each tile's own wd.
 
@@ -1581,65 +1581,146 @@ static void tvt__age_point(const tvt__ageing *A, float wd, int res, tvt_point *p
     p->specular = p->specular0 * A->st.specular_factor;
 }
 
-/* ---- merging: a hash grid of 2 * threshold cells; a point within threshold of p lies in one of
-   the 8 cells around the corner of p's cell nearest to p. Pairs across the side borders are not
-   merged (the cells do not wrap). */
-typedef struct tvt__grid {
-    uint32_t *head, *next;
+/* ---- merging. The points are sorted by voxel (a radix sort of the voxel keys), their positions
+   copied in that order into a compact array, and a hash table maps an occupied voxel to its run
+   of sorted points. A point closer than threshold (< 1 voxel) to p lies in p's voxel or, along
+   each axis where p is within threshold of a face, in the neighbour across it: at most 8 voxels,
+   x and y wrapping (distances are taken to the nearest periodic image). */
+typedef struct tvt__merge_grid {
+    uint32_t *order;  /* sorted position -> point index */
+    uint32_t *rank;   /* point index -> sorted position */
+    float *pos;       /* 4 floats per sorted position: x, y, z, unused */
+    uint32_t *key;    /* voxel key per sorted position */
+    uint32_t *slot_key, *slot_start; /* hash table of runs: key (or empty) and first position */
     size_t mask;
-    float cell;
-} tvt__grid;
+    int res;
+} tvt__merge_grid;
 
-static size_t tvt__cell_hash(long x, long y, long z, size_t mask)
+static uint32_t tvt__voxel_key(const float *p, int res)
 {
-    return (size_t)tvt__mix(((uint64_t)(uint32_t)x << 42) ^ ((uint64_t)(uint32_t)y << 21) ^ (uint64_t)(uint32_t)z) & mask;
+    long x = (long)p[0], y = (long)p[1], z = (long)p[2];
+    if (x >= res) x = res - 1;
+    if (y >= res) y = res - 1;
+    if (z >= res) z = res - 1;
+    if (x < 0) x = 0;
+    if (y < 0) y = 0;
+    if (z < 0) z = 0;
+    return (uint32_t)(((uint64_t)z * (uint64_t)res + (uint64_t)y) * (uint64_t)res + (uint64_t)x);
 }
 
-static void tvt__cell_of(const tvt__grid *g, const float *p, long *c)
+/* stable LSD radix sort of (key, index) by key, 11 bits a pass (res <= 1024: 30-bit keys) */
+static void tvt__radix_sort(uint32_t *key, uint32_t *idx, uint32_t *key2, uint32_t *idx2, size_t n)
 {
-    c[0] = (long)floorf(p[0] / g->cell);
-    c[1] = (long)floorf(p[1] / g->cell);
-    c[2] = (long)floorf(p[2] / g->cell);
+    int pass;
+    for (pass = 0; pass < 3; pass++) {
+        size_t count[2048], i, sum = 0;
+        int shift = 11 * pass;
+        uint32_t *t;
+        memset(count, 0, sizeof(count));
+        for (i = 0; i < n; i++) count[(key[i] >> shift) & 2047]++;
+        for (i = 0; i < 2048; i++) { size_t c = count[i]; count[i] = sum; sum += c; }
+        for (i = 0; i < n; i++) {
+            size_t d = count[(key[i] >> shift) & 2047]++;
+            key2[d] = key[i];
+            idx2[d] = idx[i];
+        }
+        t = key; key = key2; key2 = t;
+        t = idx; idx = idx2; idx2 = t;
+    }
+    /* three passes (an odd number): the sorted data is in the caller's key2 / idx2 */
 }
 
-/* nearest j > i (not dead) closer than thr; (size_t)-1 if none; ties go to the smaller j */
-static size_t tvt__merge_partner(const tvt__grid *g, const tvt_points *pts, const uint8_t *dead, size_t i, float thr)
+static size_t tvt__key_hash(uint32_t k, size_t mask) { return (size_t)((k * 2654435761u) ^ (k >> 15)) & mask; }
+
+static uint32_t tvt__run_start(const tvt__merge_grid *g, uint32_t k)
 {
-    const float *p = pts->p[i].pos;
+    size_t h = tvt__key_hash(k, g->mask);
+    while (g->slot_key[h] != 0xFFFFFFFFu) {
+        if (g->slot_key[h] == k) return g->slot_start[h];
+        h = (h + 1) & g->mask;
+    }
+    return 0xFFFFFFFFu;
+}
+
+static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint32_t *tmp_key, uint32_t *tmp_idx)
+{
+    size_t n = pts->count, i;
+    for (i = 0; i < n; i++) { tmp_key[i] = tvt__voxel_key(pts->p[i].pos, g->res); tmp_idx[i] = (uint32_t)i; }
+    tvt__radix_sort(tmp_key, tmp_idx, g->key, g->order, n);
+    memset(g->slot_key, 0xFF, (g->mask + 1) * sizeof(uint32_t));
+    for (i = 0; i < n; i++) {
+        const float *p = pts->p[g->order[i]].pos;
+        g->rank[g->order[i]] = (uint32_t)i;
+        g->pos[4 * i] = p[0]; g->pos[4 * i + 1] = p[1]; g->pos[4 * i + 2] = p[2]; g->pos[4 * i + 3] = 0.0f;
+        if (i == 0 || g->key[i] != g->key[i - 1]) {
+            size_t h = tvt__key_hash(g->key[i], g->mask);
+            while (g->slot_key[h] != 0xFFFFFFFFu) h = (h + 1) & g->mask;
+            g->slot_key[h] = g->key[i];
+            g->slot_start[h] = (uint32_t)i;
+        }
+    }
+}
+
+/* nearest later point (index > i, alive) closer than thr; (size_t)-1 if none; ties: smaller index */
+static size_t tvt__merge_partner(const tvt__merge_grid *g, const uint8_t *dead, size_t n, size_t i, float thr)
+{
+    const float *p = g->pos + 4 * (size_t)g->rank[i];
     long c[3], o[3];
+    float best_d2 = thr * thr, res = (float)g->res;
     size_t best = (size_t)-1;
-    float best_d2 = thr * thr;
-    int k, n;
-    tvt__cell_of(g, p, c);
-    for (k = 0; k < 3; k++) o[k] = (p[k] - (float)c[k] * g->cell < 0.5f * g->cell) ? -1 : 1;
-    for (n = 0; n < 8; n++) {
-        long x = c[0] + ((n & 1) ? o[0] : 0), y = c[1] + ((n & 2) ? o[1] : 0), z = c[2] + ((n & 4) ? o[2] : 0);
-        uint32_t j = g->head[tvt__cell_hash(x, y, z, g->mask)];
-        for (; j != 0xFFFFFFFFu; j = g->next[j]) {
-            const float *q = pts->p[j].pos;
+    int k, m;
+    for (k = 0; k < 3; k++) {
+        float f;
+        c[k] = (long)p[k];
+        if (c[k] >= g->res) c[k] = g->res - 1;
+        if (c[k] < 0) c[k] = 0;
+        f = p[k] - (float)c[k];
+        o[k] = f < thr ? -1 : (f > 1.0f - thr ? 1 : 0);
+    }
+    for (m = 0; m < 8; m++) {
+        long x = c[0], y = c[1], z = c[2];
+        uint32_t start, k2;
+        size_t j;
+        if (((m & 1) && !o[0]) || ((m & 2) && !o[1]) || ((m & 4) && !o[2])) continue;
+        if (m & 1) x += o[0];
+        if (m & 2) y += o[1];
+        if (m & 4) z += o[2];
+        if (z < 0 || z >= g->res) continue;
+        x &= g->res - 1;
+        y &= g->res - 1;
+        k2 = (uint32_t)((z * g->res + y) * g->res + x);
+        start = tvt__run_start(g, k2);
+        if (start == 0xFFFFFFFFu) continue;
+        for (j = start; j < n && g->key[j] == k2; j++) {
+            size_t idx = g->order[j];
+            const float *q = g->pos + 4 * j;
             float d[3], d2;
-            if (j <= i || dead[j]) continue;
+            if (idx <= i || dead[idx]) continue;
             d[0] = q[0] - p[0]; d[1] = q[1] - p[1]; d[2] = q[2] - p[2];
+            d[0] -= res * floorf(d[0] / res + 0.5f); /* the nearest periodic image */
+            d[1] -= res * floorf(d[1] / res + 0.5f);
             d2 = tvt__dot(d, d);
-            if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && j < best)) {
-                long cj[3];
-                tvt__cell_of(g, q, cj);
-                if (cj[0] != x || cj[1] != y || cj[2] != z) continue; /* a hash collision */
-                best = j;
-                best_d2 = d2;
-            }
+            if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && idx < best)) { best = idx; best_d2 = d2; }
         }
     }
     return best;
 }
 
-/* b merged into a: every field the mass-weighted mean, masses added, directions renormalised */
-static void tvt__merge_into(tvt_point *a, const tvt_point *b)
+/* b merged into a: every field the mass-weighted mean, masses added, directions renormalised.
+   Positions and roots are averaged at b's periodic image nearest a. */
+static void tvt__merge_into(tvt_point *a, const tvt_point *b, int res)
 {
-    float m = a->mass + b->mass, wa = a->mass / m, wb = b->mass / m, *fa = &a->pos[0], d;
+    float m = a->mass + b->mass, wa = a->mass / m, wb = b->mass / m, *fa = &a->pos[0], d, shift[2];
     const float *fb = &b->pos[0];
     size_t k, n = sizeof(tvt_point) / sizeof(float);
+    for (k = 0; k < 2; k++) shift[k] = (float)res * floorf((b->pos[k] - a->pos[k]) / (float)res + 0.5f);
     for (k = 0; k < n; k++) fa[k] = wa * fa[k] + wb * fb[k];
+    for (k = 0; k < 2; k++) {
+        a->pos[k] -= wb * shift[k];
+        a->root[k] -= wb * shift[k];
+        if (a->pos[k] < 0) a->pos[k] += (float)res;
+        if (a->pos[k] >= (float)res) a->pos[k] -= (float)res;
+    }
     a->mass = m;
     tvt__normalize(a->tangent);
     tvt__normalize(a->axis);
@@ -1651,42 +1732,45 @@ static void tvt__merge_into(tvt_point *a, const tvt_point *b)
 static tvt_result tvt__merge(tvt_points *pts, float thr)
 {
     const tvt_allocator *a = &pts->allocator;
-    tvt__grid g;
+    tvt__merge_grid g;
+    uint32_t *tmp_key, *tmp_idx;
     uint8_t *dead;
     size_t n = pts->count, size = 1, i, kept = 0;
+    int ok;
     while (size < 2 * n) size *= 2;
-    g.cell = 2.0f * thr;
+    memset(&g, 0, sizeof(g));
+    g.res = pts->res;
     g.mask = size - 1;
-    g.head = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
-    g.next = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g.order = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g.rank = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g.key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g.pos = (float *)tvt__alloc(a, n, 4 * sizeof(float));
+    g.slot_key = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
+    g.slot_start = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
+    tmp_key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    tmp_idx = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     dead = (uint8_t *)tvt__alloc(a, n, 1);
-    if (!g.head || !g.next || !dead) {
-        tvt__free(a, g.head); tvt__free(a, g.next); tvt__free(a, dead);
-        return TVT_ERR_OUT_OF_MEMORY;
+    ok = g.order && g.rank && g.key && g.pos && g.slot_key && g.slot_start && tmp_key && tmp_idx && dead;
+    if (ok) {
+        tvt__merge_grid_fill(&g, pts, tmp_key, tmp_idx);
+        memset(dead, 0, n);
+        for (i = 0; i < n; i++) {
+            size_t j;
+            if (dead[i]) continue;
+            j = tvt__merge_partner(&g, dead, n, i, thr);
+            if (j == (size_t)-1) continue;
+            tvt__merge_into(pts->p + i, pts->p + j, pts->res);
+            memcpy(g.pos + 4 * (size_t)g.rank[i], pts->p[i].pos, 3 * sizeof(float));
+            dead[j] = 1;
+        }
+        for (i = 0; i < n; i++)
+            if (!dead[i]) pts->p[kept++] = pts->p[i];
+        pts->count = kept;
     }
-    memset(g.head, 0xFF, size * sizeof(uint32_t));
-    memset(dead, 0, n);
-    for (i = n; i-- > 0;) { /* chains in index order */
-        long c[3];
-        size_t h;
-        tvt__cell_of(&g, pts->p[i].pos, c);
-        h = tvt__cell_hash(c[0], c[1], c[2], g.mask);
-        g.next[i] = g.head[h];
-        g.head[h] = (uint32_t)i;
-    }
-    for (i = 0; i < n; i++) {
-        size_t j;
-        if (dead[i]) continue;
-        j = tvt__merge_partner(&g, pts, dead, i, thr);
-        if (j == (size_t)-1) continue;
-        tvt__merge_into(pts->p + i, pts->p + j);
-        dead[j] = 1;
-    }
-    for (i = 0; i < n; i++)
-        if (!dead[i]) pts->p[kept++] = pts->p[i];
-    pts->count = kept;
-    tvt__free(a, g.head); tvt__free(a, g.next); tvt__free(a, dead);
-    return TVT_OK;
+    tvt__free(a, g.order); tvt__free(a, g.rank); tvt__free(a, g.key); tvt__free(a, g.pos);
+    tvt__free(a, g.slot_key); tvt__free(a, g.slot_start); tvt__free(a, tmp_key); tvt__free(a, tmp_idx);
+    tvt__free(a, dead);
+    return ok ? TVT_OK : TVT_ERR_OUT_OF_MEMORY;
 }
 
 TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *options)

@@ -55,7 +55,6 @@ typedef struct scene {
 
 static int quiet = 0;
 
-static double now_ms(void) { return 1e3 * (double)clock() / CLOCKS_PER_SEC; }
 
 /* "\rWHAT NN%" each time another tenth is done (the final line ends with a newline) */
 static int last_tenth = -1;
@@ -335,11 +334,22 @@ static int build_variant(grass_set *g, int v, const tvt_tvt *samples, const tvt_
     while ((res >> lo.levels) >= 8 && lo.levels < TVT_MAX_LEVELS && (levels == 0 || lo.levels < levels)) lo.levels++;
     o.lod = &lo;
     r = tvt_mingle_tvt(samples, fns, (size_t)count, &o, &g->variant[v]);
-    if (r == TVT_OK) {
-        g->variants = v + 1;
-        r = tvt_build_shadow(&g->variant[v], -1, sun, NULL, &g->shadow[v]);
-    }
+    if (r == TVT_OK) g->variants = v + 1;
+    if (r == TVT_OK && sun) r = tvt_build_shadow(&g->variant[v], -1, sun, NULL, &g->shadow[v]);
     if (r != TVT_OK) { fprintf(stderr, "grass: mingling: %s\n", tvt_result_string(r)); return 0; }
+    return 1;
+}
+
+/* The self-shadow volumes of every variant (the renderer's precomputation). */
+static int build_shadows(grass_set *g, const float *sun)
+{
+    int v;
+    for (v = 0; v < g->variants; v++) {
+        tvt_result r;
+        tvt_shadow_free(&g->shadow[v]);
+        r = tvt_build_shadow(&g->variant[v], -1, sun, NULL, &g->shadow[v]);
+        if (r != TVT_OK) { fprintf(stderr, "grass: shadows: %s\n", tvt_result_string(r)); return 0; }
+    }
     return 1;
 }
 
@@ -352,7 +362,7 @@ static void free_set(grass_set *g)
 
 /* Four variants of 400 blades: 4 of the 7 samples each, with ageing functions that spread the
    blades' ages (delays in -0.08..0.12, rates 0.9..1.3). */
-static int build_mountain_variants(grass_set *g, int frames, const float *sun)
+static int build_mountain_variants(grass_set *g, int frames)
 {
     int v, k;
     for (v = 0; v < VARIANTS; v++) {
@@ -364,7 +374,7 @@ static int build_mountain_variants(grass_set *g, int frames, const float *sun)
             fn[k].delay = -0.08f + 0.2f * (float)((v * 4 + k) * 37 % 11) / 10.0f;
             fn[k].rate = 0.9f + 0.4f * (float)((v * 4 + k) * 53 % 7) / 6.0f;
         }
-        if (!build_variant(g, v, pick, fn, 4, frames, 0, sun)) return 0;
+        if (!build_variant(g, v, pick, fn, 4, frames, 0, NULL)) return 0;
     }
     return 1;
 }
@@ -375,6 +385,30 @@ static void set_sun(scene *s)
     float l = sqrtf(0.5f * 0.5f + 0.35f * 0.35f + 0.8f * 0.8f);
     s->sun[0] = 0.5f / l; s->sun[1] = 0.35f / l; s->sun[2] = 0.8f / l;
 }
+
+/* The paper's mountain (Fig 13): the terrain, 7 samples of 100 blades, 4 variants of 400 (their
+   pyramids; shadows are the renderer's, build_shadows), and the fixed camera. */
+static int mountain_setup(scene *s, grass_set *g, int res, int tiles, int frames, uint64_t seed)
+{
+    int k;
+    memset(g, 0, sizeof(*g));
+    memset(s, 0, sizeof(*s));
+    s->tiles = tiles; s->tile = 1.0f; s->res = res;
+    s->wd_sun = 0.6f; s->wd_jitter = 0.08f;
+    set_sun(s);
+    if (!make_mountain(s, seed)) { fprintf(stderr, "grass: terrain failed\n"); return 0; }
+    if (!build_samples(g, res, frames, seed, SAMPLES) || !build_mountain_variants(g, frames)) return 0;
+    for (k = 0; k < g->variants; k++) { s->variant[k] = &g->variant[k]; s->shadow[k] = &g->shadow[k]; }
+    s->variant_count = g->variants;
+    s->target[0] = 0.5f * (float)tiles; s->target[1] = 0.55f * (float)tiles; s->target[2] = 0.3f * s->hmax;
+    s->eye[0] = 0.12f * (float)tiles; s->eye[1] = -0.22f * (float)tiles;
+    s->eye[2] = s->hmax + 0.12f * (float)tiles;
+    s->fovy = 40.0f;
+    return 1;
+}
+
+#ifndef GRASS_NO_MAIN /* bench/bench_texel.c includes this file for the mountain */
+static double now_ms(void) { return 1e3 * (double)clock() / CLOCKS_PER_SEC; }
 
 static int write_sheet(const sr_image8 *panels, const char *const *captions, int count, int columns, const char *path)
 {
@@ -395,34 +429,24 @@ static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t
     sr_image8 panels[8];
     char caption[8][64];
     const char *caps[8];
-    int k, ok = 1;
-    memset(&g, 0, sizeof(g));
-    memset(&s, 0, sizeof(s));
-    s.tiles = tiles; s.tile = 1.0f; s.res = res;
-    s.wd_sun = 0.6f; s.wd_jitter = 0.08f;
-    set_sun(&s);
-    if (!make_mountain(&s, seed)) { fprintf(stderr, "grass: terrain failed\n"); return 0; }
-    ok = build_samples(&g, res, frames, seed, SAMPLES) && build_mountain_variants(&g, frames, s.sun);
-    for (k = 0; k < g.variants; k++) { s.variant[k] = &g.variant[k]; s.shadow[k] = &g.shadow[k]; }
-    s.variant_count = g.variants;
-    s.target[0] = 0.5f * (float)tiles; s.target[1] = 0.55f * (float)tiles; s.target[2] = 0.3f * s.hmax;
-    s.eye[0] = 0.12f * (float)tiles; s.eye[1] = -0.22f * (float)tiles;
-    s.eye[2] = s.hmax + 0.12f * (float)tiles;
-    s.fovy = 40.0f;
+    int k, ok, done = 0;
+    ok = mountain_setup(&s, &g, res, tiles, frames, seed);
     for (k = 0; ok && k < nwd; k++) {
         double t0 = now_ms(), cov;
         char what[64];
         s.wd = wds[k];
         snprintf(what, sizeof(what), "grass: mountain wd %.3f", wds[k]);
-        cov = render(&s, w, h, &panels[k], what);
+        ok = build_shadows(&g, s.sun);
+        cov = ok ? render(&s, w, h, &panels[k], what) : -1;
         if (cov < 0) { ok = 0; break; }
+        done = k + 1;
         printf("RESULT grass scene=mountain wd=%.3f width=%d height=%d tiles=%d blades=%d coverage=%.3f render_ms=%.0f\n",
                wds[k], w, h, tiles * tiles, tiles * tiles * 400, cov, now_ms() - t0);
         snprintf(caption[k], sizeof(caption[k]), "wd = %.3f", wds[k]);
         caps[k] = caption[k];
     }
     if (ok) ok = write_sheet(panels, caps, nwd, nwd, path);
-    for (k = 0; k < nwd; k++) free(panels[k].pixels);
+    for (k = 0; k < done; k++) free(panels[k].pixels);
     free(s.h);
     free_set(&g);
     return ok;
@@ -562,3 +586,4 @@ int main(int argc, char **argv)
     }
     return ok ? 0 : 1;
 }
+#endif /* GRASS_NO_MAIN */
