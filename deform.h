@@ -29,9 +29,13 @@
                     centroid, S_i = sum (|q_j|^2 I - q_j q_j^T); x, y, z coupled (3x3 blocks);
          LRI        per vertex the frame F_i = [b1 b2 N] (N: area-weighted normal; b1: a tangent
                     edge direction; b2 = N x b1); first the frames: F'_j = F'_i R_ij, R_ij =
-                    F_i^T F_j, per edge, for each row of the frames (3 right-hand sides), with the
-                    handle's and fixed frames set to R F; then the positions: x'_j - x'_i =
-                    (F'_i c_ij - F'_j c_ji) / 2 per edge, c_ij = F_i^T (x_j - x_i).
+                    F_i^T F_j, per edge, with the handle's and fixed frames set to R F; then the
+                    positions: x'_j - x'_i = (F'_i c_ij - F'_j c_ji) / 2 per edge, c_ij =
+                    F_i^T (x_j - x_i). The frames are solved in M_i = F'_i F_i^T (F'_i = M_i F_i):
+                    the row F'_j - F'_i R_ij equals (M_j - M_i) F_j, of the same length as
+                    M_j - M_i, so the thesis's 3n x 3n frames system is the graph Laplacian of
+                    M's 9 entries (M = R at the handle, I at the fixed vertices), the same matrix
+                    as the positions system with uniform weights: one factorization serves both.
        The handle's rotations (9 doubles a vertex) are read by LRI only: a translation-only drag
        leaves LRI's frames unturned (the known weakness of linear methods, the thesis's Fig 3-4).
      OPTIONS (dfm_deform_options; zeroed or NULL = defaults, dfm_deform_default_options())
@@ -55,14 +59,15 @@
        allocator, progress, progress_user: as in part 2; progress runs during the setup only.
      WHEN THE FRAME CHOICE CHANGES THE RESULT
        Only with DFM_ORTHO_GRAM_SCHMIDT. Choosing another b1 replaces F_i by F_i Q_i (Q_i a turn
-       about N); the frames problem is then the same problem in the unknowns F'_i Q_i, and
-       F'_i Q_i Q_i^T c_ij = F'_i c_ij, so with no orthonormalization, or the polar factor (which
-       commutes with Q_i), the positions are the same to rounding. Gram-Schmidt treats N and b1
-       unequally, so there the choice matters. The thesis's ch. 4 figures cannot come from the
-       frame choice alone; this header offers it for fidelity.
+       about N); M_i = F'_i F_i^T does not change, and F'_i c_ij = M_i (x_j - x_i), so with no
+       orthonormalization, or the polar factor (polar(M F) = polar(M) F), the positions are the
+       same to rounding. Gram-Schmidt treats N and b1 unequally, so there the choice matters.
+       The thesis's ch. 4 figures cannot come from the frame choice alone; this header offers it
+       for fidelity.
      MEMORY
        The object holds the positions, the mesh graph, the rows (LAPLACIAN: 12 bytes a term,
-       about 7 terms a vertex; FITTING: 76 bytes a term; LRI: two rows an edge), the factors
+       about 7 terms a vertex; FITTING: 76 bytes a term; LRI: two rows an edge, and one factor
+       for both systems with uniform weights, two with cotangent ones), the factors
        (dfm_deform_get_info: bytes, nnz_l; the normal matrices only with refine_steps > 0), and
        18 doubles a vertex of per-frame workspace. During the setup a normal matrix and its
        factor are held at once. dfm_deform_solve allocates only inside dfm_chol_solve; its cost
@@ -109,6 +114,9 @@
          misses the wrap-around face and is not normalized; here it is the normalized sum of the
          incident faces' cross products.
        - Each undirected edge is one LRI row (the two directed rows have the same minimizer).
+       - LRI's frames are solved as the 9 entries of M_i = F'_i F_i^T on the scalar graph
+         Laplacian instead of the thesis's coupled 3n x 3n system: the same minimizer (the rows
+         differ by the orthogonal factor F_j), a ninth of the factor and a third of the work.
        - The ROI's outside neighbours enter as known values (the thesis leaves this open), and
          only rows that touch an unknown are assembled, so the cost follows the ROI, not the mesh.
 
@@ -3626,6 +3634,7 @@ typedef struct dfm__lsq {
     const unsigned char *soft; /* nv or NULL: soft-constrained unknowns (shared) */
     dfm_csc normal;      /* the normal matrix, (bs nu) x (bs nu), lower */
     dfm_chol *chol;
+    int chol_shared;     /* chol belongs to another system (the same matrix) */
     double *rhs, *x;     /* bs nu nrhs each: solve workspace */
 } dfm__lsq;
 
@@ -3636,7 +3645,7 @@ static void dfm__lsq_free(dfm__lsq *s, const dfm_allocator *al)
     dfm__free(al, s->term_c);
     dfm__free(al, s->row_known);
     dfm_csc_free(&s->normal);
-    dfm_chol_free(s->chol);
+    if (!s->chol_shared) dfm_chol_free(s->chol);
     dfm__free(al, s->rhs);
     dfm__free(al, s->x);
     memset(s, 0, sizeof *s);
@@ -3832,6 +3841,17 @@ done:
     return err;
 }
 
+/* s has the same rows' matrix as from (factored): it uses from's factor. */
+static dfm_result dfm__lsq_share(dfm__lsq *s, const dfm__lsq *from, const dfm_allocator *al)
+{
+    dfm_result err = DFM_OK;
+    s->chol = from->chol;
+    s->chol_shared = 1;
+    s->rhs = (double *)dfm__alloc(al, s->bs * s->nu, s->nrhs * sizeof(double), &err);
+    s->x = (double *)dfm__alloc(al, s->bs * s->nu, s->nrhs * sizeof(double), &err);
+    return err;
+}
+
 /* One solve. X holds bs values per vertex and right-hand side, X[(q nv + v) bs + c]: read at the
    known vertices (their displacement) and at soft unknowns (their target), written at the
    unknowns. rowb: NULL (every b_r = 0) or bs x nrhs values per row, [(r nrhs + q) bs + c]. */
@@ -3867,9 +3887,10 @@ static dfm_result dfm__lsq_solve(dfm__lsq *s, const double *rowb, double *X, int
     }
     if (refine > 0) {
         err = dfm_chol_solve_refined(s->chol, &s->normal, s->rhs, s->x, nr, refine);
-    } else {
+    } else { /* three right-hand sides at a time: the solve's fastest path */
         memcpy(s->x, s->rhs, n * nr * sizeof(double));
-        err = dfm_chol_solve(s->chol, s->x, nr);
+        for (q = 0, err = DFM_OK; q < nr && err == DFM_OK; q += 3)
+            err = dfm_chol_solve(s->chol, s->x + q * n, nr - q < 3 ? nr - q : 3);
     }
     if (err != DFM_OK) return err;
     for (q = 0; q < nr; q++)
@@ -3990,7 +4011,7 @@ DFMDEF void dfm_deform_get_info(const dfm_deform *d, dfm_deform_info *info)
     info->bytes = d->meter.bytes + sizeof *d;
     dfm_chol_get_info(d->sys.chol, &ci);
     info->nnz_l = d->sys.chol ? ci.nnz_l : 0;
-    if (d->fsys.chol) {
+    if (d->fsys.chol && !d->fsys.chol_shared) {
         dfm_chol_get_info(d->fsys.chol, &ci);
         info->nnz_l += ci.nnz_l;
     }
@@ -4342,26 +4363,25 @@ done:
     return err;
 }
 
-/* Method 3, LRI: the frames system (row per edge: f_j - R_ij^T f_i = 0 for each row f of the
-   frames, R_ij = F_i^T F_j) and the positions system (row per edge: sqrt(w_ij) (x'_j - x'_i) =
-   sqrt(w_ij) (F'_i c_ij - F'_j c_ji) / 2, both directions of the edge in one row). */
+/* Method 3, LRI: the frames system and the positions system (row per edge: sqrt(w_ij) (x'_j -
+   x'_i) = sqrt(w_ij) (F'_i c_ij - F'_j c_ji) / 2, both directions of the edge in one row). The
+   frames rows F'_j = F'_i R_ij, R_ij = F_i^T F_j, are solved in M_i = F'_i F_i^T: with F_i
+   orthonormal, F'_j - F'_i R_ij = (M_j - M_i) F_j and |(M_j - M_i) F_j| = |M_j - M_i|, so the
+   row is M_j - M_i = 0, one scalar row per edge for each of M's 9 entries. */
 static dfm_result dfm__lri_rows(dfm_deform *d)
 {
     dfm_result err;
-    size_t e, ntf = 0, ntp = 0, a, b;
-    dfm__lsq_init(&d->fsys, d, 3, 3);
+    size_t e, ntf = 0, ntp = 0;
+    dfm__lsq_init(&d->fsys, d, 1, 9);
     dfm__lsq_init(&d->sys, d, 1, 3);
     err = dfm__lsq_alloc_rows(&d->fsys, d->ne, 2 * d->ne, &d->al);
     if (err == DFM_OK) err = dfm__lsq_alloc_rows(&d->sys, d->ne, 2 * d->ne, &d->al);
     if (err != DFM_OK) return err;
     for (e = 0; e < d->ne; e++) {
         size_t i = (size_t)d->edge[2 * e], j = (size_t)d->edge[2 * e + 1];
-        const double *Fi = d->frame + 9 * i, *Fj = d->frame + 9 * j;
-        double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, mr[9], s, ms;
-        for (a = 0; a < 3; a++) /* -R_ij^T: entry (a, b) = -(F_i^T F_j)(b, a) = -F_j col a . F_i col b */
-            for (b = 0; b < 3; b++) mr[3 * a + b] = -(Fi[b] * Fj[a] + Fi[3 + b] * Fj[3 + a] + Fi[6 + b] * Fj[6 + a]);
-        dfm__lsq_term(&d->fsys, &ntf, (int32_t)j, id);
-        dfm__lsq_term(&d->fsys, &ntf, (int32_t)i, mr);
+        double one = 1.0, mone = -1.0, s, ms;
+        dfm__lsq_term(&d->fsys, &ntf, (int32_t)j, &one);
+        dfm__lsq_term(&d->fsys, &ntf, (int32_t)i, &mone);
         dfm__lsq_end_row(&d->fsys, e, ntf);
         s = sqrt(d->g.w[dfm__graph_find(&d->g, i, (int32_t)j)]);
         ms = -s;
@@ -4514,10 +4534,13 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
     sp.user = o.progress_user;
     sp.base = 0.1f;
     sp.last = 0.1f;
-    sp.span = o.method == DFM_METHOD_LRI ? 0.45f : 0.9f;
+    sp.span = o.method == DFM_METHOD_LRI && (o.weights != DFM_WEIGHTS_UNIFORM || o.refine_steps) ? 0.45f : 0.9f;
     if (err == DFM_OK) err = dfm__lsq_factor(&d->sys, d->pos, o.refine_steps, &d->al, &sp); /* 7: factor once */
     sp.span = 0.45f;
-    if (err == DFM_OK && o.method == DFM_METHOD_LRI) err = dfm__lsq_factor(&d->fsys, d->pos, o.refine_steps, &d->al, &sp);
+    if (err == DFM_OK && o.method == DFM_METHOD_LRI) { /* uniform weights: the same matrix */
+        if (o.weights == DFM_WEIGHTS_UNIFORM && !o.refine_steps) err = dfm__lsq_share(&d->fsys, &d->sys, &d->al);
+        else err = dfm__lsq_factor(&d->fsys, d->pos, o.refine_steps, &d->al, &sp);
+    }
     if (err == DFM_OK) err = dfm__active_list(d); /* 8 */
     if (err == DFM_OK) {
         d->X = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
@@ -4563,36 +4586,35 @@ static void dfm__known_displacements(const dfm_deform *d, const double *targets,
     }
 }
 
-/* LRI, step 1: the frames solve; known frames are R F (displacement (R - I) F); the new frames
-   of the unknowns orthonormalized as asked. d->G gets F' - F of every touched vertex. */
+/* LRI, step 1: the frames solve in M = F' F^T (I + X, X[(3 c + k) nv + v]); known frames are
+   R F, so M = R there; then F' = M F, orthonormalized as asked at the unknowns. d->G gets
+   F' - F of every vertex in a row. */
 static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
 {
     size_t a, v, c, k, m, nv = d->nv;
     dfm_result err;
     for (a = 0; a < d->nactive; a++) {
-        const double *F, *R;
         v = (size_t)d->active[a];
-        F = d->frame + 9 * v;
-        R = rot ? rot + 9 * v : NULL;
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
-        for (c = 0; c < 3; c++)
-            for (k = 0; k < 3; k++) {
-                double g = 0.0;
-                if (R)
-                    for (m = 0; m < 3; m++) g += R[3 * c + m] * F[3 * m + k];
-                d->X[(c * nv + v) * 3 + k] = R ? g - F[3 * c + k] : 0.0;
-            }
+        for (k = 0; k < 9; k++) d->X[k * nv + v] = rot ? rot[9 * v + k] - (k % 4 == 0) : 0.0;
     }
     err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
     if (err != DFM_OK) return err;
     for (a = 0; a < d->nactive; a++) {
-        double Fp[9];
+        double M[9], Fp[9];
+        const double *F;
         v = (size_t)d->active[a];
+        F = d->frame + 9 * v;
+        for (k = 0; k < 9; k++) M[k] = d->X[k * nv + v] + (k % 4 == 0);
         for (c = 0; c < 3; c++)
-            for (k = 0; k < 3; k++) Fp[3 * c + k] = d->frame[9 * v + 3 * c + k] + d->X[(c * nv + v) * 3 + k];
+            for (k = 0; k < 3; k++) {
+                double sum = 0.0;
+                for (m = 0; m < 3; m++) sum += M[3 * c + m] * F[3 * m + k];
+                Fp[3 * c + k] = sum;
+            }
         if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_POLAR) dfm__polar(Fp);
         if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_GRAM_SCHMIDT) dfm__gram_schmidt(Fp);
-        for (k = 0; k < 9; k++) d->G[9 * v + k] = Fp[k] - d->frame[9 * v + k];
+        for (k = 0; k < 9; k++) d->G[9 * v + k] = Fp[k] - F[k];
     }
     return DFM_OK;
 }
