@@ -574,6 +574,33 @@ static void test_bad_input(const tube *m)
         T_EQ_INT(setup_code(m, m->pos, m->idx, m->nv, m->nt, roi, h, &o), DFM_ERR_UNCONSTRAINED);
     }
     o = dfm_deform_default_options();
+    /* two components: the second, a shifted copy of the tube, entirely in the ROI and without a
+       handle, floats free (the first is fine) */
+    {
+        size_t nv2 = 2 * m->nv, nt2 = 2 * m->nt, t;
+        double *pos2 = (double *)malloc(3 * nv2 * sizeof(double));
+        uint32_t *idx2 = (uint32_t *)malloc(3 * nt2 * sizeof(uint32_t));
+        unsigned char *roi2 = (unsigned char *)malloc(nv2), *h2 = (unsigned char *)calloc(nv2, 1);
+        memcpy(pos2, m->pos, 3 * m->nv * sizeof(double));
+        for (v = 0; v < 3 * m->nv; v++) pos2[3 * m->nv + v] = m->pos[v] + (v % 3 == 0 ? 5.0 : 0.0);
+        memcpy(idx2, m->idx, 3 * m->nt * sizeof(uint32_t));
+        for (t = 0; t < 3 * m->nt; t++) idx2[3 * m->nt + t] = m->idx[t] + (uint32_t)m->nv;
+        memcpy(roi2, m->roi, m->nv);
+        memset(roi2 + m->nv, 1, m->nv);
+        memcpy(h2, m->handle, m->nv);
+        for (meth = 0; meth < 3; meth++) {
+            o.method = meth;
+            T_EQ_INT(setup_code(m, pos2, idx2, nv2, nt2, roi2, h2, &o), DFM_ERR_UNCONSTRAINED);
+        }
+        memcpy(roi2 + m->nv, m->roi, m->nv); /* the second held like the first: fine */
+        memcpy(h2 + m->nv, m->handle, m->nv);
+        T_EQ_INT(setup_code(m, pos2, idx2, nv2, nt2, roi2, h2, &o), DFM_OK);
+        free(pos2);
+        free(idx2);
+        free(roi2);
+        free(h2);
+    }
+    o = dfm_deform_default_options();
     /* bad index, NaN position */
     memcpy(idx, m->idx, 3 * m->nt * sizeof(uint32_t));
     idx[7] = (uint32_t)m->nv;
