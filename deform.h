@@ -4392,12 +4392,13 @@ static dfm_result dfm__lri_rows(dfm_deform *d)
     return DFM_OK;
 }
 
-/* The closest rotation (polar factor) by Newton's iteration X <- (X + X^-T) / 2. */
+/* The closest rotation (polar factor) by Newton's iteration X <- (g X + X^-T / g) / 2, scaled
+   by g = |det X|^(-1/3) while far from converged (Higham 1986: a few steps instead of many). */
 static void dfm__polar(double *X)
 {
-    int it, k;
+    int it, k, scale = 1;
     for (it = 0; it < 30; it++) {
-        double inv[9], det, nx[9], diff = 0.0, size = 0.0;
+        double inv[9], det, nx[9], diff = 0.0, size = 0.0, g;
         inv[0] = X[4] * X[8] - X[5] * X[7];
         inv[1] = X[5] * X[6] - X[3] * X[8];
         inv[2] = X[3] * X[7] - X[4] * X[6];
@@ -4409,13 +4410,15 @@ static void dfm__polar(double *X)
         inv[8] = X[0] * X[4] - X[1] * X[3];
         det = X[0] * inv[0] + X[1] * inv[1] + X[2] * inv[2];
         if (!(fabs(det) > 1e-300)) return; /* singular: left as it is */
+        g = scale ? pow(fabs(det), -1.0 / 3.0) : 1.0;
         for (k = 0; k < 9; k++) { /* inv holds the cofactors: X^-T = cof / det */
-            nx[k] = 0.5 * (X[k] + inv[k] / det);
+            nx[k] = 0.5 * (g * X[k] + inv[k] / (g * det));
             diff += (nx[k] - X[k]) * (nx[k] - X[k]);
             size += nx[k] * nx[k];
         }
         memcpy(X, nx, sizeof nx);
         if (diff <= 1e-30 * size) return;
+        scale = diff > 1e-6 * size;
     }
 }
 

@@ -529,6 +529,34 @@ static void test_helpers(const tube *m)
     free(mask);
 }
 
+/* The polar factor: orthogonal, and R^T X symmetric positive definite (the polar decomposition
+   X = R P), for random well- and badly-scaled matrices. */
+static void test_polar(void)
+{
+    int t, bad = 0;
+    for (t = 0; t < 200; t++) {
+        double X[9], R[9], P[9], e = 0.0, sym = 0.0, sc = t % 2 ? 1e-3 : 50.0;
+        int i, j, k;
+        for (k = 0; k < 9; k++) X[k] = sc * (2.0 * unit_random((uint64_t)(9 * t + k), 3) - 1.0) + (k % 4 == 0 ? 1.5 * sc : 0.0);
+        memcpy(R, X, sizeof X);
+        dfm__polar(R);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                double rr = 0.0, rp = 0.0;
+                for (k = 0; k < 3; k++) {
+                    rr += R[3 * i + k] * R[3 * j + k];
+                    rp += R[3 * k + i] * X[3 * k + j];
+                }
+                e = fmax(e, fabs(rr - (i == j)));
+                P[3 * i + j] = rp;
+            }
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) sym = fmax(sym, fabs(P[3 * i + j] - P[3 * j + i]) / sc);
+        bad += !(e <= 1e-12 && sym <= 1e-10 && P[0] > 0 && P[4] > 0 && P[8] > 0);
+    }
+    T_EQ_INT(bad, 0);
+}
+
 /* ---- bad input ---------------------------------------------------------------------------------- */
 
 static dfm_result setup_code(const tube *m, const double *pos, const uint32_t *idx, size_t nv, size_t nt,
@@ -810,6 +838,7 @@ int main(int argc, char **argv)
     test_frame_choice(&m);
     test_bend_quality();
     test_refine_and_lone_vertex(&m);
+    test_polar();
     test_helpers(&m);
     test_bad_input(&m);
     test_progress(&m);
