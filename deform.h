@@ -19,8 +19,9 @@
      WHAT
        positions are 3 doubles a vertex, triangles 3 uint32_t indices. The ROI's vertices move;
        the handle's (a subset of the ROI) follow the caller's targets; every other vertex is fixed
-       where the caller's targets put it (usually where it is), and so is a vertex in no triangle. All three methods solve for the
-       displacement x' - x, in the least-squares sense, of
+       where the caller's targets put it (usually where it is), and so is a vertex in no
+       triangle. All three methods solve for the displacement x' - x, in the least-squares sense,
+       of
          LAPLACIAN  (L x')_i = delta_i = (L x)_i for every vertex whose 1-ring holds an unknown,
                     L_i x = x_i - sum_j w_ij x_j / sum_j w_ij (the thesis's L for uniform weights);
          FITTING    (L x')_i = T_i delta_i with T_i = s_i I + [h_i]x, the linearized similarity
@@ -38,6 +39,9 @@
                     as the positions system with uniform weights: one factorization serves both.
        The handle's rotations (9 doubles a vertex) are read by LRI only: a translation-only drag
        leaves LRI's frames unturned (the known weakness of linear methods, the thesis's Fig 3-4).
+       Helpers: dfm_roi_rings (k rings around a mask), dfm_roi_geodesic (edge-path distance
+       from seeds), dfm_rotation, and the poses dfm_pose_identity / _rigid (translate, rotate) /
+       _twist / _bend, which fill targets and rotations for a mask.
      OPTIONS (dfm_deform_options; zeroed or NULL = defaults, dfm_deform_default_options())
        method             DFM_METHOD_LAPLACIAN (0), DFM_METHOD_FITTING, DFM_METHOD_LRI.
        weights            DFM_WEIGHTS_UNIFORM (0: w_ij = 1, the thesis) or DFM_WEIGHTS_COTAN
@@ -53,8 +57,8 @@
                           the neighbour edge of largest elevation angle, most below the tangent
                           plane).
        orthonormalize     LRI, the solved frames of the unknowns before the positions solve:
-                          DFM_ORTHO_NONE (0), DFM_ORTHO_POLAR (the closest rotation, Newton's
-                          iteration), DFM_ORTHO_GRAM_SCHMIDT (N first, then b1).
+                          DFM_ORTHO_NONE (0), DFM_ORTHO_POLAR (the closest rotation, scaled
+                          Newton iteration), DFM_ORTHO_GRAM_SCHMIDT (N first, then b1).
        refine_steps       iterative refinement steps per solve (0: none).
        allocator, progress, progress_user: as in part 2; progress runs during the setup only.
      WHEN THE FRAME CHOICE CHANGES THE RESULT
@@ -95,9 +99,9 @@
        scale), LRI needs the handle's rotation given. One solve cannot turn the handle by 180
        degrees or more: a rotation matrix carries no turn count (720 degrees is I), and LRI's
        linear frames solve averages the fixed frames and the turned ones, which is singular at
-       180 degrees; larger turns need several solves, each set up on the previous result. At most (2^31 - 1) / 9 vertices. The whole
-       mesh is checked for non-manifold edges and unwelded vertices, the ROI's neighbourhood for
-       degenerate triangles.
+       180 degrees; larger turns need several solves, each set up on the previous result. At
+       most (2^31 - 1) / 9 vertices. The whole mesh is checked for non-manifold edges and unwelded
+       vertices, the ROI's neighbourhood for degenerate triangles.
      DECISIONS
        - Displacements, not positions, are the unknowns: at rest the right-hand side is exactly
          zero, so zero motion reproduces the mesh whatever the conditioning (normal equations
