@@ -1,7 +1,7 @@
 # examples/render.h's image readers and examples/relief.h (issue 17 point 5, issue 20): tests, the PNG
 # fuzz target (built by the Makefile's fuzz_% rules through FUZZ_FMTS), the libpng reference test.
 HAVE_LIBPNG := $(wildcard /usr/include/png.h)
-C_TESTS   += $(B)/test_image
+C_TESTS   += $(B)/test_image $(B)/test_relief
 FUZZ_FMTS += png
 REF_TESTS += $(if $(and $(HAVE_CXX),$(HAVE_LIBPNG)),$(B)/ref_png)
 

@@ -1,0 +1,1524 @@
+/* relief.h - v0.1 - MIT licence or public domain (see end of file)
+   Sketch-driven relief on textured materials (Fan 2014, after Zhou et al. 2007): the white strokes
+   of a sketch rise as ridges and its black strokes sink as grooves, made of an example height
+   map's own material; plus the normal map that relief mapping needs. Float in, float out,
+   deterministic, libc + libm only.
+
+   HOW TO USE (in ten lines)
+       #define RL_IMPLEMENTATION          // in exactly one C or C++ file, then #include "relief.h"
+       rl_map example = {384, 384, heights};        // floats, row 0 at the top, any range
+       rl_map sketch  = {512, 512, strokes};        // > 0.75 white stroke, < 0.25 black, else none
+       rl_map out;  float *nrm = malloc(sizeof(float) * 3 * 512 * 512);
+       rl_synth_options o = rl_synth_default_options();
+       rl_result r = rl_synthesize(&example, &sketch, &o, &out);   // out: 512 x 512 floats
+       if (r != RL_OK) puts(rl_result_string(r));
+       rl_normal_options no = rl_normal_default_options();
+       rl_normal_map(out.data, out.width, out.height, &no, nrm);   // 3 floats a texel, unit length
+       rl_map_free(&out, o.allocator);
+
+   WHAT
+     The thesis's three stages; this header does the first two, examples/render.h the third.
+     - rl_skeleton_extract: ridge or valley lines of a height map by the thesis's simplified PPA
+       (profile recognition and polygon breaking, Chang et al. 1998): candidate points, their
+       8-neighbour connection with crossing diagonals resolved, loop elimination, branch pruning.
+     - rl_synthesize: the feature-guided patch synthesis. Feature samples of the sketch (branch
+       points, end points, and points every half a patch along its curves) are visited breadth
+       first from a branch point; each gets the example patch centred on an example feature
+       point of the same polarity and kind, rotated to the stroke's direction, that costs least
+       (seam mismatch + feature dissimilarity); the rest is filled by the best-matching patches;
+       every patch is joined by a graph-cut seam (Kwatra et al. 2003) and Poisson-blended across
+       it (Perez et al. 2003).
+     - rl_emboss: the baseline: the example tiled, plus a Gaussian profile of the distance to the
+       strokes (up under white ones, down under black ones).
+     - rl_graph_cut: the seam on its own (minimum cut between two overlapping patches).
+     - rl_normal_map: central differences over a sampling distance d (the thesis's Eqs. 5-4 to
+       5-7, d = 4 by default) with a strength factor, clamp-to-edge or wrap-around borders.
+
+   OPTIONS
+     Compile time: RL_STATIC (all functions static), RL_MALLOC(sz) / RL_FREE(p) (both or neither).
+     Run time: rl_normal_options, rl_skeleton_options, rl_synth_options, each with its
+     rl_*_default_options(); a zero field means its default (the field comments give them).
+
+   MEMORY
+     Every allocating call takes an rl_allocator (NULL = RL_MALLOC / RL_FREE). Results (rl_map,
+     rl_skeleton) are freed with rl_map_free / rl_skeleton_free and the same allocator.
+     rl_synthesize holds about 40 bytes per output texel and 12 per example texel while it runs.
+
+   ERRORS
+     Functions return rl_result (RL_OK = 0); rl_result_string names it. NULL pointers and bad
+     options give RL_ERR_INVALID_ARGUMENT; an empty map RL_ERR_EMPTY; a map of more than 2^26
+     texels or a side above 16384 RL_ERR_TOO_LARGE; a NaN or infinite height RL_ERR_NOT_FINITE;
+     maps that must match in size and do not RL_ERR_SIZE_MISMATCH; a sketch without strokes
+     RL_ERR_NO_STROKES; a patch larger than the example RL_ERR_PATCH_TOO_LARGE; allocation
+     failure RL_ERR_OUT_OF_MEMORY; a progress callback's nonzero return RL_CANCELLED. On any
+     error nothing is allocated and the outputs are zeroed.
+
+   THREAD SAFETY
+     No global state: calls on different data may run in different threads at once.
+
+   DETERMINISM
+     One thread, no random numbers (candidate subsets are fixed strides), ties broken by index:
+     the same input gives the same bits on every run of the same build.
+
+   LIMITS
+     Maps up to 16384 on a side and 2^26 texels. The sketch sets the output size. Patches up to
+     1024 texels; the example must hold one patch (RL_ERR_PATCH_TOO_LARGE otherwise), and feature
+     patches need example feature points 0.71 patch + 2 texels from its border (a rotated patch
+     must fit): an example too small for that gets fill patches only.
+
+   DECISIONS (where the thesis is silent or wrong)
+     - Sketch: > 0.75 is a white stroke, < 0.25 a black one. Its skeleton is the ridge line (PPA,
+       tau 0.5) of the distance to the stroke's outside, i.e. its medial axis: one code path for
+       example and sketch.
+     - PPA edge weight: the mean height of the two texels (Chang's convention; the thesis's
+       "height difference" gives a flat crest weight 0), negated for valleys. Loop elimination is
+       Kruskal's maximum spanning forest (the same forest as deleting each loop's lightest edge,
+       in O(E log E) instead of a restarted search per deletion). Pruning removes every leaf
+       edge at once per round, L rounds by default: the thesis's L / 2 rounds leave 2-3 texel
+       spurs inside every bend of a crest (the candidate test sees the crest on both sides).
+     - Warping: feature patches are rotated to the stroke's direction (both ways tried), not
+       thin-plate-spline warped: with the thesis's three control points a TPS is affine anyway.
+       So c_d = 0 and alpha_d is not an option. c_f is the mean |patch - patch centre| along the
+       sketch's skeleton inside the window in units of the height range (a ridge that follows
+       the stroke keeps its crest height); c_g for feature patches is the mean squared
+       mismatch over the filled texels (the graph cut runs once, for the chosen patch).
+     - The fill visits a grid of windows (step patch - overlap) in raster order, skipping
+       filled ones; of the K best by SSD it takes the least SSD + alpha_g x cut cost per
+       overlap texel, or with tolerance > 0 a fixed pseudo-random one of those within
+       (1 + tolerance) of it: always taking the best favours smooth, mid-height patches and
+       narrows the height and slope histograms.
+     - Graph cut: texels not filled yet are pinned to the new patch, filled texels on the
+       window's border beside filled ones outside it to the old output, a feature patch's
+       centre disc (radius patch / 6) to the patch. Pinned texels are folded into the terminal
+       links, so max-flow runs on the free texels only.
+     - Poisson: Gauss-Seidel (at most 64 sweeps) on the new texels within blend_band of a seam,
+       Dirichlet elsewhere. Across the seam the guidance is the new patch's own gradient where
+       the patch covers both texels, not zero as in the thesis: zero guidance flattens real
+       slopes along every seam, a visible crease that also narrows the slope histogram.
+     - emphasis: the synthesis puts the example's ridges under white strokes and its valleys
+       under black ones, but how far a ridge stands above a valley is whatever the example's
+       relief gives (on a rock-like example, a few percent of its range). The thesis demands
+       that the strokes be clearly embossed or engraved, so the baseline's profile is added
+       (emphasis x range, Gaussian of stroke_width); emphasis < 0 turns it off.
+     - Normal map: clamp-to-edge borders (the thesis zeroes the slope within d of the border,
+       a visible flat frame); the 1/(2d) of the central difference is explicit, so strength
+       does not change with d.
+*/
+#ifndef RL_RELIEF_H
+#define RL_RELIEF_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef RL_STATIC
+#if defined(__GNUC__) || defined(__clang__)
+#define RLDEF static __attribute__((unused))
+#else
+#define RLDEF static
+#endif
+#else
+#define RLDEF extern
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum rl_result {
+    RL_OK = 0,
+    RL_ERR_INVALID_ARGUMENT,  /* NULL pointer, negative or out-of-range option */
+    RL_ERR_OUT_OF_MEMORY,
+    RL_CANCELLED,             /* the progress callback returned nonzero */
+    RL_ERR_EMPTY,             /* a map with no texels */
+    RL_ERR_TOO_LARGE,         /* a side above 16384 or more than 2^26 texels */
+    RL_ERR_NOT_FINITE,        /* a NaN or infinite height */
+    RL_ERR_SIZE_MISMATCH,     /* maps that must have the same size do not */
+    RL_ERR_NO_STROKES,        /* the sketch has no white and no black texel */
+    RL_ERR_PATCH_TOO_LARGE    /* the patch (with its rotation margin) does not fit in the example */
+} rl_result;
+
+typedef struct rl_allocator {
+    void *(*alloc)(void *user, size_t size);
+    void (*free)(void *user, void *ptr);
+    void *user;
+} rl_allocator;
+
+/* done in [0, 1]; a nonzero return cancels the call (RL_CANCELLED, everything freed) */
+typedef int (*rl_progress_fn)(void *user, float done);
+
+/* A float map: width * height values, row-major, row 0 at the top. */
+typedef struct rl_map {
+    int width, height;
+    float *data;
+} rl_map;
+
+/* ---- normal map ------------------------------------------------------------------------------ */
+
+typedef struct rl_normal_options {
+    int distance;     /* sampling distance d in texels, 0 = 4 (the thesis's choice) */
+    float strength;   /* heights times strength are in texel units, 0 = 1. For a relief quad of
+                         width |axis_u| and depth_scale: strength = depth_scale * width_in_texels / |axis_u| */
+    int wrap;         /* nonzero: wrap-around borders (tileable maps); 0: clamp to edge */
+} rl_normal_options;
+
+RLDEF rl_normal_options rl_normal_default_options(void);
+/* out: 3 floats a texel, the unit normal (-Hs, -Ht, 1) / |.|, x along +column, y along +row, with
+   Hs = strength (h(x+d, y) - h(x-d, y)) / (2d), Ht likewise along rows. */
+RLDEF rl_result rl_normal_map(const float *height, int width, int height_texels, const rl_normal_options *options, float *out);
+/* 3 floats a texel in [-1, 1] to RGB8, (n + 1) / 2 rounded (the thesis's Eq. 5-7). */
+RLDEF void rl_normal_to_rgb8(const float *normals, size_t texels, uint8_t *rgb);
+
+/* ---- skeletons (simplified PPA) ------------------------------------------------------------- */
+
+typedef struct rl_skeleton_options {
+    int half_length;      /* profile half length L in texels, 0 = 3 */
+    float threshold;      /* height drop tau that marks a side, 0 = 0.03 of the map's height range */
+    int prune_rounds;     /* leaf-pruning rounds, 0 = L (the thesis: L / 2; see DECISIONS), negative = none */
+    int valleys;          /* nonzero: valley lines (the comparisons reversed) */
+} rl_skeleton_options;
+
+/* edges[y * width + x]: bit k set = an edge to neighbour k, clockwise from north: 0 N, 1 NE, 2 E,
+   3 SE, 4 S, 5 SW, 6 W, 7 NW (y grows downwards). Symmetric; the edges form a forest. */
+typedef struct rl_skeleton {
+    int width, height;
+    uint8_t *edges;
+} rl_skeleton;
+
+RLDEF rl_skeleton_options rl_skeleton_default_options(void);
+RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_options *options,
+                                    const rl_allocator *allocator, rl_skeleton *out);
+RLDEF void rl_skeleton_free(rl_skeleton *s, const rl_allocator *allocator);
+
+/* ---- graph-cut seam ------------------------------------------------------------------------- */
+
+/* Labels each texel of a width x height overlap A (0) or B (1), minimising the cut cost
+   sum over 4-neighbour pairs (s, t) with different labels of |a(s) - b(s)| + |a(t) - b(t)|.
+   constraint[i]: 0 free, 1 must be A, 2 must be B (NULL = all free, then all A is optimal).
+   *cost = the minimum. Uses max-flow (Dinic). */
+RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *constraint, int width, int height,
+                             const rl_allocator *allocator, uint8_t *labels, double *cost);
+
+/* ---- synthesis ------------------------------------------------------------------------------ */
+
+typedef struct rl_synth_options {
+    int patch;              /* patch side in texels, 0 = 48 */
+    int overlap;            /* overlap of neighbouring fill patches, 0 = patch / 3 */
+    int candidates;         /* K best fill candidates by SSD that get a graph cut, 0 = 4 */
+    int search_stride;      /* stride of the fill candidates' positions in the example, 0 = 4 */
+    int feature_candidates; /* example feature points tried per sketch feature, 0 = 48 */
+    float alpha_g, alpha_f; /* weights of seam and feature cost (Eq. 5-1), 0 = 1 and 3 */
+    float emphasis;         /* extra relief under the strokes in units of the example's height
+                               range, 0 = 0.45; negative = none (pure synthesis) */
+    float stroke_width;     /* width of that relief's Gaussian profile in texels, 0 = 3 */
+    int blend_band;         /* Poisson band width in texels beside a seam, 0 = 3; negative = no blending */
+    float tolerance;        /* fill: a fixed pseudo-random pick among the K whose cost is within
+                               (1 + tolerance) of the best (Efros & Freeman), 0 = 0.3; negative = the best */
+    rl_skeleton_options skeleton; /* for the example's ridges and valleys */
+    const rl_allocator *allocator;
+    rl_progress_fn progress; void *progress_user;
+    uint8_t *seams;         /* NULL, or width*height bytes of the sketch's size: bit 0 set where the
+                               texel's right neighbour came from another patch, bit 1 its lower one */
+} rl_synth_options;
+
+RLDEF rl_synth_options rl_synth_default_options(void);
+RLDEF rl_result rl_synthesize(const rl_map *example, const rl_map *sketch, const rl_synth_options *options, rl_map *out);
+/* The baseline: the example tiled by mirroring (its mean removed... no: as is) to the sketch's size,
+   plus emphasis * range * exp(-d^2 / (2 w^2)) with d the distance to the nearest white stroke
+   texel, minus the same for black strokes. Uses emphasis, stroke_width, allocator. */
+RLDEF rl_result rl_emboss(const rl_map *example, const rl_map *sketch, const rl_synth_options *options, rl_map *out);
+RLDEF void rl_map_free(rl_map *m, const rl_allocator *allocator);
+
+RLDEF const char *rl_result_string(rl_result r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RL_RELIEF_H */
+
+/* ============================================================================================
+   Implementation
+   ============================================================================================ */
+#ifdef RL_IMPLEMENTATION
+#ifndef RL_IMPLEMENTATION_DONE
+#define RL_IMPLEMENTATION_DONE
+
+#include <math.h>
+#include <string.h>
+
+#if defined(RL_MALLOC) && defined(RL_FREE)
+/* both given */
+#elif !defined(RL_MALLOC) && !defined(RL_FREE)
+#include <stdlib.h>
+#define RL_MALLOC(sz) malloc(sz)
+#define RL_FREE(p) free(p)
+#else
+#error "relief.h: define both RL_MALLOC and RL_FREE, or neither"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------------------------------
+   Section: results, allocation, map checks
+   --------------------------------------------------------------------------------------------- */
+
+#define RL__MAX_SIDE 16384
+#define RL__MAX_TEXELS ((size_t)1 << 26)
+
+RLDEF const char *rl_result_string(rl_result r)
+{
+    switch (r) {
+    case RL_OK: return "RL_OK";
+    case RL_ERR_INVALID_ARGUMENT: return "RL_ERR_INVALID_ARGUMENT";
+    case RL_ERR_OUT_OF_MEMORY: return "RL_ERR_OUT_OF_MEMORY";
+    case RL_CANCELLED: return "RL_CANCELLED";
+    case RL_ERR_EMPTY: return "RL_ERR_EMPTY";
+    case RL_ERR_TOO_LARGE: return "RL_ERR_TOO_LARGE";
+    case RL_ERR_NOT_FINITE: return "RL_ERR_NOT_FINITE";
+    case RL_ERR_SIZE_MISMATCH: return "RL_ERR_SIZE_MISMATCH";
+    case RL_ERR_NO_STROKES: return "RL_ERR_NO_STROKES";
+    case RL_ERR_PATCH_TOO_LARGE: return "RL_ERR_PATCH_TOO_LARGE";
+    }
+    return "RL_ERR_?";
+}
+
+static void *rl__default_alloc(void *user, size_t size) { (void)user; return RL_MALLOC(size); }
+static void rl__default_free(void *user, void *p) { (void)user; RL_FREE(p); }
+
+static rl_allocator rl__allocator(const rl_allocator *a)
+{
+    rl_allocator r;
+    if (a && a->alloc && a->free) return *a;
+    r.alloc = rl__default_alloc;
+    r.free = rl__default_free;
+    r.user = NULL;
+    return r;
+}
+
+static void *rl__alloc(const rl_allocator *a, size_t n) { return a->alloc(a->user, n ? n : 1); }
+static void rl__free(const rl_allocator *a, void *p) { if (p) a->free(a->user, p); }
+
+RLDEF void rl_map_free(rl_map *m, const rl_allocator *allocator)
+{
+    rl_allocator a = rl__allocator(allocator);
+    if (!m) return;
+    rl__free(&a, m->data);
+    m->data = NULL;
+}
+
+/* size and finiteness of a map; min and max heights when wanted */
+static rl_result rl__check_map(const rl_map *m, float *lo, float *hi)
+{
+    size_t i, n;
+    float a = 0.0f, b = 0.0f;
+    if (!m) return RL_ERR_INVALID_ARGUMENT;
+    if (m->width <= 0 || m->height <= 0) return (m->width < 0 || m->height < 0) ? RL_ERR_INVALID_ARGUMENT : RL_ERR_EMPTY;
+    if (m->width > RL__MAX_SIDE || m->height > RL__MAX_SIDE) return RL_ERR_TOO_LARGE;
+    n = (size_t)m->width * (size_t)m->height;
+    if (n > RL__MAX_TEXELS) return RL_ERR_TOO_LARGE;
+    if (!m->data) return RL_ERR_INVALID_ARGUMENT;
+    a = b = m->data[0];
+    for (i = 0; i < n; i++) {
+        float v = m->data[i];
+        if (!(v - v == 0.0f)) return RL_ERR_NOT_FINITE;
+        a = v < a ? v : a;
+        b = v > b ? v : b;
+    }
+    if (lo) *lo = a;
+    if (hi) *hi = b;
+    return RL_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: normal map (Eqs. 5-4 to 5-7)
+   --------------------------------------------------------------------------------------------- */
+
+RLDEF rl_normal_options rl_normal_default_options(void)
+{
+    rl_normal_options o;
+    o.distance = 4;
+    o.strength = 1.0f;
+    o.wrap = 0;
+    return o;
+}
+
+static int rl__index(int i, int n, int wrap)
+{
+    if (wrap) { i %= n; return i < 0 ? i + n : i; }
+    return i < 0 ? 0 : i >= n ? n - 1 : i;
+}
+
+RLDEF rl_result rl_normal_map(const float *height, int width, int height_texels, const rl_normal_options *options, float *out)
+{
+    rl_normal_options o = options ? *options : rl_normal_default_options();
+    rl_map m;
+    rl_result r;
+    int x, y, d;
+    float k;
+    m.width = width; m.height = height_texels; m.data = (float *)(size_t)height;
+    if (!out) return RL_ERR_INVALID_ARGUMENT;
+    if ((r = rl__check_map(&m, NULL, NULL)) != RL_OK) return r;
+    if (o.distance < 0 || !(o.strength >= 0.0f) || o.strength > 1e30f) return RL_ERR_INVALID_ARGUMENT;
+    d = o.distance ? o.distance : 4;
+    k = (o.strength ? o.strength : 1.0f) / (2.0f * (float)d);
+    for (y = 0; y < height_texels; y++) {
+        const float *up = height + (size_t)rl__index(y - d, height_texels, o.wrap) * (size_t)width;
+        const float *dn = height + (size_t)rl__index(y + d, height_texels, o.wrap) * (size_t)width;
+        const float *row = height + (size_t)y * (size_t)width;
+        float *n = out + (size_t)y * (size_t)width * 3;
+        for (x = 0; x < width; x++, n += 3) {
+            float hs = k * (row[rl__index(x + d, width, o.wrap)] - row[rl__index(x - d, width, o.wrap)]);
+            float ht = k * (dn[x] - up[x]);
+            float inv = 1.0f / sqrtf(hs * hs + ht * ht + 1.0f);
+            n[0] = -hs * inv; n[1] = -ht * inv; n[2] = inv;
+        }
+    }
+    return RL_OK;
+}
+
+RLDEF void rl_normal_to_rgb8(const float *normals, size_t texels, uint8_t *rgb)
+{
+    size_t i;
+    if (!normals || !rgb) return;
+    for (i = 0; i < 3 * texels; i++) {
+        float v = (normals[i] + 1.0f) * 0.5f * 255.0f + 0.5f;
+        rgb[i] = (uint8_t)(v < 0.0f ? 0.0f : v > 255.0f ? 255.0f : v);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: distance transform (Felzenszwalb & Huttenlocher 2012, exact squared Euclidean)
+   --------------------------------------------------------------------------------------------- */
+
+/* 1-D lower envelope of parabolas: f (n values, 1e20 = none) -> d, with scratch v (n ints), z (n+1) */
+static void rl__edt_1d(const float *f, int n, size_t stride_f, float *d, size_t stride_d, int *v, float *z)
+{
+    int k = 0, q;
+    v[0] = 0; z[0] = -1e30f; z[1] = 1e30f;
+    for (q = 1; q < n; q++) {
+        float s;
+        for (;;) {
+            int p = v[k];
+            s = ((f[(size_t)q * stride_f] + (float)q * (float)q) - (f[(size_t)p * stride_f] + (float)p * (float)p)) / (2.0f * (float)(q - p));
+            if (s <= z[k] && k > 0) k--;
+            else break;
+        }
+        if (s <= z[k]) { v[k] = q; z[k + 1] = 1e30f; continue; } /* k == 0: q replaces it */
+        k++;
+        v[k] = q; z[k] = s; z[k + 1] = 1e30f;
+    }
+    for (q = 0, k = 0; q < n; q++) {
+        float t;
+        while (z[k + 1] < (float)q) k++;
+        t = (float)(q - v[k]);
+        d[(size_t)q * stride_d] = t * t + f[(size_t)v[k] * stride_f];
+    }
+}
+
+/* dist[i] = Euclidean distance from texel i to the nearest texel with mask[i] == value; 1e10 if none */
+static rl_result rl__distance(const uint8_t *mask, uint8_t value, int w, int h, const rl_allocator *a, float *dist)
+{
+    size_t n = (size_t)w * (size_t)h, i;
+    int m = w > h ? w : h, x, y;
+    float *col = (float *)rl__alloc(a, sizeof(float) * (size_t)m * 2 + sizeof(float) * ((size_t)m + 1));
+    int *v = (int *)rl__alloc(a, sizeof(int) * (size_t)m);
+    if (!col || !v) { rl__free(a, col); rl__free(a, v); return RL_ERR_OUT_OF_MEMORY; }
+    for (i = 0; i < n; i++) dist[i] = mask[i] == value ? 0.0f : 1e20f;
+    for (x = 0; x < w; x++) { /* columns, through a copy */
+        for (y = 0; y < h; y++) col[y] = dist[(size_t)y * w + x];
+        rl__edt_1d(col, h, 1, dist + x, (size_t)w, v, col + 2 * m);
+    }
+    for (y = 0; y < h; y++) {
+        float *row = dist + (size_t)y * w;
+        memcpy(col, row, sizeof(float) * (size_t)w);
+        rl__edt_1d(col, w, 1, row, 1, v, col + 2 * m);
+    }
+    for (i = 0; i < n; i++) dist[i] = dist[i] >= 1e19f ? 1e10f : sqrtf(dist[i]);
+    rl__free(a, col);
+    rl__free(a, v);
+    return RL_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: skeletons - the thesis's simplified PPA (Sec. 5.2.2)
+   --------------------------------------------------------------------------------------------- */
+
+static const int rl__dx[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+static const int rl__dy[8] = {-1, -1, 0, 1, 1, 1, 0, -1};
+
+RLDEF rl_skeleton_options rl_skeleton_default_options(void)
+{
+    rl_skeleton_options o;
+    o.half_length = 3;
+    o.threshold = 0.0f;
+    o.prune_rounds = 0;
+    o.valleys = 0;
+    return o;
+}
+
+RLDEF void rl_skeleton_free(rl_skeleton *s, const rl_allocator *allocator)
+{
+    rl_allocator a = rl__allocator(allocator);
+    if (!s) return;
+    rl__free(&a, s->edges);
+    s->edges = NULL;
+}
+
+/* Step 1: a texel is a candidate when, along one of the 4 lines through it, both sides have a
+   texel within L whose height is below it by more than tau (above it, for valleys). */
+static void rl__ppa_candidates(const float *h, int w, int hh, int L, float tau, float sign, uint8_t *cand)
+{
+    static const int lx[4] = {1, 0, 1, 1}, ly[4] = {0, 1, 1, -1};
+    int x, y, l, k, side;
+    for (y = 0; y < hh; y++)
+        for (x = 0; x < w; x++) {
+            float c = sign * h[(size_t)y * w + x];
+            int is = 0;
+            for (l = 0; l < 4 && !is; l++) {
+                int both = 1;
+                for (side = -1; side <= 1 && both; side += 2) {
+                    int mark = 0;
+                    for (k = 1; k <= L && !mark; k++) {
+                        int px = x + side * k * lx[l], py = y + side * k * ly[l];
+                        if (px < 0 || py < 0 || px >= w || py >= hh) break;
+                        mark = c - sign * h[(size_t)py * w + px] > tau;
+                    }
+                    both = mark;
+                }
+                is = both;
+            }
+            cand[(size_t)y * w + x] = (uint8_t)is;
+        }
+}
+
+typedef struct rl__edge { float weight; uint32_t a, b; uint8_t dir; } rl__edge;
+
+static int rl__edge_cmp(const void *p, const void *q)
+{
+    const rl__edge *a = (const rl__edge *)p, *b = (const rl__edge *)q;
+    if (a->weight != b->weight) return a->weight > b->weight ? -1 : 1; /* heavier first */
+    if (a->a != b->a) return a->a < b->a ? -1 : 1;
+    return a->dir < b->dir ? -1 : a->dir > b->dir;
+}
+
+/* Step 2: edges between neighbouring candidates (E, SE, S, SW of each), weight = mean height
+   (Chang's convention; negated for valleys); of two crossing diagonals the lighter is dropped. */
+static size_t rl__ppa_connect(const float *h, int w, int hh, float sign, const uint8_t *cand, rl__edge *e)
+{
+    size_t n = 0;
+    int x, y, k;
+    for (y = 0; y < hh; y++)
+        for (x = 0; x < w; x++) {
+            size_t i = (size_t)y * w + x;
+            if (!cand[i]) continue;
+            for (k = 2; k <= 5; k++) {
+                int px = x + rl__dx[k], py = y + rl__dy[k];
+                size_t j;
+                float wt;
+                if (px < 0 || py < 0 || px >= w || py >= hh || !cand[(size_t)py * w + px]) continue;
+                j = (size_t)py * w + px;
+                wt = 0.5f * sign * (h[i] + h[j]);
+                if (k == 3 && x + 1 < w && y + 1 < hh && cand[i + 1] && cand[i + (size_t)w]) {
+                    float other = 0.5f * sign * (h[i + 1] + h[i + (size_t)w]); /* the SW diagonal from x+1 */
+                    if (other > wt) continue;
+                }
+                if (k == 5 && x >= 1 && y + 1 < hh && cand[i - 1] && cand[i + (size_t)w]) {
+                    float other = 0.5f * sign * (h[i - 1] + h[i + (size_t)w]); /* the SE diagonal from x-1 */
+                    if (other >= wt) continue;
+                }
+                e[n].weight = wt; e[n].a = (uint32_t)i; e[n].b = (uint32_t)j; e[n].dir = (uint8_t)k;
+                n++;
+            }
+        }
+    return n;
+}
+
+static uint32_t rl__find(uint32_t *parent, uint32_t i)
+{
+    while (parent[i] != i) { parent[i] = parent[parent[i]]; i = parent[i]; }
+    return i;
+}
+
+/* Step 3: loop elimination. Deleting the lightest edge of a loop until none is left (the
+   thesis's repeated depth-first search) leaves the maximum-weight spanning forest; Kruskal
+   finds the same forest in O(E log E). */
+static void rl__ppa_forest(rl__edge *e, size_t n, uint32_t *parent, size_t texels, uint8_t *edges)
+{
+    size_t i;
+    qsort(e, n, sizeof *e, rl__edge_cmp);
+    for (i = 0; i < texels; i++) parent[i] = (uint32_t)i;
+    for (i = 0; i < n; i++) {
+        uint32_t ra = rl__find(parent, e[i].a), rb = rl__find(parent, e[i].b);
+        if (ra == rb) continue;
+        parent[ra] = rb;
+        edges[e[i].a] |= (uint8_t)(1u << e[i].dir);
+        edges[e[i].b] |= (uint8_t)(1u << ((e[i].dir + 4) & 7));
+    }
+}
+
+static int rl__degree(uint8_t m)
+{
+    int d = 0;
+    while (m) { d += m & 1; m >>= 1; }
+    return d;
+}
+
+/* Step 4: each round removes the edge of every leaf at once (synchronously, so the result does
+   not depend on the scan order). list: scratch of texels entries. */
+static void rl__ppa_prune(uint8_t *edges, int w, int hh, int rounds, uint32_t *list)
+{
+    size_t n = (size_t)w * (size_t)hh, i, count;
+    int r, k;
+    for (r = 0; r < rounds; r++) {
+        count = 0;
+        for (i = 0; i < n; i++)
+            if (edges[i] && rl__degree(edges[i]) == 1) list[count++] = (uint32_t)i;
+        for (i = 0; i < count; i++) {
+            uint32_t t = list[i];
+            int x = (int)(t % (uint32_t)w), y = (int)(t / (uint32_t)w);
+            for (k = 0; k < 8; k++)
+                if (edges[t] & (1u << k)) {
+                    size_t j = (size_t)(y + rl__dy[k]) * w + (size_t)(x + rl__dx[k]);
+                    edges[t] &= (uint8_t)~(1u << k);
+                    edges[j] &= (uint8_t)~(1u << ((k + 4) & 7));
+                }
+        }
+    }
+}
+
+RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_options *options,
+                                    const rl_allocator *allocator, rl_skeleton *out)
+{
+    rl_skeleton_options o = options ? *options : rl_skeleton_default_options();
+    rl_allocator a = rl__allocator(allocator);
+    float lo, hi, tau, sign;
+    rl_result r;
+    size_t n, ne, nc, i;
+    uint8_t *cand;
+    rl__edge *e;
+    uint32_t *parent;
+    int L, rounds;
+    if (!out) return RL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if ((r = rl__check_map(height, &lo, &hi)) != RL_OK) return r;
+    if (o.half_length < 0 || o.half_length > 64 || !(o.threshold >= 0.0f) || !(o.threshold < 1e30f)) return RL_ERR_INVALID_ARGUMENT;
+    L = o.half_length ? o.half_length : 3;
+    tau = o.threshold > 0.0f ? o.threshold : 0.03f * (hi - lo);
+    rounds = o.prune_rounds < 0 ? 0 : o.prune_rounds ? o.prune_rounds : L;
+    sign = o.valleys ? -1.0f : 1.0f;
+    n = (size_t)height->width * (size_t)height->height;
+    cand = (uint8_t *)rl__alloc(&a, n);
+    if (!cand) return RL_ERR_OUT_OF_MEMORY;
+    rl__ppa_candidates(height->data, height->width, height->height, L, tau, sign, cand);
+    for (i = 0, nc = 0; i < n; i++) nc += cand[i];
+    out->edges = (uint8_t *)rl__alloc(&a, n);
+    e = (rl__edge *)rl__alloc(&a, sizeof(rl__edge) * 4 * nc);
+    parent = (uint32_t *)rl__alloc(&a, sizeof(uint32_t) * n);
+    if (!out->edges || !e || !parent) {
+        rl__free(&a, out->edges); rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent);
+        out->edges = NULL;
+        return RL_ERR_OUT_OF_MEMORY;
+    }
+    memset(out->edges, 0, n);
+    out->width = height->width;
+    out->height = height->height;
+    ne = rl__ppa_connect(height->data, height->width, height->height, sign, cand, e);
+    rl__ppa_forest(e, ne, parent, n, out->edges);
+    rl__ppa_prune(out->edges, height->width, height->height, rounds, parent);
+    rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent);
+    return RL_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: graph-cut seam (Kwatra et al. 2003, Eqs. 5-2 and 5-3), max-flow by Dinic's algorithm
+   --------------------------------------------------------------------------------------------- */
+
+typedef struct rl__flow {
+    int nodes, arcs;
+    int *head, *next, *to, *level, *it, *queue, *path;
+    double *cap;
+} rl__flow;
+
+static void rl__flow_free(rl__flow *f, const rl_allocator *a)
+{
+    rl__free(a, f->head); rl__free(a, f->next); rl__free(a, f->to); rl__free(a, f->level);
+    rl__free(a, f->it); rl__free(a, f->queue); rl__free(a, f->path); rl__free(a, f->cap);
+    memset(f, 0, sizeof *f);
+}
+
+static rl_result rl__flow_init(rl__flow *f, int nodes, int max_arcs, const rl_allocator *a)
+{
+    size_t nn = (size_t)nodes, na = (size_t)max_arcs;
+    memset(f, 0, sizeof *f);
+    f->nodes = nodes;
+    f->head = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->level = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->it = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->queue = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->path = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->next = (int *)rl__alloc(a, sizeof(int) * na);
+    f->to = (int *)rl__alloc(a, sizeof(int) * na);
+    f->cap = (double *)rl__alloc(a, sizeof(double) * na);
+    if (!f->head || !f->level || !f->it || !f->queue || !f->path || !f->next || !f->to || !f->cap) {
+        rl__flow_free(f, a);
+        return RL_ERR_OUT_OF_MEMORY;
+    }
+    memset(f->head, 0xFF, sizeof(int) * nn);
+    return RL_OK;
+}
+
+/* an arc pair u->v (capacity c) and v->u (capacity back): arc e's reverse is e ^ 1 */
+static void rl__flow_arc(rl__flow *f, int u, int v, double c, double back)
+{
+    int e = f->arcs;
+    f->to[e] = v; f->cap[e] = c; f->next[e] = f->head[u]; f->head[u] = e;
+    f->to[e + 1] = u; f->cap[e + 1] = back; f->next[e + 1] = f->head[v]; f->head[v] = e + 1;
+    f->arcs += 2;
+}
+
+static int rl__flow_levels(rl__flow *f, int s, int t)
+{
+    int qh = 0, qt = 0, e;
+    memset(f->level, 0xFF, sizeof(int) * (size_t)f->nodes);
+    f->level[s] = 0;
+    f->queue[qt++] = s;
+    while (qh < qt) {
+        int u = f->queue[qh++];
+        for (e = f->head[u]; e >= 0; e = f->next[e])
+            if (f->cap[e] > 0.0 && f->level[f->to[e]] < 0) {
+                f->level[f->to[e]] = f->level[u] + 1;
+                f->queue[qt++] = f->to[e];
+            }
+    }
+    return f->level[t] >= 0;
+}
+
+/* one blocking flow along the level graph, depth-first without recursion */
+static void rl__flow_block(rl__flow *f, int s, int t)
+{
+    int depth = 0, u = s, k;
+    memcpy(f->it, f->head, sizeof(int) * (size_t)f->nodes);
+    for (;;) {
+        if (u == t) {
+            double m = f->cap[f->path[0]];
+            int cut = 0;
+            for (k = 1; k < depth; k++) if (f->cap[f->path[k]] < m) m = f->cap[f->path[k]];
+            for (k = 0; k < depth; k++) {
+                f->cap[f->path[k]] -= m;
+                f->cap[f->path[k] ^ 1] += m;
+            }
+            for (k = 0; k < depth; k++) if (f->cap[f->path[k]] <= 0.0) { cut = k; break; }
+            depth = cut;
+            u = f->to[f->path[cut] ^ 1];
+            continue;
+        }
+        while (f->it[u] >= 0) {
+            int e = f->it[u];
+            if (f->cap[e] > 0.0 && f->level[f->to[e]] == f->level[u] + 1) break;
+            f->it[u] = f->next[e];
+        }
+        if (f->it[u] < 0) {
+            if (u == s) return;
+            f->level[u] = -1;
+            depth--;
+            u = f->to[f->path[depth] ^ 1];
+            f->it[u] = f->next[f->it[u]];
+            continue;
+        }
+        f->path[depth++] = f->it[u];
+        u = f->to[f->it[u]];
+    }
+}
+
+static double rl__pair_cost(const float *a, const float *b, size_t s, size_t t)
+{
+    return fabs((double)a[s] - (double)b[s]) + fabs((double)a[t] - (double)b[t]);
+}
+
+/* One side of a grid pair: free-free pairs become arc pairs, a free texel beside a pinned one
+   gets that cost on its link to the pinned side's terminal (the pair is cut exactly when the
+   free texel takes the other label), pinned-pinned pairs cost nothing that a cut can change. */
+static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, size_t p, size_t q, double c)
+{
+    int np = node[p], nq = node[q], s = f->nodes - 2, t = f->nodes - 1;
+    if (np >= 0 && nq >= 0) rl__flow_arc(f, np, nq, c, c);
+    else if (np >= 0) { if (cons[q] == 1) rl__flow_arc(f, s, np, c, 0.0); else rl__flow_arc(f, np, t, c, 0.0); }
+    else if (nq >= 0) { if (cons[p] == 1) rl__flow_arc(f, s, nq, c, 0.0); else rl__flow_arc(f, nq, t, c, 0.0); }
+}
+
+/* the cut on a flow workspace with room for width*height + 2 nodes and 6 arcs a texel; node:
+   width*height ints of scratch */
+static void rl__cut_solve(rl__flow *f, const float *a, const float *b, const uint8_t *cons, int width, int height,
+                          int *node, uint8_t *labels)
+{
+    size_t n = (size_t)width * (size_t)height, i;
+    int x, y, free_count = 0, s, t;
+    for (i = 0; i < n; i++) node[i] = (!cons || !cons[i]) ? free_count++ : -1;
+    f->nodes = free_count + 2;
+    f->arcs = 0;
+    s = free_count; t = free_count + 1;
+    memset(f->head, 0xFF, sizeof(int) * (size_t)f->nodes);
+    for (y = 0; y < height; y++)
+        for (x = 0; x < width; x++) {
+            size_t p = (size_t)y * width + x;
+            if (x + 1 < width) rl__cut_pair(f, node, cons, p, p + 1, rl__pair_cost(a, b, p, p + 1));
+            if (y + 1 < height) rl__cut_pair(f, node, cons, p, p + (size_t)width, rl__pair_cost(a, b, p, p + (size_t)width));
+        }
+    while (rl__flow_levels(f, s, t)) rl__flow_block(f, s, t);
+    rl__flow_levels(f, s, t); /* what the source still reaches is side A */
+    for (i = 0; i < n; i++) labels[i] = node[i] >= 0 ? (f->level[node[i]] >= 0 ? 0 : 1) : (cons[i] == 1 ? 0 : 1);
+}
+
+static double rl__cut_cost(const float *a, const float *b, const uint8_t *labels, int width, int height)
+{
+    double c = 0.0;
+    int x, y;
+    for (y = 0; y < height; y++)
+        for (x = 0; x < width; x++) {
+            size_t p = (size_t)y * width + x;
+            if (x + 1 < width && labels[p] != labels[p + 1]) c += rl__pair_cost(a, b, p, p + 1);
+            if (y + 1 < height && labels[p] != labels[p + (size_t)width]) c += rl__pair_cost(a, b, p, p + (size_t)width);
+        }
+    return c;
+}
+
+RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *constraint, int width, int height,
+                             const rl_allocator *allocator, uint8_t *labels, double *cost)
+{
+    rl_allocator al = rl__allocator(allocator);
+    rl__flow f;
+    size_t n, i;
+    int *node;
+    rl_result r;
+    if (!a || !b || !labels || width <= 0 || height <= 0) return RL_ERR_INVALID_ARGUMENT;
+    if (width > RL__MAX_SIDE || height > RL__MAX_SIDE || (size_t)width * (size_t)height > ((size_t)1 << 24)) return RL_ERR_TOO_LARGE;
+    n = (size_t)width * (size_t)height;
+    for (i = 0; i < n; i++) {
+        if (!(a[i] - a[i] == 0.0f) || !(b[i] - b[i] == 0.0f)) return RL_ERR_NOT_FINITE;
+        if (constraint && constraint[i] > 2) return RL_ERR_INVALID_ARGUMENT;
+    }
+    if ((r = rl__flow_init(&f, (int)n + 2, (int)(6 * n), &al)) != RL_OK) return r;
+    node = (int *)rl__alloc(&al, sizeof(int) * n);
+    if (!node) { rl__flow_free(&f, &al); return RL_ERR_OUT_OF_MEMORY; }
+    rl__cut_solve(&f, a, b, constraint, width, height, node, labels);
+    rl__free(&al, node);
+    rl__flow_free(&f, &al);
+    if (cost) *cost = rl__cut_cost(a, b, labels, width, height);
+    return RL_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: synthesis state, patch sampling, placement (graph cut + Poisson band)
+   --------------------------------------------------------------------------------------------- */
+
+RLDEF rl_synth_options rl_synth_default_options(void)
+{
+    rl_synth_options o;
+    memset(&o, 0, sizeof o);
+    o.patch = 48;
+    o.overlap = 0;              /* patch / 3 */
+    o.candidates = 4;
+    o.search_stride = 8;
+    o.feature_candidates = 24;
+    o.alpha_g = 1.0f;
+    o.alpha_f = 3.0f;
+    o.emphasis = 0.45f;
+    o.stroke_width = 3.0f;
+    o.blend_band = 3;
+    o.tolerance = 0.3f;
+    o.skeleton = rl_skeleton_default_options();
+    return o;
+}
+
+/* a feature point: texel, kind (0 end, 1 curve, 2 branch), polarity (0 ridge, 1 valley), direction */
+typedef struct rl__feat { int x, y, kind, valley; float angle; } rl__feat;
+
+typedef struct rl__synth {
+    rl_synth_options o;
+    rl_allocator a;
+    const float *ex;
+    int ew, eh, w, h, P, O, patch_id, windows_done, windows_total;
+    float lo, range;
+    float *out;              /* w*h output heights */
+    int32_t *owner;          /* w*h: patch id, -1 = not filled yet */
+    uint8_t *stroke;         /* w*h: 1 white stroke, 2 black stroke, 0 none */
+    uint8_t *sk_edges[2];    /* the sketch's ridge (white) and valley (black) skeletons */
+    float *cand, *best;      /* P*P candidate patches */
+    float *ga, *gb;          /* P*P graph-cut inputs */
+    uint8_t *cons, *lab, *best_lab; /* P*P */
+    int32_t *band;           /* P*P: Poisson distance, -1 outside */
+    int32_t *queue;          /* P*P */
+    int *node;               /* P*P */
+    rl__flow flow;           /* graph-cut workspace for P*P texels */
+} rl__synth;
+
+static float rl__bilinear(const float *m, int w, int h, float x, float y)
+{
+    int x0, y0, x1, y1;
+    float fx, fy, a, b;
+    x0 = (int)floorf(x); y0 = (int)floorf(y);
+    fx = x - (float)x0; fy = y - (float)y0;
+    x1 = x0 + 1; y1 = y0 + 1;
+    x0 = x0 < 0 ? 0 : x0 >= w ? w - 1 : x0; x1 = x1 < 0 ? 0 : x1 >= w ? w - 1 : x1;
+    y0 = y0 < 0 ? 0 : y0 >= h ? h - 1 : y0; y1 = y1 < 0 ? 0 : y1 >= h ? h - 1 : y1;
+    a = m[(size_t)y0 * w + x0] + fx * (m[(size_t)y0 * w + x1] - m[(size_t)y0 * w + x0]);
+    b = m[(size_t)y1 * w + x0] + fx * (m[(size_t)y1 * w + x1] - m[(size_t)y1 * w + x0]);
+    return a + fy * (b - a);
+}
+
+/* The example patch centred at example texel (cx, cy), rotated by angle, for the output window
+   whose centre is at window texel (P/2, P/2): the only warp (see DECISIONS). */
+static void rl__sample_patch(const rl__synth *S, float cx, float cy, float angle, int step, float *dst)
+{
+    float c = cosf(angle), s = sinf(angle), h = 0.5f * (float)S->P - 0.5f;
+    int i, j;
+    for (j = 0; j < S->P; j += step)
+        for (i = 0; i < S->P; i += step) {
+            float u = (float)i - h, v = (float)j - h;
+            dst[j * S->P + i] = rl__bilinear(S->ex, S->ew, S->eh, cx + 0.5f + c * u - s * v - 0.5f, cy + 0.5f + s * u + c * v - 0.5f);
+        }
+}
+
+static void rl__copy_patch(const rl__synth *S, int ex, int ey, float *dst)
+{
+    int j;
+    for (j = 0; j < S->P; j++) memcpy(dst + j * S->P, S->ex + (size_t)(ey + j) * S->ew + ex, sizeof(float) * (size_t)S->P);
+}
+
+/* mean squared difference between a candidate and the filled output texels of window (wx, wy),
+   every step-th texel; *count = the texels compared */
+static double rl__overlap_ssd(const rl__synth *S, int wx, int wy, const float *cand, int step, int *count)
+{
+    double sum = 0.0;
+    int i, j, n = 0;
+    for (j = 0; j < S->P; j += step) {
+        int y = wy + j;
+        if (y < 0 || y >= S->h) continue;
+        for (i = 0; i < S->P; i += step) {
+            int x = wx + i;
+            size_t p;
+            double d;
+            if (x < 0 || x >= S->w) continue;
+            p = (size_t)y * S->w + x;
+            if (S->owner[p] < 0) continue;
+            d = (double)cand[j * S->P + i] - (double)S->out[p];
+            sum += d * d;
+            n++;
+        }
+    }
+    if (count) *count = n;
+    return n ? sum / n : 0.0;
+}
+
+/* The graph cut of a candidate in window (wx, wy) against the output: texels not filled yet
+   must come from the candidate, filled texels on the window's border whose outside neighbour
+   is filled must stay, and (pin_radius > 0) texels that near the centre must be the candidate's.
+   Leaves the labels in S->lab (1 = candidate) over the window's in-bounds rectangle; returns the
+   cut cost, 0 with all labels 1 when nothing overlaps. */
+static rl_result rl__cut(rl__synth *S, int wx, int wy, const float *cand, float pin_radius, double *cost, int *overlap)
+{
+    int x0 = wx < 0 ? 0 : wx, y0 = wy < 0 ? 0 : wy, x1 = wx + S->P > S->w ? S->w : wx + S->P, y1 = wy + S->P > S->h ? S->h : wy + S->P;
+    int rw = x1 - x0, rh = y1 - y0, i, j, nover = 0;
+    float c = 0.5f * (float)S->P - 0.5f;
+    for (j = 0; j < rh; j++)
+        for (i = 0; i < rw; i++) {
+            int x = x0 + i, y = y0 + j, q = j * rw + i;
+            size_t p = (size_t)y * S->w + x;
+            float b = cand[(y - wy) * S->P + (x - wx)], du = (float)(x - wx) - c, dv = (float)(y - wy) - c;
+            S->gb[q] = b;
+            if (S->owner[p] < 0) { S->ga[q] = b; S->cons[q] = 2; continue; }
+            S->ga[q] = S->out[p];
+            S->cons[q] = 0;
+            nover++;
+            if ((i == 0 && x > 0 && S->owner[p - 1] >= 0) || (i == rw - 1 && x + 1 < S->w && S->owner[p + 1] >= 0) ||
+                (j == 0 && y > 0 && S->owner[p - (size_t)S->w] >= 0) || (j == rh - 1 && y + 1 < S->h && S->owner[p + (size_t)S->w] >= 0))
+                S->cons[q] = 1;
+            if (pin_radius > 0.0f && du * du + dv * dv <= pin_radius * pin_radius) S->cons[q] = 2;
+        }
+    *overlap = nover;
+    if (!nover) { memset(S->lab, 1, (size_t)rw * (size_t)rh); *cost = 0.0; return RL_OK; }
+    rl__cut_solve(&S->flow, S->ga, S->gb, S->cons, rw, rh, S->node, S->lab);
+    *cost = rl__cut_cost(S->ga, S->gb, S->lab, rw, rh);
+    return RL_OK;
+}
+
+/* Poisson seam removal in a band: the texels this patch just took that lie within blend_band
+   (4-neighbour steps) of a texel of another patch are solved for, with the patch's own gradients
+   as guidance, zero guidance across the seam, and everything else fixed (Gauss-Seidel). */
+static void rl__blend(rl__synth *S, int x0, int y0, int rw, int rh, const float *cand, int wx, int wy)
+{
+    int band = S->o.blend_band, qh = 0, qt = 0, i, k, it, id = S->patch_id;
+    static const int nx[4] = {1, -1, 0, 0}, ny[4] = {0, 0, 1, -1};
+    if (band <= 0) return;
+    for (i = 0; i < rw * rh; i++) {
+        int x = x0 + i % rw, y = y0 + i / rw, seam = 0;
+        size_t p = (size_t)y * S->w + x;
+        S->band[i] = -1;
+        if (S->owner[p] != id) continue;
+        for (k = 0; k < 4 && !seam; k++) {
+            int xx = x + nx[k], yy = y + ny[k];
+            if (xx < 0 || yy < 0 || xx >= S->w || yy >= S->h) continue;
+            seam = S->owner[(size_t)yy * S->w + xx] >= 0 && S->owner[(size_t)yy * S->w + xx] != id;
+        }
+        if (seam) { S->band[i] = 0; S->queue[qt++] = i; }
+    }
+    while (qh < qt) { /* breadth-first distance from the seam inside this patch's texels */
+        int q = S->queue[qh++], x = q % rw, y = q / rw;
+        if (S->band[q] >= band - 1) continue;
+        for (k = 0; k < 4; k++) {
+            int xx = x + nx[k], yy = y + ny[k], r;
+            if (xx < 0 || yy < 0 || xx >= rw || yy >= rh) continue;
+            r = yy * rw + xx;
+            if (S->band[r] >= 0 || S->owner[(size_t)(y0 + yy) * S->w + (x0 + xx)] != id) continue;
+            S->band[r] = S->band[q] + 1;
+            S->queue[qt++] = r;
+        }
+    }
+    for (it = 0; it < 64; it++) {
+        float change = 0.0f;
+        for (i = 0; i < qt; i++) {
+            int q = S->queue[i], x = x0 + q % rw, y = y0 + q / rw, cnt = 0;
+            size_t p = (size_t)y * S->w + x;
+            float sum = 0.0f, b = cand[(y - wy) * S->P + (x - wx)], v;
+            for (k = 0; k < 4; k++) {
+                int xx = x + nx[k], yy = y + ny[k];
+                size_t pq;
+                if (xx < 0 || yy < 0 || xx >= S->w || yy >= S->h) continue;
+                pq = (size_t)yy * S->w + xx;
+                if (S->owner[pq] < 0) continue;
+                if (S->owner[pq] == id || (xx >= wx && yy >= wy && xx < wx + S->P && yy < wy + S->P))
+                    sum += S->out[pq] + (b - cand[(yy - wy) * S->P + (xx - wx)]);
+                else
+                    sum += S->out[pq];
+                cnt++;
+            }
+            v = sum / (float)cnt;
+            change = fabsf(v - S->out[p]) > change ? fabsf(v - S->out[p]) : change;
+            S->out[p] = v;
+        }
+        if (change <= 1e-5f * S->range) break;
+    }
+}
+
+/* copies the candidate's side of the cut in S->lab into window (wx, wy), blends the seam */
+static rl_result rl__commit(rl__synth *S, int wx, int wy, const float *cand)
+{
+    int x0 = wx < 0 ? 0 : wx, y0 = wy < 0 ? 0 : wy, x1 = wx + S->P > S->w ? S->w : wx + S->P, y1 = wy + S->P > S->h ? S->h : wy + S->P;
+    int rw = x1 - x0, rh = y1 - y0, i, j;
+    if (rw <= 0 || rh <= 0) return RL_OK;
+    S->patch_id++;
+    for (j = 0; j < rh; j++)
+        for (i = 0; i < rw; i++) {
+            size_t p = (size_t)(y0 + j) * S->w + (size_t)(x0 + i);
+            if (!S->lab[j * rw + i]) continue;
+            S->out[p] = cand[(y0 + j - wy) * S->P + (x0 + i - wx)];
+            S->owner[p] = S->patch_id;
+        }
+    rl__blend(S, x0, y0, rw, rh, cand, wx, wy);
+    return RL_OK;
+}
+
+/* cuts the candidate into window (wx, wy) and commits it */
+static rl_result rl__place(rl__synth *S, int wx, int wy, const float *cand, float pin_radius)
+{
+    double cost;
+    int nover;
+    rl_result r;
+    if (wx >= S->w || wy >= S->h || wx + S->P <= 0 || wy + S->P <= 0) return RL_OK;
+    if ((r = rl__cut(S, wx, wy, cand, pin_radius, &cost, &nover)) != RL_OK) return r;
+    return rl__commit(S, wx, wy, cand);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: feature points (Sec. 5.2.3: branch nodes, terminal nodes, curve paths)
+   --------------------------------------------------------------------------------------------- */
+
+/* the direction (mod pi) of the skeleton texels within radius r of (x, y): principal axis */
+static float rl__direction(const uint8_t *edges, int w, int h, int x, int y, int r)
+{
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, n = 0;
+    int i, j;
+    for (j = y - r; j <= y + r; j++)
+        for (i = x - r; i <= x + r; i++) {
+            if (i < 0 || j < 0 || i >= w || j >= h || !edges[(size_t)j * w + i]) continue;
+            sx += i; sy += j; sxx += (double)i * i; syy += (double)j * j; sxy += (double)i * j; n++;
+        }
+    if (n < 2) return 0.0f;
+    sxx -= sx * sx / n; syy -= sy * sy / n; sxy -= sx * sy / n;
+    return (float)(0.5 * atan2(2.0 * sxy, sxx - syy));
+}
+
+static int rl__kind(uint8_t e) { int d = rl__degree(e); return d == 1 ? 0 : d >= 3 ? 2 : 1; }
+
+/* Feature samples of a skeleton, breadth first over each tree from a branch node (else an end
+   node, else its first texel), each component's roots in raster order: every node, and a curve
+   sample every `spacing` steps of depth. Returns the count (at most cap). seen, queue: w*h. */
+static int rl__feature_samples(const uint8_t *edges, int w, int h, int valley, int spacing, int32_t *seen, int32_t *queue,
+                               rl__feat *f, int cap)
+{
+    size_t n = (size_t)w * (size_t)h, i;
+    int count = 0, pass, k;
+    for (i = 0; i < n; i++) seen[i] = -1;
+    for (pass = 2; pass >= 0; pass--) /* roots: branch nodes first, then ends, then anything */
+        for (i = 0; i < n; i++) {
+            int qh = 0, qt = 0;
+            int kind0 = edges[i] ? rl__kind(edges[i]) : -1;
+            if (kind0 < 0 || seen[i] >= 0 || (pass == 2 && kind0 != 2) || (pass == 1 && kind0 != 0)) continue;
+            seen[i] = 0;
+            queue[qt++] = (int32_t)i;
+            while (qh < qt) {
+                int32_t q = queue[qh++];
+                int x = (int)(q % w), y = (int)(q / w), kind = rl__kind(edges[q]);
+                if ((kind != 1 || seen[q] % spacing == 0) && count < cap) {
+                    f[count].x = x; f[count].y = y; f[count].kind = kind; f[count].valley = valley;
+                    f[count].angle = rl__direction(edges, w, h, x, y, 4);
+                    count++;
+                }
+                for (k = 0; k < 8; k++) {
+                    size_t r;
+                    if (!(edges[q] & (1u << k))) continue;
+                    r = (size_t)(y + rl__dy[k]) * w + (size_t)(x + rl__dx[k]);
+                    if (seen[r] >= 0) continue;
+                    seen[r] = seen[q] + 1;
+                    queue[qt++] = (int32_t)r;
+                }
+            }
+        }
+    return count;
+}
+
+/* the example's feature points of one polarity far enough from its border for a rotated patch,
+   thinned to at most `cap` per kind by a fixed stride */
+static int rl__example_features(const rl__synth *S, const uint8_t *edges, int valley, rl__feat *f, int cap, int32_t *tmp)
+{
+    int margin = (int)ceilf(0.7072f * (float)S->P) + 2, kind, count = 0, x, y;
+    for (kind = 0; kind < 3; kind++) {
+        int total = 0, k;
+        for (y = margin; y < S->eh - margin; y++)
+            for (x = margin; x < S->ew - margin; x++) {
+                uint8_t e = edges[(size_t)y * S->ew + x];
+                if (e && rl__kind(e) == kind) tmp[total++] = (int32_t)((size_t)y * S->ew + x);
+            }
+        for (k = 0; k < cap && k < total; k++) {
+            int32_t q = tmp[(size_t)k * (size_t)total / (size_t)(cap < total ? cap : total)];
+            f[count].x = (int)(q % S->ew); f[count].y = (int)(q / S->ew);
+            f[count].kind = kind; f[count].valley = valley;
+            f[count].angle = rl__direction(edges, S->ew, S->eh, f[count].x, f[count].y, 4);
+            count++;
+        }
+    }
+    return count;
+}
+
+/* feature dissimilarity c_f: along the sketch's skeleton texels of this polarity inside the
+   window, the mean |candidate - candidate's centre| in units of the height range (a candidate
+   whose ridge follows the stroke keeps its crest height along it) */
+static float rl__feature_cost(const rl__synth *S, const uint8_t *edges, int wx, int wy, const float *cand)
+{
+    int c0 = (S->P / 2) & ~1;
+    float centre = cand[c0 * S->P + c0], sum = 0.0f;
+    int i, j, n = 0;
+    for (j = 0; j < S->P; j += 2)
+        for (i = 0; i < S->P; i += 2) {
+            int x = wx + i, y = wy + j;
+            if (x < 0 || y < 0 || x >= S->w || y >= S->h || !edges[(size_t)y * S->w + x]) continue;
+            sum += fabsf(cand[j * S->P + i] - centre);
+            n++;
+        }
+    return n ? sum / (float)n / S->range : 0.0f;
+}
+
+/* the example patch for one sketch feature: same polarity and kind (any kind when none), both
+   orientations; least alpha_g * overlap mismatch + alpha_f * c_f */
+static rl_result rl__place_feature(rl__synth *S, const rl__feat *t, const rl__feat *src, int nsrc)
+{
+    int wx = t->x - S->P / 2, wy = t->y - S->P / 2, k, flip, best = -1, best_flip = 0, any_kind = 1;
+    double best_cost = 0.0;
+    const uint8_t *edges = S->sk_edges[t->valley];
+    for (k = 0; k < nsrc; k++) if (src[k].valley == t->valley && src[k].kind == t->kind) any_kind = 0;
+    for (k = 0; k < nsrc; k++) {
+        if (src[k].valley != t->valley || (!any_kind && src[k].kind != t->kind)) continue;
+        for (flip = 0; flip < 2; flip++) {
+            float angle = src[k].angle - t->angle + (flip ? 3.14159265f : 0.0f);
+            double c;
+            rl__sample_patch(S, (float)src[k].x, (float)src[k].y, angle, 2, S->cand);
+            c = S->o.alpha_g * rl__overlap_ssd(S, wx, wy, S->cand, 2, NULL) / ((double)S->range * S->range) +
+                S->o.alpha_f * rl__feature_cost(S, edges, wx, wy, S->cand);
+            if (best < 0 || c < best_cost) { best = k; best_flip = flip; best_cost = c; }
+        }
+    }
+    if (best < 0) return RL_OK;
+    rl__sample_patch(S, (float)src[best].x, (float)src[best].y, src[best].angle - t->angle + (best_flip ? 3.14159265f : 0.0f), 1, S->best);
+    return rl__place(S, wx, wy, S->best, (float)S->P / 6.0f);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: non-feature fill (K best by SSD, then SSD + seam cost), the pipeline, the baseline
+   --------------------------------------------------------------------------------------------- */
+
+/* the window's best example position: the K least SSD over the filled texels (every other
+   texel, positions on a stride grid), then the least full SSD + alpha_g * cut cost */
+static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
+{
+    enum { KMAX = 16 };
+    double kc[KMAX], costs[KMAX], best_cost = 0.0;
+    int kx[KMAX], ky[KMAX], nk = 0, K = S->o.candidates, stride = S->o.search_stride, ex, ey, k, n, best = -1;
+    rl_result r;
+    K = K > KMAX ? KMAX : K;
+    rl__overlap_ssd(S, wx, wy, S->cand, S->P, &n); /* any filled texel at all? (cand unused here) */
+    for (ey = 0; ey + S->P <= S->eh; ey += stride)
+        for (ex = 0; ex + S->P <= S->ew; ex += stride) {
+            double c;
+            int cnt, i, j;
+            float *p = S->cand;
+            for (j = 0; j < S->P; j += 2) memcpy(p + j * S->P, S->ex + (size_t)(ey + j) * S->ew + ex, sizeof(float) * (size_t)S->P);
+            c = rl__overlap_ssd(S, wx, wy, p, 2, &cnt);
+            if (!cnt) { /* nothing to match: a fixed spread of positions */
+                uint32_t hsh = (uint32_t)(wx * 73856093) ^ (uint32_t)(wy * 19349663) ^ (uint32_t)(ex * 83492791) ^ (uint32_t)(ey * 2654435761u);
+                c = (double)(hsh % 1000u);
+            }
+            if (nk == K && c >= kc[nk - 1]) continue;
+            i = nk < K ? nk++ : nk - 1;
+            while (i > 0 && kc[i - 1] > c) { kc[i] = kc[i - 1]; kx[i] = kx[i - 1]; ky[i] = ky[i - 1]; i--; }
+            kc[i] = c; kx[i] = ex; ky[i] = ey;
+        }
+    for (k = 0; k < nk; k++) {
+        double cut, c;
+        int nover;
+        rl__copy_patch(S, kx[k], ky[k], S->cand);
+        if ((r = rl__cut(S, wx, wy, S->cand, 0.0f, &cut, &nover)) != RL_OK) return r;
+        c = rl__overlap_ssd(S, wx, wy, S->cand, 1, NULL) / ((double)S->range * S->range) +
+            S->o.alpha_g * cut / ((nover ? nover : 1) * (double)S->range);
+        if (best < 0 || c < best_cost) {
+            best = k; best_cost = c;
+            memcpy(S->best, S->cand, sizeof(float) * (size_t)S->P * (size_t)S->P);
+            memcpy(S->best_lab, S->lab, (size_t)S->P * (size_t)S->P);
+        }
+        costs[k] = c;
+    }
+    if (best < 0) return RL_OK;
+    if (S->o.tolerance > 0.0f) { /* a fixed pick among those within (1 + tolerance) of the best */
+        int ok[KMAX], nok = 0;
+        uint32_t hsh = (uint32_t)(wx * 2654435761u) ^ (uint32_t)(wy * 40503u + 7u);
+        for (k = 0; k < nk; k++) if (costs[k] <= (1.0 + S->o.tolerance) * best_cost) ok[nok++] = k;
+        k = ok[(hsh ^ (hsh >> 15)) % (uint32_t)nok];
+        if (k != best) {
+            int nover;
+            double cut;
+            rl__copy_patch(S, kx[k], ky[k], S->best);
+            if ((r = rl__cut(S, wx, wy, S->best, 0.0f, &cut, &nover)) != RL_OK) return r;
+            return rl__commit(S, wx, wy, S->best);
+        }
+    }
+    memcpy(S->lab, S->best_lab, (size_t)S->P * (size_t)S->P);
+    return rl__commit(S, wx, wy, S->best);
+}
+
+static int rl__window_has_hole(const rl__synth *S, int wx, int wy)
+{
+    int i, j;
+    for (j = wy < 0 ? 0 : wy; j < wy + S->P && j < S->h; j++)
+        for (i = wx < 0 ? 0 : wx; i < wx + S->P && i < S->w; i++)
+            if (S->owner[(size_t)j * S->w + i] < 0) return 1;
+    return 0;
+}
+
+static int rl__progress(rl__synth *S)
+{
+    S->windows_done++;
+    if (!S->o.progress) return 0;
+    return S->o.progress(S->o.progress_user, S->windows_total ? (float)S->windows_done / (float)S->windows_total : 1.0f);
+}
+
+/* grid windows at steps of P - O, the last one flush with the far border, raster order */
+static rl_result rl__fill(rl__synth *S)
+{
+    int step = S->P - S->O, nx = S->w > S->P ? (S->w - S->P + step - 1) / step + 1 : 1, ny = S->h > S->P ? (S->h - S->P + step - 1) / step + 1 : 1, i, j;
+    rl_result r;
+    for (j = 0; j < ny; j++)
+        for (i = 0; i < nx; i++) {
+            int wx = i * step, wy = j * step;
+            if (wx + S->P > S->w) wx = S->w - S->P < 0 ? 0 : S->w - S->P;
+            if (wy + S->P > S->h) wy = S->h - S->P < 0 ? 0 : S->h - S->P;
+            if (!rl__window_has_hole(S, wx, wy)) continue;
+            if ((r = rl__place_fill(S, wx, wy)) != RL_OK) return r;
+            if (rl__progress(S)) return RL_CANCELLED;
+        }
+    return RL_OK;
+}
+
+/* strokes: 1 where the sketch is above 0.75 (white), 2 below 0.25 (black); also their
+   skeletons, from the distance to the stroke's outside (its medial axis is that map's ridge) */
+static rl_result rl__sketch_features(rl__synth *S, const rl_map *sketch, float *dist)
+{
+    size_t n = (size_t)S->w * (size_t)S->h, i;
+    int pol, any = 0;
+    rl_skeleton_options so = rl_skeleton_default_options();
+    rl_result r;
+    for (i = 0; i < n; i++) {
+        float v = sketch->data[i];
+        S->stroke[i] = (uint8_t)(v > 0.75f ? 1 : v < 0.25f ? 2 : 0);
+        any |= S->stroke[i];
+    }
+    if (!any) return RL_ERR_NO_STROKES;
+    so.threshold = 0.5f;
+    for (pol = 0; pol < 2; pol++) {
+        rl_map m;
+        rl_skeleton sk;
+        uint8_t keep = (uint8_t)(pol + 1);
+        if ((r = rl__distance(S->stroke, 0, S->w, S->h, &S->a, dist)) != RL_OK) return r;
+        for (i = 0; i < n; i++) if (S->stroke[i] != keep) dist[i] = 0.0f;
+        m.width = S->w; m.height = S->h; m.data = dist;
+        if ((r = rl_skeleton_extract(&m, &so, &S->a, &sk)) != RL_OK) return r;
+        S->sk_edges[pol] = sk.edges;
+    }
+    return RL_OK;
+}
+
+/* adds emphasis * range * (G(d_white) - G(d_black)), G(d) = exp(-d^2 / (2 w^2)) */
+static rl_result rl__emphasis(const uint8_t *stroke, int w, int h, float amount, float width, const rl_allocator *a, float *out)
+{
+    size_t n = (size_t)w * (size_t)h, i;
+    float *d = (float *)rl__alloc(a, sizeof(float) * n), k = -0.5f / (width * width);
+    uint8_t *m = (uint8_t *)rl__alloc(a, n);
+    int pol;
+    rl_result r = RL_OK;
+    if (!d || !m) { rl__free(a, d); rl__free(a, m); return RL_ERR_OUT_OF_MEMORY; }
+    for (pol = 1; pol <= 2 && r == RL_OK; pol++) {
+        for (i = 0; i < n; i++) m[i] = stroke[i] == pol;
+        r = rl__distance(m, 1, w, h, a, d);
+        for (i = 0; r == RL_OK && i < n; i++) out[i] += (pol == 1 ? amount : -amount) * expf(k * d[i] * d[i]);
+    }
+    rl__free(a, d);
+    rl__free(a, m);
+    return r;
+}
+
+static void rl__synth_free(rl__synth *S)
+{
+    rl__free(&S->a, S->owner); rl__free(&S->a, S->stroke); rl__free(&S->a, S->sk_edges[0]); rl__free(&S->a, S->sk_edges[1]);
+    rl__free(&S->a, S->cand); rl__free(&S->a, S->best); rl__free(&S->a, S->ga); rl__free(&S->a, S->gb);
+    rl__free(&S->a, S->cons); rl__free(&S->a, S->lab); rl__free(&S->a, S->band); rl__free(&S->a, S->queue);
+    rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab);
+    if (S->flow.head) rl__flow_free(&S->flow, &S->a);
+}
+
+/* checks both maps and the options, resolves defaults, allocates the state */
+static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_map *sketch, const rl_synth_options *options)
+{
+    rl_synth_options d = rl_synth_default_options();
+    size_t pp, n;
+    float hi;
+    rl_result r;
+    memset(S, 0, sizeof *S);
+    S->o = options ? *options : d;
+    S->a = rl__allocator(S->o.allocator);
+    if ((r = rl__check_map(example, &S->lo, &hi)) != RL_OK) return r;
+    if ((r = rl__check_map(sketch, NULL, NULL)) != RL_OK) return r;
+    if (S->o.patch < 0 || S->o.overlap < 0 || S->o.candidates < 0 || S->o.search_stride < 0 || S->o.feature_candidates < 0 ||
+        !(S->o.alpha_g >= 0.0f) || !(S->o.alpha_f >= 0.0f) || !(S->o.stroke_width >= 0.0f) || S->o.emphasis != S->o.emphasis ||
+        S->o.patch > 1024)
+        return RL_ERR_INVALID_ARGUMENT;
+    if (!S->o.patch) S->o.patch = d.patch;
+    if (!S->o.overlap) S->o.overlap = S->o.patch / 3;
+    if (!S->o.candidates) S->o.candidates = d.candidates;
+    if (!S->o.search_stride) S->o.search_stride = d.search_stride;
+    if (!S->o.feature_candidates) S->o.feature_candidates = d.feature_candidates;
+    if (S->o.alpha_g == 0.0f) S->o.alpha_g = d.alpha_g;
+    if (S->o.alpha_f == 0.0f) S->o.alpha_f = d.alpha_f;
+    if (S->o.emphasis == 0.0f) S->o.emphasis = d.emphasis;
+    if (S->o.stroke_width == 0.0f) S->o.stroke_width = d.stroke_width;
+    if (S->o.blend_band == 0) S->o.blend_band = d.blend_band;
+    if (S->o.tolerance == 0.0f) S->o.tolerance = d.tolerance;
+    if (S->o.patch < 4 || S->o.overlap >= S->o.patch) return RL_ERR_INVALID_ARGUMENT;
+    if (S->o.patch > example->width || S->o.patch > example->height) return RL_ERR_PATCH_TOO_LARGE;
+    S->ex = example->data; S->ew = example->width; S->eh = example->height;
+    S->w = sketch->width; S->h = sketch->height;
+    S->P = S->o.patch; S->O = S->o.overlap;
+    S->range = hi > S->lo ? hi - S->lo : 1.0f;
+    n = (size_t)S->w * (size_t)S->h;
+    pp = (size_t)S->P * (size_t)S->P;
+    S->owner = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * n);
+    S->stroke = (uint8_t *)rl__alloc(&S->a, n);
+    S->cand = (float *)rl__alloc(&S->a, sizeof(float) * pp);
+    S->best = (float *)rl__alloc(&S->a, sizeof(float) * pp);
+    S->ga = (float *)rl__alloc(&S->a, sizeof(float) * pp);
+    S->gb = (float *)rl__alloc(&S->a, sizeof(float) * pp);
+    S->cons = (uint8_t *)rl__alloc(&S->a, pp);
+    S->lab = (uint8_t *)rl__alloc(&S->a, pp);
+    S->best_lab = (uint8_t *)rl__alloc(&S->a, pp);
+    S->band = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
+    S->queue = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
+    S->node = (int *)rl__alloc(&S->a, sizeof(int) * pp);
+    if (S->owner && S->stroke && S->cand && S->best && S->ga && S->gb && S->cons && S->lab && S->best_lab && S->band && S->queue && S->node &&
+        rl__flow_init(&S->flow, (int)pp + 2, (int)(6 * pp), &S->a) != RL_OK)
+        S->node = (rl__free(&S->a, S->node), (int *)NULL);
+    if (!S->owner || !S->stroke || !S->cand || !S->best || !S->ga || !S->gb || !S->cons || !S->lab || !S->best_lab || !S->band || !S->queue || !S->node) {
+        rl__synth_free(S);
+        return RL_ERR_OUT_OF_MEMORY;
+    }
+    memset(S->owner, 0xFF, sizeof(int32_t) * n);
+    return RL_OK;
+}
+
+/* the sketch's features in breadth-first order get example feature patches */
+static rl_result rl__features(rl__synth *S, int32_t *scratch_a, int32_t *scratch_b)
+{
+    rl_skeleton_options so = S->o.skeleton;
+    rl_map ex;
+    int pol, nt = 0, ns = 0, cap = 4 * S->w + 4 * S->h + 64, k;
+    rl__feat *tf = (rl__feat *)rl__alloc(&S->a, sizeof(rl__feat) * (size_t)cap);
+    rl__feat *sf = (rl__feat *)rl__alloc(&S->a, sizeof(rl__feat) * (size_t)(6 * S->o.feature_candidates));
+    int32_t *tmp = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * (size_t)S->ew * (size_t)S->eh);
+    rl_result r = RL_OK;
+    if (!tf || !sf || !tmp) { rl__free(&S->a, tf); rl__free(&S->a, sf); rl__free(&S->a, tmp); return RL_ERR_OUT_OF_MEMORY; }
+    ex.width = S->ew; ex.height = S->eh; ex.data = (float *)(size_t)S->ex;
+    for (pol = 0; pol < 2 && r == RL_OK; pol++) {
+        rl_skeleton sk;
+        nt += rl__feature_samples(S->sk_edges[pol], S->w, S->h, pol, S->P / 2 > 1 ? S->P / 2 : 1, scratch_a, scratch_b, tf + nt, cap - nt);
+        so.valleys = pol;
+        r = rl_skeleton_extract(&ex, &so, &S->a, &sk);
+        if (r == RL_OK) {
+            ns += rl__example_features(S, sk.edges, pol, sf + ns, S->o.feature_candidates, tmp);
+            rl_skeleton_free(&sk, &S->a);
+        }
+    }
+    S->windows_total += nt;
+    for (k = 0; k < nt && r == RL_OK; k++) {
+        r = rl__place_feature(S, &tf[k], sf, ns);
+        if (r == RL_OK && rl__progress(S)) r = RL_CANCELLED;
+    }
+    rl__free(&S->a, tf); rl__free(&S->a, sf); rl__free(&S->a, tmp);
+    return r;
+}
+
+RLDEF rl_result rl_synthesize(const rl_map *example, const rl_map *sketch, const rl_synth_options *options, rl_map *out)
+{
+    rl__synth S;
+    rl_result r;
+    size_t n, i;
+    int32_t *sa = NULL, *sb = NULL;
+    if (!out) return RL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if ((r = rl__synth_init(&S, example, sketch, options)) != RL_OK) return r;
+    n = (size_t)S.w * (size_t)S.h;
+    S.out = (float *)rl__alloc(&S.a, sizeof(float) * n);
+    sa = (int32_t *)rl__alloc(&S.a, sizeof(int32_t) * n);
+    sb = (int32_t *)rl__alloc(&S.a, sizeof(int32_t) * n);
+    r = (S.out && sa && sb) ? RL_OK : RL_ERR_OUT_OF_MEMORY;
+    S.windows_total = ((S.w + S.P - S.O - 1) / (S.P - S.O)) * ((S.h + S.P - S.O - 1) / (S.P - S.O));
+    if (r == RL_OK) r = rl__sketch_features(&S, sketch, (float *)sa);     /* 1. the sketch's skeletons */
+    if (r == RL_OK) r = rl__features(&S, sa, sb);                         /* 2. feature patches, breadth first */
+    if (r == RL_OK) r = rl__fill(&S);                                     /* 3. the rest by best matches */
+    if (r == RL_OK && S.o.emphasis > 0.0f)                                /* 4. the strokes' extra relief */
+        r = rl__emphasis(S.stroke, S.w, S.h, S.o.emphasis * S.range, S.o.stroke_width, &S.a, S.out);
+    if (r == RL_OK && S.o.seams)
+        for (i = 0; i < n; i++) {
+            size_t x = i % (size_t)S.w;
+            S.o.seams[i] = (uint8_t)((x + 1 < (size_t)S.w && S.owner[i] != S.owner[i + 1]) | ((i + (size_t)S.w < n && S.owner[i] != S.owner[i + (size_t)S.w]) << 1));
+        }
+    rl__free(&S.a, sa);
+    rl__free(&S.a, sb);
+    rl__synth_free(&S);
+    if (r != RL_OK) { rl__free(&S.a, S.out); return r; }
+    out->width = S.w; out->height = S.h; out->data = S.out;
+    return RL_OK;
+}
+
+static int rl__mirror(int i, int n)
+{
+    int m = i % (2 * n);
+    return m < n ? m : 2 * n - 1 - m;
+}
+
+RLDEF rl_result rl_emboss(const rl_map *example, const rl_map *sketch, const rl_synth_options *options, rl_map *out)
+{
+    rl_synth_options o = options ? *options : rl_synth_default_options();
+    rl_allocator a = rl__allocator(o.allocator);
+    float lo, hi, amount, width;
+    uint8_t *stroke;
+    size_t n, i;
+    int x, y, any = 0;
+    rl_result r;
+    if (!out) return RL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if ((r = rl__check_map(example, &lo, &hi)) != RL_OK) return r;
+    if ((r = rl__check_map(sketch, NULL, NULL)) != RL_OK) return r;
+    if (o.emphasis != o.emphasis || !(o.stroke_width >= 0.0f) || !(o.stroke_width < 1e6f)) return RL_ERR_INVALID_ARGUMENT;
+    amount = (o.emphasis == 0.0f ? 0.45f : o.emphasis < 0.0f ? 0.0f : o.emphasis) * (hi > lo ? hi - lo : 1.0f);
+    width = o.stroke_width == 0.0f ? 3.0f : o.stroke_width;
+    n = (size_t)sketch->width * (size_t)sketch->height;
+    stroke = (uint8_t *)rl__alloc(&a, n);
+    out->data = (float *)rl__alloc(&a, sizeof(float) * n);
+    if (!stroke || !out->data) { rl__free(&a, stroke); rl__free(&a, out->data); out->data = NULL; return RL_ERR_OUT_OF_MEMORY; }
+    for (i = 0; i < n; i++) {
+        float v = sketch->data[i];
+        stroke[i] = (uint8_t)(v > 0.75f ? 1 : v < 0.25f ? 2 : 0);
+        any |= stroke[i];
+    }
+    for (y = 0; y < sketch->height; y++)
+        for (x = 0; x < sketch->width; x++)
+            out->data[(size_t)y * sketch->width + x] = example->data[(size_t)rl__mirror(y, example->height) * example->width + rl__mirror(x, example->width)];
+    r = any ? rl__emphasis(stroke, sketch->width, sketch->height, amount, width, &a, out->data) : RL_ERR_NO_STROKES;
+    rl__free(&a, stroke);
+    if (r != RL_OK) { rl__free(&a, out->data); out->data = NULL; return r; }
+    out->width = sketch->width; out->height = sketch->height;
+    return RL_OK;
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RL_IMPLEMENTATION_DONE */
+#endif /* RL_IMPLEMENTATION */
+
+/*
+------------------------------------------------------------------------------
+This software is available under two licences; choose whichever you prefer.
+
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+
+Copyright (c) 2026 the detailed-surface graphics headers authors
+
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication for the benefit of the public at large and to
+the detriment of our heirs and successors. We intend this dedication to be an
+overt act of relinquishment in perpetuity of all present and future rights to
+this software under copyright law.
+
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER LIABILITY, WHETHER IN AN
+ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM, OUT OF OR IN CONNECTION
+WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+*/
