@@ -167,6 +167,10 @@
                          before it is applied, with the same description: position is where keep
                          goes, positions are still the old ones. A constraint that keeps its own
                          picture of the mesh (dm_shell_constraint's vertex normals) follows it here.
+       relax             called (with constraint_user) when no candidate is left above
+                         target_triangles and some were vetoed; nonzero means the constraint is
+                         now less strict, and every refused or vetoed edge is queued again (the
+                         report counts the relaxations). dm_shell_relax is one.
        allocator, progress, progress_user   as for the BVH; progress gets the fraction of the
                          triangles to remove that are gone, every 1024 collapses and at the end.
 
@@ -434,6 +438,19 @@
      tangent to a sphere at its centre is r^2/2R off at distance r, RMS over a disc 0.577
      (rho^2/2R), where the least-squares facet (shifted by the mean) has 0.289: 2.0x for the
      same facets. Memory: about 60 bytes per original vertex and a BVH of the original.
+     FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps),
+     the constraint vetoes every remaining collapse above the face count. With opt.relax =
+     dm_shell_relax, dm_simplify then relaxes it and queues the vetoed edges again: a candidate
+     that fails the checks above is still allowed when, from each overlap sample, the nearest
+     crossing of the original along the line (either way, within the thickness) faces the way
+     the base does, so that a bake both ways finds one depth there (a second relax leaves the
+     simplifier's own checks only). Candidates that pass the checks above stay exact. The keeps
+     of relaxed collapses are marked (fallback_vertex); dm_shell_fallback_triangles turns them
+     into the base triangles to bake both ways (dm_bake_options.both_ways), where the
+     displacement is signed. Report the share of the original's area over them (coverage
+     weights); a renderer must search both ways there. The relaxed region is not confined to
+     the thin parts: once the paper's constraints are stuck everywhere, every later collapse is
+     a relaxed one.
      Without a shell, a base that does not enclose the original is baked both ways.
      Part 3 references: M. S. Floater, "Mean value coordinates", CAGD 20(1), 2003. S. Yoshizawa,
      A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh parameterization",
@@ -653,6 +670,9 @@ typedef struct dm_bake_options {
                                   up to max_distance), then, if none, the nearest either way; for
                                   a base that encloses the original (dm_shell_constraint). 0: the
                                   nearest either way */
+    const uint8_t *both_ways;  /* NULL, or per base triangle: nonzero = the nearest crossing either
+                                  way even when inward is set (the signed region of a relaxed
+                                  shell constraint: dm_shell_fallback_triangles) */
     const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_dispmap */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -806,6 +826,10 @@ typedef struct dm_simplify_options {
     void (*on_collapse)(void *user, const dm_collapse *done); /* NULL, or called with constraint_user
                                          once a collapse is decided, just before it is applied:
                                          position = where keep goes, positions still the old ones */
+    int (*relax)(void *user);         /* NULL, or called with constraint_user when no candidate is
+                                         left above target_triangles and some were vetoed: nonzero
+                                         = the constraint is now less strict, and every vetoed or
+                                         refused edge is queued again (dm_shell_relax) */
     const dm_allocator *allocator;    /* NULL = DM_MALLOC/DM_FREE; kept in the result for dm_pm_free */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -819,6 +843,7 @@ typedef struct dm_simplify_report {
     size_t collapse_count;        /* collapses done = vertex splits recorded */
     size_t rejected;              /* candidates refused by the link, flip or degeneracy checks */
     size_t vetoed;                /* candidates vetoed by the constraint */
+    size_t relaxed;               /* times the constraint was relaxed (options.relax) */
     size_t frozen_vertices;       /* vertices left alone because they or a neighbour are non-manifold */
     double error;                 /* largest error of a collapse done (mesh units), 0 if none */
     int reached_target;           /* 1 when target_triangles (if set) was reached */
@@ -920,6 +945,12 @@ typedef struct dm_shell {
     size_t stopped_vertices;   /* vertices stopped before the full thickness */
     size_t moved, vetoed_enclose, vetoed_shell, vetoed_overlap; /* dm_shell_constraint's verdicts in
                                   the current (or last) dm_simplify run */
+    int fallback;              /* 0: the paper's constraints; 1 after dm_shell_relax: the base may
+                                  cross the original (signed displacement); 2 after a second one:
+                                  the simplifier's own checks only */
+    uint8_t *fallback_vertex;  /* per original vertex: 1 = keep of a collapse done while relaxed;
+                                  the base triangles at such vertices need a bake both ways */
+    size_t fallback_collapses; /* collapses done while relaxed (this run) */
     void *internal;            /* private: the original's BVH and a copy of its mesh */
 } dm_shell;
 
@@ -941,6 +972,22 @@ DMDEF int dm_shell_constraint(void *shell, const dm_collapse *candidate, float c
    One shell serves any number of dm_simplify runs, one at a time: a candidate or collapse with
    level 0 after a run that did collapses starts again from the original's normals. */
 DMDEF void dm_shell_collapsed(void *shell, const dm_collapse *done);
+
+/* dm_simplify_options.relax for the same shell: the fallback where the shell is too thin for the
+   enclosing base to reach the face count. The first call lets the base cross the original: a
+   candidate then needs, from each of its ray samples, the nearest crossing of the original along
+   the line (either way, within the thickness) to face the same way as the base, which is what a
+   bake both ways needs to be single-valued; the second leaves only the simplifier's own checks.
+   Returns 1 when it relaxed, 0 when it cannot relax further. The keep vertices of the collapses
+   done while relaxed are marked in fallback_vertex (dm_shell_fallback_triangles turns them into
+   the base triangles to bake both ways). */
+DMDEF int dm_shell_relax(void *shell);
+
+/* For a base from a dm_simplify run with this shell (vertex_ids from dm_pm_get_mesh, so input
+   ids): flags[t] = 1 when base triangle t has a vertex in fallback_vertex, else 0. Returns the
+   number flagged. */
+DMDEF size_t dm_shell_fallback_triangles(const dm_shell *shell, const uint32_t *base_indices, size_t triangle_count,
+                                         const uint32_t *vertex_ids, uint8_t *flags);
 
 #ifdef __cplusplus
 }
@@ -3676,6 +3723,31 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     return 1;
 }
 
+/* When the constraint was relaxed: every parked vertex (one of its candidates was refused or
+   vetoed) gets all its edges queued again, each edge once (from its lower parked endpoint, or
+   from the parked one). *queued says whether anything was. */
+static int dm__qem_requeue_parked(dm__qem_simp *s, int *queued)
+{
+    size_t v, i, m;
+    *queued = 0;
+    for (v = 0; v < s->n; v++)
+        if (s->vx[v].flag & DM__QEM_V_PARKED) s->ver[v]++;
+    for (v = 0; v < s->n; v++) {
+        size_t keep_n = 0;
+        if ((s->vx[v].flag & (DM__QEM_V_PARKED | DM__QEM_V_REMOVED | DM__QEM_V_FROZEN)) != DM__QEM_V_PARKED) continue;
+        m = dm__qem_neighbours(s, (uint32_t)v);
+        for (i = 0; i < m; i++) { /* an edge to a parked vertex below v was queued from there */
+            uint32_t x = s->nbr[i];
+            if ((s->vx[x].flag & DM__QEM_V_PARKED) && x < v) continue;
+            s->nbr[keep_n++] = x;
+        }
+        if (keep_n && !dm__qem_push_list(s, (uint32_t)v, s->nbr, keep_n, DM__QEM_NONE)) return 0;
+        *queued |= keep_n > 0;
+    }
+    for (v = 0; v < s->n; v++) s->vx[v].flag &= ~(uint32_t)DM__QEM_V_PARKED;
+    return 1;
+}
+
 /* After a collapse: new candidates for keep's edges, and a retry of the refused candidates of
    its neighbours, whose one-ring just changed. */
 static int dm__qem_refresh(dm__qem_simp *s, uint32_t keep)
@@ -4278,7 +4350,18 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
             r = DM_ERR_OUT_OF_MEMORY;
             goto done;
         }
-        if (got == 0) break;
+        if (got == 0) {
+            int again = 0;
+            if (opt.relax && s.target && s.live > s.target && s.vetoed > 0 && opt.relax(opt.constraint_user)) {
+                rep.relaxed++;
+                if (!dm__qem_requeue_parked(&s, &again)) {
+                    r = DM_ERR_OUT_OF_MEMORY;
+                    goto done;
+                }
+            }
+            if (!again) break;
+            continue;
+        }
         s.floor = e.key;
         dm__qem_ahead(&s, 0, 1); /* the next one: its triangles */
         ea = DM__QEM_CAND_A(&e);
@@ -5868,7 +5951,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
             const float *uv;
             dm_ray ray;
             dm_hit hit;
-            int got;
+            int got, in_t;
             int k, c;
             m->valid[id] = 0;
             if (tt == DM_NO_HIT || tt >= base_triangle_count) {
@@ -5902,10 +5985,11 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
                 ray.org[k] = m->pos[3 * id + (size_t)k];
                 ray.dir[k] = -m->nrm[3 * id + (size_t)k];
             }
-            ray.tmin = o.inward ? -0.1f * maxd : -maxd;
+            in_t = o.inward && !(o.both_ways && o.both_ways[tt]);
+            ray.tmin = in_t ? -0.1f * maxd : -maxd;
             ray.tmax = maxd;
             got = 0;
-            if (len > 0.0 && o.inward) got = dm_bvh_intersect(bvh, &ray, &hit);
+            if (len > 0.0 && in_t) got = dm_bvh_intersect(bvh, &ray, &hit);
             if (len > 0.0 && !got) {
                 ray.tmin = -maxd;
                 got = dm_bvh_intersect_line(bvh, &ray, &hit);
@@ -6390,6 +6474,8 @@ typedef struct dm__sh_internal {
     double lo[3], cell;
     int dim[3];
     uint32_t *cell_first, *cell_vert;
+    uint32_t relaxed_keep; /* keep of the last candidate allowed only by the relaxed check */
+    size_t relaxed_level;
 } dm__sh_internal;
 
 DMDEF void dm_shell_free(dm_shell *shell)
@@ -6414,6 +6500,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
     a.free(a.user, shell->positions);
     a.free(a.user, shell->normals);
     a.free(a.user, shell->offset);
+    a.free(a.user, shell->fallback_vertex);
     a.free(a.user, shell);
 }
 
@@ -6470,6 +6557,7 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
     in = (dm__sh_internal *)a.alloc(a.user, sizeof *in);
     if (!in) goto oom;
     memset(in, 0, sizeof *in);
+    in->relaxed_keep = UINT32_MAX;
     sh->internal = in;
     sh->vertex_count = in->nv = nv;
     sh->triangle_count = in->nt = nt;
@@ -6480,9 +6568,11 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
     sh->positions = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
     sh->normals = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
     sh->offset = (float *)dm__alloc_array(&a, nv, sizeof(float), &sc.overflow);
+    sh->fallback_vertex = (uint8_t *)dm__alloc_array(&a, nv, 1, &sc.overflow);
     in->pos = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
     in->idx = (uint32_t *)dm__alloc_array(&a, 3 * nt, sizeof(uint32_t), &sc.overflow);
-    if (!sh->positions || !sh->normals || !sh->offset || !in->pos || !in->idx) goto oom;
+    if (!sh->positions || !sh->normals || !sh->offset || !sh->fallback_vertex || !in->pos || !in->idx) goto oom;
+    memset(sh->fallback_vertex, 0, nv);
     memcpy(in->pos, pos, 3 * nv * sizeof(float));
     memcpy(in->idx, idx, 3 * nt * sizeof(uint32_t));
     memset(&bo, 0, sizeof bo);
@@ -6633,6 +6723,9 @@ static void dm__sh_run_check(dm_shell *sh, dm__sh_internal *in, size_t level)
         dm__pz_vertex_normals(in->pos, in->nv, in->idx, in->nt, in->vsum, sh->normals);
         in->collapsed = in->accepted = 0;
         sh->moved = sh->vetoed_enclose = sh->vetoed_shell = sh->vetoed_overlap = 0;
+        sh->fallback = 0;
+        sh->fallback_collapses = 0;
+        memset(sh->fallback_vertex, 0, in->nv);
     }
     in->last_level = level;
 }
@@ -6649,6 +6742,11 @@ DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
     if (done->keep >= in->nv || done->remove >= in->nv) return;
     dm__sh_run_check(sh, in, done->level);
     in->collapsed++;
+    if (sh->fallback && in->relaxed_keep == done->keep && in->relaxed_level == done->level) {
+        sh->fallback_vertex[done->keep] = 1;
+        sh->fallback_collapses++;
+    }
+    in->relaxed_keep = UINT32_MAX;
     dm__pz_load(done->positions, done->keep, xk);
     for (k = 0; k < 3; k++) xn[k] = done->position[k];
     for (i = 0; i < done->old_triangle_count; i++)
@@ -6784,19 +6882,13 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
     return dm__dot3(d, N) > 0.0 ? *dist : -*dist;
 }
 
-DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[3])
+/* (1) of dm_shell_constraint. */
+static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
+                          int *moved)
 {
-    dm_shell *sh = (dm_shell *)user;
-    dm__sh_internal *in;
-    double x0[3], x[3], *pl, *yv, *vn;
-    size_t i, j, no, nr, np = 0;
-    int k, iter, moved = 0;
-    if (!sh || !c || !corrected || !sh->internal || !c->positions || !c->triangles || !c->old_triangles)
-        return DM_COLLAPSE_VETO;
-    in = (dm__sh_internal *)sh->internal;
-    dm__sh_run_check(sh, in, c->level);
-    no = c->old_triangle_count;
-    nr = c->triangle_count;
+    double x0[3], *pl, *yv;
+    size_t i, no = c->old_triangle_count, nr = c->triangle_count, np = 0;
+    int k, iter;
     /* (1) Enclosure: the original's vertices near the collapse whose closest feature of the
        old triangles is at keep or remove (not on the ring's rim, which belongs to the rest of
        the mesh) must stay on the inner side of the new one-ring: their signed distance, taken
@@ -6805,165 +6897,163 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
        side of the plane through p, u, w (an exact, linear condition on keep's position); the
        position is the point nearest the proposed one that meets all of them (Dykstra's
        alternating projections), then everything is checked again at the rounded position. */
-    {
-        double lo[3], hi[3], reach = 1.5 * (double)sh->thickness, grow = 0.0;
-        int cl[3], ch[3], cx, cy, cz;
-        size_t npts = 0;
+    double lo[3], hi[3], reach = 1.5 * (double)sh->thickness, grow = 0.0;
+    int cl[3], ch[3], cx, cy, cz;
+    size_t npts = 0;
+    for (k = 0; k < 3; k++) {
+        lo[k] = hi[k] = c->position[k];
+        x0[k] = x[k] = c->position[k];
+    }
+    for (i = 0; i < 3 * no; i++)
         for (k = 0; k < 3; k++) {
-            lo[k] = hi[k] = c->position[k];
-            x0[k] = x[k] = c->position[k];
+            double q = c->positions[3 * (size_t)c->old_triangles[i] + (size_t)k];
+            if (q < lo[k]) lo[k] = q;
+            if (q > hi[k]) hi[k] = q;
         }
-        for (i = 0; i < 3 * no; i++)
-            for (k = 0; k < 3; k++) {
-                double q = c->positions[3 * (size_t)c->old_triangles[i] + (size_t)k];
-                if (q < lo[k]) lo[k] = q;
-                if (q > hi[k]) hi[k] = q;
-            }
-        { /* deeper than the one-ring is wide only where the base bridges a crevice: coarse
-             levels, whose rings are wide */
-            double span = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                               (hi[2] - lo[2]) * (hi[2] - lo[2]));
-            if (span < reach) reach = span;
-            grow = 0.1 * span + 4.0 * in->margin;
-        }
-        for (k = 0; k < 3; k++) {
-            cl[k] = dm__sh_coord(in, lo[k] - grow, k);
-            ch[k] = dm__sh_coord(in, hi[k] + grow, k);
-        }
-        if (no + nr > in->tri_cap) {
-            int of = 0;
-            float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
-            if (!nt2) return DM_COLLAPSE_VETO;
-            sh->allocator.free(sh->allocator.user, in->tri);
-            in->tri = nt2;
-            in->tri_cap = 2 * (no + nr);
-        }
-        { /* the old triangles with keep where it is now */
-            double xk[3];
-            dm__pz_load(c->positions, c->keep, xk);
-            dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
-        }
-        dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
-        /* gather the candidates and keep the relevant ones, with their old signed distance */
-        for (cz = cl[2]; cz <= ch[2]; cz++)
-            for (cy = cl[1]; cy <= ch[1]; cy++)
-                for (cx = cl[0]; cx <= ch[0]; cx++) {
-                    size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
-                    for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
-                        uint32_t v = in->cell_vert[q];
-                        double pp[3], sd, dist;
-                        int feat;
-                        dm__pz_load(in->pos, v, pp);
-                        if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
-                            pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
-                            continue;
-                        sd = dm__sh_signed(c, c->old_triangles, in->tri, no, pp, reach, 1, &feat, &dist, NULL);
-                        if (!feat || dist > reach) continue;
-                        if (npts >= in->pts_cap) {
-                            uint32_t *np2;
-                            int of = 0;
-                            size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
-                            np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
-                            if (!np2) return DM_COLLAPSE_VETO;
-                            if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
-                            sh->allocator.free(sh->allocator.user, in->pts);
-                            in->pts = np2;
-                            in->pts_cap = cap;
-                        }
-                        {
-                            float f = (float)sd;
-                            uint32_t bits;
-                            memcpy(&bits, &f, sizeof bits);
-                            in->pts[2 * npts] = v;
-                            in->pts[2 * npts + 1] = bits;
-                        }
-                        npts++;
+    { /* deeper than the one-ring is wide only where the base bridges a crevice: coarse
+         levels, whose rings are wide */
+        double span = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+        if (span < reach) reach = span;
+        grow = 0.1 * span + 4.0 * in->margin;
+    }
+    for (k = 0; k < 3; k++) {
+        cl[k] = dm__sh_coord(in, lo[k] - grow, k);
+        ch[k] = dm__sh_coord(in, hi[k] + grow, k);
+    }
+    if (no + nr > in->tri_cap) {
+        int of = 0;
+        float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
+        if (!nt2) return DM_COLLAPSE_VETO;
+        sh->allocator.free(sh->allocator.user, in->tri);
+        in->tri = nt2;
+        in->tri_cap = 2 * (no + nr);
+    }
+    { /* the old triangles with keep where it is now */
+        double xk[3];
+        dm__pz_load(c->positions, c->keep, xk);
+        dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
+    }
+    dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
+    /* gather the candidates and keep the relevant ones, with their old signed distance */
+    for (cz = cl[2]; cz <= ch[2]; cz++)
+        for (cy = cl[1]; cy <= ch[1]; cy++)
+            for (cx = cl[0]; cx <= ch[0]; cx++) {
+                size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
+                for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
+                    uint32_t v = in->cell_vert[q];
+                    double pp[3], sd, dist;
+                    int feat;
+                    dm__pz_load(in->pos, v, pp);
+                    if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
+                        pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
+                        continue;
+                    sd = dm__sh_signed(c, c->old_triangles, in->tri, no, pp, reach, 1, &feat, &dist, NULL);
+                    if (!feat || dist > reach) continue;
+                    if (npts >= in->pts_cap) {
+                        uint32_t *np2;
+                        int of = 0;
+                        size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
+                        np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
+                        if (!np2) return DM_COLLAPSE_VETO;
+                        if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
+                        sh->allocator.free(sh->allocator.user, in->pts);
+                        in->pts = np2;
+                        in->pts_cap = cap;
                     }
-                }
-        if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * nr + 16)) return DM_COLLAPSE_VETO;
-        pl = in->scratch;
-        /* one plane per relevant vertex, from its nearest new triangle at the proposed position */
-        for (i = 0; i < npts; i++) {
-            double pp[3], pu[3], pw[3], dist, A[3], len;
-            size_t t;
-            int feat, j;
-            const uint32_t *tr;
-            dm__pz_load(in->pos, in->pts[2 * i], pp);
-            dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, &t);
-            if (t == (size_t)-1) continue;
-            tr = c->triangles + 3 * t;
-            for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
-            if (j == 3) continue;
-            dm__pz_load(c->positions, tr[(j + 1) % 3], pu);
-            dm__pz_load(c->positions, tr[(j + 2) % 3], pw);
-            dm__pz_sub(pu, pp, pu);
-            dm__pz_sub(pw, pp, pw);
-            dm__cross3(pu, pw, A);
-            len = dm__pz_len(A);
-            if (!(len > 0.0)) continue;
-            for (k = 0; k < 3; k++) pl[4 * np + (size_t)k] = A[k] / len;
-            pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
-            np++;
-        }
-        yv = pl + 4 * np; /* Dykstra's corrections, 3 per plane */
-        for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
-        for (iter = 0; iter < 200 && np; iter++) {
-            double worst = 0.0;
-            for (i = 0; i < np; i++) {
-                const double *n = pl + 4 * i;
-                double z[3], sdist;
-                for (k = 0; k < 3; k++) z[k] = x[k] + yv[3 * i + (size_t)k];
-                sdist = pl[4 * i + 3] - dm__dot3(n, z);
-                for (k = 0; k < 3; k++) {
-                    double nx = sdist > 0.0 ? z[k] + sdist * n[k] : z[k];
-                    yv[3 * i + (size_t)k] = z[k] - nx;
-                    x[k] = nx;
+                    {
+                        float f = (float)sd;
+                        uint32_t bits;
+                        memcpy(&bits, &f, sizeof bits);
+                        in->pts[2 * npts] = v;
+                        in->pts[2 * npts + 1] = bits;
+                    }
+                    npts++;
                 }
             }
-            for (i = 0; i < np; i++) {
-                double sdist = pl[4 * i + 3] - dm__dot3(pl + 4 * i, x);
-                if (sdist > worst) worst = sdist;
-            }
-            if (worst <= 0.5 * in->margin) break;
-        }
-        for (k = 0; k < 3; k++) {
-            corrected[k] = (float)x[k];
-            x[k] = corrected[k];
-            if (corrected[k] != c->position[k]) moved = 1;
-            if (x[k] < lo[k] - grow || x[k] > hi[k] + grow) { /* beyond the gathered box */
-                sh->vetoed_enclose++;
-                return DM_COLLAPSE_VETO;
-            }
-        }
-        /* the check at the rounded position: no relevant vertex ends outside */
-        dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
-        for (i = 0; i < npts; i++) {
-            double pp[3], dist, sd;
-            float f;
-            int feat;
-            memcpy(&f, &in->pts[2 * i + 1], sizeof f);
-            dm__pz_load(in->pos, in->pts[2 * i], pp);
-            sd = dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, NULL);
-            if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
-                sh->vetoed_enclose++;
-                return DM_COLLAPSE_VETO;
-            }
-        }
-        np = 0;
-        yv = pl;
+    if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * nr + 16)) return DM_COLLAPSE_VETO;
+    pl = in->scratch;
+    /* one plane per relevant vertex, from its nearest new triangle at the proposed position */
+    for (i = 0; i < npts; i++) {
+        double pp[3], pu[3], pw[3], dist, A[3], len;
+        size_t t;
+        int feat, j;
+        const uint32_t *tr;
+        dm__pz_load(in->pos, in->pts[2 * i], pp);
+        dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, &t);
+        if (t == (size_t)-1) continue;
+        tr = c->triangles + 3 * t;
+        for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
+        if (j == 3) continue;
+        dm__pz_load(c->positions, tr[(j + 1) % 3], pu);
+        dm__pz_load(c->positions, tr[(j + 2) % 3], pw);
+        dm__pz_sub(pu, pp, pu);
+        dm__pz_sub(pw, pp, pw);
+        dm__cross3(pu, pw, A);
+        len = dm__pz_len(A);
+        if (!(len > 0.0)) continue;
+        for (k = 0; k < 3; k++) pl[4 * np + (size_t)k] = A[k] / len;
+        pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
+        np++;
     }
-    /* (2) Inside the shell: keep lies within the offset grown at its closest point of the
-       original; the points of the new triangles are checked along the overlap rays below, where
-       the depth to the original must not exceed the offset grown at the hit. */
-    if (!dm__sh_in_shell(sh, in, x)) {
-        sh->vetoed_shell++;
-        return DM_COLLAPSE_VETO;
+    yv = pl + 4 * np; /* Dykstra's corrections, 3 per plane */
+    for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
+    for (iter = 0; iter < 200 && np; iter++) {
+        double worst = 0.0;
+        for (i = 0; i < np; i++) {
+            const double *n = pl + 4 * i;
+            double z[3], sdist;
+            for (k = 0; k < 3; k++) z[k] = x[k] + yv[3 * i + (size_t)k];
+            sdist = pl[4 * i + 3] - dm__dot3(n, z);
+            for (k = 0; k < 3; k++) {
+                double nx = sdist > 0.0 ? z[k] + sdist * n[k] : z[k];
+                yv[3 * i + (size_t)k] = z[k] - nx;
+                x[k] = nx;
+            }
+        }
+        for (i = 0; i < np; i++) {
+            double sdist = pl[4 * i + 3] - dm__dot3(pl + 4 * i, x);
+            if (sdist > worst) worst = sdist;
+        }
+        if (worst <= 0.5 * in->margin) break;
     }
-    /* (3) No height-field overlap: rays from points of each new triangle along the inverted
-       interpolated normal meet the original's front side first, within twice the shell's
-       thickness (a miss is allowed only when the original is open). Vertex normals: keep's from
-       its whole new one-ring, a neighbour's from the one-ring triangles it is in. */
-    vn = yv + 3 * np; /* 9 per ring triangle: its corners' normals */
+    for (k = 0; k < 3; k++) {
+        corrected[k] = (float)x[k];
+        x[k] = corrected[k];
+        if (corrected[k] != c->position[k]) *moved = 1;
+        if (x[k] < lo[k] - grow || x[k] > hi[k] + grow) { /* beyond the gathered box */
+            sh->vetoed_enclose++;
+            return DM_COLLAPSE_VETO;
+        }
+    }
+    /* the check at the rounded position: no relevant vertex ends outside */
+    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
+    for (i = 0; i < npts; i++) {
+        double pp[3], dist, sd;
+        float f;
+        int feat;
+        memcpy(&f, &in->pts[2 * i + 1], sizeof f);
+        dm__pz_load(in->pos, in->pts[2 * i], pp);
+        sd = dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, NULL);
+        if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
+            sh->vetoed_enclose++;
+            return DM_COLLAPSE_VETO;
+        }
+    }
+    return DM_COLLAPSE_ALLOW;
+}
+
+/* The corner normals of the new one-ring, 9 doubles per triangle, into the scratch (keep at x):
+   keep's from its whole new one-ring; a neighbour's from the mesh's normal sums that
+   dm_shell_collapsed keeps (less its old triangles here, plus its new ones). NULL when out of
+   memory. */
+static double *dm__sh_ring_normals(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3])
+{
+    double *vn;
+    size_t i, j, no = c->old_triangle_count, nr = c->triangle_count;
+    int k;
+    if (!dm__sh_grow_scratch(sh, in, 9 * nr + 16)) return NULL;
+    vn = in->scratch;
     for (i = 0; i < 9 * nr; i++) vn[i] = 0.0;
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
@@ -7005,6 +7095,19 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
                         }
             }
     }
+    return vn;
+}
+
+/* (2, along the rays) and (3) of dm_shell_constraint, with the corner normals vn. */
+static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, const double x[3],
+                          const double *vn)
+{
+    size_t i, nr = c->triangle_count;
+    int k;
+    /* (3) No height-field overlap: rays from points of each new triangle along the inverted
+       interpolated normal meet the original's front side first, within twice the shell's
+       thickness (a miss is allowed only when the original is open). Vertex normals: keep's from
+       its whole new one-ring, a neighbour's from the one-ring triangles it is in. */
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
         double p[3][3];
@@ -7073,6 +7176,118 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             }
         }
     }
+    return DM_COLLAPSE_ALLOW;
+}
+
+/* (3) once relaxed: from the same samples as the overlap check, the nearest crossing of the
+   original along the line, either way within the thickness, must face the way the base does
+   (the original's front side when it lies inward, seen from inside when it lies outward), so that
+   a bake both ways finds one depth there. */
+static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, const double x[3],
+                            const double *vn)
+{
+    size_t i, nr = c->triangle_count;
+    int k, s;
+    for (i = 0; i < nr; i++) {
+        const uint32_t *t = c->triangles + 3 * i;
+        double p[3][3];
+        for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
+        for (s = 0; s < in->samples; s++) {
+            double y[3], n[3], len, fn[3], q[3][3];
+            dm_ray ray;
+            dm_hit hit;
+            const uint32_t *ot;
+            for (k = 0; k < 3; k++) {
+                y[k] = dm__sh_bary[s][0] * p[0][k] + dm__sh_bary[s][1] * p[1][k] + dm__sh_bary[s][2] * p[2][k];
+                n[k] = dm__sh_bary[s][0] * vn[9 * i + (size_t)k] + dm__sh_bary[s][1] * vn[9 * i + 3 + (size_t)k] +
+                       dm__sh_bary[s][2] * vn[9 * i + 6 + (size_t)k];
+            }
+            len = dm__pz_len(n);
+            if (!(len > 0.0)) {
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+            for (k = 0; k < 3; k++) {
+                ray.dir[k] = (float)(-n[k] / len);
+                ray.org[k] = (float)y[k];
+            }
+            ray.tmin = -sh->thickness;
+            ray.tmax = sh->thickness;
+            if (!dm_bvh_intersect_line(in->bvh, &ray, &hit)) {
+                if (in->open) continue;
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+            ot = in->idx + 3 * (size_t)hit.triangle;
+            for (k = 0; k < 3; k++) dm__pz_load(in->pos, ot[k], q[k]);
+            if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
+                sh->vetoed_overlap++;
+                return DM_COLLAPSE_VETO;
+            }
+        }
+    }
+    return DM_COLLAPSE_ALLOW;
+}
+
+DMDEF int dm_shell_relax(void *user)
+{
+    dm_shell *sh = (dm_shell *)user;
+    if (!sh || sh->fallback >= 2) return 0;
+    sh->fallback++;
+    return 1;
+}
+
+DMDEF size_t dm_shell_fallback_triangles(const dm_shell *sh, const uint32_t *idx, size_t nt, const uint32_t *ids,
+                                         uint8_t *flags)
+{
+    size_t t, n = 0;
+    int k;
+    if (!sh || !idx || !ids || !flags) return 0;
+    for (t = 0; t < nt; t++) {
+        flags[t] = 0;
+        for (k = 0; k < 3; k++) {
+            uint32_t v = ids[idx[3 * t + (size_t)k]];
+            if (v < sh->vertex_count && sh->fallback_vertex[v]) flags[t] = 1;
+        }
+        n += flags[t];
+    }
+    return n;
+}
+
+DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[3])
+{
+    dm_shell *sh = (dm_shell *)user;
+    dm__sh_internal *in;
+    double x[3], *vn;
+    int k, moved = 0, verdict;
+    if (!sh || !c || !corrected || !sh->internal || !c->positions || !c->triangles || !c->old_triangles)
+        return DM_COLLAPSE_VETO;
+    in = (dm__sh_internal *)sh->internal;
+    dm__sh_run_check(sh, in, c->level);
+    in->relaxed_keep = UINT32_MAX;
+    for (k = 0; k < 3; k++) x[k] = c->position[k];
+    verdict = dm__sh_enclose(sh, in, c, x, corrected, &moved);
+    /* (2) Inside the shell: keep lies within the offset grown at its closest point of the
+       original; the points of the new triangles are checked along the overlap rays, where the
+       depth to the original must not exceed the offset grown at the hit. */
+    if (verdict == DM_COLLAPSE_ALLOW && !dm__sh_in_shell(sh, in, x)) {
+        sh->vetoed_shell++;
+        verdict = DM_COLLAPSE_VETO;
+    }
+    vn = verdict == DM_COLLAPSE_ALLOW ? dm__sh_ring_normals(sh, in, c, x) : NULL;
+    if (vn) verdict = dm__sh_overlap(sh, in, c, x, vn);
+    else verdict = DM_COLLAPSE_VETO;
+    if (verdict != DM_COLLAPSE_ALLOW && sh->fallback) { /* relaxed: where the paper's constraints fail */
+        for (k = 0; k < 3; k++) x[k] = corrected[k] = c->position[k];
+        moved = 0;
+        vn = sh->fallback >= 2 ? NULL : dm__sh_ring_normals(sh, in, c, x);
+        verdict = sh->fallback >= 2 ? DM_COLLAPSE_ALLOW : vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
+        if (verdict == DM_COLLAPSE_ALLOW) { /* dm_shell_collapsed marks it when it is done */
+            in->relaxed_keep = c->keep;
+            in->relaxed_level = c->level;
+        }
+    }
+    if (verdict != DM_COLLAPSE_ALLOW) return verdict;
     in->accepted++;
     if (moved) {
         sh->moved++;

@@ -1,6 +1,6 @@
 /* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
 
-   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways]
+   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]
      IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
      --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
                  Fig 5.1.1), 496 triangles, closed and oriented outward; --faces 12 gives its box
@@ -12,6 +12,10 @@
      --both-ways bake with the nearest hit either way along the normal; the default is the paper's
                  rule, the first hit along -normal (dm_bake_options.inward), right for a base that
                  encloses the original, as the shell constraint makes it
+     --fallback  where the shell constraint stops above --faces (the shell too thin for an enclosing
+                 base), relax it there (dm_shell_relax): the base may cross the original, and its
+                 triangles there are baked both ways; RESULT's fallback= is the share of the
+                 original's area over them (by the coverage weights)
    The pipeline (dispmesh.h): dm_weld when the triangles do not share their vertices (an STL file),
    dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
@@ -25,7 +29,7 @@
      PREFIX_recon.obj    the reconstruction (positions only)
      PREFIX_views.png    original | base with wireframe | reconstruction, one camera, captions
    Progress goes to stderr; the last line on stdout is
-     RESULT dispmesh target= faces= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
+     RESULT dispmesh target= faces= fallback= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
             equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
    with distances as fractions of the original's bounding-box diagonal (see print_result).
    The stage notes say which constraint vetoed how many collapses (enclosure, shell, overlap) and
@@ -66,6 +70,8 @@ typedef struct run {
     dm_pm *pm, *pm_free;       /* constrained (the base), unconstrained (same count, then equal bytes) */
     mesh base, free_same, free_bytes;
     float *weights;
+    uint8_t *both_ways;        /* per base triangle: in the fallback region (bake both ways) */
+    size_t fallback_triangles;
     dm_param *param;
     dm_dispmap *map;
     dm_trimesh *dense;
@@ -522,6 +528,7 @@ static void run_free(run *R)
     dm_dispmap_free(R->map); /* before the dm_param: it shares its neighbour arrays */
     dm_param_free(R->param);
     free(R->weights);
+    free(R->both_ways);
     mesh_free(&R->base);
     mesh_free(&R->free_same);
     mesh_free(&R->free_bytes);
@@ -570,22 +577,49 @@ static int weld_original(run *R)
     return 1;
 }
 
+static double triangle_area(const mesh *m, size_t t)
+{
+    const float *a = m->p + 3 * (size_t)m->t[3 * t], *b = m->p + 3 * (size_t)m->t[3 * t + 1], *c = m->p + 3 * (size_t)m->t[3 * t + 2];
+    double u[3], v[3], w[3];
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = (double)b[k] - a[k]; v[k] = (double)c[k] - a[k]; }
+    w[0] = u[1] * v[2] - u[2] * v[1]; w[1] = u[2] * v[0] - u[0] * v[2]; w[2] = u[0] * v[1] - u[1] * v[0];
+    return 0.5 * sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+}
+
+/* The base triangles in the fallback region of a relaxed shell constraint (baked both ways). */
+static int fallback_region(run *R)
+{
+    uint32_t *ids = (uint32_t *)malloc(R->base.nv * sizeof(uint32_t) + 1);
+    R->both_ways = (uint8_t *)malloc(R->base.nt + 1);
+    if (!ids || !R->both_ways) { free(ids); return 0; }
+    dm_pm_get_mesh(R->pm, R->base.p, R->base.t, ids);
+    R->fallback_triangles = dm_shell_fallback_triangles(R->shell, R->base.t, R->base.nt, ids, R->both_ways);
+    free(ids);
+    return 1;
+}
+
 /* The result is unusable when parts of the base get no texel (the map is too coarse for the base:
    the reconstruction would have holes there) or when more than 1% of the texels under the base
    find no original surface. Returns 1 when it is usable; otherwise says why. */
 static int result_usable(const run *R, long res, size_t inside, size_t missed)
 {
     size_t n = (size_t)R->map->width * (size_t)R->map->height, t, k, bare = 0;
+    double area = 0.0, bare_area = 0.0;
     uint8_t *has = (uint8_t *)calloc(R->base.nt + 1, 1);
     if (!has) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
     for (k = 0; k < n; k++)
         if (R->param->texel_triangle[k] < R->base.nt) has[R->param->texel_triangle[k]] = 1;
-    for (t = 0; t < R->base.nt; t++) bare += !has[t];
+    for (t = 0; t < R->base.nt; t++) {
+        double a = triangle_area(&R->base, t);
+        area += a;
+        if (!has[t]) { bare++; bare_area += a; }
+    }
     free(has);
-    if (bare > 0) {
-        fprintf(stderr, "dispmesh: error: the map is too coarse for the base: %zu of %zu base triangles have no texel, "
-                        "so the reconstruction would have holes there; use a larger --res than %ld or fewer --faces\n",
-                bare, R->base.nt, res);
+    if (bare_area > 0.005 * area) { /* slivers may miss every texel centre: their neighbours' texels span them */
+        fprintf(stderr, "dispmesh: error: the map is too coarse for the base: %zu of %zu base triangles (%.1f%% of its area) "
+                        "have no texel, so the reconstruction would have holes there; use a larger --res than %ld or fewer "
+                        "--faces\n", bare, R->base.nt, 100.0 * bare_area / area, res);
         return 0;
     }
     if (missed * 100 > inside) {
@@ -598,7 +632,7 @@ static int result_usable(const run *R, long res, size_t inside, size_t missed)
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways]\n"
+    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]\n"
                 "  writes PREFIX_base.obj PREFIX_disp.pfm PREFIX_normal.png PREFIX_recon.obj PREFIX_views.png\n"
                 "  and prints one RESULT line (defaults: --faces 500 --res 512 -o out/dispmesh --size 400)\n");
 }
@@ -607,7 +641,7 @@ int main(int argc, char **argv)
 {
     const char *in = NULL, *prefix = "out/dispmesh";
     long faces = 500, res = 512, size = 400;
-    int brick = 0, views = 1, inward = 1, i, status = 2;
+    int brick = 0, views = 1, inward = 1, fallback = 0, i, status = 2;
     run R;
     stage st;
     dm_result r;
@@ -616,7 +650,7 @@ int main(int argc, char **argv)
     dm_param_options po;
     dm_bake_options bo;
     dm_distance_report d_recon, d_base, d_same, d_bytes;
-    double t0 = now_ms(), diag, bake_ms = 0.0, flagged = 0.0;
+    double t0 = now_ms(), diag, bake_ms = 0.0, flagged = 0.0, fallback_share = 0.0;
     float lo[3], hi[3];
     size_t uv_count = 0, inside = 0, missed = 0, k, bytes_base = 0, bytes_free = 0;
     char *path = NULL;
@@ -627,6 +661,7 @@ int main(int argc, char **argv)
         if (strcmp(a, "--brick") == 0) brick = 1;
         else if (strcmp(a, "--no-views") == 0) views = 0;
         else if (strcmp(a, "--both-ways") == 0) inward = 0;
+        else if (strcmp(a, "--fallback") == 0) fallback = 1;
         else if (strcmp(a, "--faces") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 1, 1000000000L, &faces)) return 1; }
         else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
         else if (strcmp(a, "--size") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 16, 4096, &size)) return 1; }
@@ -691,13 +726,14 @@ int main(int argc, char **argv)
     so.target_triangles = (size_t)faces;
     so.constraint = dm_shell_constraint;
     so.on_collapse = dm_shell_collapsed;
+    so.relax = fallback ? dm_shell_relax : NULL;
     so.constraint_user = R.shell;
     stage_begin(&st, "simplify (shell-constrained)");
     so.progress = stage_progress; so.progress_user = &st;
     r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm, &srep);
     if (r != DM_OK) { stage_fail(&st, "dm_simplify", r); status = r == DM_ERR_OUT_OF_MEMORY ? 2 : 1; goto done; }
     dm_pm_set_level(R.pm, 0);
-    if (!pm_to_mesh(R.pm, &R.base)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+    if (!pm_to_mesh(R.pm, &R.base) || !fallback_region(&R)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     {
         char note[256];
         snprintf(note, sizeof note, "%zu -> %zu triangles%s, %zu vetoed (enclosure %zu, shell %zu, overlap %zu)",
@@ -705,8 +741,16 @@ int main(int argc, char **argv)
                  R.shell->vetoed_enclose, R.shell->vetoed_shell, R.shell->vetoed_overlap);
         stage_end(&st, note);
     }
+    if (R.shell->fallback_collapses)
+        fprintf(stderr, "dispmesh: note: where the shell is too thin for an enclosing base, %zu collapses were done relaxed "
+                        "(level %d); %zu of %zu base triangles are baked both ways\n",
+                R.shell->fallback_collapses, R.shell->fallback, R.fallback_triangles, R.base.nt);
     if (!srep.reached_target)
-        fprintf(stderr, "dispmesh: note: the constrained simplifier stopped at %zu triangles, above --faces %ld\n", R.base.nt, faces);
+        fprintf(stderr, "dispmesh: note: the simplifier stopped at %zu triangles, above --faces %ld: %s\n", R.base.nt, faces,
+                !srep.vetoed ? "no edge left passes the simplifier's own checks"
+                : fallback ? "the relaxed constraint still vetoed the rest"
+                           : "the shell constraint vetoed every remaining collapse (see the counts above; the shell is too "
+                             "thin there for an enclosing base); --fallback relaxes it there and bakes those parts both ways");
 
     /* 4. the map's layout, texels where the original's area is */
     R.weights = (float *)malloc(R.base.nt * sizeof(float) + 1);
@@ -725,6 +769,14 @@ int main(int argc, char **argv)
     memset(&po, 0, sizeof po);
     po.width = po.height = (int)res;
     po.triangle_weight = R.weights;
+    { /* the share of the original's area over the fallback region, by the coverage weights */
+        double all = 0.0, fb = 0.0;
+        for (k = 0; k < R.base.nt; k++) {
+            all += R.weights[k];
+            if (R.both_ways[k]) fb += R.weights[k];
+        }
+        fallback_share = all > 0.0 ? fb / all : 0.0;
+    }
     stage_begin(&st, "parameterize");
     po.progress = stage_progress; po.progress_user = &st;
     r = dm_parameterize(R.base.p, R.base.nv, R.base.t, R.base.nt, &po, &R.param);
@@ -745,6 +797,7 @@ int main(int argc, char **argv)
     /* 5. the bake */
     memset(&bo, 0, sizeof bo);
     bo.inward = inward;
+    bo.both_ways = R.both_ways;
     stage_begin(&st, inward ? "bake (inward)" : "bake (both ways)");
     bo.progress = stage_progress; bo.progress_user = &st;
     bake_ms = now_ms();
@@ -880,9 +933,9 @@ int main(int argc, char **argv)
                     "(%zu triangles)\n", R.base.nv, R.base.nt, uv_count, bytes_base, bytes_free, R.free_bytes.nt);
 
     /* 8. the result */
-    printf("RESULT dispmesh target=%ld faces=%zu res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
+    printf("RESULT dispmesh target=%ld faces=%zu fallback=%.4f res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
            "unconstrained_rms=%.4e equal_bytes_rms=%.4e equal_bytes_max=%.4e flagged=%.5f bake_ms=%.1f total_ms=%.1f\n",
-           faces, R.base.nt, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
+           faces, R.base.nt, fallback_share, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
            bake_ms, now_ms() - t0);
     fflush(stdout);
     status = ferror(stdout) ? 2 : 0;

@@ -94,6 +94,14 @@ else
   bad "brick at --faces 496 failed: $(tail -n 3 "$tmp/full_err.txt")"
 fi
 
+# ---- a target the paper's constraints cannot reach: the brick's box has 12 faces -----------------
+"$prog" --brick --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"
+rc=$?
+result=$(grep '^RESULT dispmesh ' "$tmp/b8_out.txt" | tail -n 1)
+check "--faces 8 exits 0 (status $rc)" [ $rc -eq 0 ]
+check "--faces 8: RESULT says target=8 faces=12 fallback=0 ($result)" [ "$(field target) $(field faces) $(field fallback)" = "8 12 0.0000" ]
+check "--faces 8: the note says why and names --fallback" grep -q 'shell constraint vetoed every remaining collapse.*--fallback' "$tmp/b8_err.txt"
+
 # ---- bad input --------------------------------------------------------------------------------------
 refuse() { # refuse DESCRIPTION ARGS...: non-zero exit, no signal, a message, no sanitizer report
   what="$1"; shift
@@ -123,6 +131,7 @@ refuse "--res 0" --brick --res 0 -o "$tmp/x"
 refuse "--faces abc" --brick --faces abc -o "$tmp/x"
 refuse "--res too small for the charts" --brick --faces 496 --res 8 -o "$tmp/x"
 refuse "--res too coarse for the base (triangles without a texel)" --brick --faces 496 --res 32 -o "$tmp/x"
+refuse "--fallback to 8 faces: most texels find no surface (a broken result)" --brick --fallback --faces 8 --res 128 -o "$tmp/x"
 refuse "unwritable prefix" --brick --res 64 -o "$tmp/no/such/dir/x"
 refuse "no input" -o "$tmp/x"
 found=0

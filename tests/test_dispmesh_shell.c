@@ -347,6 +347,93 @@ static void check_mesh(const char *what, const mesh *m, size_t target, size_t ma
     dm_shell_free(sh);
 }
 
+/* The fallback (dm_shell_relax): on the torus with a narrow hole, a target below what the paper's
+   constraints reach is reached once relaxed; the relaxed collapses' keeps are marked and turn into
+   the flagged base triangles; the bake takes the nearest crossing either way on exactly those
+   (their texels equal a both-ways bake's, the others an inward bake's). */
+static void test_fallback(const mesh *m, size_t target)
+{
+    dm_shell *sh = NULL;
+    dm_simplify_options o;
+    dm_simplify_report rep;
+    dm_pm *pm = NULL;
+    run strict;
+    uint32_t *ids = NULL;
+    uint8_t *flags = NULL;
+    float *bp = NULL;
+    uint32_t *bi = NULL;
+    size_t bnv, bnt, nflag, t, n, k, bad_in = 0, bad_out = 0, in_flagged = 0;
+    dm_param *param = NULL;
+    dm_param_options po;
+    dm_bake_options bo;
+    dm_dispmap *mix = NULL, *inw = NULL, *both = NULL;
+    if (!T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &sh) == DM_OK)) return;
+    T_CHECK(simplify(m, sh, target, &strict) == DM_OK);
+    T_CHECK_MSG(strict.bnt > target, "the paper's constraints reach %zu faces, target %zu: no fallback needed", strict.bnt,
+                target);
+    T_CHECK(sh->fallback == 0 && sh->fallback_collapses == 0);
+    run_free(&strict);
+    memset(&o, 0, sizeof o);
+    o.target_triangles = target;
+    o.constraint = dm_shell_constraint;
+    o.on_collapse = dm_shell_collapsed;
+    o.relax = dm_shell_relax;
+    o.constraint_user = sh;
+    if (!T_CHECK(dm_simplify(m->p, m->nv, m->t, m->nt, &o, &pm, &rep) == DM_OK)) goto done;
+    T_CHECK_MSG(rep.reached_target && rep.relaxed >= 1 && sh->fallback >= 1 && sh->fallback_collapses > 0,
+                "relaxed: %zu faces (target %zu), relaxed %zu, level %d, %zu relaxed collapses", rep.triangle_count,
+                target, rep.relaxed, sh->fallback, sh->fallback_collapses);
+    dm_pm_counts(pm, &bnv, &bnt);
+    bp = (float *)malloc(3 * bnv * sizeof(float));
+    bi = (uint32_t *)malloc(3 * bnt * sizeof(uint32_t));
+    ids = (uint32_t *)malloc(bnv * sizeof(uint32_t));
+    flags = (uint8_t *)malloc(bnt);
+    dm_pm_get_mesh(pm, bp, bi, ids);
+    nflag = dm_shell_fallback_triangles(sh, bi, bnt, ids, flags);
+    for (t = 0, k = 0; t < bnt; t++) k += flags[t];
+    T_CHECK_MSG(nflag > 0 && nflag == k, "%zu of %zu base triangles flagged (%zu counted)", nflag, bnt, k);
+    printf("  fallback: %zu -> %zu faces (paper's constraints alone: more than %zu); %zu relaxed collapses, %zu of %zu "
+           "triangles flagged\n", m->nt, bnt, target, sh->fallback_collapses, nflag, bnt);
+    memset(&po, 0, sizeof po);
+    po.width = po.height = 128;
+    if (!T_CHECK(dm_parameterize(bp, bnv, bi, bnt, &po, &param) == DM_OK)) goto done;
+    memset(&bo, 0, sizeof bo);
+    bo.inward = 1;
+    bo.both_ways = flags;
+    T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &mix) == DM_OK);
+    bo.both_ways = NULL;
+    T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &inw) == DM_OK);
+    bo.inward = 0;
+    T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &both) == DM_OK);
+    if (mix && inw && both) {
+        n = (size_t)po.width * (size_t)po.height;
+        for (k = 0; k < n; k++) {
+            uint32_t tt = param->texel_triangle[k];
+            if (tt == DM_NO_HIT) continue;
+            if (flags[tt]) {
+                in_flagged++;
+                bad_in += mix->disp[k] != both->disp[k];
+            } else {
+                bad_out += mix->disp[k] != inw->disp[k];
+            }
+        }
+        T_CHECK_MSG(in_flagged > 0 && bad_in == 0 && bad_out == 0,
+                    "%zu texels in flagged triangles, %zu differ from the both-ways bake; %zu others differ from the inward one",
+                    in_flagged, bad_in, bad_out);
+    }
+done:
+    dm_dispmap_free(mix);
+    dm_dispmap_free(inw);
+    dm_dispmap_free(both);
+    dm_param_free(param);
+    free(bp);
+    free(bi);
+    free(ids);
+    free(flags);
+    dm_pm_free(pm);
+    dm_shell_free(sh);
+}
+
 static void test_bad_input(const mesh *m)
 {
     dm_shell *sh = (dm_shell *)1;
@@ -499,6 +586,7 @@ int main(int argc, char **argv)
         dm_bvh_free(bvh);
     }
     check_mesh("fat torus", &torus, 400, 400, 1, 0);
+    test_fallback(&torus, 120);
     {   /* sharp edges and narrow grooves: the QEM position of an edge collapse lands far from
            keep, which the enclosure's old triangles must not follow */
         mesh box = make_grooved_box(12, 0.03);

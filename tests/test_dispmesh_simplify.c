@@ -584,6 +584,63 @@ static int stay(void *user, const dm_collapse *c, float corrected[3])
     return DM_COLLAPSE_MOVE;
 }
 
+/* a constraint with a strictness: at level 0 it vetoes the half x > 0, at level 1 nothing;
+   relax moves it up once */
+typedef struct levels { int level; size_t relax_calls, vetoes_at_0; } levels;
+static int veto_by_level(void *user, const dm_collapse *c, float corrected[3])
+{
+    levels *l = (levels *)user;
+    (void)corrected;
+    if (l->level == 0 && (c->positions[3 * c->keep] > 0.0f || c->positions[3 * c->remove] > 0.0f)) {
+        l->vetoes_at_0++;
+        return DM_COLLAPSE_VETO;
+    }
+    return DM_COLLAPSE_ALLOW;
+}
+static int relax_once(void *user)
+{
+    levels *l = (levels *)user;
+    l->relax_calls++;
+    if (l->level > 0) return 0;
+    l->level = 1;
+    return 1;
+}
+
+/* dm_simplify_options.relax: called only when the queue runs dry above the target with vetoes,
+   then every vetoed edge is tried again; without it the run stops there */
+static void relax_checks(const mesh *in)
+{
+    dm_simplify_options o;
+    dm_simplify_report rep, rep_strict;
+    dm_pm *pm = NULL;
+    levels l;
+    memset(&o, 0, sizeof o);
+    memset(&l, 0, sizeof l);
+    o.target_triangles = in->nt / 20;
+    o.constraint = veto_by_level;
+    o.constraint_user = &l;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep_strict), DM_OK);
+    T_CHECK(!rep_strict.reached_target && rep_strict.relaxed == 0 && rep_strict.vetoed > 0);
+    dm_pm_free(pm);
+    pm = NULL;
+    memset(&l, 0, sizeof l);
+    o.relax = relax_once;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK_MSG(rep.reached_target && rep.relaxed == 1 && l.relax_calls == 1 && l.level == 1,
+                "relaxed %zu times (%zu calls), reached %zu of target %zu", rep.relaxed, l.relax_calls,
+                rep.triangle_count, o.target_triangles);
+    /* the strict part of the run is the strict run: the same collapses first */
+    T_CHECK(rep.collapse_count > rep_strict.collapse_count && l.vetoes_at_0 == rep_strict.vetoed);
+    dm_pm_free(pm);
+    pm = NULL;
+    /* a target the strict run reaches: relax is never called */
+    memset(&l, 0, sizeof l);
+    o.target_triangles = rep_strict.triangle_count + 2;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK(rep.reached_target && rep.relaxed == 0 && l.relax_calls == 0);
+    dm_pm_free(pm);
+}
+
 static void constraint_checks(const mesh *in)
 {
     dm_simplify_options o;
@@ -1030,6 +1087,7 @@ int main(int argc, char **argv)
     lanes_checks();
     error_bound_checks(&sph);
     constraint_checks(&sph);
+    relax_checks(&sph);
     on_collapse_checks(&sph);
     bad_input_checks();
     messy_checks();
