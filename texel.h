@@ -1581,9 +1581,10 @@ static void tvt__age_point(const tvt__ageing *A, float wd, int res, tvt_point *p
     p->specular = p->specular0 * A->st.specular_factor;
 }
 
-/* ---- merging. The points are sorted by voxel (a radix sort of the voxel keys), their positions
-   copied in that order into a compact array, and a hash table maps an occupied voxel to its run
-   of sorted points. A point closer than threshold (< 1 voxel) to p lies in p's voxel or, along
+/* ---- merging. The points are sorted by voxel (a radix sort of the voxel keys) and their
+   positions copied in that order into a compact array; a neighbour voxel's run of points is
+   found by a galloping search from p's own place (x neighbours are adjacent, y and z ones a row
+   or a layer away). A point closer than threshold (< 1 voxel) to p lies in p's voxel or, along
    each axis where p is within threshold of a face, in the neighbour across it: at most 8 voxels,
    x and y wrapping (distances are taken to the nearest periodic image). */
 typedef struct tvt__merge_grid {
@@ -1591,8 +1592,7 @@ typedef struct tvt__merge_grid {
     uint32_t *rank;   /* point index -> sorted position */
     float *pos;       /* 4 floats per sorted position: x, y, z, unused */
     uint32_t *key;    /* voxel key per sorted position */
-    uint32_t *slot_key, *slot_start; /* hash table of runs: key (or empty) and first position */
-    size_t mask;
+    size_t n;
     int res;
 } tvt__merge_grid;
 
@@ -1630,16 +1630,25 @@ static void tvt__radix_sort(uint32_t *key, uint32_t *idx, uint32_t *key2, uint32
     /* three passes (an odd number): the sorted data is in the caller's key2 / idx2 */
 }
 
-static size_t tvt__key_hash(uint32_t k, size_t mask) { return (size_t)((k * 2654435761u) ^ (k >> 15)) & mask; }
-
-static uint32_t tvt__run_start(const tvt__merge_grid *g, uint32_t k)
+/* first sorted position with key >= k, galloping from position `from` */
+static size_t tvt__lower_bound_from(const uint32_t *key, size_t n, size_t from, uint32_t k)
 {
-    size_t h = tvt__key_hash(k, g->mask);
-    while (g->slot_key[h] != 0xFFFFFFFFu) {
-        if (g->slot_key[h] == k) return g->slot_start[h];
-        h = (h + 1) & g->mask;
+    size_t lo, hi, step = 1;
+    if (key[from] >= k) { /* backward: find lo with key[lo] < k */
+        hi = from;
+        while (hi >= step && key[hi - step] >= k) { hi -= step; step *= 2; }
+        lo = hi >= step ? hi - step : 0;
+        if (key[lo] >= k) return lo;
+    } else { /* forward: key[lo] < k */
+        lo = from;
+        while (lo + step < n && key[lo + step] < k) { lo += step; step *= 2; }
+        hi = lo + step < n ? lo + step : n;
     }
-    return 0xFFFFFFFFu;
+    while (hi - lo > 1) { /* key[lo] < k <= key[hi] (hi = n: past the end) */
+        size_t mid = lo + (hi - lo) / 2;
+        if (key[mid] < k) lo = mid; else hi = mid;
+    }
+    return hi;
 }
 
 static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint32_t *tmp_key, uint32_t *tmp_idx)
@@ -1647,17 +1656,11 @@ static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint
     size_t n = pts->count, i;
     for (i = 0; i < n; i++) { tmp_key[i] = tvt__voxel_key(pts->p[i].pos, g->res); tmp_idx[i] = (uint32_t)i; }
     tvt__radix_sort(tmp_key, tmp_idx, g->key, g->order, n);
-    memset(g->slot_key, 0xFF, (g->mask + 1) * sizeof(uint32_t));
+    g->n = n;
     for (i = 0; i < n; i++) {
         const float *p = pts->p[g->order[i]].pos;
         g->rank[g->order[i]] = (uint32_t)i;
         g->pos[4 * i] = p[0]; g->pos[4 * i + 1] = p[1]; g->pos[4 * i + 2] = p[2]; g->pos[4 * i + 3] = 0.0f;
-        if (i == 0 || g->key[i] != g->key[i - 1]) {
-            size_t h = tvt__key_hash(g->key[i], g->mask);
-            while (g->slot_key[h] != 0xFFFFFFFFu) h = (h + 1) & g->mask;
-            g->slot_key[h] = g->key[i];
-            g->slot_start[h] = (uint32_t)i;
-        }
     }
 }
 
@@ -1689,8 +1692,7 @@ static size_t tvt__merge_partner(const tvt__merge_grid *g, const uint8_t *dead, 
         x &= g->res - 1;
         y &= g->res - 1;
         k2 = (uint32_t)((z * g->res + y) * g->res + x);
-        start = tvt__run_start(g, k2);
-        if (start == 0xFFFFFFFFu) continue;
+        start = (uint32_t)tvt__lower_bound_from(g->key, n, g->rank[i], k2);
         for (j = start; j < n && g->key[j] == k2; j++) {
             size_t idx = g->order[j];
             const float *q = g->pos + 4 * j;
@@ -1735,22 +1737,18 @@ static tvt_result tvt__merge(tvt_points *pts, float thr)
     tvt__merge_grid g;
     uint32_t *tmp_key, *tmp_idx;
     uint8_t *dead;
-    size_t n = pts->count, size = 1, i, kept = 0;
+    size_t n = pts->count, i, kept = 0;
     int ok;
-    while (size < 2 * n) size *= 2;
     memset(&g, 0, sizeof(g));
     g.res = pts->res;
-    g.mask = size - 1;
     g.order = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     g.rank = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     g.key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     g.pos = (float *)tvt__alloc(a, n, 4 * sizeof(float));
-    g.slot_key = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
-    g.slot_start = (uint32_t *)tvt__alloc(a, size, sizeof(uint32_t));
     tmp_key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     tmp_idx = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
     dead = (uint8_t *)tvt__alloc(a, n, 1);
-    ok = g.order && g.rank && g.key && g.pos && g.slot_key && g.slot_start && tmp_key && tmp_idx && dead;
+    ok = g.order && g.rank && g.key && g.pos && tmp_key && tmp_idx && dead;
     if (ok) {
         tvt__merge_grid_fill(&g, pts, tmp_key, tmp_idx);
         memset(dead, 0, n);
@@ -1768,7 +1766,7 @@ static tvt_result tvt__merge(tvt_points *pts, float thr)
         pts->count = kept;
     }
     tvt__free(a, g.order); tvt__free(a, g.rank); tvt__free(a, g.key); tvt__free(a, g.pos);
-    tvt__free(a, g.slot_key); tvt__free(a, g.slot_start); tvt__free(a, tmp_key); tvt__free(a, tmp_idx);
+    tvt__free(a, tmp_key); tvt__free(a, tmp_idx);
     tvt__free(a, dead);
     return ok ? TVT_OK : TVT_ERR_OUT_OF_MEMORY;
 }

@@ -211,7 +211,7 @@ static void trace(const scene *s, const float *o, const float *d, float pixel_an
             continue;
         }
         level = tvt_lod_level_for(&s->variant[0]->frames[0], t * pixel_angle / vox);
-        step_w = 0.5f * vox * (float)(1 << level);
+        step_w = vox * (float)(1 << level); /* one voxel of the level: the trilinear field has no finer detail */
         fx = p[0] / s->tile; fy = p[1] / s->tile;
         i = (int)floorf(fx); j = (int)floorf(fy);
         if (i >= s->tiles) i = s->tiles - 1;
