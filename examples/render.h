@@ -16,7 +16,9 @@
        It is a deferred ("visibility buffer") rasterizer: each draw first resolves depth,
        triangle and barycentrics per pixel, then shades every covered pixel once.
      - Relief mapping of a height map over a world-space quad (Policarpo et al. 2005: linear
-       search then binary refinement), ray marching of a terrain height field, and ray marching
+       search then binary refinement), with self-shadowing (a march up from the hit, or
+       Policarpo's search down the light ray) and, for curved surfaces, a bend per quad that
+       gives correct silhouettes; ray marching of a terrain height field, and ray marching
        of a box-bounded volume given by callbacks (front-to-back compositing, early termination,
        shadow rays, Kajiya-Kay hair/grass lighting). All of them write depth and so composite
        with rasterized geometry in either order (opaque ones; draw volumes last).
@@ -93,7 +95,10 @@
    LIMITS
      Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
      triangles per draw. Vertices must be finite (checked). One draw is opaque (no blending);
-     volumes blend over what is in the framebuffer. Read images up to 32768 on a side and 2^28
+     volumes blend over what is in the framebuffer. A curved relief quad (curvature_u / _v) is
+     the tangent plane of a convex bend: rays must cross that plane over the quad (a ray that
+     enters only through the shell's side is a miss), its shadow rays use the flat frame, and
+     its shading normal is tilted by the bend's slope. Read images up to 32768 on a side and 2^28
      samples (width x height x channels). PNG ancillary chunks are skipped, so gamma, colour
      profiles and a grey / RGB tRNS colour key are not applied: samples are as stored (height
      maps want exactly that); a palette's tRNS does become an alpha channel.
@@ -252,6 +257,15 @@ typedef struct sr_relief_desc {
     int shadows;              /* nonzero: shadow ray toward each light through the height field */
     const sr_light *lights; int light_count;
     sr_material material;
+    /* Added later; zero keeps the behaviour of the fields above. */
+    int shadow_search;        /* with shadows: 0 = march up from the hit (2 x linear_steps, bias 0.02);
+                                 1 = Policarpo's test: the linear + binary search down the light ray
+                                 from where it enters the top plane; shadowed if it stops above the
+                                 hit by more than shadow_bias */
+    float shadow_bias;        /* map depth, 0 = 0.02 */
+    float shadow_light;       /* share of a light's diffuse + specular kept in shadow, 0 = none */
+    float curvature_u, curvature_v; /* >= 0, 1/radius (world) of the surface's bend along u and v:
+                                 nonzero gives correct silhouettes on curved surfaces (see below) */
 } sr_relief_desc;
 
 /* Terrain: heights[y*width+x] at world (origin_x + x*spacing, base_y + h*height_scale,
@@ -362,6 +376,9 @@ SRDEF void sr_relief_desc_default(sr_relief_desc *d);
    (s, t_map, depth) in uvd, or 0 for a miss. */
 SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t,
                               float uvd[3]);
+/* 1 if the map point uvd (s, t_map, depth) sees a light in direction toward_light (unit, world),
+   0 if the height field shadows it, by the test shadow_search selects. */
+SRDEF float sr_relief_light_visibility(const sr_relief_desc *d, const float uvd[3], const float toward_light[3]);
 SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const sr_relief_desc *d);
 
 SRDEF void sr_terrain_desc_default(sr_terrain_desc *d);
@@ -1548,6 +1565,58 @@ static float sr__relief_search(const sr_image *img, float s0, float t0, float ds
     return 0.5f * (lo + hi);
 }
 
+/* Curved mode (Oliveira & Policarpo 2005's idea, with the bend given per quad): the reference
+   surface lies sag = (cu x^2 + cv y^2) / 2 below the quad's plane, x and y the world offsets from
+   the quad's centre along u and v; the map's depth is measured from it. The ray is followed from
+   where it crosses the plane to where it is below the deepest possible surface, in linear_steps
+   uniform steps and binary_steps halvings of the step that first finds it at or below the map:
+   a ray that passes the bend without that is a miss, which draws the silhouette. */
+static float sr__relief_shell_gap(const sr_relief_desc *d, const sr__relief_frame *f, const float o[3], const float dir[3],
+                                  float lam, float *s, float *tm, float *r)
+{
+    float P[3], rel[3], x, y, lu = sqrtf(sr__dot(d->axis_u, d->axis_u)), lv = sqrtf(sr__dot(d->axis_v, d->axis_v)), z;
+    int k;
+    for (k = 0; k < 3; k++) P[k] = o[k] + lam * dir[k];
+    sr__sub(P, d->origin, rel);
+    *s = sr__dot(rel, f->du);
+    *tm = sr__dot(rel, f->dv);
+    z = sr__dot(rel, f->n);
+    x = (*s - 0.5f) * lu;
+    y = (*tm - 0.5f) * lv;
+    *r = (-z - 0.5f * (d->curvature_u * x * x + d->curvature_v * y * y)) / d->depth_scale;
+    return *r - sr__depth_at(&d->depth, *s, *tm);
+}
+
+static int sr__relief_intersect_curved(const sr_relief_desc *d, const sr__relief_frame *f, const float o[3], const float dir[3],
+                                       float lam0, float *t, float uvd[3])
+{
+    float lu = sqrtf(sr__dot(d->axis_u, d->axis_u)), lv = sqrtf(sr__dot(d->axis_v, d->axis_v));
+    float sag = 0.125f * (d->curvature_u * lu * lu + d->curvature_v * lv * lv), denom = -sr__dot(dir, f->n);
+    float lam1 = lam0 + (d->depth_scale + sag) / denom, lo, hi, s, tm, r, step;
+    int linear = d->linear_steps > 0 ? d->linear_steps : 10, binary = d->binary_steps > 0 ? d->binary_steps : 5, i;
+    step = (lam1 - lam0) / (float)linear;
+    lo = lam0;
+    for (i = 1; i <= linear; i++) {
+        float lam = lam0 + (float)i * step;
+        float gap = sr__relief_shell_gap(d, f, o, dir, lam, &s, &tm, &r);
+        if (!d->depth.wrap && (s < 0.0f || s > 1.0f || tm < 0.0f || tm > 1.0f)) return 0; /* passed the bend */
+        if (gap >= 0.0f && r >= 0.0f) break;
+        lo = lam;
+    }
+    if (i > linear) return 0;
+    hi = lo + step;
+    for (i = 0; i < binary; i++) {
+        float mid = 0.5f * (lo + hi);
+        if (sr__relief_shell_gap(d, f, o, dir, mid, &s, &tm, &r) >= 0.0f && r >= 0.0f) hi = mid;
+        else lo = mid;
+    }
+    sr__relief_shell_gap(d, f, o, dir, 0.5f * (lo + hi), &s, &tm, &r);
+    if (!d->depth.wrap && (s < 0.0f || s > 1.0f || tm < 0.0f || tm > 1.0f)) return 0;
+    if (t) *t = 0.5f * (lo + hi);
+    if (uvd) { uvd[0] = s; uvd[1] = tm; uvd[2] = r < 0.0f ? 0.0f : r > 1.0f ? 1.0f : r; }
+    return 1;
+}
+
 SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t, float uvd[3])
 {
     sr__relief_frame f;
@@ -1565,6 +1634,10 @@ SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], co
     s0 = sr__dot(rel, f.du);
     tm0 = sr__dot(rel, f.dv);
     if (s0 < 0.0f || s0 > 1.0f || tm0 < 0.0f || tm0 > 1.0f) return 0;
+    if (d->curvature_u != 0.0f || d->curvature_v != 0.0f) {
+        if (!(d->curvature_u >= 0.0f) || !(d->curvature_v >= 0.0f)) return 0;
+        return sr__relief_intersect_curved(d, &f, origin, dir, t0, t, uvd);
+    }
     /* world offset per unit of map depth: depth_scale along -n */
     for (k = 0; k < 3; k++) step[k] = dir[k] * d->depth_scale / -denom;
     ds = sr__dot(step, f.du);
@@ -1596,6 +1669,28 @@ static float sr__relief_visibility(const sr_relief_desc *d, const sr__relief_fra
     return 1.0f;
 }
 
+/* Policarpo's test: from where the light ray through the hit enters the top plane, the linear +
+   binary search down it; lit when it stops no higher than the hit's depth - bias */
+static float sr__relief_visibility_search(const sr_relief_desc *d, const sr__relief_frame *f, const float L[3], const float uvd[3])
+{
+    float ln = sr__dot(L, f->n), step[3], ds, dt, found, bias = d->shadow_bias > 0.0f ? d->shadow_bias : 0.02f;
+    int k;
+    if (ln <= 0.0f) return 0.0f;
+    for (k = 0; k < 3; k++) step[k] = L[k] * d->depth_scale / ln;
+    ds = sr__dot(step, f->du);
+    dt = sr__dot(step, f->dv);
+    found = sr__relief_search(&d->depth, uvd[0] + uvd[2] * ds, uvd[1] + uvd[2] * dt, -ds, -dt,
+                              d->linear_steps > 0 ? d->linear_steps : 10, d->binary_steps > 0 ? d->binary_steps : 5);
+    return found < uvd[2] - bias ? 0.0f : 1.0f;
+}
+
+SRDEF float sr_relief_light_visibility(const sr_relief_desc *d, const float uvd[3], const float toward_light[3])
+{
+    sr__relief_frame f;
+    if (!d || !uvd || !toward_light || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f) || !sr__relief_frame_init(d, &f)) return 1.0f;
+    return d->shadow_search ? sr__relief_visibility_search(d, &f, toward_light, uvd) : sr__relief_visibility(d, &f, toward_light, uvd);
+}
+
 SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const sr_relief_desc *d)
 {
     sr__relief_frame f;
@@ -1608,6 +1703,8 @@ SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const s
     if ((d->albedo && !sr__image_ok(d->albedo, 3)) || (d->normal_map && !sr__image_ok(d->normal_map, 3)))
         return SR_ERR_INVALID_ARGUMENT;
     if (!sr__relief_frame_init(d, &f)) return SR_ERR_INVALID_ARGUMENT;
+    if (!(d->curvature_u >= 0.0f) || !(d->curvature_v >= 0.0f) || !(d->shadow_light >= 0.0f) || !(d->shadow_bias >= 0.0f))
+        return SR_ERR_INVALID_ARGUMENT;
     lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
     spec_cut = sr__spec_cut(&d->material);
     for (y = 0; y < fb->height; y++)
@@ -1637,13 +1734,24 @@ SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const s
                 sr__cross(Ps, Pt, N);
             }
             sr__normalize(N);
+            if (d->curvature_u != 0.0f || d->curvature_v != 0.0f) { /* tilt by the bend's slope at (s, t) */
+                float lu = sqrtf(sr__dot(d->axis_u, d->axis_u)), lv = sqrtf(sr__dot(d->axis_v, d->axis_v));
+                float gu = d->curvature_u * (uvd[0] - 0.5f) * lu, gv = d->curvature_v * (uvd[1] - 0.5f) * lv;
+                for (k = 0; k < 3; k++) N[k] += gu * d->axis_u[k] / lu + gv * d->axis_v[k] / lv;
+                sr__normalize(N);
+            }
             if (d->albedo) { float a4[4]; sr__sample(d->albedo, uvd[0], uvd[1], a4); memcpy(kd, a4, sizeof kd); }
             else memcpy(kd, d->material.diffuse, sizeof kd);
             sr__view_dir(o, P, V);
             memcpy(rgb, d->material.emission, sizeof rgb);
             for (l = 0; l < nl; l++) {
                 float vis = 1.0f;
-                if (d->shadows) { float L[3]; sr__light_dir(&lights[l], P, L); vis = sr__relief_visibility(d, &f, L, uvd); }
+                if (d->shadows) {
+                    float L[3];
+                    sr__light_dir(&lights[l], P, L);
+                    vis = d->shadow_search ? sr__relief_visibility_search(d, &f, L, uvd) : sr__relief_visibility(d, &f, L, uvd);
+                    if (vis == 0.0f) vis = d->shadow_light;
+                }
                 sr__shade_light(&d->material, kd, d->albedo ? kd : d->material.ambient, &lights[l], P, N, V, vis, spec_cut, rgb);
             }
             fb->depth[i] = z;

@@ -545,6 +545,109 @@ static void test_relief(void)
     }
 }
 
+/* Shadow rays against an analytic occluder: a floor at depth 1 with a wall (depth 0) over
+   s in [0.5, 0.55], the quad of test_relief (x = 2 s - 1, top at y = 0, depth_scale 0.3). The
+   light comes from +x at elevation e: a floor point at x_h is shadowed exactly when its ray
+   meets the wall's near face x = 0 below the top, x_h > -0.3 / tan e. Points closer to that
+   boundary than the sampling allows (a texel of bilinear blur, one linear step of the search
+   along the light ray, the bias) are not judged. Both shadow tests, both must be exact
+   elsewhere. */
+static void test_relief_shadows(void)
+{
+    enum { N = 64 };
+    static float depth[N * N];
+    sr_relief_desc rd;
+    uint32_t seed = 4;
+    int i, k, mode, judged[2] = {0, 0}, wrong[2] = {0, 0};
+    for (i = 0; i < N * N; i++) {
+        int x = i % N;
+        depth[i] = (x >= N / 2 && x < N / 2 + 4) ? 0.0f : 1.0f; /* texels 32..35: s in [0.5, 0.5625) */
+    }
+    sr_relief_desc_default(&rd);
+    rd.origin[0] = -1; rd.origin[1] = 0; rd.origin[2] = 1;
+    rd.axis_u[0] = 2; rd.axis_u[1] = 0; rd.axis_u[2] = 0;
+    rd.axis_v[0] = 0; rd.axis_v[1] = 0; rd.axis_v[2] = -2;
+    rd.depth_scale = 0.3f;
+    rd.depth.width = N; rd.depth.height = N; rd.depth.channels = 1; rd.depth.data = depth;
+    for (mode = 0; mode < 2; mode++) {
+        rd.shadow_search = mode;
+        for (k = 0; k < 400; k++) {
+            float e = (30.0f + 40.0f * frand(&seed)) * 3.14159265f / 180.0f, L[3], uvd[3], vis, xh, edge;
+            float texel = 2.0f / N, step_x = (mode ? 1.0f : 0.5f) * 0.1f * 0.3f / tanf(e), margin;
+            int shadowed;
+            uvd[0] = 0.05f + 0.42f * frand(&seed); /* floor texels left of the wall, away from its blur */
+            uvd[1] = 0.5f; uvd[2] = 1.0f;
+            L[0] = cosf(e); L[1] = sinf(e); L[2] = 0.0f;
+            xh = 2.0f * uvd[0] - 1.0f;
+            edge = -0.3f / tanf(e);
+            margin = texel + step_x + 0.02f * 0.3f / tanf(e) + 1e-3f;
+            if (fabsf(xh - edge) < margin) continue;
+            shadowed = xh > edge;
+            vis = sr_relief_light_visibility(&rd, uvd, L);
+            judged[mode]++;
+            wrong[mode] += (vis == 0.0f) != shadowed;
+        }
+        printf("relief shadows (%s): %d points judged, %d wrong\n", mode ? "linear + binary search" : "march from the hit", judged[mode], wrong[mode]);
+        T_CHECK(judged[mode] > 200);
+        T_EQ_INT(wrong[mode], 0);
+    }
+}
+
+/* Curved silhouettes: with a zero depth map and curvature_u = 1/R the surface is the parabolic
+   cylinder y = -(x^2) / (2R) over the quad (x = 2 s - 1). Rays aimed near its edge hit it
+   exactly when the analytic quadratic has a root inside the footprint; the hit distance agrees
+   within one binary-refined step of the march. Rays that cross the surface for less than two
+   linear steps (grazing) are not judged: linear search may step over them by design. */
+static void test_relief_silhouette(void)
+{
+    enum { N = 16 };
+    static float zero[N * N];
+    sr_relief_desc rd;
+    uint32_t seed = 12;
+    int k, judged = 0, wrong = 0, far = 0, misses = 0;
+    const float R = 1.5f, kappa = 1.0f / 1.5f;
+    sr_relief_desc_default(&rd);
+    rd.origin[0] = -1; rd.origin[1] = 0; rd.origin[2] = 1;
+    rd.axis_u[0] = 2; rd.axis_u[1] = 0; rd.axis_u[2] = 0;
+    rd.axis_v[0] = 0; rd.axis_v[1] = 0; rd.axis_v[2] = -2;
+    rd.depth_scale = 0.1f;
+    rd.curvature_u = kappa;
+    rd.depth.width = N; rd.depth.height = N; rd.depth.channels = 1; rd.depth.data = zero;
+    for (k = 0; k < 2000; k++) {
+        float o[3], dir[3], t, uvd[3], l, A, B, C, disc, r1, r2, lam0, lam1, step;
+        int hit, an_hit = 0, i;
+        o[0] = -3.0f + 0.5f * frand(&seed); o[1] = 0.2f + 0.6f * frand(&seed); o[2] = 0.6f * frand(&seed) - 0.3f;
+        dir[0] = 1.0f; dir[1] = -(0.05f + 0.5f * frand(&seed)); dir[2] = 0.1f * frand(&seed) - 0.05f;
+        l = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        for (i = 0; i < 3; i++) dir[i] /= l;
+        lam0 = -o[1] / dir[1];
+        if (fabsf(o[0] + lam0 * dir[0]) > 1.0f || fabsf(o[2] + lam0 * dir[2]) > 1.0f) continue; /* must cross the quad's plane over it */
+        /* y + x^2/(2R) = 0 along the ray: A lam^2 + B lam + C = 0 */
+        A = dir[0] * dir[0] / (2 * R); B = dir[1] + o[0] * dir[0] / R; C = o[1] + o[0] * o[0] / (2 * R);
+        disc = B * B - 4 * A * C;
+        lam1 = lam0 + (rd.depth_scale + kappa * 4.0f / 8.0f) / -dir[1];
+        step = (lam1 - lam0) / 10.0f;
+        if (disc > 0) {
+            r1 = (-B - sqrtf(disc)) / (2 * A); r2 = (-B + sqrtf(disc)) / (2 * A);
+            if (fabsf(o[0] + r1 * dir[0]) <= 1.0f && r1 >= lam0 - 1e-4f) an_hit = 1; /* float: a root at the plane crossing */
+            if (an_hit && r2 - r1 < 2 * step) continue; /* grazing */
+            if (!an_hit && disc < 0.05f) continue;
+        } else {
+            r1 = 0;
+        }
+        hit = sr_relief_intersect(&rd, o, dir, &t, uvd);
+        judged++;
+        misses += !an_hit;
+        if (hit != an_hit) { wrong++; printf("  ray %d: ours %d analytic %d disc %.4f r1 %.4f x(r1) %.4f lam0 %.4f t %.4f\n", k, hit, an_hit, disc, r1, o[0] + r1 * dir[0], lam0, hit ? t : 0.0f); }
+        else if (hit && fabsf(t - r1) > step / 32.0f + 1e-4f) far++; /* 5 halvings: the bracket is step / 32 */
+    }
+    printf("curved silhouettes: %d rays judged (%d analytic misses), %d disagree on hit/miss, %d hits off by more than a refined step\n",
+           judged, misses, wrong, far);
+    T_CHECK(judged > 300 && misses > 50 && judged - misses > 50);
+    T_EQ_INT(wrong, 0);
+    T_EQ_INT(far, 0);
+}
+
 /* ---- terrain ---------------------------------------------------------------------------------- */
 
 static void test_terrain(void)
@@ -1047,6 +1150,8 @@ int main(int argc, char **argv)
     test_checkerboard();
     test_volume_silhouette();
     test_relief();
+    test_relief_shadows();
+    test_relief_silhouette();
     test_terrain();
     test_shading();
     test_alloc_failures();
