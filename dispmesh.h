@@ -1,483 +1,245 @@
-/* dispmesh.h - v0.1 - MIT licence or public domain (see end of file)
-   Displacement-mapped meshes. Part 1: a BVH ray caster over a triangle mesh. Part 2 (see
-   PART 2 below): QEM edge-collapse simplification with progressive-mesh records. Part 3 (see
-   PART 3): parameterization of a base mesh, displacement bake, surface sample grid,
-   reconstruction.
+/* dispmesh.h - v0.2 - MIT licence or public domain (see end of file)
+   Displacement-mapped meshes (paper 000, Chuang et al.): a dense mesh becomes a coarse base mesh
+   that encloses it plus one displacement map that holds its detail, and back.
 
-   WHAT
-     A bounding volume hierarchy over a triangle mesh (float xyz positions, uint32 indices) with
-     the queries a displacement bake, picking or an occlusion test needs: closest hit within
-     [tmin, tmax], any hit (occlusion), the nearest hit along a line in either direction, batches
-     of rays, and the closest point on the mesh to a query point. The ray/triangle test is
-     watertight: a ray through a shared edge or vertex never slips between the triangles.
-     Parts 2 (dm_simplify, dm_pm_*) and 3 (dm_parameterize, dm_bake, ...) are described under
-     PART 2 and PART 3.
-
-   HOW TO USE (in ten lines)
+   HOW TO USE (the main job: dense mesh P, T -> base + map -> dense again)
        // in exactly one C or C++ file, #define DM_IMPLEMENTATION before #include "dispmesh.h"
-       dm_bvh *bvh;
-       if (dm_bvh_build(positions, vertex_count, indices, triangle_count, NULL, &bvh) != DM_OK)
-           return 1;                                      // dm_result_string() names the code
-       dm_ray ray = {{ox, oy, oz}, 0.0f, {dx, dy, dz}, INFINITY};
-       dm_hit hit;
-       if (dm_bvh_intersect(bvh, &ray, &hit))             // nearest hit in [tmin, tmax]
-           use(hit.t, hit.triangle, hit.u, hit.v);        // point = (1-u-v) p0 + u p1 + v p2
-       dm_bvh_free(bvh);
+       dm_shell *shell; dm_pm *pm; dm_param *param; dm_dispmap *map; dm_trimesh *dense;
+       dm_shell_grow(P, nv, T, nt, NULL, &shell);                      // 1. the bounding shell
+       dm_simplify_options so = {0};  so.target_triangles = 500;       // 2. the base mesh
+       so.constraint = dm_shell_constraint;  so.on_collapse = dm_shell_collapsed;
+       so.constraint_user = shell;  dm_simplify(P, nv, T, nt, &so, &pm, NULL);
+       dm_pm_counts(pm, &bnv, &bnt);  dm_pm_get_mesh(pm, B, BT, NULL); // 3. its arrays (yours)
+       dm_param_options po = {0};  po.width = po.height = 1024;        // 4. charts in one map
+       dm_parameterize(B, bnv, BT, bnt, &po, &param);
+       dm_bake(param, B, bnv, BT, bnt, P, nv, T, nt, NULL, &map);      // 5. displacement, normals
+       dm_reconstruct(map, param, NULL, &dense);                       // 6. base + map as a mesh
+       dm_trimesh_free(dense); dm_dispmap_free(map); dm_param_free(param); dm_pm_free(pm);
+       dm_shell_free(shell);
+     Every call returns a dm_result (DM_OK = 0; dm_result_string() names it). Check each one.
+     A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it.
 
-   OPTIONS
-     Compile time (define before including the implementation):
-       DM_STATIC             all functions are static (DMDEF = static), for private use in one file
-       DM_MALLOC(sz)         default allocator; define both DM_MALLOC and DM_FREE or neither
-       DM_FREE(p)
-       DM_USE_SSE2           opt-in SSE2 box and triangle tests (x86, x86-64: always available
-                             there); recommended on x86
-       DM_USE_AVX2           opt-in AVX box and triangle tests (eight lanes); needs AVX code
-                             generation (-mavx2, /arch:AVX2), implies DM_USE_SSE2; recommended
-                             when the program may require AVX2 (Haswell, 2013, and later)
-                             All paths give bit-identical answers (tests/simd_same.sh checks it):
-                             the portable path is written lane by lane over arrays so that
-                             compilers can vectorize it, but it is 1.5-2x slower than SSE2
-     Run time, dm_bvh_options (a zeroed struct, or NULL, means defaults; dm_bvh_default_options()
-     returns the resolved values):
-       quality        DM_BVH_QUALITY_DEFAULT: binned SAH over the axis where the centroids
-                      spread most, 16 bins. DM_BVH_QUALITY_HIGH: binned SAH over all three
-                      axes, 64 bins (about 1.5x the build time, a 3-6% cheaper tree by the SAH;
-                      ray speed within measurement noise on the bench meshes).
-       bins           SAH bins, 0 = from quality; clamped to [4, 256]; small ranges use fewer
-       max_leaf_size  largest leaf, 0 = 8; clamped to [1, 16]. Ranges larger than this are
-                      always split; 8 built 12-20% faster than 4 and traced as fast or faster
-                      on the bench meshes (bunny, 1M-triangle sphere).
-       allocator      NULL = DM_MALLOC/DM_FREE; a copy is kept in the BVH and used to free it
-                      Recommended on Linux for large meshes: an allocator that backs blocks of
-                      1 MiB and more with transparent huge pages (aligned_alloc to 2 MiB, size
-                      rounded up, then madvise(MADV_HUGEPAGE); bench/bench.h has one in 20
-                      lines), as Embree's own allocator does. The build touches fewer pages
-                      (on the 1M-triangle sphere it took 0.55 of the time with malloc) and
-                      rays miss the TLB less often.
-       progress       NULL, or called during the build with done in [0, 1]; returning nonzero
-                      cancels the build (DM_CANCELLED, everything freed). progress_user is
-                      passed back.
+   THE PARTS (each described below under the same headings: options, memory, errors, thread
+   safety, limits)
+     PART 1  BVH ray caster: dm_bvh_build, dm_bvh_intersect, _occluded, _intersect_line, batches,
+             dm_bvh_closest_point, dm_bvh_refit.
+     PART 2  Simplification with progressive-mesh records: dm_simplify, dm_pm_*, dm_weld.
+     PART 3  Bounding shell and paper 000's constraints: dm_shell_grow, dm_shell_constraint,
+             dm_shell_collapsed, dm_shell_relax (the fallback), dm_shell_fallback_triangles.
+     PART 4  Parameterization, bake, surface sample grid, reconstruction: dm_parameterize,
+             dm_bake, dm_reconstruct, dm_coverage_weights, dm_surface_distance.
 
-   STRUCTURE
-     The primary structure is a binary SAH tree of compact 32-byte nodes (box, child or triangle
-     offset, count); refit and the closest-point query work on it, and dm_bvh_get_info()
-     describes it. Ray queries run on an 8-wide tree derived from it by collapsing (each 256-byte
-     wide node holds the boxes of up to eight binary descendants side by side, so one node load
-     gives eight box tests and the tree is a third as deep). Its leaves are the binary tree's
-     leaves, so both share one triangle array; a refit recomputes the binary boxes and
-     re-derives the wide ones. The triangles are stored four to a 160-byte block, coordinates
-     side by side, so that one ray meets four (with AVX eight) triangles in one pass; each leaf
-     starts a block. Against a 4-wide tree of single triangles (the previous version) this cut
-     the instructions per incoherent ray on the bunny from about 1400 to 900 (AVX) or 1200
-     (SSE2). A child's entry distance orders the visit (nearest first; two children compared,
-     three or more insertion-sorted on the stack). Every hit child's cache lines are
-     prefetched as soon as its box is hit (all four of a wide node, three of a leaf): against
-     no prefetch, 8% more incoherent rays per second on the bunny and 15% on the 1M-triangle
-     sphere, in CPU time measured alternately with Embree.
+   COMMON TO ALL PARTS
+     Meshes are float xyz positions (3 per vertex) and uint32 indices (3 per triangle,
+     counter-clockwise front faces). Compile-time options: DM_STATIC (all functions static),
+     DM_MALLOC/DM_FREE (the default allocator; define both or neither), DM_USE_SSE2 (x86) and
+     DM_USE_AVX2 (needs -mavx2; implies SSE2): opt-in SIMD box and triangle tests, bit-identical
+     to the portable path and recommended where available. Run-time options are structs whose
+     zero value (or NULL) means the defaults; every allocating call takes a dm_allocator (NULL =
+     DM_MALLOC/DM_FREE) and objects that outlive the call keep it for their free; every long
+     call takes a progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing
+     leaked). Bad input gets a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no
+     triangles (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN,
+     infinite or huge (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes
+     that overflow (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure
+     *out is NULL and nothing is left allocated. No global state; every call is re-entrant and
+     deterministic (the same input gives the same bits; ties go to the lower index). Do not build
+     with -ffast-math or FMA contraction (-ffp-contract=fast): the watertight ray test relies on
+     the two triangles of an edge computing the same products.
 
-   MEMORY
-     A BVH holds 32-byte binary nodes, 256-byte wide nodes and the triangles in 160-byte blocks
-     of four. The binary node array is allocated for the worst case, 2 nodes per triangle (64
-     bytes), of which about 0.35 are used with the default leaf size (pages never written cost
-     no physical memory on systems with lazy allocation); the wide nodes (about 8 bytes per
-     triangle) live in its unused tail when they fit there, which they do unless leaves are
-     tiny. While the build runs, each triangle has a 32-byte box and id in an array of 56 bytes
-     per triangle, which the blocks then replace in place (45 bytes per triangle on the bunny,
-     blocks 7/8 full; a tree whose blocks need more gets a second allocation). In all about 120
-     bytes per triangle allocated, about 70 touched; dm_bvh_get_info() reports the allocated
-     figure (memory_bytes) and the binary nodes in use. Queries never allocate; a ray query
-     keeps a 10 KB stack.
+   PART 1: BVH RAY CASTER
+     WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
+     closest hit in [tmin, tmax], any hit, the nearest hit along a line either way, batches, and
+     the closest point on the mesh. The ray/triangle test is watertight (Woop et al. 2013): a ray
+     through a shared edge or vertex never slips between the triangles. Degenerate triangles are
+     never hit. A ray with NaN components, a zero direction or tmin > tmax misses.
+         dm_bvh *bvh;  dm_bvh_build(P, nv, T, nt, NULL, &bvh);
+         dm_ray ray = {{ox, oy, oz}, 0.0f, {dx, dy, dz}, INFINITY};  dm_hit hit;
+         if (dm_bvh_intersect(bvh, &ray, &hit)) use(hit.t, hit.triangle, hit.u, hit.v);
+         dm_bvh_free(bvh);                             // point = (1-u-v) p0 + u p1 + v p2
+     METHOD. Binned SAH build (Wald 2007) of a binary tree of 32-byte nodes, collapsed into an
+     8-wide tree for rays (Dammertz et al. 2008); triangles stored four to a 160-byte block;
+     nearest child first; conservative box test (Ize 2013); t from the triangle's plane in double.
+     OPTIONS (dm_bvh_options). quality: DM_BVH_QUALITY_DEFAULT (16 bins over the widest axis) or
+     _HIGH (64 bins over three axes, a slower build); bins (0 = from quality, [4, 256]);
+     max_leaf_size (0 = 8, [1, 16]); allocator (large meshes trace faster with one that backs big
+     blocks with huge pages); progress.
+     MEMORY. About 120 bytes per triangle allocated, 70 touched (dm_bvh_get_info reports it);
+     queries never allocate (a ray keeps a 10 KB stack).
+     ERRORS. As above for dm_bvh_build and dm_bvh_refit (which needs the same triangle count).
+     THREAD SAFETY. A built BVH may be queried from any number of threads; refit and free must
+     run alone.
+     LIMITS. At most 2^30 - 1 triangles; coordinates up to 1e18.
 
-   ERRORS
-     dm_bvh_build and dm_bvh_refit return a dm_result (DM_OK = 0); dm_result_string() names it.
-     On failure nothing is leaked and *out is NULL. Checked at the boundary: NULL arrays,
-     no triangles (DM_ERR_NO_TRIANGLES), indices >= vertex_count (DM_ERR_BAD_INDEX), non-finite
-     or huge (|x| > 1e18) coordinates of a referenced vertex (DM_ERR_BAD_POSITION), counts whose
-     byte size overflows size_t or that do not fit the 32-bit node indices (DM_ERR_TOO_LARGE).
-     Queries take any ray: a ray with NaN components, a zero direction or tmin > tmax misses.
-     Degenerate (zero-area) triangles are kept and never hit; they never produce NaN.
+   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*, dm_weld)
+     WHAT. Edge collapses in order of quadric error (Garland-Heckbert 1997), recorded as a
+     progressive mesh (Hoppe 1996): the base mesh and one vertex split per collapse, so any
+     level between the base and the input can be rebuilt exactly, up and down; for every base
+     vertex, the input vertices merged into it. A constraint hook lets the caller veto or move
+     each candidate (Part 3 uses it).
+         dm_simplify_options opt = {0};  opt.target_triangles = nt / 100;
+         dm_simplify(P, nv, T, nt, &opt, &pm, &report);
+         dm_pm_counts(pm, &bnv, &bnt);  dm_pm_get_mesh(pm, B, BT, ids);   // level 0: the base
+         dm_pm_set_level(pm, dm_pm_split_count(pm) / 2);                 // any level
+     METHOD. Quadrics in a frame centred on the bounding box and scaled by its largest side,
+     area-weighted, with Garland-Heckbert's boundary planes. The position is the quadric's
+     minimiser when it is well conditioned and near the edge, else the best point on the edge
+     (Lindstrom-Turk's fallback); a boundary stays on its edges; locked vertices stay put. Checks
+     on each candidate: the link condition (Dey et al. 1999), no degenerate fan, no triangle
+     turning by 78 degrees or more or becoming degenerate, then the constraint. Non-manifold
+     vertices and their neighbours are frozen. A refused or vetoed edge is retried when its
+     one-ring changes; a candidate moved by the constraint to more than twice its cost waits in
+     the queue at the new cost.
+     GUARANTEES. A manifold region stays manifold and keeps its orientation; no new degenerate or
+     flipped triangle; boundary vertices stay on boundary edges; locked and frozen vertices keep
+     their positions bit for bit. The error of a collapse is the area-weighted RMS distance from
+     the new position to the planes merged into it (mesh units); the report's error is the
+     largest. Level k of the progressive mesh is bit for bit the mesh after the (split_count -
+     k)-th collapse; triangles keep their input order. dm_pm_merged_vertices gives, for a base
+     vertex, the sorted input vertices merged into it (a partition of all input vertices).
+     OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error
+     (no collapse above it, mesh units; 0 none; neither: until no collapse passes the checks);
+     flags (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes);
+     max_collapses (0 none; the first k collapses are the same whatever the limit); constraint,
+     constraint_user, on_collapse (called just before each collapse is applied, for a constraint
+     that follows the mesh), relax (called when no candidate is left above the target and some
+     were vetoed: nonzero = the constraint is less strict now, every vetoed edge is queued
+     again); allocator; progress (the fraction of the triangles to remove that are gone).
+     dm_weld merges vertices at the same position (bit for bit, -0 = +0) in first-use order.
+     MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
+     queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
+     the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
+     ERRORS. As in COMMON; a negative or NaN target_error is DM_ERR_INVALID_ARGUMENT; a triangle
+     soup (no vertex in two triangles) with repeated positions is DM_ERR_NOT_WELDED. Vetoes or
+     checks that stop above the target still give DM_OK (report.reached_target = 0). Triangles
+     with a repeated index are dropped (counted); duplicate vertices are different vertices (a
+     seam between them is two boundaries); isolated vertices are in no level.
+     THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads;
+     dm_pm_set_level and dm_pm_get_mesh must run alone on it.
+     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles, and 3 triangles + 2 vertices
+     below about 4.0e9. Attributes (normals, UVs) are not simplified.
 
-   THREAD SAFETY
-     No global state. A built BVH is read-only for queries: any number of threads may query it
-     at once. dm_bvh_refit and dm_bvh_free must not run concurrently with anything else on the
-     same BVH. Results are deterministic: the same input gives the same tree and the same hits
-     on every run; equal-distance hits go to the lower triangle index.
-
-   PRECISION
-     Hit or miss is decided by the watertight test in float (with its double fallback when an
-     edge function is exactly zero); t is then computed from the triangle's plane in double and
-     rounded to float, so t is exact to about one ulp even at grazing angles. Box tests widen
-     the far distance by 1 + 2 gamma(3) (Ize 2013), so rounding never culls a box the ray
-     touches. Do not compile with -ffast-math or FMA contraction of the edge functions
-     (-ffp-contract=fast with FMA enabled): watertightness relies on the two triangles of an
-     edge computing the same products.
-
-   LIMITS
-     At most 2^30 - 1 triangles (slots of the padded blocks are 32-bit); coordinates up to 1e18
-     in magnitude. The closest-point query
-     works in double.
-
-   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*)
-     WHAT. Edge-collapse simplification driven by quadric error metrics (Garland-Heckbert 1997),
-     recorded as a progressive mesh (Hoppe 1996): the base mesh, and one vertex split per
-     collapse, so that any level between the base and the input can be rebuilt exactly, up and
-     down; for every base vertex, the input vertices merged into it. Paper 000 builds its base
-     mesh this way, under constraints that keep the displacement map valid: a constraint hook
-     lets the caller veto or move each candidate collapse.
-
-     HOW TO USE
-       dm_simplify_options opt = {0};
-       opt.target_triangles = triangle_count / 100;            // and/or opt.target_error
-       dm_pm *pm; dm_simplify_report rep;
-       if (dm_simplify(positions, vertex_count, indices, triangle_count, &opt, &pm, &rep) != DM_OK)
-           return 1;
-       size_t nv, nt; dm_pm_counts(pm, &nv, &nt);              // the base mesh (level 0)
-       dm_pm_get_mesh(pm, out_positions, out_indices, out_ids); // compact arrays, caller-sized
-       dm_pm_set_level(pm, dm_pm_split_count(pm) / 2);          // any level; top level = input
-       dm_pm_free(pm);
-
-     OPTIONS (dm_simplify_options, zero = default)
-       target_triangles  stop at or below this count (a collapse removes 2 triangles, 1 on a
-                         boundary). 0: no count target.
-       target_error      no collapse whose error exceeds it is done (mesh units). 0: none. With
-                         neither target the mesh is simplified until no collapse passes the checks
-                         (the paper's "until no edge can be collapsed").
-       flags             DM_SIMPLIFY_LOCK_BOUNDARY: boundary vertices never move, never go.
-       locked            per-vertex bytes: a nonzero vertex never moves and is never removed (a free
-                         neighbour may still merge into it).
-       max_collapses     stop after this many collapses (0: no limit). The first k collapses of a
-                         run are the same whatever the limit: this is how level k is checked.
-       constraint        called for every candidate that passed all the checks below, with the
-                         edge (keep, remove), the proposed position, its error, the current
-                         positions and the triangles of keep's new one-ring. It returns
-                         DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE with a corrected
-                         position, which is checked again for flips and degenerate triangles (and
-                         must equal keep's position when keep is locked or absorbs an interior
-                         vertex from the boundary); if that fails it counts as a veto. A refused
-                         or vetoed edge is retried when a collapse changes its one-ring. When
-                         vetoes stop the simplification above the target, dm_simplify still
-                         returns DM_OK; the report says what was reached (reached_target = 0).
-                         The candidate also carries the old triangles of keep and remove. A
-                         moved candidate whose cost there is more than twice the cost it was
-                         queued with goes back in the queue at the new cost and is asked again
-                         when its turn comes, so that collapses stay in order of what they
-                         really cost (on the bunny's enclosing base: RMS 2.06x instead of 2.48x
-                         the unconstrained simplification's, for twice the constraint calls).
-       on_collapse       called (with constraint_user) once per collapse that will be done, just
-                         before it is applied, with the same description: position is where keep
-                         goes, positions are still the old ones. A constraint that keeps its own
-                         picture of the mesh (dm_shell_constraint's vertex normals) follows it here.
-       relax             called (with constraint_user) when no candidate is left above
-                         target_triangles and some were vetoed; nonzero means the constraint is
-                         now less strict, and every refused or vetoed edge is queued again (the
-                         report counts the relaxations). dm_shell_relax is one.
-       allocator, progress, progress_user   as for the BVH; progress gets the fraction of the
-                         triangles to remove that are gone, every 1024 collapses and at the end.
-
-     THE METHOD, step by step
-       1. Input checks (as dm_bvh_build); triangles with a repeated index are dropped (counted in
-          the report, absent from every level, so the top level is the input without them).
-       2. Per vertex, a list of its triangle corners (one pool, filled by a counting sort; a
-          collapse appends keep's new list, and the pool is compacted in place when full) and one
-          128-byte record (quadric, normalised position, list, flags). Classification: a vertex
-          is non-manifold when an edge at it has more than two triangles, two triangles the same
-          way round, or its triangles form more than one fan (fans of up to 16 triangles are
-          checked by linking each triangle to the next around the vertex; larger or irregular
-          ones by a union-find over the neighbours). Non-manifold vertices and every vertex that
-          shares a triangle with one are frozen: their triangles are left exactly as they are.
-       3. Quadrics in a frame centred on the bounding box and scaled by its largest side: each
-          triangle's plane weighted by its area, added to its three vertices; each boundary edge
-          adds the plane through it perpendicular to its triangle, weighted 10 x its squared
-          length (Garland-Heckbert's boundary constraint).
-       4. Placement for an edge (a, b), Q = Qa + Qb. Both interior: the minimiser of Q, A x = -b,
-          solved by the adjugate when det(A) > 1e-7 trace(A)^3 and the solution lies within two
-          edge lengths of the midpoint; otherwise (flat or cylindrical regions: A singular or
-          nearly so) the minimiser of Q on the segment a b, which always exists. Both on the
-          boundary (and the edge a boundary edge): the segment's minimiser, so a boundary stays
-          on its edges. One on the boundary: the boundary vertex stays where it is. A locked
-          vertex stays where it is; two locked vertices never merge. The surviving id is the
-          boundary or locked one, else the lower id. New candidates are costed in batches, two
-          edges between free interior vertices at a time: a solve is a chain of dependent
-          operations, and two independent chains side by side run in little more than the time
-          of one (the same bits as one at a time; the bunny simplifies about 12% faster).
-       5. Order: the cost Q(x) (area-weighted squared distance to the merged planes, rounded to
-          float), ties by the lower vertex id, then last pushed first. The candidates sit in a
-          radix heap over the 64-bit key (cost bits, lower id): buckets by the highest octal
-          digit that differs from the last popped key and the key's value of that digit, each a
-          stack of 4 KiB chunks; a pop that finds the
-          lowest bucket empty spreads the next one. A candidate cheaper than the last popped one
-          (merged quadrics make costs nearly, not exactly, monotone) is queued at that cost.
-          Deletion is lazy: each entry carries the sum of its endpoints' version numbers, a
-          collapse bumps them, and stale entries are dropped when met (or all at once when the
-          heap exceeds three entries per live triangle).
-       6. Checks on each popped candidate, in this order: the link condition (the common
-          neighbours of a and b are exactly the opposite vertices of the edge's two triangles, one
-          on a boundary edge; two boundary vertices joined by an interior edge never merge); no
-          opposite vertex left with a degenerate fan (an interior one needs more than 3
-          triangles, a boundary one more than 1); every surviving triangle of the one-ring keeps
-          its orientation (its normal turns by less than acos(0.2) = 78 degrees) and is not
-          degenerate (2 area > 1e-5 longest edge^2); then the constraint. A candidate whose error
-          exceeds target_error is dropped before these checks (not counted as refused).
-          The checks and the collapse are written without branches on the mesh data (counts
-          move on by 0 or 1, tests are combined with & and |): which triangle dies or which
-          neighbour is new is unpredictable, and on the bunny the branches the processor
-          guessed wrong fell from 4.1 M to 1.3 M a run to 10% (valgrind's branch simulator),
-          for about 15% of the time.
-       7. The collapse: dying triangles are marked dead, remove's corners move to keep, keep takes
-          the new position and Qa + Qb, and the record stores keep's positions before and after,
-          the dead triangles and the moved corners. New candidates for keep's edges go in the
-          heap; neighbours that had a candidate refused get all theirs again.
-       8. Memory: on a large mesh each collapse works at a random place, and its data come as a
-          chain (versions and records, corner lists, triangles, the neighbours' records), each
-          load waiting for the one before. So the heap's next two candidates are popped ahead
-          into a short front list, and each collapse asks for the next one's data a stage at a
-          time (prefetches: corner lists mid-way through the collapse before, triangles at its
-          start, neighbours at its end), each stage reading what the one before asked for. A
-          new candidate not above the last popped key joins the front list, and the cheapest
-          in it comes next, so the collapses are the same as without the look-ahead, bit for
-          bit. With this and the batched costs, the 1M-triangle sphere simplifies in about 0.6
-          of the time it took before, the bunny in about 0.8.
-
-     GUARANTEES. A manifold region stays manifold and keeps its orientation; no collapse creates
-     a degenerate triangle (zero-area input triangles may stay); no triangle flips against its
-     predecessor; boundaries keep their vertices on boundary edges (a vertex at a boundary corner
-     can slide along one of its edges by what the quadric balances, 1e-7 of the size in the
-     tests); locked and frozen vertices keep their position bit for bit. The output is a pure
-     function of the input and options (no randomness, ties by index).
-
-     ERROR. A collapse's error is sqrt(Q(x) / W) in mesh units, where W is the total area of the
-     planes in Q: the area-weighted RMS distance from the new position to the planes of the
-     triangles merged into it. The report's error is the largest over the collapses done.
-
-     PROGRESSIVE MESH. Level 0 is the base, level dm_pm_split_count() the input; level k is
-     bit for bit the simplifier's mesh after its (split_count - k)-th collapse (positions of
-     every vertex in use, the same triangles in the same order: triangles keep their input
-     order, and dead ones are skipped). dm_pm_set_level walks the records (no allocation);
-     dm_pm_get_vsplit describes one; dm_pm_merged_vertices gives, for a base vertex, the sorted
-     input vertices merged into it (itself included; a partition of all input vertices).
-
-     BAD INPUT. NULL arrays, zero triangles, bad indices, non-finite or huge referenced
-     coordinates, a NaN or negative target_error: an error code, *out stays NULL and nothing is
-     left allocated (the positions are checked once per used vertex, after the working arrays
-     are allocated; a bad index is found before). Duplicate
-     vertices (same position, different ids) are different vertices: a seam between them is two
-     boundaries, each kept as a boundary. A triangle soup (no vertex in two triangles) with
-     repeated positions is DM_ERR_NOT_WELDED: dm_weld makes the mesh it stands for. Zero-area triangles have no plane; they may be collapsed
-     away, and are never the reason a new degenerate triangle appears. Edges with three or more
-     triangles and vertices joining several fans: frozen (above). Isolated vertices: kept in the
-     positions, in no level's mesh. Unreferenced vertices may hold NaN.
-
-     MEMORY. During dm_simplify about 160 bytes per vertex (the 128-byte record among them) and
-     45 per triangle, plus the candidate heap (16 bytes an entry, about 1.5 per triangle at the
-     start, purged back to the live ones beyond 3 per live triangle, in 4 KiB chunks allocated 64
-     at a time) and the records of the expected collapses, reserved at the start. The progressive mesh
-     keeps the positions, the triangles, 48 bytes per split and 4 bytes per moved corner or dead
-     triangle (about 6 per split), and 12 bytes per vertex for the merged sets and a scratch array.
-
-     THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads, but
-     dm_pm_set_level and dm_pm_get_mesh (which uses a scratch array in the pm) must not run
-     concurrently with anything else on the same pm.
-
-     LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles (corner ids are 32-bit), and
-     3 triangles + 2 vertices below about 4.0e9 (offsets in the corner pool are 32-bit).
-     Attributes (normals, UVs) are not simplified: the quadrics see positions only.
-
-   PART 3: PARAMETERIZATION, DISPLACEMENT BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
-     The representation of paper 000 (Chuang et al., NSC 96-2628-E-009-160-MY3): a base mesh
-     plus one displacement map that holds the original's detail. The base mesh comes from the
-     caller (however it was made); these calls lay it out, bake, and rebuild:
-       dm_param *pm;  dm_dispmap *map;  dm_trimesh *dense;
-       dm_param_options po = {0};  po.width = po.height = 1024;
-       dm_coverage_weights(base..., orig..., NULL, weights);  // optional: texels where
-       po.triangle_weight = weights;             // the original's area is (one float a triangle)
-       dm_parameterize(base_pos, base_nv, base_idx, base_nt, &po, &pm);  // charts + layout + packing
-       dm_bake(pm, base_pos, base_nv, base_idx, base_nt, orig_pos, orig_nv, orig_idx, orig_nt,
-               NULL, &map);                      // map->disp, map->normal, the sample grid
-       dm_reconstruct(map, pm, NULL, &dense);    // base tessellated to the map and displaced
-       dm_surface_distance(orig..., dense..., NULL, &report);  // RMS / max, of the diagonal
-       dm_trimesh_free(dense); dm_dispmap_free(map); dm_param_free(pm);
-     Parameterization. The base is cut into charts that are topological disks (closed and
-     higher-genus bases included): charts grow breadth first from the lowest free triangle; a
-     triangle joins when it shares one edge with the chart and brings a new vertex, or shares two
-     edges, lies within max_chart_angle (30 degrees) of the chart's mean normal, and the chart
-     has fewer than max_chart_triangles (96). Each chart's boundary is fixed at its projection on
-     the chart's mean plane (or, when that loop is not simple and counter-clockwise, on a circle
-     by arc length, Floater's convex boundary); the interior is Floater's mean value
-     parameterization (a dense solve: charts are small), then Yoshizawa-Belyaev-Seidel rounds
-     w_ij <- w_ij / sigma_j, sigma_j the area-weighted L2 stretch (Sander et al. 2001) around
-     vertex j, where the stretch is measured against each triangle's target: the 3D triangle
-     scaled to the map area it should get (area-proportional: triangle_weight, default its own
-     area; dm_coverage_weights gives the original's area over each base triangle, each original
-     triangle counted for the base triangle closest to its centroid). A round is kept only when the chart's stretch
-     drops and nothing flips; a chart with no flip-free layout is split into lone triangles.
-     Charts are scaled to their targets, turned to the smallest box of 12 angles, and packed in
-     shelves (tallest first) with `gutter` texels between boxes; a bisection finds the largest
-     scale that fits. dm_param reports utilization, L2 / max stretch and the fraction of
-     triangles with normalised area ratio in [0.8, 1.25]. Deviation from the paper: it uses one
-     global chart (its text omits the cut); ours are many small charts with seams, so every
-     neighbour lookup goes through nbr.
-     Bake. For each texel whose centre lies in a base triangle (the first in index order on a
-     shared edge): the base point p, the interpolated angle-weighted base vertex normal n
-     (renormalised); dm_bvh_intersect_line along p - t n for |t| <= max_distance (default 5% of
-     the original's diagonal) gives the nearest crossing either way (the paper casts inward only;
-     outward too because the base need not enclose the original without a bounding shell; with
-     one, dm_bake_options.inward takes the paper's rule: the first hit along -n, so that another
-     part of the original just outside the base never wins);
-     disp = t (world units, positive inward) and normal = the original's interpolated
-     angle-weighted vertex normal at the hit. A texel with no crossing (over a hole of an open
-     original, say) is DM_TEXEL_MISS, valid = 0. Gutter texels are DM_TEXEL_EMPTY. Both get disp
-     and normal from a push-pull fill (Gortler et al. 1996) for filtering only. Single thread;
-     the same input gives the same bits.
-     SURFACE SAMPLE GRID. dm_dispmap holds DESIGN.md's arrays: pos, nrm, disp, area (the base
-     area the texel stands for: triangle area over its texel count in UV, so sums are areas),
-     valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the dm_param's arrays, shared: free the
-     dm_dispmap first). Inside a chart nbr is the adjacent
-     texel (rot 0). Where that texel is outside the chart, its centre is carried across the
-     nearest chart-boundary edge into the twin triangle's chart (same position along the edge,
-     same offset across it, scaled by the two charts' texel sizes) and nbr is the nearest texel
-     of that chart within one texel; UINT32_MAX at the mesh's own boundary. nbr_rot = r means a
-     step along direction d here continues as d turned r quarter turns counter-clockwise in the
-     neighbour's texel axes (the angle between the edge's two images, rounded to 90 degrees):
-     to step back, go along -(d turned r). Where that walk back would not land within one texel
-     of the start (the rounding to quarter turns at a seam near 45 degrees), the neighbour and
-     its rotation are re-chosen among the other chart's texels within three of it and all four
-     quarter turns, so that it does; failing that, the neighbour's own step back (when it crosses
-     a seam) is pointed at the start texel, kept only when fewer walks around both texels fail.
-     What is left sits at chart corners, where one texel's step back cannot serve the texels of
-     two charts that both step into it: there the neighbour is the texel itself with a half turn
-     (nbr = own index, nbr_rot = 2: a mirror boundary, as a clamped filter sees it), so that every
-     walk comes back. Measured: 0-1 such links among 4-13k seam crossings on the test sphere and
-     torus, 10 among 19283 (0.05%) on a 500-triangle bunny base.
-     Reconstruction. One vertex per valid texel at pos - disp nrm, in row-major texel order (vertex
-     k stands for the k-th valid texel, so a texel's vertex is the count of valid texels before
-     it: edits of the map, by erosion.h say, map to the vertices without a lookup table); two triangles per 2x2 block
-     of valid texels of one chart, one for three; a triangle across a depth break is left out (an
-     edge longer than 8 texel spacings, or longer than 2 in a triangle whose normal is more than
-     60 degrees from the original's normal at a corner: a fin between two sheets of the original,
-     which on the bunny put the reconstruction's far side 1e-2 of the diagonal off the original
-     instead of 1e-3). Seams are zipped: two neighbouring border texels of a chart whose steps
-     across the seam (nbr) land on the same or neighbouring texels of one other chart are joined
-     to them by one or two triangles (laid from the chart with the lower index, oriented against
-     the chart's own blocks). Where the steps land farther apart (chart corners, very different
-     texel sizes) a crack remains: on the test sphere 3440 boundary edges of 401k (6687
-     unzipped), no edge with three triangles or run the same way twice; on the bunny the
-     reconstruction's RMS went from 1.6e-4 to 1.0e-4 of the diagonal.
-     Measured by tests/ref_dispmesh_base.cpp (Embree point queries, 200k samples a side) on the
-     bunny, shell-constrained base of 500 faces, 512^2 map, inward bake: reconstruction RMS
-     1.0e-4 and max 2.5e-3 of the diagonal against base-only 4.8e-3 and 2.2e-2 (0.02x, 0.11x);
-     no texel flagged; every bake ray's first hit front-facing and equal to the stored depth;
-     1 of 105168 rays goes out and in again within the shell (a fold patch at the bunny's paw,
-     between the overlap check's 4 samples of the triangle; one more crosses a pleat of the
-     original itself, triangle 69660 folded back onto its three neighbours, which no base
-     avoids). The max depends on the base:
-     where an enclosing base spans a crevice of the original, no bake ray reaches its bottom (a
-     base from an earlier candidate order did, under the bunny: symmetric max 2.1e-2, while the
-     reconstruction's own points stayed within 1.5e-3). Requiring every original vertex to see
-     the base (nothing between it and its closest base point) stopped the simplification at
-     1160-1200 faces on the bunny, so it is not done.
-     dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
-     dm_bvh_closest_point; max also covers every vertex.
-     BOUNDING SHELL. Paper 000 keeps its base mesh outside the original and inside a shell grown
-     from it (Cohen et al.'s simplification envelopes), and without height-field overlap:
-       dm_shell *sh;  dm_shell_grow(orig..., NULL, &sh);
-       opt.constraint = dm_shell_constraint;  opt.on_collapse = dm_shell_collapsed;
-       opt.constraint_user = sh;                                          // then dm_simplify(orig...)
-     dm_shell_grow moves every vertex out along its angle-weighted normal in `steps` steps up to
-     `thickness` (default 2% of the diagonal); a vertex stops for good when its next offset point
-     would come closer to the original than 90% of its offset (the offset surface would run into
-     another part: the paper's "cannot move"; a distance query instead of Cohen's triangle-triangle
-     tests). The shell volume is the set of points whose distance to the original is at most the
-     offset interpolated at their closest original point. Deviation: the paper's smoothing pass
-     (concave vertices pushed out) is not done; the volume test never needs it.
-     dm_shell_constraint, per candidate collapse, in order:
-       1. Enclosure. The paper's text does not say how; ours: the original's vertices that the
-          collapse can sweep over (in the bounding box of the old one-ring and the proposed
-          position, grown by a tenth of its size; a position corrected beyond it is a veto),
-          within 1.5 thicknesses, whose closest feature of the old one-ring touches keep or remove
-          (not its rim), must stay on the inner side (signed distance with the angle-weighted pseudonormal,
-          Baerentzen-Aanaes 2005) of the new one-ring. Nearest new triangle (keep, u, w) gives an
-          exact linear condition on keep: outside the plane through p, u, w. The proposed (QEM)
-          position is projected onto those half-spaces (Dykstra), rounded to float, and every
-          vertex is checked again (DM_COLLAPSE_MOVE, or a veto). Against Sander et al.'s
-          progressive hulls (outside every old face's plane, which encloses each previous level
-          and so piles up the offsets), this encloses the original itself: on the bunny at 500
-          faces RMS 5.6e-3 against 1.13e-2 (and 602 faces reached instead of 500).
-       2. Shell: keep inside the shell volume, and along each ray of the overlap check (3.) the
-          depth to the original no more than the offset grown at the hit.
-       3. Overlap: from 4 points of each new triangle (overlap_samples, at most 7) and the middle
-          of its edge from keep, a ray along the
-          inverted interpolated normal, started a quarter thickness outside, must meet a front
-          face of the original first, within 2.25 thicknesses, and must not go out and in again
-          within that depth (the fold of the paper's Fig 4.1.3: three depths for one texel, and
-          the original between them reached by no ray; on the bunny that hidden strip put the
-          reconstruction 1.7e-2 of the diagonal away from the original instead of 3e-3); a miss
-          is a violation unless the original is open. Normals: the mesh's angle-weighted vertex
-          normals after the collapse, exact when dm_shell_collapsed is set as on_collapse (it
-          keeps every vertex's normal sum up to date); without it, each vertex's from the new
-          one-ring triangles it is in. Triangles beyond the one-ring whose normals change with
-          it are not checked again; the tests check the final bake rays. Sampled, so not a
-          guarantee: a fold patch lies between the samples of a triangle checked with its final
-          normals (on the bunny at 500 faces, near a paw where the rays graze the original:
-          0.5% of one triangle, 1 ray of a 512^2 bake), or on a triangle whose corner normals a
-          later collapse next to it changed (at 800 and 1200 faces, 5 of 10 folded triangles).
-          Tried, on the bunny at 300/500/800 faces, against 0/0/7 folded rays of 325 per
-          triangle: also checking the triangles next to the one-ring (their corner normals from
-          the mesh's, with tracked triangle lists) 13/18/2 folded rays; with samples half a
-          thickness apart as well 1/2/2, at twice the time (an eighth of a thickness apart: none
-          at 500 faces, but 2.39x the unconstrained RMS and half the texels; a quarter: a 0.01
-          degree sliver); simplifying again
-          with rays near those that failed a dense check of the previous base converged at 500
-          faces only. Every extra veto changes the collapse order, and the slivers that vetoes
-          leave (smallest angle 5 degrees down to 0.5) fold elsewhere.
-     Measured (tests/test_dispmesh_shell.c, brute-force checks): bunny to 500 faces, no original
-     vertex on the outer side (worst signed distance 0), every sampled base point inside the shell,
-     every bake ray's first hit front-facing. An enclosing base is farther from the original than a
-     least-squares one: RMS 2.06x our unconstrained simplification at the same face count on the
-     bunny, 1.97x on a bumpy sphere, 2.64x on a fat torus (2.5x, 2.1x, 3.3x before candidates
-     were re-queued at their constrained cost). That is near what geometry allows: a facet
-     tangent to a sphere at its centre is r^2/2R off at distance r, RMS over a disc 0.577
-     (rho^2/2R), where the least-squares facet (shifted by the mean) has 0.289: 2.0x for the
-     same facets. Memory: about 60 bytes per original vertex and a BVH of the original.
-     FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps),
+   PART 3: BOUNDING SHELL AND PAPER 000'S CONSTRAINTS
+     WHAT. The base must lie outside the original (so that every ray that meets the displaced
+     surface meets the base first) but near it, inside a shell grown from it (Cohen et al.'s
+     simplification envelopes), and each texel must get one depth (no height-field overlap,
+     the paper's Fig 4.1.3). dm_shell_grow grows the shell; dm_shell_constraint and
+     dm_shell_collapsed, given to dm_simplify as in HOW TO USE, keep the base inside it.
+     METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
+     `thickness`, and stops for good when its next offset point would come closer to the
+     original than 90% of its offset (the offset surface would run into another part). The
+     paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
+       1. Enclosure (the paper does not say how): the original's vertices that the collapse can
+          sweep over (in the box of the old one-ring and the proposed position), whose closest
+          feature of the old one-ring touches keep or remove, must stay on the inner side of the
+          new one-ring (signed distance with the angle-weighted pseudonormal, Baerentzen-Aanaes
+          2005). Each asks keep to lie outside one plane; the proposed position is projected on
+          those half-spaces (Dykstra) and checked again (DM_COLLAPSE_MOVE, or a veto). Against
+          Sander et al.'s progressive hulls, which enclose each previous level and so pile up the
+          offsets, this encloses the original itself.
+       2. Shell: keep within the offset grown at its closest point of the original; along each
+          ray of 3., the depth to the original no more than the offset grown at the hit.
+       3. Overlap: from overlap_samples points of each new triangle and the middle of its edge
+          from keep, a ray along the inverted interpolated normal (started a quarter thickness
+          outside) must meet a front face of the original first, within 2.25 thicknesses, and not
+          go out and in again within that depth. The normals are the mesh's angle-weighted vertex
+          normals after the collapse (dm_shell_collapsed keeps their sums). A miss is a violation
+          unless the original is open.
+     The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
+     FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes every remaining collapse above the face count. With opt.relax =
-     dm_shell_relax, dm_simplify then relaxes it and queues the vetoed edges again: a candidate
-     that fails the checks above is still allowed when, from each overlap sample, the nearest
-     crossing of the original along the line (either way, within the thickness) faces the way
-     the base does, so that a bake both ways finds one depth there (a second relax leaves the
-     simplifier's own checks only). Candidates that pass the checks above stay exact. The keeps
-     of relaxed collapses are marked (fallback_vertex); dm_shell_fallback_triangles turns them
-     into the base triangles to bake both ways (dm_bake_options.both_ways), where the
-     displacement is signed. Report the share of the original's area over them (coverage
-     weights); a renderer must search both ways there. The relaxed region is not confined to
-     the thin parts: once the paper's constraints are stuck everywhere, every later collapse is
-     a relaxed one.
-     Without a shell, a base that does not enclose the original is baked both ways.
-     Part 3 references: M. S. Floater, "Mean value coordinates", CAGD 20(1), 2003. S. Yoshizawa,
-     A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh parameterization",
-     SMI 2004. P. Sander, J. Snyder, S. Gortler, H. Hoppe, "Texture mapping progressive meshes",
-     SIGGRAPH 2001 (L2 stretch). S. Gortler, R. Grzeszczuk, R. Szeliski, M. Cohen, "The
-     Lumigraph", SIGGRAPH 1996 (push-pull). G. Thurmer, C. Wüthrich, "Computing vertex normals
-     from polygonal facets", JGT 3(1), 1998 (angle-weighted normals).
-     Errors: DM_ERR_MAP_TOO_SMALL when the charts with their gutters do not fit the map at any
-     scale; the usual mesh checks on every mesh argument. Memory: dm_parameterize keeps
-     32 bytes per texel (plus 24 per base triangle); dm_bake 46 bytes per texel (and about 22 more
-     while it runs) plus a BVH of the original.
+     dm_shell_relax, dm_simplify then relaxes it: a candidate that fails 1-3 is still allowed when,
+     from each overlap sample, the nearest crossing of the original along the line (either way,
+     within the thickness) faces the way the base does, so that a bake both ways finds one depth
+     (a second relax leaves only the simplifier's own checks). Candidates that pass 1-3 stay
+     exact. dm_shell_fallback_triangles gives the base triangles at relaxed keeps: bake them both
+     ways (dm_bake_options.both_ways; their displacement is signed) and report the share of the
+     original's area over them (dm_coverage_weights). The relaxed region is not confined to the
+     thin parts: once the constraints are stuck everywhere, every later collapse is relaxed.
+     OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
+     overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
+     dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
+     MEMORY. About 60 bytes per original vertex, a copy of the original and its BVH.
+     ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
+     arguments, allocation failure).
+     THREAD SAFETY. One dm_simplify run at a time per shell.
+     LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's
+     own vertex normals (without it, normals come from the one-ring).
+
+   PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
+     WHAT. The base mesh (from Part 2 or anywhere) laid out in one width x height map,
+     displacement and the original's normals baked into it, the surface sample grid other
+     headers filter on, and the dense mesh rebuilt from base + map.
+     PARAMETERIZATION. Charts that are topological disks grow breadth first (a triangle joins
+     within max_chart_angle of the chart's mean normal, up to max_chart_triangles). Each chart's
+     boundary is fixed at its projection on the chart's plane (or on a circle by arc length when
+     that is not a simple counter-clockwise loop), the interior is Floater's mean value
+     parameterization, then Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional
+     targets (triangle_weight, default each triangle's area; dm_coverage_weights gives the
+     original's area over each base triangle, so texels go where the original's surface is). A
+     round is kept only when the stretch drops and nothing flips; a chart with no flip-free
+     layout becomes lone triangles. Charts are turned to their smallest box (12 angles) and packed
+     in shelves with `gutter` texels between boxes at the largest scale that fits. dm_param
+     reports utilization, L2 and max stretch (Sander et al. 2001), and the share of triangles
+     whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many small charts with seams
+     instead of its one global chart (its text omits the cut), so every neighbour lookup goes
+     through nbr.
+     BAKE. For each texel whose centre lies in a base triangle (the first in index order on a
+     shared edge): the base point p and the interpolated angle-weighted base normal n; the line
+     p - t n for |t| <= max_distance (default 5% of the original's diagonal) gives disp = t (world
+     units, positive inward) and the original's interpolated vertex normal at the hit. inward
+     takes the paper's rule (the first hit along -n, for a base that encloses the original);
+     otherwise, and on both_ways triangles, the nearest crossing either way. A texel with no
+     crossing is DM_TEXEL_MISS (valid = 0); gutter texels are DM_TEXEL_EMPTY; both get push-pull
+     filled values (Gortler et al. 1996) for filtering only.
+     SURFACE SAMPLE GRID. dm_dispmap holds, per texel: pos, nrm, disp, area (the base area the
+     texel stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y
+     (the dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the
+     adjacent texel (rot 0). Across a seam, the texel's centre is carried over the nearest
+     chart-boundary edge into the twin triangle's chart and nbr is the nearest texel there;
+     UINT32_MAX at the mesh's own boundary. nbr_rot = r: a step along direction d here continues
+     as d turned r quarter turns counter-clockwise in the neighbour's axes; to step back, go along
+     -(d turned r). Links are chosen so that the walk back lands where it started; where one
+     texel cannot serve two charts that step into it (chart corners), nbr is the texel itself
+     with a half turn (a mirror, as a clamped filter sees it).
+     RECONSTRUCTION. One vertex per valid texel at pos - disp nrm, in row-major texel order
+     (vertex k is the k-th valid texel, so map edits map to vertices without a table); two
+     triangles per 2x2 block of valid texels of one chart, one for three; none across a depth
+     break (an edge longer than 8 texel spacings, or than 2 in a triangle more than 60 degrees
+     from the original's normal). Seams are zipped where the neighbouring border texels of two
+     charts meet; cracks remain where they do not (chart corners, very different texel sizes).
+     dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
+     dm_bvh_closest_point; its max also covers every vertex.
+     OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 2),
+     triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
+     stretch_iterations (0 = 6, negative none). dm_bake_options: max_distance, inward, both_ways.
+     dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
+     samples_per_side (0 = 200000). Each with allocator and progress.
+     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle; dm_dispmap: 46 bytes per
+     texel (about 22 more while dm_bake runs) plus a BVH of the original.
+     ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
+     their gutters do not fit the map at any scale.
+     THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
+     LIMITS. Maps up to 16384 x 16384.
 
    REFERENCES
      S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
-     I. Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007 (binning).
-     T. Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013 (conservative box test).
-     C. Ericson, "Real-Time Collision Detection", 2005, 5.1.5 (closest point on a triangle).
-     J. Bikker, tinybvh (2024-2025): 32-byte node layout, near-child-first traversal.
-     H. Dammertz, J. Hanika, A. Keller, "Shallow Bounding Volume Hierarchies for Fast SIMD Ray
-     Tracing of Incoherent Rays", EGSR 2008 (4-wide nodes collapsed from a binary tree).
-     M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997
-     (quadrics, optimal placement, boundary planes).
-     H. Hoppe, "Progressive Meshes", SIGGRAPH 1996 (vertex split records).
-     T. Dey, H. Edelsbrunner, S. Guha, D. Nekhayev, "Topology Preserving Edge Contraction", Publ.
-     Inst. Math. (Beograd) 66, 1999 (the link condition).
-     P. Lindstrom, G. Turk, "Fast and Memory Efficient Polygonal Simplification", IEEE Vis 1998
-     (constrained placement when the quadric is singular; ours falls back to the edge). */
+     I. Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007.
+     T. Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013. C. Ericson, "Real-Time Collision
+     Detection", 2005, 5.1.5. J. Bikker, tinybvh (2024-2025). H. Dammertz, J. Hanika, A. Keller,
+     "Shallow Bounding Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", EGSR 2008.
+     M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997.
+     H. Hoppe, "Progressive Meshes", SIGGRAPH 1996. T. Dey, H. Edelsbrunner, S. Guha, D.
+     Nekhayev, "Topology Preserving Edge Contraction", 1999. P. Lindstrom, G. Turk, "Fast and
+     Memory Efficient Polygonal Simplification", IEEE Vis 1998. J. Cohen et al., "Simplification
+     Envelopes", SIGGRAPH 1996. P. Sander et al., "Silhouette Clipping" (progressive hulls),
+     SIGGRAPH 2000. J. A. Baerentzen, H. Aanaes, "Signed Distance Computation Using the Angle
+     Weighted Pseudonormal", TVCG 2005. M. S. Floater, "Mean value coordinates", CAGD 2003.
+     S. Yoshizawa, A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh
+     parameterization", SMI 2004. P. Sander, J. Snyder, S. Gortler, H. Hoppe, "Texture mapping
+     progressive meshes", SIGGRAPH 2001. S. Gortler et al., "The Lumigraph", SIGGRAPH 1996
+     (push-pull). G. Thurmer, C. Wüthrich, "Computing vertex normals from polygonal facets", JGT
+     1998. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
