@@ -39,8 +39,8 @@
                     as the positions system with uniform weights: one factorization serves both.
        The handle's rotations (9 doubles a vertex) are read by LRI only: a translation-only drag
        leaves LRI's frames unturned (the known weakness of linear methods, the thesis's Fig 3-4).
-       Helpers: dfm_roi_rings (k rings around a mask), dfm_roi_geodesic (edge-path distance
-       from seeds), dfm_rotation, and the poses dfm_pose_identity / _rigid (translate, rotate) /
+       Helpers: dfm_weld (the pre-pass for triangle soups), dfm_roi_rings (k rings around a
+       mask), dfm_roi_geodesic (edge-path distance from seeds), dfm_rotation, and the poses dfm_pose_identity / _rigid (translate, rotate) /
        _twist / _bend, which fill targets and rotations for a mask.
      OPTIONS (dfm_deform_options; zeroed or NULL = defaults, dfm_deform_default_options())
        method             DFM_METHOD_LAPLACIAN (0), DFM_METHOD_FITTING, DFM_METHOD_LRI.
@@ -84,7 +84,7 @@
        no fixed vertex and no soft handle: its translation would be free), DFM_ERR_DEGENERATE_TRIANGLE
        (zero area, 1e-12 relative, or a repeated index, in a triangle touching the unknowns),
        DFM_ERR_NON_MANIFOLD (an edge in more than two triangles, anywhere in the mesh),
-       DFM_ERR_UNWELDED (two used vertices at exactly the same position: weld first),
+       DFM_ERR_UNWELDED (two used vertices at exactly the same position: dfm_weld first),
        DFM_ERR_NOT_POSITIVE_DEFINITE (a singular system the checks above did not catch, e.g. a
        fitting ROI held by collinear vertices only), DFM_ERR_TOO_LARGE, DFM_ERR_OUT_OF_MEMORY,
        DFM_CANCELLED. On failure *out is NULL and nothing is leaked.
@@ -517,6 +517,13 @@ DFMDEF dfm_result dfm_roi_rings(const uint32_t *indices, size_t triangle_count, 
 DFMDEF dfm_result dfm_roi_geodesic(const double *positions, size_t vertex_count, const uint32_t *indices,
                                    size_t triangle_count, const unsigned char *seeds, double radius,
                                    unsigned char *mask, const dfm_allocator *allocator);
+
+/* The welding pre-pass for triangle soups: remap[v] = the lowest-numbered vertex at exactly the
+   same position as v (vertex_count entries), out_indices = indices through remap (3 a triangle;
+   may alias indices). Set up on out_indices; afterwards out[v] = out[remap[v]] moves the copies. */
+DFMDEF dfm_result dfm_weld(const double *positions, size_t vertex_count, const uint32_t *indices,
+                           size_t triangle_count, uint32_t *remap, uint32_t *out_indices,
+                           const dfm_allocator *allocator);
 
 /* R (row-major 3x3) = rotation by angle (radians, right hand) about axis (any length > 0). */
 DFMDEF void dfm_rotation(const double axis[3], double angle, double R[9]);
@@ -4780,6 +4787,37 @@ DFMDEF dfm_result dfm_roi_geodesic(const double *positions, size_t vertex_count,
     dfm__free(&al, hv);
     dfm__graph_free(&g, &al);
     return err;
+}
+
+DFMDEF dfm_result dfm_weld(const double *positions, size_t vertex_count, const uint32_t *indices,
+                           size_t triangle_count, uint32_t *remap, uint32_t *out_indices,
+                           const dfm_allocator *allocator)
+{
+    dfm_allocator al = dfm__resolve_allocator(allocator);
+    dfm_result err = DFM_OK;
+    dfm__vkey *keys;
+    size_t v, t, first = 0;
+    if (!positions || !remap || vertex_count == 0 || (triangle_count > 0 && (!indices || !out_indices)))
+        return DFM_ERR_INVALID_ARGUMENT;
+    if (vertex_count > DFM__MAX_N || triangle_count > ((size_t)-1 >> 4) / 6) return DFM_ERR_TOO_LARGE;
+    for (t = 0; t < 3 * triangle_count; t++)
+        if (indices[t] >= vertex_count) return DFM_ERR_BAD_INDEX;
+    for (v = 0; v < 3 * vertex_count; v++)
+        if (!dfm__finite(positions[v])) return DFM_ERR_BAD_VALUE;
+    keys = (dfm__vkey *)dfm__alloc(&al, vertex_count, sizeof(dfm__vkey), &err);
+    if (!keys) return err;
+    for (v = 0; v < vertex_count; v++) {
+        memcpy(keys[v].p, positions + 3 * v, 3 * sizeof(double));
+        keys[v].v = (int32_t)v;
+    }
+    qsort(keys, vertex_count, sizeof *keys, dfm__cmp_vkey); /* equal positions: by index */
+    for (v = 0; v < vertex_count; v++) {
+        if (v > 0 && memcmp(keys[v].p, keys[first].p, 3 * sizeof(double)) != 0) first = v;
+        remap[keys[v].v] = (uint32_t)keys[first].v;
+    }
+    for (t = 0; t < 3 * triangle_count; t++) out_indices[t] = remap[indices[t]];
+    dfm__free(&al, keys);
+    return DFM_OK;
 }
 
 DFMDEF void dfm_rotation(const double axis[3], double angle, double R[9])

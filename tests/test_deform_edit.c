@@ -683,6 +683,40 @@ static void test_bad_input(const tube *m)
             h2[t] = m->handle[m->idx[t]];
         }
         T_EQ_INT(setup_code(m, pos2, idx2, n3, m->nt, roi2, h2, &o), DFM_ERR_UNWELDED);
+        /* welded by dfm_weld, the soup deforms as the mesh does (copies moved with remap) */
+        {
+            uint32_t *remap = (uint32_t *)malloc(n3 * sizeof(uint32_t));
+            double *tg2 = (double *)malloc(3 * n3 * sizeof(double)), *out2 = (double *)malloc(3 * n3 * sizeof(double));
+            double *tgm = (double *)malloc(3 * m->nv * sizeof(double)), *rotm = (double *)malloc(9 * m->nv * sizeof(double));
+            double *rot2 = (double *)malloc(9 * n3 * sizeof(double)), *ref, e = 0.0;
+            dfm_deform *d = NULL;
+            dfm_result er;
+            T_EQ_INT(dfm_weld(pos2, n3, idx2, m->nt, remap, idx2, NULL), DFM_OK);
+            bend_pose(m, 0.5 * PI, tgm, rotm);
+            for (t = 0; t < n3; t++) {
+                memcpy(tg2 + 3 * t, tgm + 3 * m->idx[t], 3 * sizeof(double));
+                memcpy(rot2 + 9 * t, rotm + 9 * m->idx[t], 9 * sizeof(double));
+            }
+            ref = deform(m, &o, tgm, rotm, &er);
+            T_EQ_INT(dfm_deform_setup(pos2, n3, idx2, m->nt, roi2, h2, &o, &d), DFM_OK);
+            if (d && ref && dfm_deform_solve(d, tg2, rot2, out2) == DFM_OK) {
+                for (t = 0; t < n3; t++) {
+                    int c;
+                    for (c = 0; c < 3; c++) e = fmax(e, fabs(out2[3 * remap[t] + c] - ref[3 * m->idx[t] + c]));
+                }
+                T_CHECK_MSG(e <= 1e-9 * m->diag, "welded soup vs mesh: %.3g", e);
+            } else {
+                T_CHECK(0);
+            }
+            dfm_deform_free(d);
+            free(ref);
+            free(remap);
+            free(tg2);
+            free(out2);
+            free(tgm);
+            free(rotm);
+            free(rot2);
+        }
         free(idx2);
         free(pos2);
         free(roi2);
