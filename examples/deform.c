@@ -57,6 +57,7 @@ typedef struct scene {
     double *pos;
     uint32_t *idx;
     unsigned char *roi, *handle;
+    uint32_t *remap; /* dfm_weld's: copies of a vertex follow the one in the triangles */
     double lo[3], hi[3];
 } scene;
 
@@ -120,12 +121,14 @@ static int load_mesh(scene *S, const char *path)
     S->nt = m.triangle_count;
     S->pos = (double *)malloc(3 * S->nv * sizeof(double) + 1);
     S->idx = (uint32_t *)malloc(3 * S->nt * sizeof(uint32_t) + 1);
-    if (S->pos && S->idx) {
+    S->remap = (uint32_t *)malloc(S->nv * sizeof(uint32_t) + 1);
+    if (S->pos && S->idx && S->remap) {
         for (i = 0; i < 3 * S->nv; i++) S->pos[i] = m.positions[i];
         memcpy(S->idx, m.indices, 3 * S->nt * sizeof(uint32_t));
     }
     mio_free_mesh(&m);
-    return S->pos && S->idx;
+    /* a triangle soup (STL) is welded first: deform.h refuses unwelded meshes */
+    return S->pos && S->idx && S->remap && dfm_weld(S->pos, S->nv, S->idx, S->nt, S->remap, S->idx, NULL) == DFM_OK;
 }
 
 /* ---- selection and pose --------------------------------------------------------------------- */
@@ -405,6 +408,7 @@ static int run_method(const scene *S, const args *A, int up, int method, double 
     double t_init = 0.0, t_frame = 0.0, *cur = (double *)malloc(3 * S->nv * sizeof(double));
     double *tg = (double *)malloc(3 * S->nv * sizeof(double)), *rot = (double *)malloc(9 * S->nv * sizeof(double));
     double *prev = (double *)malloc(9 * S->nv * sizeof(double)), *step = (double *)malloc(9 * S->nv * sizeof(double));
+    size_t v;
     int k, ok = 0;
     o.method = method;
     o.weights = A->weights;
@@ -435,6 +439,8 @@ static int run_method(const scene *S, const args *A, int up, int method, double 
         t_init += t1 - t0;
         t_frame += t2 - t1;
         dfm_deform_free(d);
+        if (S->remap)
+            for (v = 0; v < S->nv; v++) memcpy(*res + 3 * v, *res + 3 * (size_t)S->remap[v], 3 * sizeof(double));
         memcpy(cur, *res, 3 * S->nv * sizeof(double));
     }
     fprintf(stderr, "\n");
@@ -534,5 +540,6 @@ done:
     free(S.idx);
     free(S.roi);
     free(S.handle);
+    free(S.remap);
     return status;
 }
