@@ -1356,21 +1356,6 @@ static void tvt__rest_from_tangent(uint64_t *s, tvt_point *p)
     p->wd_delay = 2.0f * tvt__rand(s) - 1.0f;
 }
 
-static void tvt__point_init(const tvt_texel *t, const tvt_voxel *v, unsigned blade, const float *pos, float green_lum,
-                            uint64_t *s, tvt_point *p)
-{
-    memcpy(p->pos, pos, sizeof(p->pos));
-    memcpy(p->normal, v->normal, sizeof(p->normal));
-    memcpy(p->normal0, v->normal, sizeof(p->normal0));
-    memcpy(p->tangent, v->tangent, sizeof(p->tangent));
-    memcpy(p->color, v->color, sizeof(p->color));
-    p->specular = p->specular0 = v->specular;
-    p->mass = 1.0f;
-    p->brightness = tvt__luminance(v->color) / green_lum;
-    if (blade < t->blade_count) tvt__rest_from_blade(t->blades + blade, t->res, p);
-    else tvt__rest_from_tangent(s, p);
-}
-
 /* Points of one voxel: the first random number of its stream rounds q = proportion * density. */
 static unsigned tvt__voxel_points(float q, uint64_t *s)
 {
@@ -1401,20 +1386,35 @@ static void tvt__sample_voxel(tvt__sampler *S, long x, long y, long z, size_t sl
     const tvt_texel *t = S->t;
     unsigned q[TVT_CHANNELS], n, i;
     tvt_voxel v;
-    uint64_t s = tvt__mix(S->o.seed ^ tvt__mix((((uint64_t)z * (uint64_t)t->res + (uint64_t)y) * (uint64_t)t->res +
-                                                (uint64_t)x) + 1));
-    tvt__load(t, slot, q);
+    float d;
+    uint64_t s;
+    q[0] = t->bits == 8 ? ((const uint8_t *)t->data)[slot * TVT_CHANNELS] : ((const uint16_t *)t->data)[slot * TVT_CHANNELS];
     if (!q[0]) return;
-    tvt__decode(q, t->density_max, t->bits, &v);
-    n = tvt__voxel_points(S->o.proportion * v.density, &s);
-    if (S->out) {
+    d = (float)q[0] * (t->bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f);
+    d = t->density_max * (t->bits == 8 ? d * d : d); /* = tvt__decode's density */
+    s = tvt__mix(S->o.seed ^ tvt__mix((((uint64_t)z * (uint64_t)t->res + (uint64_t)y) * (uint64_t)t->res + (uint64_t)x) + 1));
+    n = tvt__voxel_points(S->o.proportion * d, &s);
+    if (S->out && n) {
         unsigned blade = t->blade_of_voxel ? t->blade_of_voxel[slot] : TVT_NO_BLADE;
+        tvt_point proto;
+        tvt__load(t, slot, q);
+        tvt__decode(q, t->density_max, t->bits, &v);
+        memset(&proto, 0, sizeof(proto));
+        memcpy(proto.normal, v.normal, sizeof(proto.normal));
+        memcpy(proto.normal0, v.normal, sizeof(proto.normal0));
+        memcpy(proto.tangent, v.tangent, sizeof(proto.tangent));
+        memcpy(proto.color, v.color, sizeof(proto.color));
+        proto.specular = proto.specular0 = v.specular;
+        proto.mass = 1.0f;
+        proto.brightness = tvt__luminance(v.color) / S->green_lum;
         for (i = 0; i < n; i++) {
-            float pos[3];
-            pos[0] = (float)x + tvt__rand(&s);
-            pos[1] = (float)y + tvt__rand(&s);
-            pos[2] = (float)z + tvt__rand(&s);
-            tvt__point_init(t, &v, blade, pos, S->green_lum, &s, S->out + S->count + i);
+            tvt_point *p = S->out + S->count + i;
+            *p = proto;
+            p->pos[0] = (float)x + tvt__rand(&s);
+            p->pos[1] = (float)y + tvt__rand(&s);
+            p->pos[2] = (float)z + tvt__rand(&s);
+            if (blade < t->blade_count) tvt__rest_from_blade(t->blades + blade, t->res, p);
+            else tvt__rest_from_tangent(&s, p);
         }
     }
     S->count += n;
