@@ -7,3 +7,4 @@ REF_TESTS += $(if $(and $(HAVE_CXX),$(HAVE_LIBPNG)),$(B)/ref_png)
 
 $(B)/ref_png: tests/ref_png.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lpng -lz -lm
+EXAMPLES  += $(B)/relief
