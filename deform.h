@@ -121,6 +121,8 @@
        - LRI's frames are solved as the 9 entries of M_i = F'_i F_i^T on the scalar graph
          Laplacian instead of the thesis's coupled 3n x 3n system: the same minimizer (the rows
          differ by the orthogonal factor F_j), a ninth of the factor and a third of the work.
+         When every known rotation is I or one R (a rigid handle), M = I + phi (R - I) with one
+         scalar solve for phi, exactly (the problem is linear); other poses take 9 solves.
        - The ROI's outside neighbours enter as known values (the thesis leaves this open), and
          only rows that touch an unknown are assembled, so the cost follows the ROI, not the mesh.
 
@@ -4600,19 +4602,71 @@ static void dfm__known_displacements(const dfm_deform *d, const double *targets,
     }
 }
 
-/* LRI, step 1: the frames solve in M = F' F^T (I + X, X[(3 c + k) nv + v]); known frames are
-   R F, so M = R there; then F' = M F, orthonormalized as asked at the unknowns. d->G gets
-   F' - F of every vertex in a row. */
-static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
+/* The one rotation R != I among the known (and soft) vertices' rotations, when every one of them
+   is I or that R bit for bit (a rigid handle, fixed vertices in place); NULL otherwise. *one is
+   set when every rotation is I. */
+static const double *dfm__single_rotation(const dfm_deform *d, const double *rot, int *one)
 {
-    size_t a, v, c, k, m, nv = d->nv;
+    static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double *R = NULL;
+    size_t a, v;
+    *one = 1;
+    if (!rot) return NULL;
+    for (a = 0; a < d->nactive; a++) {
+        const double *r;
+        v = (size_t)d->active[a];
+        if (d->unk[v] >= 0 && !d->soft[v]) continue;
+        r = rot + 9 * v;
+        if (!memcmp(r, id, sizeof id) || (R && !memcmp(r, R, sizeof id))) continue;
+        if (R) return NULL;
+        R = r;
+        *one = 0;
+    }
+    return R;
+}
+
+/* M of every active vertex into d->X (X[(3 c + k) nv + v] = M - I): with a single rotation R,
+   M = I + phi (R - I) for the one scalar solution phi (1 where R, 0 where I; the problem is
+   linear), else the 9 right-hand sides. */
+static dfm_result dfm__lri_rotation_field(dfm_deform *d, const double *rot)
+{
+    size_t a, v, k, nv = d->nv;
+    int identity;
+    const double *R = dfm__single_rotation(d, rot, &identity);
     dfm_result err;
+    if (identity || R) {
+        for (a = 0; a < d->nactive; a++) {
+            v = (size_t)d->active[a];
+            if (d->unk[v] < 0 || d->soft[v]) d->X[v] = identity ? 0.0 : !memcmp(rot + 9 * v, R, 9 * sizeof(double));
+        }
+        if (!identity) {
+            d->fsys.nrhs = 1;
+            err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
+            d->fsys.nrhs = 9;
+            if (err != DFM_OK) return err;
+        }
+        for (a = 0; a < d->nactive; a++) {
+            double phi;
+            v = (size_t)d->active[a];
+            phi = identity ? 0.0 : d->X[v];
+            for (k = 9; k-- > 0;) d->X[k * nv + v] = identity ? 0.0 : phi * (R[k] - (k % 4 == 0));
+        }
+        return DFM_OK;
+    }
     for (a = 0; a < d->nactive; a++) {
         v = (size_t)d->active[a];
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
-        for (k = 0; k < 9; k++) d->X[k * nv + v] = rot ? rot[9 * v + k] - (k % 4 == 0) : 0.0;
+        for (k = 0; k < 9; k++) d->X[k * nv + v] = rot[9 * v + k] - (k % 4 == 0);
     }
-    err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
+    return dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
+}
+
+/* LRI, step 1: the frames solve in M = F' F^T (known frames are R F, so M = R there); then
+   F' = M F, orthonormalized as asked at the unknowns. d->G gets F' - F of every vertex in a row. */
+static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
+{
+    size_t a, v, c, k, m, nv = d->nv;
+    dfm_result err = dfm__lri_rotation_field(d, rot);
     if (err != DFM_OK) return err;
     for (a = 0; a < d->nactive; a++) {
         double M[9], Fp[9];

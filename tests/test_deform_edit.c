@@ -529,6 +529,32 @@ static void test_helpers(const tube *m)
     free(mask);
 }
 
+/* LRI's single-rotation shortcut (one scalar solve when every known rotation is I or the same R)
+   agrees with the general nine-right-hand-side solve, taken when one handle rotation differs in
+   its last bit. */
+static void test_single_rotation_path(const tube *m)
+{
+    double *tg = (double *)malloc(3 * m->nv * sizeof(double)), *rot = (double *)malloc(9 * m->nv * sizeof(double));
+    double *a = (double *)malloc(3 * m->nv * sizeof(double)), *b = (double *)malloc(3 * m->nv * sizeof(double));
+    dfm_deform_options o = method_options(DFM_METHOD_LRI, DFM_ORTHO_POLAR);
+    dfm_deform *d = NULL;
+    size_t v;
+    bend_pose(m, 0.5 * PI, tg, rot);
+    T_EQ_INT(dfm_deform_setup(m->pos, m->nv, m->idx, m->nt, m->roi, m->handle, &o, &d), DFM_OK);
+    T_EQ_INT(dfm_deform_solve(d, tg, rot, a), DFM_OK);
+    for (v = 0; v < m->nv && !m->handle[v]; v++) {
+    }
+    rot[9 * v + 1] = nextafter(rot[9 * v + 1], 1.0);
+    T_EQ_INT(dfm_deform_solve(d, tg, rot, b), DFM_OK);
+    T_CHECK_MSG(max_dist(a, b, m->nv) <= 1e-10 * m->diag, "shortcut vs general: %.3g", max_dist(a, b, m->nv));
+    T_CHECK(max_dist(a, m->pos, m->nv) > 0.1 * m->diag); /* and the pose did move the mesh */
+    dfm_deform_free(d);
+    free(tg);
+    free(rot);
+    free(a);
+    free(b);
+}
+
 /* The polar factor: orthogonal, and R^T X symmetric positive definite (the polar decomposition
    X = R P), for random well- and badly-scaled matrices. */
 static void test_polar(void)
@@ -873,6 +899,7 @@ int main(int argc, char **argv)
     test_bend_quality();
     test_refine_and_lone_vertex(&m);
     test_polar();
+    test_single_rotation_path(&m);
     test_helpers(&m);
     test_bad_input(&m);
     test_progress(&m);
