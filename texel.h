@@ -1594,6 +1594,8 @@ typedef struct tvt__merge_grid {
     uint32_t *key;    /* voxel key per sorted position */
     size_t n;
     int res;
+    uint32_t cache_key[8], cache_start[8]; /* the last run found per neighbour slot (points of one
+                                              voxel mostly come one after another) */
 } tvt__merge_grid;
 
 static uint32_t tvt__voxel_key(const float *p, int res)
@@ -1657,6 +1659,7 @@ static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint
     for (i = 0; i < n; i++) { tmp_key[i] = tvt__voxel_key(pts->p[i].pos, g->res); tmp_idx[i] = (uint32_t)i; }
     tvt__radix_sort(tmp_key, tmp_idx, g->key, g->order, n);
     g->n = n;
+    memset(g->cache_key, 0xFF, sizeof(g->cache_key)); /* no voxel has key 2^32 - 1 (res <= 1024) */
     for (i = 0; i < n; i++) {
         const float *p = pts->p[g->order[i]].pos;
         g->rank[g->order[i]] = (uint32_t)i;
@@ -1665,11 +1668,11 @@ static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint
 }
 
 /* nearest later point (index > i, alive) closer than thr; (size_t)-1 if none; ties: smaller index */
-static size_t tvt__merge_partner(const tvt__merge_grid *g, const uint8_t *dead, size_t n, size_t i, float thr)
+static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t n, size_t i, float thr)
 {
     const float *p = g->pos + 4 * (size_t)g->rank[i];
     long c[3], o[3];
-    float best_d2 = thr * thr, res = (float)g->res;
+    float best_d2 = thr * thr, res = (float)g->res, half = 0.5f * res;
     size_t best = (size_t)-1;
     int k, m;
     for (k = 0; k < 3; k++) {
@@ -1692,15 +1695,20 @@ static size_t tvt__merge_partner(const tvt__merge_grid *g, const uint8_t *dead, 
         x &= g->res - 1;
         y &= g->res - 1;
         k2 = (uint32_t)((z * g->res + y) * g->res + x);
-        start = (uint32_t)tvt__lower_bound_from(g->key, n, g->rank[i], k2);
+        if (g->cache_key[m] == k2) start = g->cache_start[m];
+        else {
+            start = (uint32_t)tvt__lower_bound_from(g->key, n, g->rank[i], k2);
+            g->cache_key[m] = k2;
+            g->cache_start[m] = start;
+        }
         for (j = start; j < n && g->key[j] == k2; j++) {
             size_t idx = g->order[j];
             const float *q = g->pos + 4 * j;
             float d[3], d2;
             if (idx <= i || dead[idx]) continue;
             d[0] = q[0] - p[0]; d[1] = q[1] - p[1]; d[2] = q[2] - p[2];
-            d[0] -= res * floorf(d[0] / res + 0.5f); /* the nearest periodic image */
-            d[1] -= res * floorf(d[1] / res + 0.5f);
+            if (d[0] > half) d[0] -= res; else if (d[0] < -half) d[0] += res; /* the nearest periodic image */
+            if (d[1] > half) d[1] -= res; else if (d[1] < -half) d[1] += res;
             d2 = tvt__dot(d, d);
             if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && idx < best)) { best = idx; best_d2 = d2; }
         }
