@@ -8,3 +8,5 @@ REF_TESTS += $(if $(and $(HAVE_CXX),$(HAVE_LIBPNG)),$(B)/ref_png)
 $(B)/ref_png: tests/ref_png.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lpng -lz -lm
 EXAMPLES  += $(B)/relief
+BENCHES   += $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_relief)
+BENCH_LIBS_relief = -lOSMesa
