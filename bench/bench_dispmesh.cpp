@@ -9,9 +9,9 @@
    build over the original included); dm_reconstruct alone. Both with bench.h's huge-page
    allocator (as dispmesh.h recommends on Linux; a bake touches ~70 MB of fresh memory at 1024^2);
      RESULT dispmesh_bake_malloc res=<r> ms=<t>   the bake with plain malloc (NULL allocator).
-     RESULT dispmesh_base faces=<n> shell_ms=<t> constrained_ms=<t> unconstrained_ms=<t> base_only_rms=<e> unconstrained_rms=<e> ...
-                  paper 000's base (bounding shell + constrained simplification to 500 faces), one run,
-                  for meshes up to 200k triangles. The distances (dm_surface_distance,
+     RESULT dispmesh_base target=<n> faces=<n> shell_ms=<t> constrained_ms=<t> unconstrained_ms=<t> ...
+                  paper 000's base (bounding shell + constrained simplification) at 500 faces and at
+                  1% of the input's, any size (see bench_base). The distances (dm_surface_distance,
    200k samples a side, fraction of the diagonal) are computed once, outside the timer. There is
    no peer library for the bake as a whole; bench_bvh compares the bake rays with Embree. */
 #include "bench.h"
@@ -27,6 +27,8 @@
 
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
+#define SD4_IMPLEMENTATION
+#include "subdiv4.h"
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
 
@@ -71,13 +73,99 @@ static int run_recon(void *u)
 }
 static void free_recon(void *u) { state *s = (state *)u; dm_trimesh_free(s->rec); s->rec = nullptr; }
 
+/* ---- paper 000's own base: the bounding shell, then dm_simplify under dm_shell_constraint ---- */
+struct base_state {
+    const float *pos;
+    size_t nv, nt;
+    const uint32_t *idx;
+    size_t target;
+    dm_shell *shell = nullptr;
+    dm_pm *pm = nullptr;
+    dm_simplify_report rep;
+    int constrained = 1;
+};
+static int run_shell(void *u)
+{
+    base_state *b = (base_state *)u;
+    return dm_shell_grow(b->pos, b->nv, b->idx, b->nt, NULL, &b->shell) != DM_OK;
+}
+static void free_shell(void *u) { base_state *b = (base_state *)u; dm_shell_free(b->shell); b->shell = nullptr; }
+static int run_simplify(void *u)
+{
+    base_state *b = (base_state *)u;
+    dm_simplify_options so;
+    memset(&so, 0, sizeof so);
+    so.target_triangles = b->target;
+    if (b->constrained) {
+        so.constraint = dm_shell_constraint;
+        so.on_collapse = dm_shell_collapsed;
+        so.constraint_user = b->shell;
+    }
+    return dm_simplify(b->pos, b->nv, b->idx, b->nt, &so, &b->pm, &b->rep) != DM_OK;
+}
+static void free_simplify(void *u) { base_state *b = (base_state *)u; dm_pm_free(b->pm); b->pm = nullptr; }
+static double base_rms(const base_state *b, dm_pm *pm)
+{
+    size_t bnv, bnt;
+    dm_distance_report r;
+    dm_pm_counts(pm, &bnv, &bnt);
+    std::vector<float> bp(3 * bnv);
+    std::vector<uint32_t> bi(3 * bnt);
+    dm_pm_get_mesh(pm, bp.data(), bi.data(), NULL);
+    if (dm_surface_distance(b->pos, b->nv, b->idx, b->nt, bp.data(), bnv, bi.data(), bnt, nullptr, &r) != DM_OK) return -1.0;
+    return r.rms;
+}
+
+/*   RESULT dispmesh_base target=<n> faces=<reached> shell_ms= constrained_ms= unconstrained_ms=
+            ratio=<constrained / unconstrained time> base_ms=<shell + constrained> peak_mb=
+            base_only_rms= unconstrained_rms= rms_ratio= vetoed=
+   Medians of 5 after a warm-up (bench_median): the shell; the constrained simplification (with a
+   shell grown once outside the timer); the unconstrained one to the same face count. peak_mb: the
+   peak resident memory of one shell + constrained run above what was resident before. The
+   distances (200k samples a side, of the diagonal) once, outside the timers. */
+static void bench_base(const float *pos, size_t nv, const uint32_t *idx, size_t nt, size_t target)
+{
+    base_state b;
+    b.pos = pos; b.nv = nv; b.idx = idx; b.nt = nt; b.target = target;
+    double t_shell = bench_median(run_shell, free_shell, &b);
+    if (t_shell < 0) { fprintf(stderr, "dm_shell_grow failed\n"); return; }
+    long before = bench_reset_peak_rss() == 0 ? bench_current_rss_kb() : -1;
+    if (run_shell(&b)) { fprintf(stderr, "dm_shell_grow failed\n"); return; }
+    double t_con = bench_median(run_simplify, free_simplify, &b);
+    long peak = before >= 0 ? bench_peak_rss_kb() - before : -1;
+    if (t_con < 0 || run_simplify(&b)) { fprintf(stderr, "dm_simplify (constrained) failed\n"); free_shell(&b); return; }
+    dm_pm *con = b.pm;
+    dm_simplify_report rep_c = b.rep;
+    double rms_c = base_rms(&b, con);
+    b.pm = nullptr;
+    b.constrained = 0;
+    b.target = rep_c.triangle_count;
+    double t_unc = bench_median(run_simplify, free_simplify, &b);
+    double rms_u = -1.0;
+    if (t_unc >= 0 && !run_simplify(&b)) {
+        rms_u = base_rms(&b, b.pm);
+        free_simplify(&b);
+    }
+    printf("RESULT dispmesh_base target=%zu faces=%zu shell_ms=%.1f constrained_ms=%.1f unconstrained_ms=%.2f ratio=%.1f "
+           "base_ms=%.1f peak_mb=%.1f base_only_rms=%.3g unconstrained_rms=%.3g rms_ratio=%.2f vetoed=%zu\n",
+           target, rep_c.triangle_count, 1e3 * t_shell, 1e3 * t_con, 1e3 * t_unc, t_unc > 0 ? t_con / t_unc : 0.0,
+           1e3 * (t_shell + t_con), peak >= 0 ? peak / 1024.0 : -1.0, rms_c, rms_u, rms_u > 0 ? rms_c / rms_u : 0.0,
+           rep_c.vetoed);
+    fflush(stdout);
+    dm_pm_free(con);
+    free_shell(&b);
+}
+
 int main(int argc, char **argv)
 {
     const char *path = "build/sphere1m.off";
-    int res = 1024;
+    int res = 1024, refine = 0, base_only = 0;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--res") && i + 1 < argc) res = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--refine") && i + 1 < argc) refine = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--base-only")) base_only = 1;
         else if (argv[i][0] != '-') path = argv[i];
+        else { fprintf(stderr, "usage: bench_dispmesh [MESH] [--res R] [--refine K] [--base-only]\n"); return 2; }
     }
     BENCH_PRINT_FLAGS("bench_dispmesh");
     mio_mesh mesh;
@@ -91,6 +179,26 @@ int main(int argc, char **argv)
     s.nv = mesh.vertex_count;
     s.idx = mesh.indices;
     s.nt = mesh.triangle_count;
+    sd4_mesh fine;
+    memset(&fine, 0, sizeof fine);
+    if (refine > 0) { /* K butterfly levels (subdiv4.h), e.g. the bunny twice: 1,114,656 triangles */
+        if (sd4_butterfly(s.pos, s.nv, s.idx, s.nt, refine, 0.0625, NULL, &fine) != SD4_OK) {
+            fprintf(stderr, "sd4_butterfly failed\n");
+            return 1;
+        }
+        s.pos = fine.positions;
+        s.nv = fine.vertex_count;
+        s.idx = fine.indices;
+        s.nt = fine.triangle_count;
+    }
+    if (base_only) {
+        fprintf(stderr, "bench_dispmesh: %s%s, %zu triangles: the base only\n", path, refine ? " refined" : "", s.nt);
+        bench_base(s.pos, s.nv, s.idx, s.nt, 500);
+        bench_base(s.pos, s.nv, s.idx, s.nt, s.nt / 100);
+        sd4_free_mesh(&fine);
+        mio_free_mesh(&mesh);
+        return 0;
+    }
     s.res = res;
     s.base.resize(3 * s.nt);
     float e = 0.0f;
@@ -132,50 +240,9 @@ int main(int argc, char **argv)
     free_bake(&s);
     free_param(&s);
 
-    /* paper 000's own base: the bounding shell and dm_simplify under dm_shell_constraint to 500
-       faces (one run each: seconds, and no peer to compare with), against our unconstrained
-       simplification to the same count; meshes up to 200k triangles */
-    if (s.nt <= 200000) {
-        dm_shell *sh = NULL;
-        double t0 = bench_now();
-        if (dm_shell_grow(s.pos, s.nv, s.idx, s.nt, NULL, &sh) != DM_OK) { fprintf(stderr, "dm_shell_grow failed\n"); return 1; }
-        double t_shell = bench_now() - t0;
-        dm_simplify_options so;
-        memset(&so, 0, sizeof so);
-        so.target_triangles = 500;
-        so.constraint = dm_shell_constraint;
-        so.on_collapse = dm_shell_collapsed;
-        so.constraint_user = sh;
-        dm_pm *pm = NULL, *pu = NULL;
-        dm_simplify_report rep_c;
-        t0 = bench_now();
-        if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pm, &rep_c) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }
-        double t_con = bench_now() - t0;
-        so.constraint = NULL;
-        so.on_collapse = NULL;
-        so.target_triangles = rep_c.triangle_count;
-        t0 = bench_now();
-        if (dm_simplify(s.pos, s.nv, s.idx, s.nt, &so, &pu, NULL) != DM_OK) { fprintf(stderr, "dm_simplify failed\n"); return 1; }
-        double t_unc = bench_now() - t0;
-        dm_distance_report rc, ru;
-        size_t bnv, bnt;
-        dm_pm *both[2] = {pm, pu};
-        dm_distance_report *reps[2] = {&rc, &ru};
-        for (int k = 0; k < 2; k++) {
-            dm_pm_counts(both[k], &bnv, &bnt);
-            std::vector<float> bp(3 * bnv);
-            std::vector<uint32_t> bi(3 * bnt);
-            dm_pm_get_mesh(both[k], bp.data(), bi.data(), NULL);
-            dm_surface_distance(s.pos, s.nv, s.idx, s.nt, bp.data(), bnv, bi.data(), bnt, nullptr, reps[k]);
-        }
-        printf("RESULT dispmesh_base faces=%zu shell_ms=%.1f constrained_ms=%.1f unconstrained_ms=%.1f base_only_rms=%.3g "
-               "unconstrained_rms=%.3g ratio=%.2f moved=%zu vetoed=%zu\n",
-               rep_c.triangle_count, 1e3 * t_shell, 1e3 * t_con, 1e3 * t_unc, rc.rms, ru.rms, rc.rms / ru.rms, sh->moved,
-               rep_c.vetoed);
-        dm_pm_free(pm);
-        dm_pm_free(pu);
-        dm_shell_free(sh);
-    }
+    bench_base(s.pos, s.nv, s.idx, s.nt, 500);
+    bench_base(s.pos, s.nv, s.idx, s.nt, s.nt / 100);
+    sd4_free_mesh(&fine);
     mio_free_mesh(&mesh);
     return 0;
 }
