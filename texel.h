@@ -6,7 +6,8 @@
        colour and specular, res^3 voxels (res a power of two, 8..1024). The texel wraps at its
        four side borders (blades crossing a border come back on the other side), so it tiles.
        Storage is sparse: res^3 voxels in bricks of 4^3, an index of uint32 per brick (empty
-       bricks cost 4 bytes), 8- or 16-bit channels. tvt_texel_bytes reports the bytes.
+       bricks cost 4 bytes, occupied ones only their non-empty voxels), 8- or 16-bit channels.
+       tvt_texel_bytes reports the bytes.
      - Point-based structure (PBS): proportion * density points per voxel (default 6), and
        normalised Gaussian splatting back into a texel (total density kept exactly).
      - The physical-biological model: water-content curves, vein / mesophyll shrinkage with
@@ -164,8 +165,10 @@
    MEMORY
      A tvt_texel owns its brick index, brick data, per-voxel blade indices (static texels
      only) and blade table, allocated with the allocator it was built with; tvt_texel_free
-     frees them. Per voxel of an occupied brick: 11 bytes at 8 bits, 22 at 16 bits, +2 for the
-     blade index of a static texel. 8-bit density is stored as the square root of density /
+     frees them. Each occupied brick costs a 64-bit mask of its stored voxels and a 32-bit
+     offset; each stored (non-empty) voxel 11 bytes at 8 bits, 22 at 16 bits, +2 for the blade
+     index of a static texel. A voxel's place is the brick's offset plus the number of mask bits
+     below its own (one popcount), so thin blades cost what they fill, not whole bricks. 8-bit density is stored as the square root of density /
      density_max (fine steps for the faint voxels a splat makes; 16-bit is linear); vectors map
      [-1, 1] and colours [0, 1] linearly. A tvt_points holds 140 bytes per point. Building,
      splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
@@ -276,9 +279,12 @@ typedef struct tvt_texel {
     int bricks_per_side;     /* res / TVT_BRICK */
     uint32_t *brick_index;   /* bricks_per_side^3 (x fastest): brick number or TVT_EMPTY_BRICK */
     size_t brick_count;      /* occupied bricks, stored in index order */
-    void *data;              /* brick_count * 64 voxels * 11 channels of uint8_t or uint16_t */
+    uint64_t *brick_mask;    /* brick_count: bit i set = voxel i of the brick is stored (i = (z*4+y)*4+x) */
+    uint32_t *brick_offset;  /* brick_count: the brick's first stored voxel */
+    size_t voxel_count;      /* stored (non-empty) voxels */
+    void *data;              /* voxel_count * 11 channels of uint8_t or uint16_t */
     float density_max;       /* scale of the density channel */
-    uint16_t *blade_of_voxel;/* NULL, or brick_count * 64 blade indices (TVT_NO_BLADE = none) */
+    uint16_t *blade_of_voxel;/* NULL, or voxel_count blade indices (TVT_NO_BLADE = none) */
     tvt_blade *blades;       /* NULL, or the blades of a static texel */
     size_t blade_count;
     tvt_allocator allocator;
@@ -818,21 +824,34 @@ static void tvt__acc_resolve(const float *a, float density_factor, tvt_voxel *v)
     if (w > 0) tvt__normalize(v->tangent);
 }
 
-/* Brick of accumulator brick k: does any voxel quantise to a nonzero density? */
-static int tvt__brick_occupied(const tvt__acc *g, uint32_t k, float density_factor, float density_max, int bits)
+/* The voxels of accumulator brick k that quantise to a nonzero density, as a mask. */
+static uint64_t tvt__brick_occupied(const tvt__acc *g, uint32_t k, float density_factor, float density_max, int bits)
 {
+    uint64_t mask = 0;
     size_t i;
     for (i = 0; i < TVT__BV; i++) {
         tvt_voxel v;
         unsigned q[TVT_CHANNELS];
         tvt__acc_resolve(g->data + ((size_t)k * TVT__BV + i) * TVT__ACC, density_factor, &v);
         tvt__encode(&v, density_max, bits, q);
-        if (q[0]) return 1;
+        if (q[0]) mask |= (uint64_t)1 << i;
     }
-    return 0;
+    return mask;
 }
 
-static tvt_result tvt__texel_alloc(tvt_texel *t, int res, int bits, size_t bricks, int with_blades,
+static unsigned tvt__popcount(uint64_t x)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return (unsigned)__builtin_popcountll(x);
+#else
+    x = x - ((x >> 1) & 0x5555555555555555ull);
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return (unsigned)((x * 0x0101010101010101ull) >> 56);
+#endif
+}
+
+static tvt_result tvt__texel_alloc(tvt_texel *t, int res, int bits, size_t bricks, size_t voxels, int with_blades,
                                    const tvt_allocator *a)
 {
     size_t nidx = (size_t)(res / TVT_BRICK) * (res / TVT_BRICK) * (res / TVT_BRICK), i;
@@ -842,10 +861,13 @@ static tvt_result tvt__texel_alloc(tvt_texel *t, int res, int bits, size_t brick
     t->bricks_per_side = res / TVT_BRICK;
     t->allocator = *a;
     t->brick_count = bricks;
+    t->voxel_count = voxels;
     t->brick_index = (uint32_t *)tvt__alloc(a, nidx, sizeof(uint32_t));
-    t->data = tvt__alloc(a, bricks * TVT__BV * TVT_CHANNELS, (size_t)bits / 8);
-    if (with_blades) t->blade_of_voxel = (uint16_t *)tvt__alloc(a, bricks * TVT__BV, sizeof(uint16_t));
-    if (!t->brick_index || !t->data || (with_blades && !t->blade_of_voxel)) {
+    t->brick_mask = (uint64_t *)tvt__alloc(a, bricks, sizeof(uint64_t));
+    t->brick_offset = (uint32_t *)tvt__alloc(a, bricks, sizeof(uint32_t));
+    t->data = tvt__alloc(a, voxels * TVT_CHANNELS, (size_t)bits / 8);
+    if (with_blades) t->blade_of_voxel = (uint16_t *)tvt__alloc(a, voxels, sizeof(uint16_t));
+    if (!t->brick_index || !t->brick_mask || !t->brick_offset || !t->data || (with_blades && !t->blade_of_voxel)) {
         tvt_texel_free(t);
         return TVT_ERR_OUT_OF_MEMORY;
     }
@@ -854,38 +876,49 @@ static tvt_result tvt__texel_alloc(tvt_texel *t, int res, int bits, size_t brick
 }
 
 /* Writes the accumulator into a new texel. Bricks come in index order whatever order the
-   accumulator made them in, so the texel's bytes depend on its content only. */
+   accumulator made them in, so the texel's bytes depend on its content only; a brick keeps the
+   voxels of nonzero quantised density (its mask), in voxel order. */
 static tvt_result tvt__acc_to_texel(const tvt__acc *g, float density_factor, int bits, int with_blades,
                                     tvt_texel *out)
 {
-    size_t nidx = (size_t)g->nb * g->nb * g->nb, b, i, kept = 0;
+    size_t nidx = (size_t)g->nb * g->nb * g->nb, b, i, kept = 0, voxels = 0, slot = 0;
+    uint64_t *masks;
     float dmax = 0.0f;
     tvt_result r;
     for (i = 0; i < g->count * TVT__BV; i++) {
         float d = g->data[i * TVT__ACC] * density_factor;
         if (d > dmax) dmax = d;
     }
-    for (b = 0; b < nidx; b++)
-        if (g->index[b] != TVT_EMPTY_BRICK && tvt__brick_occupied(g, g->index[b], density_factor, dmax, bits)) kept++;
-    r = tvt__texel_alloc(out, g->res, bits, kept, with_blades, &g->a);
-    if (r != TVT_OK) return r;
+    masks = (uint64_t *)tvt__alloc(&g->a, g->count, sizeof(uint64_t));
+    if (!masks) return TVT_ERR_OUT_OF_MEMORY;
+    for (b = 0; b < g->count; b++) {
+        masks[b] = tvt__brick_occupied(g, (uint32_t)b, density_factor, dmax, bits);
+        if (masks[b]) { kept++; voxels += tvt__popcount(masks[b]); }
+    }
+    r = tvt__texel_alloc(out, g->res, bits, kept, voxels, with_blades, &g->a);
+    if (r != TVT_OK) { tvt__free(&g->a, masks); return r; }
     out->density_max = dmax;
     kept = 0;
     for (b = 0; b < nidx; b++) {
         uint32_t k = g->index[b];
-        if (k == TVT_EMPTY_BRICK || !tvt__brick_occupied(g, k, density_factor, dmax, bits)) continue;
+        if (k == TVT_EMPTY_BRICK || !masks[k]) continue;
         out->brick_index[b] = (uint32_t)kept;
+        out->brick_mask[kept] = masks[k];
+        out->brick_offset[kept] = (uint32_t)slot;
         for (i = 0; i < TVT__BV; i++) {
             const float *a = g->data + ((size_t)k * TVT__BV + i) * TVT__ACC;
             tvt_voxel v;
             unsigned q[TVT_CHANNELS];
+            if (!((masks[k] >> i) & 1)) continue;
             tvt__acc_resolve(a, density_factor, &v);
             tvt__encode(&v, dmax, bits, q);
-            tvt__store(out, kept * TVT__BV + i, q);
-            if (with_blades) out->blade_of_voxel[kept * TVT__BV + i] = (uint16_t)(q[0] && a[12] >= 0 ? (unsigned)a[12] : TVT_NO_BLADE);
+            tvt__store(out, slot, q);
+            if (with_blades) out->blade_of_voxel[slot] = (uint16_t)(a[12] >= 0 ? (unsigned)a[12] : TVT_NO_BLADE);
+            slot++;
         }
         kept++;
     }
+    tvt__free(&g->a, masks);
     return TVT_OK;
 }
 
@@ -1251,6 +1284,7 @@ static size_t tvt__slot(const tvt_texel *t, long x, long y, long z, int *ok)
     long res = t->res;
     size_t b;
     uint32_t k;
+    unsigned i;
     *ok = 0;
     if (z < 0 || z >= res || !t->brick_index) return 0;
     x &= res - 1; /* res is a power of two: the wrap, also for negative x */
@@ -1258,8 +1292,10 @@ static size_t tvt__slot(const tvt_texel *t, long x, long y, long z, int *ok)
     b = ((size_t)(z >> 2) * (size_t)t->bricks_per_side + (size_t)(y >> 2)) * (size_t)t->bricks_per_side + (size_t)(x >> 2);
     k = t->brick_index[b];
     if (k == TVT_EMPTY_BRICK) return 0;
+    i = (unsigned)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
+    if (!((t->brick_mask[k] >> i) & 1)) return 0;
     *ok = 1;
-    return (size_t)k * TVT__BV + (size_t)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
+    return (size_t)t->brick_offset[k] + tvt__popcount(t->brick_mask[k] & (((uint64_t)1 << i) - 1));
 }
 
 TVTDEF void tvt_texel_voxel(const tvt_texel *t, long x, long y, long z, tvt_voxel *out)
@@ -1275,8 +1311,9 @@ TVTDEF void tvt_texel_voxel(const tvt_texel *t, long x, long y, long z, tvt_voxe
 TVTDEF size_t tvt_texel_bytes(const tvt_texel *t)
 {
     size_t nb = (size_t)t->bricks_per_side, bytes = nb * nb * nb * sizeof(uint32_t);
-    bytes += t->brick_count * TVT__BV * TVT_CHANNELS * (size_t)(t->bits / 8);
-    if (t->blade_of_voxel) bytes += t->brick_count * TVT__BV * sizeof(uint16_t);
+    bytes += t->brick_count * (sizeof(uint64_t) + sizeof(uint32_t));
+    bytes += t->voxel_count * TVT_CHANNELS * (size_t)(t->bits / 8);
+    if (t->blade_of_voxel) bytes += t->voxel_count * sizeof(uint16_t);
     return bytes + t->blade_count * sizeof(tvt_blade);
 }
 
@@ -1284,7 +1321,7 @@ TVTDEF double tvt_texel_total_density(const tvt_texel *t)
 {
     double sum = 0.0;
     size_t i;
-    for (i = 0; i < t->brick_count * TVT__BV; i++) {
+    for (i = 0; i < t->voxel_count; i++) {
         unsigned q[TVT_CHANNELS];
         tvt_voxel v;
         tvt__load(t, i, q);
@@ -1299,6 +1336,8 @@ TVTDEF void tvt_texel_free(tvt_texel *t)
     if (!t) return;
     if (t->allocator.free) {
         tvt__free(&t->allocator, t->brick_index);
+        tvt__free(&t->allocator, t->brick_mask);
+        tvt__free(&t->allocator, t->brick_offset);
         tvt__free(&t->allocator, t->data);
         tvt__free(&t->allocator, t->blade_of_voxel);
         tvt__free(&t->allocator, t->blades);
@@ -1427,10 +1466,12 @@ static int tvt__sample_pass(tvt__sampler *S, float done0, float done1)
     for (b = 0; b < total; b++) {
         uint32_t k = t->brick_index[b];
         long bx = (long)(b % nb) * 4, by = (long)(b / nb % nb) * 4, bz = (long)(b / (nb * nb)) * 4;
+        size_t slot;
         int i;
         if (k == TVT_EMPTY_BRICK) continue;
+        slot = t->brick_offset[k];
         for (i = 0; i < TVT__BV; i++)
-            tvt__sample_voxel(S, bx + (i & 3), by + ((i >> 2) & 3), bz + (i >> 4), (size_t)k * TVT__BV + (size_t)i);
+            if ((t->brick_mask[k] >> i) & 1) tvt__sample_voxel(S, bx + (i & 3), by + ((i >> 2) & 3), bz + (i >> 4), slot++);
         if ((b & 1023) == 1023 &&
             tvt__report(S->o.progress, S->o.progress_user, done0 + (done1 - done0) * (float)b / (float)total))
             return 0;
@@ -1893,12 +1934,16 @@ TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *opti
 static tvt_result tvt__texel_copy(const tvt_texel *t, const tvt_allocator *a, tvt_texel *out)
 {
     size_t nb = (size_t)t->bricks_per_side;
-    tvt_result r = tvt__texel_alloc(out, t->res, t->bits, t->brick_count, t->blade_of_voxel != NULL, a);
+    tvt_result r = tvt__texel_alloc(out, t->res, t->bits, t->brick_count, t->voxel_count, t->blade_of_voxel != NULL, a);
     if (r != TVT_OK) return r;
     out->density_max = t->density_max;
     memcpy(out->brick_index, t->brick_index, nb * nb * nb * sizeof(uint32_t));
-    memcpy(out->data, t->data, t->brick_count * TVT__BV * TVT_CHANNELS * (size_t)(t->bits / 8));
-    if (t->blade_of_voxel) memcpy(out->blade_of_voxel, t->blade_of_voxel, t->brick_count * TVT__BV * sizeof(uint16_t));
+    if (t->brick_count) {
+        memcpy(out->brick_mask, t->brick_mask, t->brick_count * sizeof(uint64_t));
+        memcpy(out->brick_offset, t->brick_offset, t->brick_count * sizeof(uint32_t));
+    }
+    if (t->voxel_count) memcpy(out->data, t->data, t->voxel_count * TVT_CHANNELS * (size_t)(t->bits / 8));
+    if (t->blade_of_voxel && t->voxel_count) memcpy(out->blade_of_voxel, t->blade_of_voxel, t->voxel_count * sizeof(uint16_t));
     return TVT_OK;
 }
 
@@ -1912,12 +1957,15 @@ static tvt_result tvt__downsample(const tvt_texel *t, const tvt_allocator *a, tv
     for (b = 0; r == TVT_OK && b < nb * nb * nb; b++) {
         uint32_t k = t->brick_index[b];
         int bx = (int)(b % nb) * 4, by = (int)(b / nb % nb) * 4, bz = (int)(b / (nb * nb)) * 4, i, c;
+        size_t slot;
         if (k == TVT_EMPTY_BRICK) continue;
+        slot = t->brick_offset[k];
         for (i = 0; i < TVT__BV; i++) {
             unsigned q[TVT_CHANNELS];
             tvt_voxel v;
             float *acc, w;
-            tvt__load(t, (size_t)k * TVT__BV + (size_t)i, q);
+            if (!((t->brick_mask[k] >> i) & 1)) continue;
+            tvt__load(t, slot++, q);
             if (!q[0]) continue;
             tvt__decode(q, t->density_max, t->bits, &v);
             acc = tvt__acc_voxel(&g, (bx + (i & 3)) / 2, (by + ((i >> 2) & 3)) / 2, (bz + (i >> 4)) / 2);

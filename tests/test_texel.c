@@ -60,8 +60,11 @@ static int texels_equal(const tvt_texel *a, const tvt_texel *b)
     if (a->res != b->res || a->bits != b->bits || a->brick_count != b->brick_count ||
         a->density_max != b->density_max)
         return 0;
-    if (memcmp(a->brick_index, b->brick_index, nb * nb * nb * 4)) return 0;
-    return memcmp(a->data, b->data, a->brick_count * 64 * 11 * (size_t)(a->bits / 8)) == 0;
+    if (memcmp(a->brick_index, b->brick_index, nb * nb * nb * 4) || a->voxel_count != b->voxel_count) return 0;
+    if (a->brick_count && (memcmp(a->brick_mask, b->brick_mask, a->brick_count * 8) ||
+                           memcmp(a->brick_offset, b->brick_offset, a->brick_count * 4)))
+        return 0;
+    return memcmp(a->data, b->data, a->voxel_count * 11 * (size_t)(a->bits / 8)) == 0;
 }
 
 /* ---- 1. static texel ------------------------------------------------------------------------- */
@@ -95,10 +98,13 @@ static void test_static_texel(void)
     /* fresh colour is green: G > R > B */
     tvt_texel_voxel(&t, 20, 30, 2, &v);
     T_CHECK(v.color[1] > v.color[0] && v.color[0] > v.color[2]);
-    /* sparse: one thin blade occupies few of the 16^3 bricks; the bytes are the index plus the
-       occupied bricks (64 voxels x 11 channels x 2 bytes) plus blade indices and the blade */
+    /* sparse: one thin blade occupies few of the 16^3 bricks and stores only its covered voxels
+       (the cone's 377 voxels of volume touch a few hundred more at its surface); the bytes are
+       the index, a mask and an offset per occupied brick, 11 channels x 2 bytes and a blade
+       index per stored voxel, and the blade */
     T_CHECK(t.brick_count > 0 && t.brick_count < 60);
-    T_EQ_SIZE(tvt_texel_bytes(&t), 16 * 16 * 16 * 4 + t.brick_count * 64 * (22 + 2) + sizeof(tvt_blade));
+    T_CHECK(t.voxel_count >= 377 && t.voxel_count < 2 * 377);
+    T_EQ_SIZE(tvt_texel_bytes(&t), 16 * 16 * 16 * 4 + t.brick_count * 12 + t.voxel_count * (22 + 2) + sizeof(tvt_blade));
     /* 8 bits: same bricks, half the channel bytes, total density within the sqrt-coded
        quantisation (step 2 sqrt(d) / 255 at most per voxel, far less on average): 1% */
     d.bits = 8;
@@ -166,9 +172,9 @@ static void test_round_trip(int sanitize)
         before = tvt_texel_total_density(&t);
         T_CHECK(tvt_sample(&t, NULL, &p) == TVT_OK);
         /* the point count is the sum of independent roundings of 6 rho per voxel: mean 6 sum rho,
-           variance at most 1/4 per voxel; 5 standard deviations */
+           variance at most 1/4 per stored voxel; 5 standard deviations */
         expected = 6.0 * before;
-        T_NEAR((double)p.count, expected, 5.0 * sqrt(0.25 * (double)t.brick_count * 64));
+        T_NEAR((double)p.count, expected, 5.0 * sqrt(0.25 * (double)t.voxel_count));
         /* every point inherits its voxel: inside the texel, with unit mass */
         for (i = 0; i < p.count; i++)
             if (p.p[i].pos[2] < 0 || p.p[i].pos[2] >= (float)d.res || p.p[i].mass != 1.0f) break;

@@ -185,9 +185,9 @@ static void test_mingling(void)
         T_CHECK(tvt_mingle_tvt(s, fn, 2, &o, &mt2) == TVT_OK);
         T_EQ_INT(mt.frame_count, 3);
         T_EQ_INT(mt.frames[0].levels, 2);
-        T_CHECK(mt.frames[2].level[1].brick_count == mt2.frames[2].level[1].brick_count &&
+        T_CHECK(mt.frames[2].level[1].voxel_count == mt2.frames[2].level[1].voxel_count &&
                 memcmp(mt.frames[2].level[1].data, mt2.frames[2].level[1].data,
-                       mt.frames[2].level[1].brick_count * 64 * 11) == 0 &&
+                       mt.frames[2].level[1].voxel_count * 11) == 0 &&
                 mt.frames[2].density_scale[1] == mt2.frames[2].density_scale[1]);
         tvt_tvt_free(&mt);
         tvt_tvt_free(&mt2);
