@@ -13,6 +13,10 @@
      - The physical-biological model: water-content curves, vein / mesophyll shrinkage with
        stiffening, droop that bends blades more toward the tip, point merging, colour from
        chlorophyll a, b and carotene absorption spectra to linear sRGB, and wd(t).
+     - The TVT: key frames over wd with interpolation, mingling of K samples each with its own
+       ageing function, and an LOD pyramid per frame whose coarse levels keep the mean opacity.
+     - Rendering: density, tangent, colour and transmittance at a point for a level, Kajiya-Kay
+       shading with self-shadow volumes, and a ray march through a tile, for any renderer.
 
    HOW TO USE (in ten lines)
        // in exactly one C or C++ file, #define TVT_IMPLEMENTATION before #include "texel.h"
@@ -145,22 +149,25 @@
 
    OPTIONS
      Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
-     Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options. Zero
-     (or a NULL pointer) means the default; tvt_*_default_*() return the resolved values.
+     Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options,
+     tvt_lod_options, tvt_tvt_options, tvt_shade_desc. Zero (or a NULL pointer) means the
+     default; tvt_*_default_*() return the resolved values.
        tvt_grass_desc   res (64), blade_count (100), seed, height_min/max (0.55, 0.9 of res),
                         radius_min/max (1.5 voxels), lean_min/max (3, 12 degrees), supersample
-                        (3), bits (8 or 16; 8), ms (0.3), allocator, progress.
+                        (3), bits (8 or 16; 8), specular (0.3), allocator, progress.
        tvt_sample_options  proportion (6), seed, allocator, progress.
        tvt_model_options   water_curve (TVT_WATER_STANDARD / _AMPLE / _COLD), k_vein (0.10),
                         k_mesophyll (0.40), vein_stiffness (2), stiffening (4), area_ratio (3),
                         droop_max_deg (80), droop_exponent (2), droop_length (0.6 of res),
-                        merge_threshold (0.15 voxel;
-                        no_merge = 1 turns merging off), colour_jitter (0.05), progress.
+                        merge_threshold (0.15 voxel; no_merge = 1 turns merging off),
+                        colour_jitter (0.05), progress.
        tvt_splat_options   bits (8), sigma (0.5 voxel), allocator, progress.
        tvt_lod_options     levels (down to 32^3), extinction (1 per level-0 voxel at density 1),
                         calibration_rays (512 per elevation), seed, allocator, progress.
        tvt_tvt_options     frames (8), steps_per_frame (2), the sample / model / splat / lod
                         options (NULL = defaults), allocator, progress.
+       tvt_shade_desc      light_dir, light_rgb, ambient_rgb, kd (1), ks (0.35), shininess (24),
+                        shadow (NULL = none).
 
    MEMORY
      A tvt_texel owns its brick index, brick data, per-voxel blade indices (static texels
@@ -168,9 +175,9 @@
      frees them. Each occupied brick costs a 64-bit mask of its stored voxels and a 32-bit
      offset; each stored (non-empty) voxel 11 bytes at 8 bits, 22 at 16 bits, +2 for the blade
      index of a static texel. A voxel's place is the brick's offset plus the number of mask bits
-     below its own (one popcount), so thin blades cost what they fill, not whole bricks. 8-bit density is stored as the square root of density /
-     density_max (fine steps for the faint voxels a splat makes; 16-bit is linear); vectors map
-     [-1, 1] and colours [0, 1] linearly. A tvt_points holds 140 bytes per point. Building,
+     below its own (one popcount), so thin blades cost what they fill, not whole bricks. 8-bit
+     density is stored as the square root of density / density_max (fine steps for the faint
+     voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly. A tvt_points holds 132 bytes per point. Building,
      splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
      each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
      tvt_lod_free / tvt_tvt_free free them; tvt_lod_bytes / tvt_tvt_bytes count them.
@@ -183,7 +190,9 @@
                                  (negative radius, height_min > height_max, ...);
        TVT_ERR_BAD_WD            wd outside [0, 1] (NaN included) in tvt_age; tvt_wd_from_time
                                  clamps instead (documented there);
-       TVT_ERR_EMPTY             zero blades, or sampling a texel with no density;
+       TVT_ERR_EMPTY             sampling a texel with no density, mingling zero samples
+                                 (blade_count 0 in a tvt_grass_desc means the default 100;
+                                 tvt_build_texel with no blades gives an empty texel);
        TVT_ERR_TOO_LARGE         a size that overflows size_t or 32-bit counts;
        TVT_ERR_OUT_OF_MEMORY     the allocator returned NULL;
        TVT_CANCELLED             the progress callback returned nonzero.
