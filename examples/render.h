@@ -1539,11 +1539,30 @@ static int sr__relief_frame_init(const sr_relief_desc *d, sr__relief_frame *f)
     return 1;
 }
 
-static float sr__depth_at(const sr_image *img, float s, float t)
+/* sr__sample of channel 0 alone (the same arithmetic, so the same bits), the marchers' inner loop */
+static float sr__depth_at(const sr_image *img, float u, float v)
 {
-    float h[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    sr__sample(img, s, t, h);
-    return h[0];
+    float x = u * (float)img->width - 0.5f, y = v * (float)img->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy, a, b, e, f;
+    int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1, w = img->width, h = img->height;
+    size_t ch = (size_t)img->channels, r0, r1;
+    if (img->wrap) {
+        x0 %= w; if (x0 < 0) x0 += w;
+        y0 %= h; if (y0 < 0) y0 += h;
+        x1 = (x0 + 1) % w; y1 = (y0 + 1) % h;
+    } else {
+        x0 = x0 < 0 ? 0 : (x0 >= w ? w - 1 : x0);
+        x1 = x1 < 0 ? 0 : (x1 >= w ? w - 1 : x1);
+        y0 = y0 < 0 ? 0 : (y0 >= h ? h - 1 : y0);
+        y1 = y1 < 0 ? 0 : (y1 >= h ? h - 1 : y1);
+    }
+    r0 = (size_t)y0 * (size_t)w;
+    r1 = (size_t)y1 * (size_t)w;
+    a = img->data[(r0 + (size_t)x0) * ch];
+    b = img->data[(r0 + (size_t)x1) * ch];
+    e = img->data[(r1 + (size_t)x0) * ch];
+    f = img->data[(r1 + (size_t)x1) * ch];
+    return (a + (b - a) * ax) * (1.0f - ay) + (e + (f - e) * ax) * ay;
 }
 
 /* Search along the map-space ray (s0 + d*ds, t0 + d*dt, d) for the first d >= depth(s, t):
@@ -1617,13 +1636,12 @@ static int sr__relief_intersect_curved(const sr_relief_desc *d, const sr__relief
     return 1;
 }
 
-SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t, float uvd[3])
+/* the intersection for a checked descriptor and its frame */
+static int sr__relief_hit(const sr_relief_desc *d, const sr__relief_frame *fp, const float origin[3], const float dir[3], float *t, float uvd[3])
 {
-    sr__relief_frame f;
+    const sr__relief_frame f = *fp;
     float denom, t0, E[3], rel[3], s0, tm0, step[3], ds, dt, hit, sh, th;
     int k, linear, binary;
-    if (!d || !origin || !dir || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f)) return 0;
-    if (!sr__relief_frame_init(d, &f)) return 0;
     denom = sr__dot(dir, f.n);
     if (!(denom < 0.0f)) return 0; /* only rays entering the surface from above */
     sr__sub(d->origin, origin, rel);
@@ -1651,6 +1669,49 @@ SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], co
     if (t) *t = t0 + hit * d->depth_scale / -denom;
     if (uvd) { uvd[0] = sh; uvd[1] = th; uvd[2] = hit; }
     return 1;
+}
+
+SRDEF int sr_relief_intersect(const sr_relief_desc *d, const float origin[3], const float dir[3], float *t, float uvd[3])
+{
+    sr__relief_frame f;
+    if (!d || !origin || !dir || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f)) return 0;
+    if (!sr__relief_frame_init(d, &f)) return 0;
+    return sr__relief_hit(d, &f, origin, dir, t, uvd);
+}
+
+/* The pixels the relief's prism (the quad and its copy depth_scale, plus the bend's sag, below
+   it) can cover: the bounding box of its 8 corners' projections, one pixel wider; the whole
+   frame when a corner is not in front of the camera. */
+static void sr__relief_bounds(const sr_relief_desc *d, const sr__relief_frame *f, const sr_camera *cam, int W, int H, int box[4])
+{
+    float lu = sqrtf(sr__dot(d->axis_u, d->axis_u)), lv = sqrtf(sr__dot(d->axis_v, d->axis_v));
+    float drop = d->depth_scale + 0.125f * (d->curvature_u * lu * lu + d->curvature_v * lv * lv), lo[2] = {1e30f, 1e30f}, hi[2] = {-1e30f, -1e30f};
+    int c, k;
+    box[0] = 0; box[1] = 0; box[2] = W - 1; box[3] = H - 1;
+    for (c = 0; c < 8; c++) {
+        float P[3], rel[3], z, sx, sy;
+        for (k = 0; k < 3; k++)
+            P[k] = d->origin[k] + ((c & 1) ? d->axis_u[k] : 0.0f) + ((c & 2) ? d->axis_v[k] : 0.0f) - ((c & 4) ? drop * f->n[k] : 0.0f);
+        sr__sub(P, cam->eye, rel);
+        z = sr__dot(rel, cam->forward);
+        if (cam->orthographic) {
+            sx = sr__dot(rel, cam->right) / (cam->half_height * cam->aspect);
+            sy = sr__dot(rel, cam->up) / cam->half_height;
+        } else {
+            if (!(z > 1e-6f)) return;
+            sx = sr__dot(rel, cam->right) / (z * cam->tan_half_fovy * cam->aspect);
+            sy = sr__dot(rel, cam->up) / (z * cam->tan_half_fovy);
+        }
+        sx = (sx + 1.0f) * 0.5f * (float)W;
+        sy = (1.0f - sy) * 0.5f * (float)H;
+        lo[0] = sx < lo[0] ? sx : lo[0]; hi[0] = sx > hi[0] ? sx : hi[0];
+        lo[1] = sy < lo[1] ? sy : lo[1]; hi[1] = sy > hi[1] ? sy : hi[1];
+    }
+    if (!(hi[0] - lo[0] < 1e7f) || !(hi[1] - lo[1] < 1e7f)) return;
+    box[0] = lo[0] - 1.0f > 0.0f ? (int)(lo[0] - 1.0f) : 0;
+    box[1] = lo[1] - 1.0f > 0.0f ? (int)(lo[1] - 1.0f) : 0;
+    box[2] = hi[0] + 1.0f < (float)(W - 1) ? (int)(hi[0] + 1.0f) : W - 1;
+    box[3] = hi[1] + 1.0f < (float)(H - 1) ? (int)(hi[1] + 1.0f) : H - 1;
 }
 
 /* 1 if the light ray from map point (s, t, depth) escapes the height field */
@@ -1697,7 +1758,7 @@ SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const s
     sr_light head;
     const sr_light *lights;
     float spec_cut;
-    int nl, x, y;
+    int nl, x, y, box[4];
     if (!fb || !fb->color || !cam || !d || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f))
         return SR_ERR_INVALID_ARGUMENT;
     if ((d->albedo && !sr__image_ok(d->albedo, 3)) || (d->normal_map && !sr__image_ok(d->normal_map, 3)))
@@ -1707,13 +1768,14 @@ SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const s
         return SR_ERR_INVALID_ARGUMENT;
     lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
     spec_cut = sr__spec_cut(&d->material);
-    for (y = 0; y < fb->height; y++)
-        for (x = 0; x < fb->width; x++) {
+    sr__relief_bounds(d, &f, cam, fb->width, fb->height, box);
+    for (y = box[1]; y <= box[3]; y++)
+        for (x = box[0]; x <= box[2]; x++) {
             float o[3], dir[3], t, uvd[3], P[3], N[3], V[3], kd[3], rgb[3], z;
             size_t i = (size_t)y * (size_t)fb->width + (size_t)x;
             int k, l;
             sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
-            if (!sr_relief_intersect(d, o, dir, &t, uvd)) continue;
+            if (!sr__relief_hit(d, &f, o, dir, &t, uvd)) continue;
             for (k = 0; k < 3; k++) P[k] = o[k] + t * dir[k];
             if (!sr_camera_depth(cam, P, &z) || !(z < fb->depth[i]) || z < 0.0f) continue;
             if (d->normal_map) {
