@@ -848,9 +848,10 @@ static uint64_t tvt__brick_occupied(const tvt__acc *g, uint32_t k, float density
     return mask;
 }
 
+/* bit count (the builtin only where it is one instruction: elsewhere it is a library call) */
 static unsigned tvt__popcount(uint64_t x)
 {
-#if defined(__GNUC__) || defined(__clang__)
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__POPCNT__)
     return (unsigned)__builtin_popcountll(x);
 #else
     x = x - ((x >> 1) & 0x5555555555555555ull);

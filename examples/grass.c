@@ -75,19 +75,20 @@ static void progress_end(const char *what)
 /* ---- terrain ------------------------------------------------------------------------------- */
 static float height_at(const scene *s, float x, float y, float *gx, float *gy)
 {
-    float span = (float)s->tiles * s->tile, fx, fy, h00, h10, h01, h11;
+    float scale, fx, fy, h00, h10, h01, h11;
     int i, j, n = s->hn;
     if (!s->h) { *gx = *gy = 0.0f; return 0.0f; }
-    fx = x / span * (float)(n - 1);
-    fy = y / span * (float)(n - 1);
+    scale = (float)(n - 1) / ((float)s->tiles * s->tile); /* height samples per world unit */
+    fx = x * scale;
+    fy = y * scale;
     if (fx < 0) fx = 0;
     if (fy < 0) fy = 0;
     if (fx > (float)(n - 1) - 1e-3f) fx = (float)(n - 1) - 1e-3f;
     if (fy > (float)(n - 1) - 1e-3f) fy = (float)(n - 1) - 1e-3f;
     i = (int)fx; j = (int)fy; fx -= (float)i; fy -= (float)j;
     h00 = s->h[j * n + i]; h10 = s->h[j * n + i + 1]; h01 = s->h[(j + 1) * n + i]; h11 = s->h[(j + 1) * n + i + 1];
-    *gx = ((h10 - h00) * (1 - fy) + (h11 - h01) * fy) * (float)(n - 1) / span;
-    *gy = ((h01 - h00) * (1 - fx) + (h11 - h10) * fx) * (float)(n - 1) / span;
+    *gx = ((h10 - h00) * (1 - fy) + (h11 - h01) * fy) * scale;
+    *gy = ((h01 - h00) * (1 - fx) + (h11 - h10) * fx) * scale;
     return (h00 * (1 - fx) + h10 * fx) * (1 - fy) + (h01 * (1 - fx) + h11 * fx) * fy;
 }
 
