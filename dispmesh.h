@@ -5125,384 +5125,515 @@ static int dm__pz_report(int (*progress)(void *, float), void *user, float done)
     return progress ? progress(user, done) : 0;
 }
 
-DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, const uint32_t *indices,
-                                size_t triangle_count, const dm_param_options *options, dm_param **out)
-{
+/* dm_parameterize's working state: the input, the resolved options, the result being filled and
+   the temporaries (all in sc, freed together on the one exit path) */
+typedef struct dm__pz_run {
+    const float *positions;
+    const uint32_t *indices;
+    size_t nt, nv, n;  /* triangles, vertices, texels (W * H) */
     dm_param_options o;
+    int W, H, g, max_tris, rounds;
+    double cos_max;
     dm__pz_scratch sc;
-    dm_param *pm = NULL;
-    dm_result res;
-    size_t nt = triangle_count, nv = vertex_count, t, i, nc0, nc = 0, maxc = 0, n, x, y;
-    int W, H, g, max_tris, rounds, c;
-    double cos_max, total_area = 0.0, total_w = 0.0, s_lo, s_hi, s_best;
+    dm_param *pm;
     dm__pz_edge *edges;
-    uint32_t *twin_he, *chart0, *vstamp, *queue, *cstart, *ctris, *gl, *order, *otmp, *bstart, *blist;
-    double *target, *cuv, *sig_t, *chart_n;
+    uint32_t *twin_he, *chart0, *vstamp, *queue, *gl;
+    uint32_t *cstart, *ctris;                   /* triangles bucketed by chart */
+    uint32_t *order, *otmp, *bstart, *blist;    /* packing order; boundary half-edges by chart */
+    double *target, *cuv, *sig_t, *chart_n;     /* target areas, chart-space uv, true areas */
+    double total_area;
+    size_t nc0, maxc;                           /* grown charts, most triangles in one */
     dm__pz_pack *pk;
     dm__pz_chart ch;
+} dm__pz_run;
 
-    if (out) *out = NULL;
-    if (!out) return DM_ERR_INVALID_ARGUMENT;
+static dm_result dm__pz_step_report(const dm__pz_run *r, float done)
+{
+    return dm__pz_report(r->o.progress, r->o.progress_user, done) ? DM_CANCELLED : DM_OK;
+}
+
+/* the options with their defaults, checked; then the mesh and the triangle weights */
+static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *options)
+{
+    dm_param_options o;
+    dm_result res;
+    size_t t;
+    int W, H, g, max_tris;
     memset(&o, 0, sizeof o);
     if (options) o = *options;
+    r->o = o;
     W = o.width ? o.width : 1024;
     H = o.height ? o.height : 1024;
     g = o.gutter ? o.gutter : 2;
     max_tris = o.max_chart_triangles ? o.max_chart_triangles : 96;
     max_tris = max_tris < 1 ? 1 : max_tris > 256 ? 256 : max_tris;
-    rounds = o.stretch_iterations == 0 ? 6 : o.stretch_iterations < 0 ? 0 : o.stretch_iterations;
+    r->W = W; r->H = H; r->g = g; r->max_tris = max_tris;
+    r->rounds = o.stretch_iterations == 0 ? 6 : o.stretch_iterations < 0 ? 0 : o.stretch_iterations;
     if (W < 1 || H < 1 || W > 16384 || H > 16384 || g < 0 || g > 1024 || !(o.max_chart_angle >= 0.0f) ||
         o.max_chart_angle > 180.0f)
         return DM_ERR_INVALID_ARGUMENT;
-    cos_max = cos((o.max_chart_angle > 0.0f ? o.max_chart_angle : 30.0f) * 0.017453292519943295);
-    res = dm__pz_check_mesh(positions, nv, indices, nt);
+    r->cos_max = cos((o.max_chart_angle > 0.0f ? o.max_chart_angle : 30.0f) * 0.017453292519943295);
+    res = dm__pz_check_mesh(r->positions, r->nv, r->indices, r->nt);
     if (res != DM_OK) return res;
     if (o.triangle_weight)
-        for (t = 0; t < nt; t++)
+        for (t = 0; t < r->nt; t++)
             if (!(o.triangle_weight[t] >= 0.0f) || o.triangle_weight[t] > 1e30f) return DM_ERR_INVALID_ARGUMENT;
+    return DM_OK;
+}
 
-    memset(&sc, 0, sizeof sc);
-    sc.a = dm__resolve_allocator(o.allocator);
-    n = (size_t)W * (size_t)H;
-    pm = (dm_param *)sc.a.alloc(sc.a.user, sizeof(dm_param));
+/* the result (its arrays owned by it) and the first temporaries */
+static dm_result dm__pz_alloc_result(dm__pz_run *r)
+{
+    dm__pz_scratch *sc = &r->sc;
+    size_t nt = r->nt, nv = r->nv, n;
+    dm_param *pm;
+    sc->a = dm__resolve_allocator(r->o.allocator);
+    n = r->n = (size_t)r->W * (size_t)r->H;
+    pm = r->pm = (dm_param *)sc->a.alloc(sc->a.user, sizeof(dm_param));
     if (!pm) return DM_ERR_OUT_OF_MEMORY;
     memset(pm, 0, sizeof *pm);
-    pm->allocator = sc.a;
-    pm->width = W;
-    pm->height = H;
+    pm->allocator = sc->a;
+    pm->width = r->W;
+    pm->height = r->H;
     pm->triangle_count = nt;
-    pm->uv = (float *)dm__alloc_array(&sc.a, 6 * nt, sizeof(float), &sc.overflow);
-    pm->chart = (uint32_t *)dm__alloc_array(&sc.a, nt, sizeof(uint32_t), &sc.overflow);
-    pm->twin = (uint32_t *)dm__alloc_array(&sc.a, 3 * nt, sizeof(uint32_t), &sc.overflow);
-    pm->texel_triangle = (uint32_t *)dm__alloc_array(&sc.a, n, sizeof(uint32_t), &sc.overflow);
-    pm->texel_bary = (float *)dm__alloc_array(&sc.a, 2 * n, sizeof(float), &sc.overflow);
-    pm->nbr = (uint32_t *)dm__alloc_array(&sc.a, 4 * n, sizeof(uint32_t), &sc.overflow);
-    pm->nbr_rot = (uint8_t *)dm__alloc_array(&sc.a, 4 * n, sizeof(uint8_t), &sc.overflow);
-    edges = (dm__pz_edge *)dm__pz_take(&sc, 3 * nt, sizeof(dm__pz_edge));
-    twin_he = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
-    chart0 = (uint32_t *)dm__pz_take(&sc, nt, sizeof(uint32_t));
-    vstamp = (uint32_t *)dm__pz_take(&sc, nv, sizeof(uint32_t));
-    queue = (uint32_t *)dm__pz_take(&sc, 3 * nt + 3, sizeof(uint32_t));
-    gl = (uint32_t *)dm__pz_take(&sc, nv, sizeof(uint32_t));
-    target = (double *)dm__pz_take(&sc, nt, sizeof(double));
-    cuv = (double *)dm__pz_take(&sc, 6 * nt, sizeof(double));
-    sig_t = (double *)dm__pz_take(&sc, nt, sizeof(double));
+    pm->uv = (float *)dm__alloc_array(&sc->a, 6 * nt, sizeof(float), &sc->overflow);
+    pm->chart = (uint32_t *)dm__alloc_array(&sc->a, nt, sizeof(uint32_t), &sc->overflow);
+    pm->twin = (uint32_t *)dm__alloc_array(&sc->a, 3 * nt, sizeof(uint32_t), &sc->overflow);
+    pm->texel_triangle = (uint32_t *)dm__alloc_array(&sc->a, n, sizeof(uint32_t), &sc->overflow);
+    pm->texel_bary = (float *)dm__alloc_array(&sc->a, 2 * n, sizeof(float), &sc->overflow);
+    pm->nbr = (uint32_t *)dm__alloc_array(&sc->a, 4 * n, sizeof(uint32_t), &sc->overflow);
+    pm->nbr_rot = (uint8_t *)dm__alloc_array(&sc->a, 4 * n, sizeof(uint8_t), &sc->overflow);
+    r->edges = (dm__pz_edge *)dm__pz_take(sc, 3 * nt, sizeof(dm__pz_edge));
+    r->twin_he = (uint32_t *)dm__pz_take(sc, 3 * nt, sizeof(uint32_t));
+    r->chart0 = (uint32_t *)dm__pz_take(sc, nt, sizeof(uint32_t));
+    r->vstamp = (uint32_t *)dm__pz_take(sc, nv, sizeof(uint32_t));
+    r->queue = (uint32_t *)dm__pz_take(sc, 3 * nt + 3, sizeof(uint32_t));
+    r->gl = (uint32_t *)dm__pz_take(sc, nv, sizeof(uint32_t));
+    r->target = (double *)dm__pz_take(sc, nt, sizeof(double));
+    r->cuv = (double *)dm__pz_take(sc, 6 * nt, sizeof(double));
+    r->sig_t = (double *)dm__pz_take(sc, nt, sizeof(double));
     if (!pm->uv || !pm->chart || !pm->twin || !pm->texel_triangle || !pm->texel_bary || !pm->nbr || !pm->nbr_rot ||
-        !edges || !twin_he || !chart0 || !vstamp || !queue || !gl || !target || !cuv || !sig_t) {
-        res = dm__pz_fail(&sc);
-        goto fail;
-    }
+        !r->edges || !r->twin_he || !r->chart0 || !r->vstamp || !r->queue || !r->gl || !r->target || !r->cuv ||
+        !r->sig_t)
+        return dm__pz_fail(sc);
+    return DM_OK;
+}
 
-    /* 1. adjacency and charts */
-    dm__pz_twins(indices, nt, edges, pm->twin, twin_he);
-    for (i = 0; i < nv; i++) { vstamp[i] = DM_NO_HIT; gl[i] = DM_NO_HIT; }
-    nc0 = dm__pz_grow_charts(positions, indices, nt, pm->twin, max_tris, cos_max, chart0, vstamp, queue);
+/* 1. adjacency, then charts grown over edges while the normals stay within the cone */
+static dm_result dm__pz_find_charts(dm__pz_run *r)
+{
+    size_t i;
+    dm__pz_twins(r->indices, r->nt, r->edges, r->pm->twin, r->twin_he);
+    for (i = 0; i < r->nv; i++) { r->vstamp[i] = DM_NO_HIT; r->gl[i] = DM_NO_HIT; }
+    r->nc0 = dm__pz_grow_charts(r->positions, r->indices, r->nt, r->pm->twin, r->max_tris, r->cos_max, r->chart0,
+                                r->vstamp, r->queue);
+    return DM_OK;
+}
 
-    /* 2. targets: weights (default: area), floored at 1e-4 of the mean, scaled to the total area */
+/* 2. targets: weights (default: area), floored at 1e-4 of the mean, scaled to the total area */
+static dm_result dm__pz_targets(dm__pz_run *r)
+{
+    size_t t, nt = r->nt;
+    double total_area = 0.0, total_w = 0.0, floor_w, sum = 0.0;
+    double *target = r->target;
     for (t = 0; t < nt; t++) {
         double fnv[3];
-        dm__pz_face_normal(positions, indices, t, fnv);
-        sig_t[t] = 0.5 * dm__pz_len(fnv);
-        total_area += sig_t[t];
-        target[t] = o.triangle_weight ? (double)o.triangle_weight[t] : sig_t[t];
+        dm__pz_face_normal(r->positions, r->indices, t, fnv);
+        r->sig_t[t] = 0.5 * dm__pz_len(fnv);
+        total_area += r->sig_t[t];
+        target[t] = r->o.triangle_weight ? (double)r->o.triangle_weight[t] : r->sig_t[t];
         total_w += target[t];
     }
     if (!(total_area > 0.0)) total_area = (double)nt;
     if (!(total_w > 0.0)) { for (t = 0; t < nt; t++) target[t] = 1.0; total_w = (double)nt; }
-    {
-        double floor_w = 1e-4 * total_w / (double)nt, sum = 0.0;
-        for (t = 0; t < nt; t++) { if (target[t] < floor_w) target[t] = floor_w; sum += target[t]; }
-        for (t = 0; t < nt; t++) target[t] *= total_area / sum;
-    }
+    floor_w = 1e-4 * total_w / (double)nt;
+    for (t = 0; t < nt; t++) { if (target[t] < floor_w) target[t] = floor_w; sum += target[t]; }
+    for (t = 0; t < nt; t++) target[t] *= total_area / sum;
+    r->total_area = total_area;
+    return DM_OK;
+}
 
-    /* 3. bucket the triangles by chart */
-    cstart = (uint32_t *)dm__pz_take(&sc, nc0 + 1, sizeof(uint32_t));
-    ctris = (uint32_t *)dm__pz_take(&sc, nt, sizeof(uint32_t));
-    if (!cstart || !ctris) { res = dm__pz_fail(&sc); goto fail; }
-    memset(cstart, 0, (nc0 + 1) * sizeof(uint32_t));
-    for (t = 0; t < nt; t++) cstart[chart0[t] + 1]++;
+/* 3. bucket the triangles by chart (stable: in triangle order within a chart) */
+static dm_result dm__pz_bucket_charts(dm__pz_run *r)
+{
+    size_t t, i, nc0 = r->nc0;
+    uint32_t *fillp;
+    r->cstart = (uint32_t *)dm__pz_take(&r->sc, nc0 + 1, sizeof(uint32_t));
+    r->ctris = (uint32_t *)dm__pz_take(&r->sc, r->nt, sizeof(uint32_t));
+    if (!r->cstart || !r->ctris) return dm__pz_fail(&r->sc);
+    memset(r->cstart, 0, (nc0 + 1) * sizeof(uint32_t));
+    for (t = 0; t < r->nt; t++) r->cstart[r->chart0[t] + 1]++;
     for (i = 0; i < nc0; i++) {
-        if (cstart[i + 1] > maxc) maxc = cstart[i + 1];
-        cstart[i + 1] += cstart[i];
+        if (r->cstart[i + 1] > r->maxc) r->maxc = r->cstart[i + 1];
+        r->cstart[i + 1] += r->cstart[i];
     }
-    {
-        /* stable fill: a second counter per chart */
-        uint32_t *fillp = (uint32_t *)dm__pz_take(&sc, nc0, sizeof(uint32_t));
-        if (!fillp) { res = dm__pz_fail(&sc); goto fail; }
-        memcpy(fillp, cstart, nc0 * sizeof(uint32_t));
-        for (t = 0; t < nt; t++) ctris[fillp[chart0[t]]++] = (uint32_t)t;
-    }
+    fillp = (uint32_t *)dm__pz_take(&r->sc, nc0, sizeof(uint32_t));
+    if (!fillp) return dm__pz_fail(&r->sc);
+    memcpy(fillp, r->cstart, nc0 * sizeof(uint32_t));
+    for (t = 0; t < r->nt; t++) r->ctris[fillp[r->chart0[t]]++] = (uint32_t)t;
+    return DM_OK;
+}
 
-    /* 4. lay out each chart */
-    memset(&ch, 0, sizeof ch);
-    ch.tri = (uint32_t *)dm__pz_take(&sc, maxc, sizeof(uint32_t));
-    ch.lv = (uint32_t *)dm__pz_take(&sc, 3 * maxc, sizeof(uint32_t));
-    ch.gv = (uint32_t *)dm__pz_take(&sc, 3 * maxc, sizeof(uint32_t));
-    ch.x = (double *)dm__pz_take(&sc, 9 * maxc, sizeof(double));
-    ch.uv = (double *)dm__pz_take(&sc, 6 * maxc, sizeof(double));
-    ch.uv_prev = (double *)dm__pz_take(&sc, 6 * maxc, sizeof(double));
-    ch.w = (double *)dm__pz_take(&sc, 6 * maxc, sizeof(double));
-    ch.target = (double *)dm__pz_take(&sc, maxc, sizeof(double));
-    ch.sigma = (double *)dm__pz_take(&sc, 3 * maxc, sizeof(double));
-    ch.sig_w = (double *)dm__pz_take(&sc, 3 * maxc, sizeof(double));
-    ch.interior = (int *)dm__pz_take(&sc, 3 * maxc, sizeof(int));
-    ch.bnext = (uint32_t *)dm__pz_take(&sc, 3 * maxc, sizeof(uint32_t));
-    ch.mat = (double *)dm__pz_take(&sc, 9 * maxc * maxc, sizeof(double));
-    ch.rhs = (double *)dm__pz_take(&sc, 6 * maxc, sizeof(double));
-    chart_n = (double *)dm__pz_take(&sc, 3 * maxc, sizeof(double));
-    if (!ch.tri || !ch.lv || !ch.gv || !ch.x || !ch.uv || !ch.uv_prev || !ch.w || !ch.target || !ch.sigma ||
-        !ch.sig_w || !ch.interior || !ch.bnext || !ch.mat || !ch.rhs || !chart_n) {
-        res = dm__pz_fail(&sc);
-        goto fail;
-    }
-    pm->stretch_l2 = 0.0f;
-    for (i = 0; i < nc0; i++) {
-        size_t k, lt;
-        double nsum[3] = {0.0, 0.0, 0.0}, ln, uvsum = 0.0, tsum = 0.0, f;
-        int ok;
-        if (dm__pz_report(o.progress, o.progress_user, 0.6f * (float)i / (float)nc0)) { res = DM_CANCELLED; goto fail; }
-        ch.nt = cstart[i + 1] - cstart[i];
-        ch.nv = 0;
-        for (lt = 0; lt < ch.nt; lt++) {
-            double fn[3];
-            t = ctris[cstart[i] + lt];
-            ch.tri[lt] = (uint32_t)t;
-            ch.target[lt] = target[t];
-            dm__pz_face_normal(positions, indices, t, fn);
-            nsum[0] += fn[0]; nsum[1] += fn[1]; nsum[2] += fn[2];
-            for (c = 0; c < 3; c++) {
-                uint32_t v = indices[3 * t + (size_t)c];
-                if (gl[v] == DM_NO_HIT) {
-                    gl[v] = (uint32_t)ch.nv;
-                    ch.gv[ch.nv] = v;
-                    dm__pz_load(positions, v, ch.x + 3 * ch.nv);
-                    ch.bnext[ch.nv] = DM_NO_HIT;
-                    ch.nv++;
-                }
-                ch.lv[3 * lt + (size_t)c] = gl[v];
-            }
-        }
-        for (lt = 0; lt < ch.nt; lt++)
-            for (c = 0; c < 3; c++) {
-                uint32_t o2 = pm->twin[3 * (size_t)ch.tri[lt] + (size_t)c];
-                if (o2 == DM_NO_HIT || chart0[o2] != i)
-                    ch.bnext[ch.lv[3 * lt + (size_t)c]] = ch.lv[3 * lt + (size_t)((c + 1) % 3)];
-            }
-        ch.n_int = 0;
-        for (k = 0; k < ch.nv; k++) ch.interior[k] = ch.bnext[k] == DM_NO_HIT ? (int)ch.n_int++ : -1;
-        ln = dm__pz_len(nsum);
-        if (ln > 0.0) { nsum[0] /= ln; nsum[1] /= ln; nsum[2] /= ln; } else { nsum[2] = 1.0; }
-        ok = ch.nt > 1 && dm__pz_layout(&ch, nsum, rounds, sig_t);
-        if (ok) {
-            for (lt = 0; lt < ch.nt; lt++) {
-                for (c = 0; c < 3; c++) {
-                    cuv[6 * (size_t)ch.tri[lt] + 2 * (size_t)c] = ch.uv[2 * ch.lv[3 * lt + (size_t)c]];
-                    cuv[6 * (size_t)ch.tri[lt] + 2 * (size_t)c + 1] = ch.uv[2 * ch.lv[3 * lt + (size_t)c] + 1];
-                }
-                uvsum += dm__pz_uv_area(ch.uv, ch.lv + 3 * lt);
-                tsum += ch.target[lt];
-            }
-            f = sqrt(tsum / uvsum);
-            for (lt = 0; lt < ch.nt; lt++) {
-                pm->chart[ch.tri[lt]] = (uint32_t)nc;
-                for (c = 0; c < 6; c++) cuv[6 * (size_t)ch.tri[lt] + (size_t)c] *= f;
-            }
-            nc++;
-        } else {
-            /* a chart without a flip-free layout falls apart into lone triangles */
-            for (lt = 0; lt < ch.nt; lt++) {
-                double *q = cuv + 6 * (size_t)ch.tri[lt];
-                dm__pz_single(positions, indices, ch.tri[lt], q);
-                f = sqrt(ch.target[lt] / dm__pz_cuv_area(q));
-                for (c = 0; c < 6; c++) q[c] *= f;
-                pm->chart[ch.tri[lt]] = (uint32_t)nc++;
-            }
-        }
-        for (k = 0; k < ch.nv; k++) gl[ch.gv[k]] = DM_NO_HIT;
-    }
-    pm->chart_count = nc;
+/* the working arrays of one chart's layout, sized for the largest chart */
+static dm_result dm__pz_alloc_chart(dm__pz_run *r)
+{
+    dm__pz_scratch *sc = &r->sc;
+    dm__pz_chart *ch = &r->ch;
+    size_t maxc = r->maxc;
+    memset(ch, 0, sizeof *ch);
+    ch->tri = (uint32_t *)dm__pz_take(sc, maxc, sizeof(uint32_t));
+    ch->lv = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->gv = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->x = (double *)dm__pz_take(sc, 9 * maxc, sizeof(double));
+    ch->uv = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
+    ch->uv_prev = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
+    ch->w = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
+    ch->target = (double *)dm__pz_take(sc, maxc, sizeof(double));
+    ch->sigma = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
+    ch->sig_w = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
+    ch->interior = (int *)dm__pz_take(sc, 3 * maxc, sizeof(int));
+    ch->bnext = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->mat = (double *)dm__pz_take(sc, 9 * maxc * maxc, sizeof(double));
+    ch->rhs = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
+    r->chart_n = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
+    if (!ch->tri || !ch->lv || !ch->gv || !ch->x || !ch->uv || !ch->uv_prev || !ch->w || !ch->target || !ch->sigma ||
+        !ch->sig_w || !ch->interior || !ch->bnext || !ch->mat || !ch->rhs || !r->chart_n)
+        return dm__pz_fail(sc);
+    return DM_OK;
+}
 
-    /* 5. turn each chart to its smallest box (12 angles), then shelf-pack with bisection on scale */
-    pk = (dm__pz_pack *)dm__pz_take(&sc, nc, sizeof(dm__pz_pack));
-    order = (uint32_t *)dm__pz_take(&sc, nc, sizeof(uint32_t));
-    otmp = (uint32_t *)dm__pz_take(&sc, nc, sizeof(uint32_t));
-    bstart = (uint32_t *)dm__pz_take(&sc, nc + 1, sizeof(uint32_t));
-    blist = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
-    if (!pk || !order || !otmp || !bstart || !blist) { res = dm__pz_fail(&sc); goto fail; }
-    memset(bstart, 0, (nc + 1) * sizeof(uint32_t));
-    for (t = 0; t < nt; t++) bstart[pm->chart[t] + 1]++;
-    for (i = 0; i < nc; i++) bstart[i + 1] += bstart[i];
-    memcpy(otmp, bstart, nc * sizeof(uint32_t));
-    for (t = 0; t < nt; t++) ctris[otmp[pm->chart[t]]++] = (uint32_t)t;
-    for (i = 0; i < nc; i++) {
-        int a, best_a = 0;
-        double best_area = 0.0, mn[2], mx[2], cs, sn;
-        for (a = 0; a < 12; a++) {
-            double ang = a * (3.141592653589793 / 12.0), area;
-            size_t k;
-            cs = cos(ang); sn = sin(ang);
-            mn[0] = mn[1] = HUGE_VAL; mx[0] = mx[1] = -HUGE_VAL;
-            for (k = bstart[i]; k < bstart[i + 1]; k++)
-                for (c = 0; c < 3; c++) {
-                    const double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
-                    double u = cs * q[0] - sn * q[1], v = sn * q[0] + cs * q[1];
-                    if (u < mn[0]) mn[0] = u;
-                    if (u > mx[0]) mx[0] = u;
-                    if (v < mn[1]) mn[1] = v;
-                    if (v > mx[1]) mx[1] = v;
-                }
-            area = (mx[0] - mn[0]) * (mx[1] - mn[1]);
-            if (a == 0 || area < best_area) { best_area = area; best_a = a; }
+/* chart i's triangles and local vertices into ch, its boundary loop (bnext) and interior
+   numbering; nsum gets the chart's mean normal */
+static void dm__pz_gather_chart(dm__pz_run *r, size_t i, double nsum[3])
+{
+    dm__pz_chart *ch = &r->ch;
+    size_t k, lt, t;
+    double ln;
+    int c;
+    nsum[0] = nsum[1] = nsum[2] = 0.0;
+    ch->nt = r->cstart[i + 1] - r->cstart[i];
+    ch->nv = 0;
+    for (lt = 0; lt < ch->nt; lt++) {
+        double fn[3];
+        t = r->ctris[r->cstart[i] + lt];
+        ch->tri[lt] = (uint32_t)t;
+        ch->target[lt] = r->target[t];
+        dm__pz_face_normal(r->positions, r->indices, t, fn);
+        nsum[0] += fn[0]; nsum[1] += fn[1]; nsum[2] += fn[2];
+        for (c = 0; c < 3; c++) {
+            uint32_t v = r->indices[3 * t + (size_t)c];
+            if (r->gl[v] == DM_NO_HIT) {
+                r->gl[v] = (uint32_t)ch->nv;
+                ch->gv[ch->nv] = v;
+                dm__pz_load(r->positions, v, ch->x + 3 * ch->nv);
+                ch->bnext[ch->nv] = DM_NO_HIT;
+                ch->nv++;
+            }
+            ch->lv[3 * lt + (size_t)c] = r->gl[v];
         }
-        cs = cos(best_a * (3.141592653589793 / 12.0));
-        sn = sin(best_a * (3.141592653589793 / 12.0));
+    }
+    for (lt = 0; lt < ch->nt; lt++)
+        for (c = 0; c < 3; c++) {
+            uint32_t o2 = r->pm->twin[3 * (size_t)ch->tri[lt] + (size_t)c];
+            if (o2 == DM_NO_HIT || r->chart0[o2] != i)
+                ch->bnext[ch->lv[3 * lt + (size_t)c]] = ch->lv[3 * lt + (size_t)((c + 1) % 3)];
+        }
+    ch->n_int = 0;
+    for (k = 0; k < ch->nv; k++) ch->interior[k] = ch->bnext[k] == DM_NO_HIT ? (int)ch->n_int++ : -1;
+    ln = dm__pz_len(nsum);
+    if (ln > 0.0) { nsum[0] /= ln; nsum[1] /= ln; nsum[2] /= ln; } else { nsum[2] = 1.0; }
+}
+
+/* the laid-out chart in ch becomes chart nc, scaled to its target area; returns the next number */
+static size_t dm__pz_keep_chart(dm__pz_run *r, size_t nc)
+{
+    const dm__pz_chart *ch = &r->ch;
+    double uvsum = 0.0, tsum = 0.0, f;
+    size_t lt;
+    int c;
+    for (lt = 0; lt < ch->nt; lt++) {
+        for (c = 0; c < 3; c++) {
+            r->cuv[6 * (size_t)ch->tri[lt] + 2 * (size_t)c] = ch->uv[2 * ch->lv[3 * lt + (size_t)c]];
+            r->cuv[6 * (size_t)ch->tri[lt] + 2 * (size_t)c + 1] = ch->uv[2 * ch->lv[3 * lt + (size_t)c] + 1];
+        }
+        uvsum += dm__pz_uv_area(ch->uv, ch->lv + 3 * lt);
+        tsum += ch->target[lt];
+    }
+    f = sqrt(tsum / uvsum);
+    for (lt = 0; lt < ch->nt; lt++) {
+        r->pm->chart[ch->tri[lt]] = (uint32_t)nc;
+        for (c = 0; c < 6; c++) r->cuv[6 * (size_t)ch->tri[lt] + (size_t)c] *= f;
+    }
+    return nc + 1;
+}
+
+/* the chart in ch, which has no flip-free layout, falls apart into lone triangles, numbered
+   from nc; returns the next number */
+static size_t dm__pz_split_chart(dm__pz_run *r, size_t nc)
+{
+    const dm__pz_chart *ch = &r->ch;
+    size_t lt;
+    int c;
+    for (lt = 0; lt < ch->nt; lt++) {
+        double *q = r->cuv + 6 * (size_t)ch->tri[lt], f;
+        dm__pz_single(r->positions, r->indices, ch->tri[lt], q);
+        f = sqrt(ch->target[lt] / dm__pz_cuv_area(q));
+        for (c = 0; c < 6; c++) q[c] *= f;
+        r->pm->chart[ch->tri[lt]] = (uint32_t)nc++;
+    }
+    return nc;
+}
+
+/* 4. lay out each grown chart; the charts are renumbered as they are kept or split */
+static dm_result dm__pz_layout_charts(dm__pz_run *r)
+{
+    size_t i, k, nc = 0;
+    dm_result res = dm__pz_alloc_chart(r);
+    if (res != DM_OK) return res;
+    r->pm->stretch_l2 = 0.0f;
+    for (i = 0; i < r->nc0; i++) {
+        double nsum[3];
+        if (dm__pz_step_report(r, 0.6f * (float)i / (float)r->nc0) != DM_OK) return DM_CANCELLED;
+        dm__pz_gather_chart(r, i, nsum);
+        if (r->ch.nt > 1 && dm__pz_layout(&r->ch, nsum, r->rounds, r->sig_t))
+            nc = dm__pz_keep_chart(r, nc);
+        else
+            nc = dm__pz_split_chart(r, nc);
+        for (k = 0; k < r->ch.nv; k++) r->gl[r->ch.gv[k]] = DM_NO_HIT;
+    }
+    r->pm->chart_count = nc;
+    return DM_OK;
+}
+
+/* chart i (its triangles ctris[bstart[i]..bstart[i+1]]) turned to the smallest of 12 box
+   angles and moved to the origin; its box size goes to pk[i] */
+static void dm__pz_box_chart(dm__pz_run *r, size_t i)
+{
+    const uint32_t *ctris = r->ctris, *bstart = r->bstart;
+    double *cuv = r->cuv;
+    int a, best_a = 0, c;
+    double best_area = 0.0, mn[2], mx[2], cs, sn;
+    size_t k;
+    for (a = 0; a < 12; a++) {
+        double ang = a * (3.141592653589793 / 12.0), area;
+        cs = cos(ang); sn = sin(ang);
         mn[0] = mn[1] = HUGE_VAL; mx[0] = mx[1] = -HUGE_VAL;
-        {
-            size_t k;
-            for (k = bstart[i]; k < bstart[i + 1]; k++)
-                for (c = 0; c < 3; c++) {
-                    double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
-                    double u = cs * q[0] - sn * q[1], v = sn * q[0] + cs * q[1];
-                    q[0] = u; q[1] = v;
-                    if (u < mn[0]) mn[0] = u;
-                    if (u > mx[0]) mx[0] = u;
-                    if (v < mn[1]) mn[1] = v;
-                    if (v > mx[1]) mx[1] = v;
-                }
-            for (k = bstart[i]; k < bstart[i + 1]; k++)
-                for (c = 0; c < 3; c++) {
-                    double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
-                    q[0] -= mn[0];
-                    q[1] -= mn[1];
-                }
-        }
-        pk[i].bw = mx[0] - mn[0];
-        pk[i].bh = mx[1] - mn[1];
+        for (k = bstart[i]; k < bstart[i + 1]; k++)
+            for (c = 0; c < 3; c++) {
+                const double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
+                double u = cs * q[0] - sn * q[1], v = sn * q[0] + cs * q[1];
+                if (u < mn[0]) mn[0] = u;
+                if (u > mx[0]) mx[0] = u;
+                if (v < mn[1]) mn[1] = v;
+                if (v > mx[1]) mx[1] = v;
+            }
+        area = (mx[0] - mn[0]) * (mx[1] - mn[1]);
+        if (a == 0 || area < best_area) { best_area = area; best_a = a; }
     }
-    dm__pz_order(pk, nc, order, otmp);
-    s_lo = 0.0;
-    s_hi = sqrt((double)W * (double)H / total_area);
-    if (!dm__pz_try_pack(pk, order, nc, 0.0, g, W, H)) { res = DM_ERR_MAP_TOO_SMALL; goto fail; }
+    cs = cos(best_a * (3.141592653589793 / 12.0));
+    sn = sin(best_a * (3.141592653589793 / 12.0));
+    mn[0] = mn[1] = HUGE_VAL; mx[0] = mx[1] = -HUGE_VAL;
+    for (k = bstart[i]; k < bstart[i + 1]; k++)
+        for (c = 0; c < 3; c++) {
+            double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
+            double u = cs * q[0] - sn * q[1], v = sn * q[0] + cs * q[1];
+            q[0] = u; q[1] = v;
+            if (u < mn[0]) mn[0] = u;
+            if (u > mx[0]) mx[0] = u;
+            if (v < mn[1]) mn[1] = v;
+            if (v > mx[1]) mx[1] = v;
+        }
+    for (k = bstart[i]; k < bstart[i + 1]; k++)
+        for (c = 0; c < 3; c++) {
+            double *q = cuv + 6 * (size_t)ctris[k] + 2 * (size_t)c;
+            q[0] -= mn[0];
+            q[1] -= mn[1];
+        }
+    r->pk[i].bw = mx[0] - mn[0];
+    r->pk[i].bh = mx[1] - mn[1];
+}
+
+/* 5a. the triangles bucketed again by final chart, each chart turned to its smallest box */
+static dm_result dm__pz_box_charts(dm__pz_run *r)
+{
+    size_t t, i, nt = r->nt, nc = r->pm->chart_count;
+    const uint32_t *chart = r->pm->chart;
+    r->pk = (dm__pz_pack *)dm__pz_take(&r->sc, nc, sizeof(dm__pz_pack));
+    r->order = (uint32_t *)dm__pz_take(&r->sc, nc, sizeof(uint32_t));
+    r->otmp = (uint32_t *)dm__pz_take(&r->sc, nc, sizeof(uint32_t));
+    r->bstart = (uint32_t *)dm__pz_take(&r->sc, nc + 1, sizeof(uint32_t));
+    r->blist = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
+    if (!r->pk || !r->order || !r->otmp || !r->bstart || !r->blist) return dm__pz_fail(&r->sc);
+    memset(r->bstart, 0, (nc + 1) * sizeof(uint32_t));
+    for (t = 0; t < nt; t++) r->bstart[chart[t] + 1]++;
+    for (i = 0; i < nc; i++) r->bstart[i + 1] += r->bstart[i];
+    memcpy(r->otmp, r->bstart, nc * sizeof(uint32_t));
+    for (t = 0; t < nt; t++) r->ctris[r->otmp[chart[t]]++] = (uint32_t)t;
+    for (i = 0; i < nc; i++) dm__pz_box_chart(r, i);
+    return DM_OK;
+}
+
+/* 5b. shelf-pack the boxes, the largest scale that fits found by bisection; the uv follow */
+static dm_result dm__pz_pack_charts(dm__pz_run *r)
+{
+    size_t i, t, nc = r->pm->chart_count;
+    int W = r->W, H = r->H, g = r->g, c;
+    double s_lo = 0.0, s_hi, s_best;
+    dm__pz_order(r->pk, nc, r->order, r->otmp);
+    s_hi = sqrt((double)W * (double)H / r->total_area);
+    if (!dm__pz_try_pack(r->pk, r->order, nc, 0.0, g, W, H)) return DM_ERR_MAP_TOO_SMALL;
     s_best = 0.0;
     for (i = 0; i < 48; i++) {
         double s = 0.5 * (s_lo + s_hi);
-        if (dm__pz_try_pack(pk, order, nc, s, g, W, H)) { s_best = s; s_lo = s; } else s_hi = s;
+        if (dm__pz_try_pack(r->pk, r->order, nc, s, g, W, H)) { s_best = s; s_lo = s; } else s_hi = s;
     }
-    if (!(s_best > 0.0)) { res = DM_ERR_MAP_TOO_SMALL; goto fail; }
-    dm__pz_try_pack(pk, order, nc, s_best, g, W, H);
-    for (t = 0; t < nt; t++) {
-        const dm__pz_pack *p = pk + pm->chart[t];
+    if (!(s_best > 0.0)) return DM_ERR_MAP_TOO_SMALL;
+    dm__pz_try_pack(r->pk, r->order, nc, s_best, g, W, H);
+    for (t = 0; t < r->nt; t++) {
+        const dm__pz_pack *p = r->pk + r->pm->chart[t];
         for (c = 0; c < 3; c++) {
-            double px = p->ox + 0.5 * g + s_best * cuv[6 * t + 2 * (size_t)c];
-            double py = p->oy + 0.5 * g + s_best * cuv[6 * t + 2 * (size_t)c + 1];
-            pm->uv[6 * t + 2 * (size_t)c] = (float)(px / W);
-            pm->uv[6 * t + 2 * (size_t)c + 1] = (float)(py / H);
+            double px = p->ox + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c];
+            double py = p->oy + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c + 1];
+            r->pm->uv[6 * t + 2 * (size_t)c] = (float)(px / W);
+            r->pm->uv[6 * t + 2 * (size_t)c + 1] = (float)(py / H);
         }
     }
-    if (dm__pz_report(o.progress, o.progress_user, 0.6f)) { res = DM_CANCELLED; goto fail; }
+    return dm__pz_step_report(r, 0.6f);
+}
 
-    /* 6. the texel -> triangle map: texel centres inside a triangle, first triangle wins */
-    for (i = 0; i < n; i++) { pm->texel_triangle[i] = DM_NO_HIT; pm->texel_bary[2 * i] = pm->texel_bary[2 * i + 1] = 0.0f; }
-    for (t = 0; t < nt; t++) {
-        double P[3][2], d, mnx, mxx, mny, mxy;
-        long x0, x1, y0, y1, xx, yy;
-        for (c = 0; c < 3; c++) {
-            P[c][0] = (double)pm->uv[6 * t + 2 * (size_t)c] * W;
-            P[c][1] = (double)pm->uv[6 * t + 2 * (size_t)c + 1] * H;
-        }
-        d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
-        if (!(d > 0.0)) continue;
-        mnx = fmin(P[0][0], fmin(P[1][0], P[2][0])); mxx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
-        mny = fmin(P[0][1], fmin(P[1][1], P[2][1])); mxy = fmax(P[0][1], fmax(P[1][1], P[2][1]));
-        x0 = (long)floor(mnx - 0.5); x1 = (long)ceil(mxx - 0.5);
-        y0 = (long)floor(mny - 0.5); y1 = (long)ceil(mxy - 0.5);
-        if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
-        if (x1 > W - 1) x1 = W - 1;
-        if (y1 > H - 1) y1 = H - 1;
-        for (yy = y0; yy <= y1; yy++)
-            for (xx = x0; xx <= x1; xx++) {
-                double cx = xx + 0.5 - P[0][0], cy = yy + 0.5 - P[0][1], u, v;
-                size_t id = (size_t)yy * (size_t)W + (size_t)xx;
-                u = (cx * (P[2][1] - P[0][1]) - cy * (P[2][0] - P[0][0])) / d;
-                v = ((P[1][0] - P[0][0]) * cy - (P[1][1] - P[0][1]) * cx) / d;
-                if (u < -1e-7 || v < -1e-7 || u + v > 1.0 + 1e-7 || pm->texel_triangle[id] != DM_NO_HIT) continue;
-                if (u < 0.0) u = 0.0;
-                if (v < 0.0) v = 0.0;
-                if (u + v > 1.0) { double sm = u + v; u /= sm; v /= sm; }
-                pm->texel_triangle[id] = (uint32_t)t;
-                pm->texel_bary[2 * id] = (float)u;
-                pm->texel_bary[2 * id + 1] = (float)v;
-            }
+/* the texels whose centres lie in triangle t (of positive uv area) and are not taken yet */
+static void dm__pz_raster_triangle(dm_param *pm, size_t t)
+{
+    int W = pm->width, H = pm->height, c;
+    double P[3][2], d, mnx, mxx, mny, mxy;
+    long x0, x1, y0, y1, xx, yy;
+    for (c = 0; c < 3; c++) {
+        P[c][0] = (double)pm->uv[6 * t + 2 * (size_t)c] * W;
+        P[c][1] = (double)pm->uv[6 * t + 2 * (size_t)c + 1] * H;
     }
-    if (dm__pz_report(o.progress, o.progress_user, 0.8f)) { res = DM_CANCELLED; goto fail; }
+    d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
+    if (!(d > 0.0)) return;
+    mnx = fmin(P[0][0], fmin(P[1][0], P[2][0])); mxx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
+    mny = fmin(P[0][1], fmin(P[1][1], P[2][1])); mxy = fmax(P[0][1], fmax(P[1][1], P[2][1]));
+    x0 = (long)floor(mnx - 0.5); x1 = (long)ceil(mxx - 0.5);
+    y0 = (long)floor(mny - 0.5); y1 = (long)ceil(mxy - 0.5);
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > W - 1) x1 = W - 1;
+    if (y1 > H - 1) y1 = H - 1;
+    for (yy = y0; yy <= y1; yy++)
+        for (xx = x0; xx <= x1; xx++) {
+            double cx = xx + 0.5 - P[0][0], cy = yy + 0.5 - P[0][1], u, v;
+            size_t id = (size_t)yy * (size_t)W + (size_t)xx;
+            u = (cx * (P[2][1] - P[0][1]) - cy * (P[2][0] - P[0][0])) / d;
+            v = ((P[1][0] - P[0][0]) * cy - (P[1][1] - P[0][1]) * cx) / d;
+            if (u < -1e-7 || v < -1e-7 || u + v > 1.0 + 1e-7 || pm->texel_triangle[id] != DM_NO_HIT) continue;
+            if (u < 0.0) u = 0.0;
+            if (v < 0.0) v = 0.0;
+            if (u + v > 1.0) { double sm = u + v; u /= sm; v /= sm; }
+            pm->texel_triangle[id] = (uint32_t)t;
+            pm->texel_bary[2 * id] = (float)u;
+            pm->texel_bary[2 * id + 1] = (float)v;
+        }
+}
 
-    /* 7. each chart's boundary half-edges, then the neighbours across seams */
-    memset(bstart, 0, (nc + 1) * sizeof(uint32_t));
-    for (t = 0; t < nt; t++)
+/* 6. the texel -> triangle map: texel centres inside a triangle, first triangle wins */
+static dm_result dm__pz_rasterize(dm__pz_run *r)
+{
+    dm_param *pm = r->pm;
+    size_t i, t;
+    for (i = 0; i < r->n; i++) { pm->texel_triangle[i] = DM_NO_HIT; pm->texel_bary[2 * i] = pm->texel_bary[2 * i + 1] = 0.0f; }
+    for (t = 0; t < r->nt; t++) dm__pz_raster_triangle(pm, t);
+    return dm__pz_step_report(r, 0.8f);
+}
+
+/* 7a. each chart's boundary half-edges (3 t + c), listed by chart in blist[bstart[chart]..] */
+static void dm__pz_seam_lists(dm__pz_run *r)
+{
+    const dm_param *pm = r->pm;
+    size_t t, i, nc = pm->chart_count;
+    int c;
+    memset(r->bstart, 0, (nc + 1) * sizeof(uint32_t));
+    for (t = 0; t < r->nt; t++)
         for (c = 0; c < 3; c++) {
             uint32_t o2 = pm->twin[3 * t + (size_t)c];
-            if (o2 == DM_NO_HIT || pm->chart[o2] != pm->chart[t]) bstart[pm->chart[t] + 1]++;
+            if (o2 == DM_NO_HIT || pm->chart[o2] != pm->chart[t]) r->bstart[pm->chart[t] + 1]++;
         }
-    for (i = 0; i < nc; i++) bstart[i + 1] += bstart[i];
-    memcpy(otmp, bstart, nc * sizeof(uint32_t));
-    for (t = 0; t < nt; t++)
+    for (i = 0; i < nc; i++) r->bstart[i + 1] += r->bstart[i];
+    memcpy(r->otmp, r->bstart, nc * sizeof(uint32_t));
+    for (t = 0; t < r->nt; t++)
         for (c = 0; c < 3; c++) {
             uint32_t o2 = pm->twin[3 * t + (size_t)c];
-            if (o2 == DM_NO_HIT || pm->chart[o2] != pm->chart[t]) blist[otmp[pm->chart[t]]++] = (uint32_t)(3 * t + (size_t)c);
+            if (o2 == DM_NO_HIT || pm->chart[o2] != pm->chart[t])
+                r->blist[r->otmp[pm->chart[t]]++] = (uint32_t)(3 * t + (size_t)c);
         }
-    for (y = 0; y < (size_t)H; y++) {
-        for (x = 0; x < (size_t)W; x++) {
-            size_t id = y * (size_t)W + x;
-            uint32_t tt = pm->texel_triangle[id], cc;
-            int dir;
-            for (dir = 0; dir < 4; dir++) { pm->nbr[4 * id + (size_t)dir] = UINT32_MAX; pm->nbr_rot[4 * id + (size_t)dir] = 0; }
-            if (tt == DM_NO_HIT) continue;
-            cc = pm->chart[tt];
-            for (dir = 0; dir < 4; dir++) {
-                long nx = (long)x + (dir == 0 ? 1 : dir == 1 ? -1 : 0), ny = (long)y + (dir == 2 ? 1 : dir == 3 ? -1 : 0);
-                double P[2];
-                uint8_t rot = 0;
-                if (nx >= 0 && ny >= 0 && nx < W && ny < H) {
-                    uint32_t t2 = pm->texel_triangle[(size_t)ny * (size_t)W + (size_t)nx];
-                    if (t2 != DM_NO_HIT && pm->chart[t2] == cc) {
-                        pm->nbr[4 * id + (size_t)dir] = (uint32_t)((size_t)ny * (size_t)W + (size_t)nx);
-                        continue;
-                    }
-                }
-                P[0] = (double)nx + 0.5;
-                P[1] = (double)ny + 0.5;
-                pm->nbr[4 * id + (size_t)dir] = dm__pz_across(pm, indices, twin_he, blist, bstart[cc], bstart[cc + 1], P, dir, &rot);
-                pm->nbr_rot[4 * id + (size_t)dir] = pm->nbr[4 * id + (size_t)dir] == UINT32_MAX ? 0 : rot;
+}
+
+/* texel (x, y)'s four neighbours: the next texel of its chart, else the texel across the seam */
+static void dm__pz_link_texel(dm__pz_run *r, size_t x, size_t y)
+{
+    dm_param *pm = r->pm;
+    int W = r->W, H = r->H, dir;
+    size_t id = y * (size_t)W + x;
+    uint32_t tt = pm->texel_triangle[id], cc;
+    for (dir = 0; dir < 4; dir++) { pm->nbr[4 * id + (size_t)dir] = UINT32_MAX; pm->nbr_rot[4 * id + (size_t)dir] = 0; }
+    if (tt == DM_NO_HIT) return;
+    cc = pm->chart[tt];
+    for (dir = 0; dir < 4; dir++) {
+        long nx = (long)x + (dir == 0 ? 1 : dir == 1 ? -1 : 0), ny = (long)y + (dir == 2 ? 1 : dir == 3 ? -1 : 0);
+        double P[2];
+        uint8_t rot = 0;
+        if (nx >= 0 && ny >= 0 && nx < W && ny < H) {
+            uint32_t t2 = pm->texel_triangle[(size_t)ny * (size_t)W + (size_t)nx];
+            if (t2 != DM_NO_HIT && pm->chart[t2] == cc) {
+                pm->nbr[4 * id + (size_t)dir] = (uint32_t)((size_t)ny * (size_t)W + (size_t)nx);
+                continue;
             }
         }
-        if ((y & 63) == 63 && dm__pz_report(o.progress, o.progress_user, 0.8f + 0.2f * (float)y / (float)H)) {
-            res = DM_CANCELLED;
-            goto fail;
-        }
+        P[0] = (double)nx + 0.5;
+        P[1] = (double)ny + 0.5;
+        pm->nbr[4 * id + (size_t)dir] =
+            dm__pz_across(pm, r->indices, r->twin_he, r->blist, r->bstart[cc], r->bstart[cc + 1], P, dir, &rot);
+        pm->nbr_rot[4 * id + (size_t)dir] = pm->nbr[4 * id + (size_t)dir] == UINT32_MAX ? 0 : rot;
     }
+}
 
-    /* 7b. a seam neighbour whose step back (in its own axes) does not come back within one
-       texel is replaced by the nearest texel of its chart, around it, from which it does; the
-       quarter-turn rotation cannot follow a seam at 45 degrees exactly, so this keeps walks
-       consistent. Two sweeps, in texel order (a third changed nothing on the test meshes). */
+/* 7. the neighbours of every texel, across seams too */
+static dm_result dm__pz_link_texels(dm__pz_run *r)
+{
+    size_t x, y;
+    dm__pz_seam_lists(r);
+    for (y = 0; y < (size_t)r->H; y++) {
+        for (x = 0; x < (size_t)r->W; x++) dm__pz_link_texel(r, x, y);
+        if ((y & 63) == 63 && dm__pz_step_report(r, 0.8f + 0.2f * (float)y / (float)r->H) != DM_OK) return DM_CANCELLED;
+    }
+    return DM_OK;
+}
+
+/* 7b. a seam neighbour whose step back (in its own axes) does not come back within one texel
+   is replaced by the nearest texel of its chart, around it, from which it does; the
+   quarter-turn rotation cannot follow a seam at 45 degrees exactly, so this keeps walks
+   consistent. Two sweeps, in texel order (a third changed nothing on the test meshes). Then
+   the step back is relinked where that helps, and what is left (a chart corner where no texel
+   of the other chart walks back) gets the texel itself with a half turn, a mirror boundary, so
+   that every walk comes back. */
+static dm_result dm__pz_repair_links(dm__pz_run *r)
+{
+    dm_param *pm = r->pm;
+    size_t i, n = r->n;
+    int dir;
     for (i = 0; i < 2 * n; i++) {
         size_t id = i % n;
-        int dir;
         if (pm->texel_triangle[id] == DM_NO_HIT) continue;
         for (dir = 0; dir < 4; dir++)
             dm__pz_fix_walk(pm, id, dir);
     }
     for (i = 0; i < n; i++) {
-        int dir;
         if (pm->texel_triangle[i] == DM_NO_HIT) continue;
         for (dir = 0; dir < 4; dir++)
             dm__pz_relink_back(pm, i, dir);
     }
-    /* what is left (a chart corner where no texel of the other chart walks back): the texel
-       itself with a half turn, a mirror boundary, so that every walk comes back */
     for (i = 0; i < n; i++) {
-        int dir;
         if (pm->texel_triangle[i] == DM_NO_HIT) continue;
         for (dir = 0; dir < 4; dir++)
             if (!dm__pz_link_ok(pm, i, dir)) {
@@ -5510,44 +5641,76 @@ DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, con
                 pm->nbr_rot[4 * i + (size_t)dir] = 2;
             }
     }
-
-    /* 8. statistics: utilization, stretch and area ratios against the targets */
-    {
-        size_t covered = 0, ok = 0;
-        double uv_total = 0.0, acc = 0.0, mx = 0.0, scale;
-        for (i = 0; i < n; i++) covered += pm->texel_triangle[i] != DM_NO_HIT;
-        pm->utilization = (float)((double)covered / (double)n);
-        for (t = 0; t < nt; t++) {
-            for (c = 0; c < 6; c++) cuv[6 * t + (size_t)c] = (double)pm->uv[6 * t + (size_t)c] * (c % 2 ? H : W);
-            uv_total += dm__pz_cuv_area(cuv + 6 * t);
-        }
-        scale = sqrt(uv_total / total_area);
-        for (t = 0; t < nt; t++) {
-            double r = dm__pz_cuv_area(cuv + 6 * t) / target[t] / (uv_total / total_area);
-            dm__pz_chart one;
-            uint32_t lv[3] = {0, 1, 2};
-            double xs[9], sg;
-            ok += r >= 0.8 && r <= 1.25;
-            memset(&one, 0, sizeof one);
-            for (c = 0; c < 3; c++) dm__pz_load(positions, indices[3 * t + (size_t)c], xs + 3 * c);
-            one.nt = 1; one.nv = 3; one.lv = lv; one.x = xs; one.uv = cuv + 6 * t; one.target = target + t;
-            dm__pz_stretch(&one, &sg);
-            sg *= scale / sqrt(dm__pz_cuv_area(cuv + 6 * t) / target[t]);
-            acc += target[t] * sg * sg;
-            if (sg > mx) mx = sg;
-        }
-        pm->stretch_l2 = (float)sqrt(acc / total_area);
-        pm->stretch_max = (float)mx;
-        pm->area_ratio_ok = (float)((double)ok / (double)nt);
-    }
-    if (dm__pz_report(o.progress, o.progress_user, 1.0f)) { res = DM_CANCELLED; goto fail; }
-    dm__pz_release(&sc);
-    *out = pm;
     return DM_OK;
-fail:
-    dm__pz_release(&sc);
-    dm_param_free(pm);
-    return res;
+}
+
+/* 8. statistics: utilization, stretch and area ratios against the targets */
+static dm_result dm__pz_statistics(dm__pz_run *r)
+{
+    dm_param *pm = r->pm;
+    size_t covered = 0, ok = 0, i, t, nt = r->nt;
+    double uv_total = 0.0, acc = 0.0, mx = 0.0, scale, total_area = r->total_area;
+    double *cuv = r->cuv, *target = r->target;
+    int c;
+    for (i = 0; i < r->n; i++) covered += pm->texel_triangle[i] != DM_NO_HIT;
+    pm->utilization = (float)((double)covered / (double)r->n);
+    for (t = 0; t < nt; t++) {
+        for (c = 0; c < 6; c++) cuv[6 * t + (size_t)c] = (double)pm->uv[6 * t + (size_t)c] * (c % 2 ? r->H : r->W);
+        uv_total += dm__pz_cuv_area(cuv + 6 * t);
+    }
+    scale = sqrt(uv_total / total_area);
+    for (t = 0; t < nt; t++) {
+        double ratio = dm__pz_cuv_area(cuv + 6 * t) / target[t] / (uv_total / total_area);
+        dm__pz_chart one;
+        uint32_t lv[3] = {0, 1, 2};
+        double xs[9], sg;
+        ok += ratio >= 0.8 && ratio <= 1.25;
+        memset(&one, 0, sizeof one);
+        for (c = 0; c < 3; c++) dm__pz_load(r->positions, r->indices[3 * t + (size_t)c], xs + 3 * c);
+        one.nt = 1; one.nv = 3; one.lv = lv; one.x = xs; one.uv = cuv + 6 * t; one.target = target + t;
+        dm__pz_stretch(&one, &sg);
+        sg *= scale / sqrt(dm__pz_cuv_area(cuv + 6 * t) / target[t]);
+        acc += target[t] * sg * sg;
+        if (sg > mx) mx = sg;
+    }
+    pm->stretch_l2 = (float)sqrt(acc / total_area);
+    pm->stretch_max = (float)mx;
+    pm->area_ratio_ok = (float)((double)ok / (double)nt);
+    return dm__pz_step_report(r, 1.0f);
+}
+
+DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const dm_param_options *options, dm_param **out)
+{
+    dm__pz_run r;
+    dm_result res;
+    if (out) *out = NULL;
+    if (!out) return DM_ERR_INVALID_ARGUMENT;
+    memset(&r, 0, sizeof r);
+    r.positions = positions;
+    r.nv = vertex_count;
+    r.indices = indices;
+    r.nt = triangle_count;
+    res = dm__pz_read_options(&r, options);
+    if (res != DM_OK) return res;
+    res = dm__pz_alloc_result(&r);
+    if (res == DM_OK) res = dm__pz_find_charts(&r);    /* 1. adjacency and charts */
+    if (res == DM_OK) res = dm__pz_targets(&r);        /* 2. target area of each triangle */
+    if (res == DM_OK) res = dm__pz_bucket_charts(&r);  /* 3. triangles by chart */
+    if (res == DM_OK) res = dm__pz_layout_charts(&r);  /* 4. flatten each chart, or split it */
+    if (res == DM_OK) res = dm__pz_box_charts(&r);     /* 5a. each chart to its smallest box */
+    if (res == DM_OK) res = dm__pz_pack_charts(&r);    /* 5b. pack the boxes into the map */
+    if (res == DM_OK) res = dm__pz_rasterize(&r);      /* 6. texel -> triangle */
+    if (res == DM_OK) res = dm__pz_link_texels(&r);    /* 7. texel neighbours, across seams */
+    if (res == DM_OK) res = dm__pz_repair_links(&r);   /* 7b. walks across seams come back */
+    if (res == DM_OK) res = dm__pz_statistics(&r);     /* 8. utilization, stretch, area ratios */
+    dm__pz_release(&r.sc);
+    if (res != DM_OK) {
+        dm_param_free(r.pm);
+        return res;
+    }
+    *out = r.pm;
+    return DM_OK;
 }
 
 /* ---------------------------------------------------------------------------------------------
