@@ -2039,35 +2039,41 @@ TVTDEF float tvt_lod_density(const tvt_lod *l, int level, const float p[3])
     return l->density_scale[level] * tvt__level_density(&l->level[level], q);
 }
 
+/* The channels are linear in their codes (density apart), so the density-weighted mean of the
+   8 corners is taken on the codes and decoded once. */
 TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_voxel *out)
 {
     const tvt_texel *t = &l->level[level];
-    float s = 1.0f / (float)(1 << level), q[3], f[3], wsum = 0.0f;
+    float s = 1.0f / (float)(1 << level), q[3], f[3], wsum = 0.0f, code[TVT_CHANNELS] = {0}, inv;
     long b[3];
     int n, c;
     q[0] = p[0] * s; q[1] = p[1] * s; q[2] = p[2] * s;
     tvt__trilinear(q, b, f);
     memset(out, 0, sizeof(*out));
     for (n = 0; n < 8; n++) {
-        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), wd;
-        tvt_voxel v;
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), d, wd;
+        unsigned qc[TVT_CHANNELS];
+        size_t slot;
+        int ok;
         if (!(w > 0)) continue;
-        tvt_texel_voxel(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &v);
-        wd = w * v.density;
-        out->density += wd;
-        for (c = 0; c < 3; c++) {
-            out->normal[c] += wd * v.normal[c];
-            out->tangent[c] += wd * v.tangent[c];
-            out->color[c] += wd * v.color[c];
-        }
-        out->specular += wd * v.specular;
+        slot = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok);
+        if (!ok) continue;
+        tvt__load(t, slot, qc);
+        d = (float)qc[0] * (t->bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f);
+        d = t->density_max * (t->bits == 8 ? d * d : d);
+        wd = w * d;
+        for (c = 1; c < TVT_CHANNELS; c++) code[c] += wd * (float)qc[c];
         wsum += wd;
     }
-    if (wsum > 0) {
-        for (c = 0; c < 3; c++) { out->normal[c] /= wsum; out->tangent[c] /= wsum; out->color[c] /= wsum; }
-        out->specular /= wsum;
+    if (!(wsum > 0)) return;
+    inv = (t->bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f) / wsum;
+    for (c = 0; c < 3; c++) {
+        out->normal[c] = code[1 + c] * inv * 2.0f - 1.0f;
+        out->tangent[c] = code[4 + c] * inv * 2.0f - 1.0f;
+        out->color[c] = code[7 + c] * inv;
     }
-    out->density *= l->density_scale[level];
+    out->specular = code[10] * inv;
+    out->density = wsum * l->density_scale[level];
 }
 
 /* density and the density-weighted tangent at p (level units), trilinear */
