@@ -26,11 +26,13 @@
        first from a branch point; each gets the example patch centred on an example feature
        point of the same polarity and kind, rotated to the stroke's direction, that costs least
        (seam mismatch + feature dissimilarity); the rest is filled by the best-matching patches;
-       every patch is joined by a graph-cut seam (Kwatra et al. 2003) and Poisson-blended across
-       it (Perez et al. 2003).
+       every patch is joined by a graph-cut seam (Kwatra et al. 2003; max-flow by Boykov &
+       Kolmogorov 2004) and Poisson-blended across it (Perez et al. 2003).
      - rl_emboss: the baseline: the example tiled, plus a Gaussian profile of the distance to the
        strokes (up under white ones, down under black ones).
      - rl_graph_cut: the seam on its own (minimum cut between two overlapping patches).
+     Feature samples closer than patch / 6 to an earlier one of the same polarity (inside its
+     pinned centre) are skipped: they would add a cut and change nothing.
      - rl_normal_map: central differences over a sampling distance d (the thesis's Eqs. 5-4 to
        5-7, d = 4 by default) with a strength factor, clamp-to-edge or wrap-around borders.
 
@@ -194,7 +196,7 @@ RLDEF void rl_skeleton_free(rl_skeleton *s, const rl_allocator *allocator);
 /* Labels each texel of a width x height overlap A (0) or B (1), minimising the cut cost
    sum over 4-neighbour pairs (s, t) with different labels of |a(s) - b(s)| + |a(t) - b(t)|.
    constraint[i]: 0 free, 1 must be A, 2 must be B (NULL = all free, then all A is optimal).
-   *cost = the minimum. Uses max-flow (Dinic). */
+   *cost = the minimum. Max-flow by Boykov & Kolmogorov (2004) on the free texels. */
 RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *constraint, int width, int height,
                              const rl_allocator *allocator, uint8_t *labels, double *cost);
 
@@ -631,19 +633,26 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
 }
 
 /* ---------------------------------------------------------------------------------------------
-   Section: graph-cut seam (Kwatra et al. 2003, Eqs. 5-2 and 5-3), max-flow by Dinic's algorithm
+   Section: graph-cut seam (Kwatra et al. 2003, Eqs. 5-2 and 5-3), max-flow by Boykov & Kolmogorov
    --------------------------------------------------------------------------------------------- */
 
+/* Arcs in pairs (arc e's reverse is e ^ 1) between non-terminal nodes; each node's terminal link
+   is one residual tr: > 0 from the source, < 0 to the sink (Boykov & Kolmogorov 2004). */
 typedef struct rl__flow {
     int nodes, arcs;
-    int *head, *next, *to, *level, *it, *queue, *path;
-    double *cap;
+    int *head, *next, *to, *parent, *queue, *orphans;
+    uint8_t *tree, *queued;     /* tree: 0 free, 1 source, 2 sink */
+    double *cap, *tr;
 } rl__flow;
+
+#define RL__TERMINAL (-1)
+#define RL__ORPHAN (-2)
 
 static void rl__flow_free(rl__flow *f, const rl_allocator *a)
 {
-    rl__free(a, f->head); rl__free(a, f->next); rl__free(a, f->to); rl__free(a, f->level);
-    rl__free(a, f->it); rl__free(a, f->queue); rl__free(a, f->path); rl__free(a, f->cap);
+    rl__free(a, f->head); rl__free(a, f->next); rl__free(a, f->to); rl__free(a, f->parent);
+    rl__free(a, f->queue); rl__free(a, f->orphans); rl__free(a, f->tree); rl__free(a, f->queued);
+    rl__free(a, f->cap); rl__free(a, f->tr);
     memset(f, 0, sizeof *f);
 }
 
@@ -653,22 +662,31 @@ static rl_result rl__flow_init(rl__flow *f, int nodes, int max_arcs, const rl_al
     memset(f, 0, sizeof *f);
     f->nodes = nodes;
     f->head = (int *)rl__alloc(a, sizeof(int) * nn);
-    f->level = (int *)rl__alloc(a, sizeof(int) * nn);
-    f->it = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->parent = (int *)rl__alloc(a, sizeof(int) * nn);
     f->queue = (int *)rl__alloc(a, sizeof(int) * nn);
-    f->path = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->orphans = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->tree = (uint8_t *)rl__alloc(a, nn);
+    f->queued = (uint8_t *)rl__alloc(a, nn);
+    f->tr = (double *)rl__alloc(a, sizeof(double) * nn);
     f->next = (int *)rl__alloc(a, sizeof(int) * na);
     f->to = (int *)rl__alloc(a, sizeof(int) * na);
     f->cap = (double *)rl__alloc(a, sizeof(double) * na);
-    if (!f->head || !f->level || !f->it || !f->queue || !f->path || !f->next || !f->to || !f->cap) {
+    if (!f->head || !f->parent || !f->queue || !f->orphans || !f->tree || !f->queued || !f->tr || !f->next || !f->to || !f->cap) {
         rl__flow_free(f, a);
         return RL_ERR_OUT_OF_MEMORY;
     }
-    memset(f->head, 0xFF, sizeof(int) * nn);
     return RL_OK;
 }
 
-/* an arc pair u->v (capacity c) and v->u (capacity back): arc e's reverse is e ^ 1 */
+static void rl__flow_reset(rl__flow *f, int nodes)
+{
+    f->nodes = nodes;
+    f->arcs = 0;
+    memset(f->head, 0xFF, sizeof(int) * (size_t)nodes);
+    memset(f->tr, 0, sizeof(double) * (size_t)nodes);
+}
+
+/* an arc pair u->v (capacity c) and v->u (capacity back) */
 static void rl__flow_arc(rl__flow *f, int u, int v, double c, double back)
 {
     int e = f->arcs;
@@ -677,57 +695,98 @@ static void rl__flow_arc(rl__flow *f, int u, int v, double c, double back)
     f->arcs += 2;
 }
 
-static int rl__flow_levels(rl__flow *f, int s, int t)
+/* the residual of the arc that carries flow along the tree toward the sink: in the source tree
+   from q to its child, in the sink tree from the child to q */
+static double rl__tree_res(const rl__flow *f, int tree, int e) { return tree == 1 ? f->cap[e ^ 1] : f->cap[e]; }
+
+/* pushes the bottleneck along source root -> u -> v -> sink root (arc e from u to v); the
+   saturated tree arcs make orphans */
+static int rl__flow_augment(rl__flow *f, int e, int norph)
 {
-    int qh = 0, qt = 0, e;
-    memset(f->level, 0xFF, sizeof(int) * (size_t)f->nodes);
-    f->level[s] = 0;
-    f->queue[qt++] = s;
-    while (qh < qt) {
-        int u = f->queue[qh++];
-        for (e = f->head[u]; e >= 0; e = f->next[e])
-            if (f->cap[e] > 0.0 && f->level[f->to[e]] < 0) {
-                f->level[f->to[e]] = f->level[u] + 1;
-                f->queue[qt++] = f->to[e];
+    double m = f->cap[e];
+    int x, k;
+    for (x = f->to[e ^ 1]; f->parent[x] != RL__TERMINAL; x = f->to[f->parent[x]]) { double r = f->cap[f->parent[x] ^ 1]; m = r < m ? r : m; }
+    m = f->tr[x] < m ? f->tr[x] : m;
+    for (x = f->to[e]; f->parent[x] != RL__TERMINAL; x = f->to[f->parent[x]]) { double r = f->cap[f->parent[x]]; m = r < m ? r : m; }
+    m = -f->tr[x] < m ? -f->tr[x] : m;
+    f->cap[e] -= m; f->cap[e ^ 1] += m;
+    for (k = 0; k < 2; k++) {
+        for (x = k ? f->to[e] : f->to[e ^ 1];;) {
+            int pe = f->parent[x];
+            if (pe == RL__TERMINAL) {
+                f->tr[x] += k ? m : -m;
+                if (f->tr[x] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; }
+                break;
             }
+            if (k) { f->cap[pe] -= m; f->cap[pe ^ 1] += m; if (f->cap[pe] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
+            else { f->cap[pe ^ 1] -= m; f->cap[pe] += m; if (f->cap[pe ^ 1] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
+            x = f->to[pe];
+        }
     }
-    return f->level[t] >= 0;
+    return norph;
 }
 
-/* one blocking flow along the level graph, depth-first without recursion */
-static void rl__flow_block(rl__flow *f, int s, int t)
+/* 1 when q's chain of parents reaches a terminal */
+static int rl__rooted(const rl__flow *f, int q)
 {
-    int depth = 0, u = s, k;
-    memcpy(f->it, f->head, sizeof(int) * (size_t)f->nodes);
-    for (;;) {
-        if (u == t) {
-            double m = f->cap[f->path[0]];
-            int cut = 0;
-            for (k = 1; k < depth; k++) if (f->cap[f->path[k]] < m) m = f->cap[f->path[k]];
-            for (k = 0; k < depth; k++) {
-                f->cap[f->path[k]] -= m;
-                f->cap[f->path[k] ^ 1] += m;
-            }
-            for (k = 0; k < depth; k++) if (f->cap[f->path[k]] <= 0.0) { cut = k; break; }
-            depth = cut;
-            u = f->to[f->path[cut] ^ 1];
-            continue;
+    while (f->parent[q] >= 0) q = f->to[f->parent[q]];
+    return f->parent[q] == RL__TERMINAL;
+}
+
+static void rl__activate(rl__flow *f, int q, int *qt)
+{
+    if (f->queued[q]) return;
+    f->queued[q] = 1;
+    f->queue[*qt % f->nodes] = q;
+    (*qt)++;
+}
+
+/* each orphan takes a new parent of its tree whose chain is rooted, or leaves the tree */
+static void rl__flow_adopt(rl__flow *f, int norph, int *qt)
+{
+    while (norph > 0) {
+        int x = f->orphans[--norph], e, t = f->tree[x];
+        for (e = f->head[x]; e >= 0; e = f->next[e]) {
+            int q = f->to[e];
+            if (f->tree[q] == t && rl__tree_res(f, t, e) > 0.0 && f->parent[q] != RL__ORPHAN && rl__rooted(f, q)) break;
         }
-        while (f->it[u] >= 0) {
-            int e = f->it[u];
-            if (f->cap[e] > 0.0 && f->level[f->to[e]] == f->level[u] + 1) break;
-            f->it[u] = f->next[e];
+        if (e >= 0) { f->parent[x] = e; continue; }
+        for (e = f->head[x]; e >= 0; e = f->next[e]) {
+            int q = f->to[e];
+            if (f->tree[q] != t) continue;
+            if (rl__tree_res(f, t, e) > 0.0) rl__activate(f, q, qt);
+            if (f->parent[q] >= 0 && f->to[f->parent[q]] == x) { f->parent[q] = RL__ORPHAN; f->orphans[norph++] = q; }
         }
-        if (f->it[u] < 0) {
-            if (u == s) return;
-            f->level[u] = -1;
-            depth--;
-            u = f->to[f->path[depth] ^ 1];
-            f->it[u] = f->next[f->it[u]];
-            continue;
+        f->tree[x] = 0;
+    }
+}
+
+/* max-flow from the source tree to the sink tree: grow, augment, adopt, until no path is left;
+   then tree[v] == 1 exactly for the nodes the source still reaches */
+static void rl__flow_run(rl__flow *f)
+{
+    int qh = 0, qt = 0, v, e;
+    for (v = 0; v < f->nodes; v++) {
+        f->queued[v] = 0;
+        f->tree[v] = (uint8_t)(f->tr[v] > 0.0 ? 1 : f->tr[v] < 0.0 ? 2 : 0);
+        f->parent[v] = RL__TERMINAL;
+        if (f->tree[v]) rl__activate(f, v, &qt);
+    }
+    while (qh < qt) {
+        int p = f->queue[qh % f->nodes], found = -1;
+        qh++;
+        f->queued[p] = 0;
+        if (!f->tree[p]) continue;
+        for (e = f->head[p]; e >= 0 && found < 0; e = f->next[e]) {
+            int q = f->to[e], t = f->tree[p];
+            if ((t == 1 ? f->cap[e] : f->cap[e ^ 1]) <= 0.0) continue;
+            if (!f->tree[q]) { f->tree[q] = (uint8_t)t; f->parent[q] = e ^ 1; rl__activate(f, q, &qt); }
+            else if (f->tree[q] != t) found = t == 1 ? e : e ^ 1;
         }
-        f->path[depth++] = f->it[u];
-        u = f->to[f->it[u]];
+        if (found >= 0) {
+            rl__activate(f, p, &qt); /* p may have more to give */
+            rl__flow_adopt(f, rl__flow_augment(f, found, 0), &qt);
+        }
     }
 }
 
@@ -741,33 +800,30 @@ static double rl__pair_cost(const float *a, const float *b, size_t s, size_t t)
    free texel takes the other label), pinned-pinned pairs cost nothing that a cut can change. */
 static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, size_t p, size_t q, double c)
 {
-    int np = node[p], nq = node[q], s = f->nodes - 2, t = f->nodes - 1;
+    int np = node[p], nq = node[q];
     if (np >= 0 && nq >= 0) rl__flow_arc(f, np, nq, c, c);
-    else if (np >= 0) { if (cons[q] == 1) rl__flow_arc(f, s, np, c, 0.0); else rl__flow_arc(f, np, t, c, 0.0); }
-    else if (nq >= 0) { if (cons[p] == 1) rl__flow_arc(f, s, nq, c, 0.0); else rl__flow_arc(f, nq, t, c, 0.0); }
+    else if (np >= 0) f->tr[np] += cons[q] == 1 ? c : -c;
+    else if (nq >= 0) f->tr[nq] += cons[p] == 1 ? c : -c;
 }
 
-/* the cut on a flow workspace with room for width*height + 2 nodes and 6 arcs a texel; node:
+/* the cut on a flow workspace with room for width*height nodes and 6 arcs a texel; node:
    width*height ints of scratch */
 static void rl__cut_solve(rl__flow *f, const float *a, const float *b, const uint8_t *cons, int width, int height,
                           int *node, uint8_t *labels)
 {
     size_t n = (size_t)width * (size_t)height, i;
-    int x, y, free_count = 0, s, t;
+    int x, y, free_count = 0;
     for (i = 0; i < n; i++) node[i] = (!cons || !cons[i]) ? free_count++ : -1;
-    f->nodes = free_count + 2;
-    f->arcs = 0;
-    s = free_count; t = free_count + 1;
-    memset(f->head, 0xFF, sizeof(int) * (size_t)f->nodes);
+    rl__flow_reset(f, free_count > 0 ? free_count : 1);
     for (y = 0; y < height; y++)
         for (x = 0; x < width; x++) {
             size_t p = (size_t)y * width + x;
             if (x + 1 < width) rl__cut_pair(f, node, cons, p, p + 1, rl__pair_cost(a, b, p, p + 1));
             if (y + 1 < height) rl__cut_pair(f, node, cons, p, p + (size_t)width, rl__pair_cost(a, b, p, p + (size_t)width));
         }
-    while (rl__flow_levels(f, s, t)) rl__flow_block(f, s, t);
-    rl__flow_levels(f, s, t); /* what the source still reaches is side A */
-    for (i = 0; i < n; i++) labels[i] = node[i] >= 0 ? (f->level[node[i]] >= 0 ? 0 : 1) : (cons[i] == 1 ? 0 : 1);
+    /* a texel linked to both terminals passes the smaller link's flow at once (Boykov & Kolmogorov) */
+    if (free_count) rl__flow_run(f);
+    for (i = 0; i < n; i++) labels[i] = node[i] >= 0 ? (f->tree[node[i]] == 1 ? 0 : 1) : (cons[i] == 1 ? 0 : 1);
 }
 
 static double rl__cut_cost(const float *a, const float *b, const uint8_t *labels, int width, int height)
@@ -850,6 +906,8 @@ typedef struct rl__synth {
     int32_t *band;           /* P*P: Poisson distance, -1 outside */
     int32_t *queue;          /* P*P */
     int *node;               /* P*P */
+    int32_t *fill_off;       /* P*P: the fill search's example offsets */
+    float *fill_val;         /* and output values */
     rl__flow flow;           /* graph-cut workspace for P*P texels */
 } rl__synth;
 
@@ -1158,23 +1216,35 @@ static rl_result rl__place_feature(rl__synth *S, const rl__feat *t, const rl__fe
    --------------------------------------------------------------------------------------------- */
 
 /* the window's best example position: the K least SSD over the filled texels (every other
-   texel, positions on a stride grid), then the least full SSD + alpha_g * cut cost */
+   texel, positions on a stride grid, a candidate dropped as soon as its partial sum passes the
+   K-th best), then the least full SSD + alpha_g * cut cost */
 static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
 {
     enum { KMAX = 16 };
     double kc[KMAX], costs[KMAX], best_cost = 0.0;
-    int kx[KMAX], ky[KMAX], nk = 0, K = S->o.candidates, stride = S->o.search_stride, ex, ey, k, n, best = -1;
+    int kx[KMAX], ky[KMAX], nk = 0, K = S->o.candidates, stride = S->o.search_stride, ex, ey, k, n = 0, best = -1, i, j;
     rl_result r;
     K = K > KMAX ? KMAX : K;
-    rl__overlap_ssd(S, wx, wy, S->cand, S->P, &n); /* any filled texel at all? (cand unused here) */
+    for (j = 0; j < S->P; j += 2) /* the filled texels compared: example offsets and output values */
+        for (i = 0; i < S->P; i += 2) {
+            int x = wx + i, y = wy + j;
+            size_t p;
+            if (x < 0 || y < 0 || x >= S->w || y >= S->h) continue;
+            p = (size_t)y * S->w + x;
+            if (S->owner[p] < 0) continue;
+            S->fill_off[n] = (int32_t)((size_t)j * S->ew + i);
+            S->fill_val[n] = S->out[p];
+            n++;
+        }
     for (ey = 0; ey + S->P <= S->eh; ey += stride)
         for (ex = 0; ex + S->P <= S->ew; ex += stride) {
-            double c;
-            int cnt, i, j;
-            float *p = S->cand;
-            for (j = 0; j < S->P; j += 2) memcpy(p + j * S->P, S->ex + (size_t)(ey + j) * S->ew + ex, sizeof(float) * (size_t)S->P);
-            c = rl__overlap_ssd(S, wx, wy, p, 2, &cnt);
-            if (!cnt) { /* nothing to match: a fixed spread of positions */
+            const float *base = S->ex + (size_t)ey * S->ew + ex;
+            double c = 0.0, limit = nk == K ? kc[nk - 1] * n : 1e300;
+            if (n) {
+                for (i = 0; i < n && c < limit; i++) { double d = (double)base[S->fill_off[i]] - (double)S->fill_val[i]; c += d * d; }
+                if (c >= limit) continue;
+                c /= n;
+            } else { /* nothing to match: a fixed spread of positions */
                 uint32_t hsh = (uint32_t)(wx * 73856093) ^ (uint32_t)(wy * 19349663) ^ (uint32_t)(ex * 83492791) ^ (uint32_t)(ey * 2654435761u);
                 c = (double)(hsh % 1000u);
             }
@@ -1300,7 +1370,7 @@ static void rl__synth_free(rl__synth *S)
     rl__free(&S->a, S->owner); rl__free(&S->a, S->stroke); rl__free(&S->a, S->sk_edges[0]); rl__free(&S->a, S->sk_edges[1]);
     rl__free(&S->a, S->cand); rl__free(&S->a, S->best); rl__free(&S->a, S->ga); rl__free(&S->a, S->gb);
     rl__free(&S->a, S->cons); rl__free(&S->a, S->lab); rl__free(&S->a, S->band); rl__free(&S->a, S->queue);
-    rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab);
+    rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab); rl__free(&S->a, S->fill_off); rl__free(&S->a, S->fill_val);
     if (S->flow.head) rl__flow_free(&S->flow, &S->a);
 }
 
@@ -1351,6 +1421,9 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
     S->band = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
     S->queue = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
     S->node = (int *)rl__alloc(&S->a, sizeof(int) * pp);
+    S->fill_off = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
+    S->fill_val = (float *)rl__alloc(&S->a, sizeof(float) * pp);
+    if (!S->fill_off || !S->fill_val) S->node = (rl__free(&S->a, S->node), (int *)NULL);
     if (S->owner && S->stroke && S->cand && S->best && S->ga && S->gb && S->cons && S->lab && S->best_lab && S->band && S->queue && S->node &&
         rl__flow_init(&S->flow, (int)pp + 2, (int)(6 * pp), &S->a) != RL_OK)
         S->node = (rl__free(&S->a, S->node), (int *)NULL);
@@ -1386,7 +1459,11 @@ static rl_result rl__features(rl__synth *S, int32_t *scratch_a, int32_t *scratch
     }
     S->windows_total += nt;
     for (k = 0; k < nt && r == RL_OK; k++) {
-        r = rl__place_feature(S, &tf[k], sf, ns);
+        int j, near = 0; /* a sample within the pinned centre of an earlier one adds nothing */
+        float rr = (float)S->P / 6.0f;
+        for (j = k - 1; j >= 0 && j >= k - 64 && !near; j--)
+            near = tf[j].valley == tf[k].valley && (float)((tf[j].x - tf[k].x) * (tf[j].x - tf[k].x) + (tf[j].y - tf[k].y) * (tf[j].y - tf[k].y)) < rr * rr;
+        if (!near) r = rl__place_feature(S, &tf[k], sf, ns);
         if (r == RL_OK && rl__progress(S)) r = RL_CANCELLED;
     }
     rl__free(&S->a, tf); rl__free(&S->a, sf); rl__free(&S->a, tmp);
