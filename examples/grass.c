@@ -537,6 +537,17 @@ static void usage(FILE *to)
 {
     fprintf(to, "usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
                 "             [--wd A,B,C] [--frames F] [--seed S] [--quiet]\n");
+    if (to != stdout) return;
+    fprintf(to, "  --scene   mountain: the paper's Fig 13 (N x N tiles of 400 blades), one panel per wd;\n"
+                "            wither: one patch at wd 0..1; mingle: the paper's Fig 11 (default mountain)\n"
+                "  -o        the PNG to write (a contact sheet of the panels)\n"
+                "  --size    panel size (800x600 for mountain, 320x240 otherwise)\n"
+                "  --res     texel resolution, a power of two in 16..256 (64)\n"
+                "  --tiles   mountain tiles per side (80: 6400 tiles, 2.56M blades)\n"
+                "  --wd      mountain's weathering degrees, in [0, 1] (0,0.30,0.917)\n"
+                "  --frames  key frames per TVT, 2..64 (6)\n"
+                "  --seed    terrain and blades (2010)\n"
+                "  --quiet   no progress on stderr\n");
 }
 
 int main(int argc, char **argv)
