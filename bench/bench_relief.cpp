@@ -7,7 +7,7 @@
               384 x 384 square at (112, 578), inside its lower disk, is used; other files whole)
      -o       also write PREFIX_ours.png and PREFIX_llvmpipe.png
 
-   synth_ms   rl_synthesize (default options: patch 48, K 4, stride 8) of a 512 x 512 output from the
+   synth_ms   rl_synthesize (default options: patch 48, K 2, stride 8) of a 512 x 512 output from the
               example, sketch = the letter R of render.h's font, black strokes (engraved), centred.
    normal_ms  rl_normal_map of that output (d = 4, clamp).
    render_ms  one 800 x 600 frame: sr_framebuffer_clear + sr_draw_relief of the cube's 6 faces

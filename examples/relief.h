@@ -205,7 +205,7 @@ RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *cons
 typedef struct rl_synth_options {
     int patch;              /* patch side in texels, 0 = 48 */
     int overlap;            /* overlap of neighbouring fill patches, 0 = patch / 3 */
-    int candidates;         /* K best fill candidates by SSD that get a graph cut, 0 = 4 */
+    int candidates;         /* K best fill candidates by SSD that get a graph cut, 0 = 2 */
     int search_stride;      /* stride of the fill candidates' positions in the example, 0 = 4 */
     int feature_candidates; /* example feature points tried per sketch feature, 0 = 48 */
     float alpha_g, alpha_f; /* weights of seam and feature cost (Eq. 5-1), 0 = 1 and 3 */
@@ -496,12 +496,29 @@ static void rl__ppa_candidates(const float *h, int w, int hh, int L, float tau, 
 
 typedef struct rl__edge { float weight; uint32_t a, b; uint8_t dir; } rl__edge;
 
-static int rl__edge_cmp(const void *p, const void *q)
+/* a float's bits as an unsigned key that sorts the same way, inverted: heavier first */
+static uint32_t rl__weight_key(float w)
 {
-    const rl__edge *a = (const rl__edge *)p, *b = (const rl__edge *)q;
-    if (a->weight != b->weight) return a->weight > b->weight ? -1 : 1; /* heavier first */
-    if (a->a != b->a) return a->a < b->a ? -1 : 1;
-    return a->dir < b->dir ? -1 : a->dir > b->dir;
+    uint32_t u;
+    memcpy(&u, &w, 4);
+    u = (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+    return ~u;
+}
+
+/* Edges are made in (a, dir) order; a stable radix sort on the key (two 16-bit passes) puts
+   them heavier first, ties in that order. tmp: n edges of scratch; count: 65536 sizes. */
+static void rl__sort_edges(rl__edge *e, rl__edge *tmp, size_t n, size_t *count)
+{
+    int pass;
+    for (pass = 0; pass < 2; pass++) {
+        rl__edge *src = pass ? tmp : e, *dst = pass ? e : tmp;
+        size_t i, sum = 0;
+        int sh = pass * 16;
+        memset(count, 0, sizeof(size_t) * 65536);
+        for (i = 0; i < n; i++) count[(rl__weight_key(src[i].weight) >> sh) & 0xFFFFu]++;
+        for (i = 0; i < 65536; i++) { size_t c = count[i]; count[i] = sum; sum += c; }
+        for (i = 0; i < n; i++) dst[count[(rl__weight_key(src[i].weight) >> sh) & 0xFFFFu]++] = src[i];
+    }
 }
 
 /* Step 2: edges between neighbouring candidates (E, SE, S, SW of each), weight = mean height
@@ -545,10 +562,10 @@ static uint32_t rl__find(uint32_t *parent, uint32_t i)
 /* Step 3: loop elimination. Deleting the lightest edge of a loop until none is left (the
    thesis's repeated depth-first search) leaves the maximum-weight spanning forest; Kruskal
    finds the same forest in O(E log E). */
-static void rl__ppa_forest(rl__edge *e, size_t n, uint32_t *parent, size_t texels, uint8_t *edges)
+static void rl__ppa_forest(rl__edge *e, rl__edge *tmp, size_t *count, size_t n, uint32_t *parent, size_t texels, uint8_t *edges)
 {
     size_t i;
-    qsort(e, n, sizeof *e, rl__edge_cmp);
+    rl__sort_edges(e, tmp, n, count);
     for (i = 0; i < texels; i++) parent[i] = (uint32_t)i;
     for (i = 0; i < n; i++) {
         uint32_t ra = rl__find(parent, e[i].a), rb = rl__find(parent, e[i].b);
@@ -596,7 +613,7 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
     rl_allocator a = rl__allocator(allocator);
     float lo, hi, tau, sign;
     rl_result r;
-    size_t n, ne, nc, i;
+    size_t n, ne, nc, i, *count;
     uint8_t *cand;
     rl__edge *e;
     uint32_t *parent;
@@ -615,10 +632,11 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
     rl__ppa_candidates(height->data, height->width, height->height, L, tau, sign, cand);
     for (i = 0, nc = 0; i < n; i++) nc += cand[i];
     out->edges = (uint8_t *)rl__alloc(&a, n);
-    e = (rl__edge *)rl__alloc(&a, sizeof(rl__edge) * 4 * nc);
+    e = (rl__edge *)rl__alloc(&a, sizeof(rl__edge) * 8 * nc); /* the edges and the sort's scratch */
     parent = (uint32_t *)rl__alloc(&a, sizeof(uint32_t) * n);
-    if (!out->edges || !e || !parent) {
-        rl__free(&a, out->edges); rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent);
+    count = (size_t *)rl__alloc(&a, sizeof(size_t) * 65536);
+    if (!out->edges || !e || !parent || !count) {
+        rl__free(&a, out->edges); rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent); rl__free(&a, count);
         out->edges = NULL;
         return RL_ERR_OUT_OF_MEMORY;
     }
@@ -626,9 +644,9 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
     out->width = height->width;
     out->height = height->height;
     ne = rl__ppa_connect(height->data, height->width, height->height, sign, cand, e);
-    rl__ppa_forest(e, ne, parent, n, out->edges);
+    rl__ppa_forest(e, e + 4 * nc, count, ne, parent, n, out->edges);
     rl__ppa_prune(out->edges, height->width, height->height, rounds, parent);
-    rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent);
+    rl__free(&a, cand); rl__free(&a, e); rl__free(&a, parent); rl__free(&a, count);
     return RL_OK;
 }
 
@@ -640,7 +658,7 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
    is one residual tr: > 0 from the source, < 0 to the sink (Boykov & Kolmogorov 2004). */
 typedef struct rl__flow {
     int nodes, arcs;
-    int *head, *next, *to, *parent, *queue, *orphans;
+    int *head, *next, *to, *parent, *queue, *orphans, *stamp, time;
     uint8_t *tree, *queued;     /* tree: 0 free, 1 source, 2 sink */
     double *cap, *tr;
 } rl__flow;
@@ -651,7 +669,7 @@ typedef struct rl__flow {
 static void rl__flow_free(rl__flow *f, const rl_allocator *a)
 {
     rl__free(a, f->head); rl__free(a, f->next); rl__free(a, f->to); rl__free(a, f->parent);
-    rl__free(a, f->queue); rl__free(a, f->orphans); rl__free(a, f->tree); rl__free(a, f->queued);
+    rl__free(a, f->queue); rl__free(a, f->orphans); rl__free(a, f->tree); rl__free(a, f->queued); rl__free(a, f->stamp);
     rl__free(a, f->cap); rl__free(a, f->tr);
     memset(f, 0, sizeof *f);
 }
@@ -665,13 +683,14 @@ static rl_result rl__flow_init(rl__flow *f, int nodes, int max_arcs, const rl_al
     f->parent = (int *)rl__alloc(a, sizeof(int) * nn);
     f->queue = (int *)rl__alloc(a, sizeof(int) * nn);
     f->orphans = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->stamp = (int *)rl__alloc(a, sizeof(int) * nn);
     f->tree = (uint8_t *)rl__alloc(a, nn);
     f->queued = (uint8_t *)rl__alloc(a, nn);
     f->tr = (double *)rl__alloc(a, sizeof(double) * nn);
     f->next = (int *)rl__alloc(a, sizeof(int) * na);
     f->to = (int *)rl__alloc(a, sizeof(int) * na);
     f->cap = (double *)rl__alloc(a, sizeof(double) * na);
-    if (!f->head || !f->parent || !f->queue || !f->orphans || !f->tree || !f->queued || !f->tr || !f->next || !f->to || !f->cap) {
+    if (!f->head || !f->parent || !f->queue || !f->orphans || !f->stamp || !f->tree || !f->queued || !f->tr || !f->next || !f->to || !f->cap) {
         rl__flow_free(f, a);
         return RL_ERR_OUT_OF_MEMORY;
     }
@@ -726,11 +745,20 @@ static int rl__flow_augment(rl__flow *f, int e, int norph)
     return norph;
 }
 
-/* 1 when q's chain of parents reaches a terminal */
-static int rl__rooted(const rl__flow *f, int q)
+/* 1 when q's chain of parents reaches a terminal; the chain's nodes are then stamped, and a
+   stamped node ends later walks of the same adoption (an intact chain stays intact while
+   orphans are processed: only broken subtrees are freed) */
+static int rl__rooted(rl__flow *f, int q)
 {
-    while (f->parent[q] >= 0) q = f->to[f->parent[q]];
-    return f->parent[q] == RL__TERMINAL;
+    int x = q, ok;
+    while (f->parent[x] >= 0 && f->stamp[x] != f->time) x = f->to[f->parent[x]];
+    ok = f->stamp[x] == f->time || f->parent[x] == RL__TERMINAL;
+    if (ok)
+        for (x = q; f->stamp[x] != f->time; x = f->parent[x] >= 0 ? f->to[f->parent[x]] : x) {
+            f->stamp[x] = f->time;
+            if (f->parent[x] < 0) break;
+        }
+    return ok;
 }
 
 static void rl__activate(rl__flow *f, int q, int *qt)
@@ -744,6 +772,7 @@ static void rl__activate(rl__flow *f, int q, int *qt)
 /* each orphan takes a new parent of its tree whose chain is rooted, or leaves the tree */
 static void rl__flow_adopt(rl__flow *f, int norph, int *qt)
 {
+    f->time++;
     while (norph > 0) {
         int x = f->orphans[--norph], e, t = f->tree[x];
         for (e = f->head[x]; e >= 0; e = f->next[e]) {
@@ -766,7 +795,9 @@ static void rl__flow_adopt(rl__flow *f, int norph, int *qt)
 static void rl__flow_run(rl__flow *f)
 {
     int qh = 0, qt = 0, v, e;
+    f->time = 0;
     for (v = 0; v < f->nodes; v++) {
+        f->stamp[v] = 0;
         f->queued[v] = 0;
         f->tree[v] = (uint8_t)(f->tr[v] > 0.0 ? 1 : f->tr[v] < 0.0 ? 2 : 0);
         f->parent[v] = RL__TERMINAL;
@@ -874,7 +905,7 @@ RLDEF rl_synth_options rl_synth_default_options(void)
     memset(&o, 0, sizeof o);
     o.patch = 48;
     o.overlap = 0;              /* patch / 3 */
-    o.candidates = 4;
+    o.candidates = 2;
     o.search_stride = 8;
     o.feature_candidates = 24;
     o.alpha_g = 1.0f;
