@@ -1272,7 +1272,12 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
             const float *base = S->ex + (size_t)ey * S->ew + ex;
             double c = 0.0, limit = nk == K ? kc[nk - 1] * n : 1e300;
             if (n) {
-                for (i = 0; i < n && c < limit; i++) { double d = (double)base[S->fill_off[i]] - (double)S->fill_val[i]; c += d * d; }
+                for (i = 0; i < n && c < limit;) { /* float sums of 32 terms at a time */
+                    float part = 0.0f;
+                    int end = i + 32 < n ? i + 32 : n;
+                    for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; part += d * d; }
+                    c += (double)part;
+                }
                 if (c >= limit) continue;
                 c /= n;
             } else { /* nothing to match: a fixed spread of positions */
