@@ -682,11 +682,14 @@ static int tvt__report(int (*progress)(void *, float), void *user, float done)
    --------------------------------------------------------------------------------------------- */
 enum { TVT__ACC = 13, TVT__BV = TVT_BRICK * TVT_BRICK * TVT_BRICK };
 
+/* Bricks live in pages of TVT__PAGE, so that growing never copies them. */
+enum { TVT__PAGE = 256 };
+
 typedef struct tvt__acc {
     int res, nb;
     uint32_t *index;
-    float *data;
-    size_t count, cap;
+    float **pages;
+    size_t page_count, page_cap, count;
     int failed;
     tvt_allocator a;
 } tvt__acc;
@@ -707,20 +710,34 @@ static tvt_result tvt__acc_init(tvt__acc *g, int res, const tvt_allocator *a)
 
 static void tvt__acc_free(tvt__acc *g)
 {
+    size_t i;
+    for (i = 0; i < g->page_count; i++) tvt__free(&g->a, g->pages[i]);
+    tvt__free(&g->a, g->pages);
     tvt__free(&g->a, g->index);
-    tvt__free(&g->a, g->data);
     memset(g, 0, sizeof(*g));
+}
+
+/* the TVT__BV * TVT__ACC floats of brick k */
+static float *tvt__acc_brick(const tvt__acc *g, size_t k)
+{
+    return g->pages[k / TVT__PAGE] + (k % TVT__PAGE) * (size_t)(TVT__ACC * TVT__BV);
 }
 
 static int tvt__acc_grow(tvt__acc *g)
 {
-    size_t cap = g->cap ? g->cap * 2 : 64;
-    float *d = (float *)tvt__alloc(&g->a, cap, sizeof(float) * TVT__ACC * TVT__BV);
-    if (!d) return 0;
-    if (g->count) memcpy(d, g->data, g->count * sizeof(float) * TVT__ACC * TVT__BV);
-    tvt__free(&g->a, g->data);
-    g->data = d;
-    g->cap = cap;
+    float *page;
+    if (g->page_count == g->page_cap) {
+        size_t cap = g->page_cap ? 2 * g->page_cap : 16;
+        float **pages = (float **)tvt__alloc(&g->a, cap, sizeof(float *));
+        if (!pages) return 0;
+        if (g->page_count) memcpy(pages, g->pages, g->page_count * sizeof(float *));
+        tvt__free(&g->a, g->pages);
+        g->pages = pages;
+        g->page_cap = cap;
+    }
+    page = (float *)tvt__alloc(&g->a, TVT__PAGE, sizeof(float) * TVT__ACC * TVT__BV);
+    if (!page) return 0;
+    g->pages[g->page_count++] = page;
     return 1;
 }
 
@@ -731,13 +748,16 @@ static float *tvt__acc_voxel(tvt__acc *g, int x, int y, int z)
     size_t b = ((size_t)(z >> 2) * g->nb + (size_t)(y >> 2)) * g->nb + (size_t)(x >> 2);
     uint32_t k = g->index[b];
     if (k == TVT_EMPTY_BRICK) {
-        if (g->failed || (g->count == g->cap && !tvt__acc_grow(g))) { g->failed = 1; return NULL; }
+        float *d;
+        size_t i;
+        if (g->failed || (g->count == g->page_count * TVT__PAGE && !tvt__acc_grow(g))) { g->failed = 1; return NULL; }
         k = (uint32_t)g->count++;
-        memset(g->data + (size_t)k * TVT__ACC * TVT__BV, 0, sizeof(float) * TVT__ACC * TVT__BV);
-        for (size_t i = 0; i < TVT__BV; i++) g->data[((size_t)k * TVT__BV + i) * TVT__ACC + 12] = -1.0f;
+        d = tvt__acc_brick(g, k);
+        memset(d, 0, sizeof(float) * TVT__ACC * TVT__BV);
+        for (i = 0; i < TVT__BV; i++) d[i * TVT__ACC + 12] = -1.0f;
         g->index[b] = k;
     }
-    return g->data + ((size_t)k * TVT__BV + (size_t)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3))) * TVT__ACC;
+    return tvt__acc_brick(g, k) + (size_t)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3)) * TVT__ACC;
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -833,17 +853,17 @@ static void tvt__acc_resolve(const float *a, float density_factor, tvt_voxel *v)
     if (w > 0) tvt__normalize(v->tangent);
 }
 
-/* The voxels of accumulator brick k that quantise to a nonzero density, as a mask. */
+/* The voxels of accumulator brick k that quantise to a nonzero density, as a mask (the
+   density channel of tvt__encode alone). */
 static uint64_t tvt__brick_occupied(const tvt__acc *g, uint32_t k, float density_factor, float density_max, int bits)
 {
+    const float *brick = tvt__acc_brick(g, k);
+    float qm = bits == 8 ? 255.0f : 65535.0f;
     uint64_t mask = 0;
     size_t i;
     for (i = 0; i < TVT__BV; i++) {
-        tvt_voxel v;
-        unsigned q[TVT_CHANNELS];
-        tvt__acc_resolve(g->data + ((size_t)k * TVT__BV + i) * TVT__ACC, density_factor, &v);
-        tvt__encode(&v, density_max, bits, q);
-        if (q[0]) mask |= (uint64_t)1 << i;
+        float d = density_max > 0 ? brick[i * TVT__ACC] * density_factor / density_max : 0.0f;
+        if (tvt__q(bits == 8 ? sqrtf(d > 0 ? d : 0) : d, qm)) mask |= (uint64_t)1 << i;
     }
     return mask;
 }
@@ -896,7 +916,7 @@ static tvt_result tvt__acc_to_texel(const tvt__acc *g, float density_factor, int
     float dmax = 0.0f;
     tvt_result r;
     for (i = 0; i < g->count * TVT__BV; i++) {
-        float d = g->data[i * TVT__ACC] * density_factor;
+        float d = tvt__acc_brick(g, i / TVT__BV)[(i % TVT__BV) * TVT__ACC] * density_factor;
         if (d > dmax) dmax = d;
     }
     masks = (uint64_t *)tvt__alloc(&g->a, g->count, sizeof(uint64_t));
@@ -916,7 +936,7 @@ static tvt_result tvt__acc_to_texel(const tvt__acc *g, float density_factor, int
         out->brick_mask[kept] = masks[k];
         out->brick_offset[kept] = (uint32_t)slot;
         for (i = 0; i < TVT__BV; i++) {
-            const float *a = g->data + ((size_t)k * TVT__BV + i) * TVT__ACC;
+            const float *a = tvt__acc_brick(g, k) + i * TVT__ACC;
             tvt_voxel v;
             unsigned q[TVT_CHANNELS];
             if (!((masks[k] >> i) & 1)) continue;
