@@ -97,8 +97,9 @@
        under an equal-energy illuminant and converted to linear sRGB. Each blade ages with a
        delay in [-colour_jitter, colour_jitter] (0.05) of wd for its colour, so a patch is not
        one flat tint. Specular: ms = ms0 (0.4 + 0.6 w(wd)) (dry grass is less glossy).
-     Merging (paper Algorithm 1): after each step, each point (in index order) absorbs its
-       nearest later point closer than merge_threshold (0.15 voxel): position, normal, tangent,
+     Merging (paper Algorithm 1): after each step, each point, in the order of its voxel (z, y,
+       x; points of a voxel in index order), absorbs its nearest later point closer than
+       merge_threshold (0.15 voxel): position, normal, tangent,
        colour, specular and rest state are mass-weighted means and masses add. Density counts
        mass, so merging keeps the grass (the paper counts each point as 1, which would make
        merged grass thinner). Points sorted by voxel (radix sort) and a hash table of voxels make
@@ -1738,10 +1739,11 @@ static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint
     }
 }
 
-/* nearest later point (index > i, alive) closer than thr; (size_t)-1 if none; ties: smaller index */
+/* the nearest point after sorted position i (alive) closer than thr, as a sorted position;
+   (size_t)-1 if none; ties: the earlier position */
 static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t n, size_t i, float thr)
 {
-    const float *p = g->pos + 4 * (size_t)g->rank[i];
+    const float *p = g->pos + 4 * i;
     long c[3], o[3];
     float best_d2 = thr * thr, res = (float)g->res, half = 0.5f * res;
     size_t best = (size_t)-1;
@@ -1768,20 +1770,19 @@ static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t
         k2 = (uint32_t)((z * g->res + y) * g->res + x);
         if (g->cache_key[m] == k2) start = g->cache_start[m];
         else {
-            start = (uint32_t)tvt__lower_bound_from(g->key, n, g->rank[i], k2);
+            start = (uint32_t)tvt__lower_bound_from(g->key, n, i, k2);
             g->cache_key[m] = k2;
             g->cache_start[m] = start;
         }
-        for (j = start; j < n && g->key[j] == k2; j++) {
-            size_t idx = g->order[j];
+        for (j = start > i ? start : i + 1; j < n && g->key[j] == k2; j++) {
             const float *q = g->pos + 4 * j;
             float d[3], d2;
-            if (idx <= i || dead[idx]) continue;
+            if (dead[j]) continue;
             d[0] = q[0] - p[0]; d[1] = q[1] - p[1]; d[2] = q[2] - p[2];
             if (d[0] > half) d[0] -= res; else if (d[0] < -half) d[0] += res; /* the nearest periodic image */
             if (d[1] > half) d[1] -= res; else if (d[1] < -half) d[1] += res;
             d2 = tvt__dot(d, d);
-            if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && idx < best)) { best = idx; best_d2 = d2; }
+            if (d2 < best_d2 || (d2 == best_d2 && best != (size_t)-1 && j < best)) { best = j; best_d2 = d2; }
         }
     }
     return best;
@@ -1830,18 +1831,18 @@ static tvt_result tvt__merge(tvt_points *pts, float thr)
     ok = g.order && g.rank && g.key && g.pos && tmp_key && tmp_idx && dead;
     if (ok) {
         tvt__merge_grid_fill(&g, pts, tmp_key, tmp_idx);
-        memset(dead, 0, n);
+        memset(dead, 0, n); /* by sorted position */
         for (i = 0; i < n; i++) {
             size_t j;
             if (dead[i]) continue;
             j = tvt__merge_partner(&g, dead, n, i, thr);
             if (j == (size_t)-1) continue;
-            tvt__merge_into(pts->p + i, pts->p + j, pts->res);
-            memcpy(g.pos + 4 * (size_t)g.rank[i], pts->p[i].pos, 3 * sizeof(float));
+            tvt__merge_into(pts->p + g.order[i], pts->p + g.order[j], pts->res);
+            memcpy(g.pos + 4 * i, pts->p[g.order[i]].pos, 3 * sizeof(float));
             dead[j] = 1;
         }
-        for (i = 0; i < n; i++)
-            if (!dead[i]) pts->p[kept++] = pts->p[i];
+        for (i = 0; i < n; i++) /* the survivors in their index order */
+            if (!dead[g.rank[i]]) pts->p[kept++] = pts->p[i];
         pts->count = kept;
     }
     tvt__free(a, g.order); tvt__free(a, g.rank); tvt__free(a, g.key); tvt__free(a, g.pos);
