@@ -78,6 +78,9 @@
        in O(E log E) instead of a restarted search per deletion). Pruning removes every leaf
        edge at once per round, L rounds by default: the thesis's L / 2 rounds leave 2-3 texel
        spurs inside every bend of a crest (the candidate test sees the crest on both sides).
+     - Feature candidates: per kind, the example's most prominent feature points (highest ridge
+       texels, lowest valley texels), at least patch / 4 apart: any crest is a ridge to PPA, and
+       in raster order the crests put under white strokes stood barely above the mean.
      - Warping: feature patches are rotated to the stroke's direction (both ways tried), not
        thin-plate-spline warped: with the thesis's three control points a TPS is affine anyway.
        So c_d = 0 and alpha_d is not an option. c_f is the mean |patch - patch centre| along the
@@ -99,7 +102,7 @@
        slopes along every seam, a visible crease that also narrows the slope histogram.
      - emphasis: the synthesis puts the example's ridges under white strokes and its valleys
        under black ones, but how far a ridge stands above a valley is whatever the example's
-       relief gives (on a rock-like example, a few percent of its range). The thesis demands
+       relief gives (on a ridged-noise rock, about a fifth of its range). The thesis demands
        that the strokes be clearly embossed or engraved, so the baseline's profile is added
        (emphasis x range, Gaussian of stroke_width); emphasis < 0 turns it off.
      - Normal map: clamp-to-edge borders (the thesis zeroes the slope within d of the border,
@@ -930,6 +933,7 @@ typedef struct rl__synth {
     float *out;              /* w*h output heights */
     int32_t *owner;          /* w*h: patch id, -1 = not filled yet */
     uint8_t *stroke;         /* w*h: 1 white stroke, 2 black stroke, 0 none */
+    uint8_t *locked;         /* w*h: a feature patch's centre, kept by every later cut */
     uint8_t *sk_edges[2];    /* the sketch's ridge (white) and valley (black) skeletons */
     float *cand, *best;      /* P*P candidate patches */
     float *ga, *gb;          /* P*P graph-cut inputs */
@@ -1024,6 +1028,7 @@ static rl_result rl__cut(rl__synth *S, int wx, int wy, const float *cand, float 
                 (j == 0 && y > 0 && S->owner[p - (size_t)S->w] >= 0) || (j == rh - 1 && y + 1 < S->h && S->owner[p + (size_t)S->w] >= 0))
                 S->cons[q] = 1;
             if (pin_radius > 0.0f && du * du + dv * dv <= pin_radius * pin_radius) S->cons[q] = 2;
+            if (S->locked[p]) S->cons[q] = 1; /* an earlier feature patch's centre stays */
         }
     *overlap = nover;
     if (!nover) { memset(S->lab, 1, (size_t)rw * (size_t)rh); *cost = 0.0; return RL_OK; }
@@ -1108,15 +1113,27 @@ static rl_result rl__commit(rl__synth *S, int wx, int wy, const float *cand)
     return RL_OK;
 }
 
-/* cuts the candidate into window (wx, wy) and commits it */
+/* cuts the candidate into window (wx, wy) and commits it; a feature patch's centre disc
+   (pin_radius > 0) is then locked against later patches */
 static rl_result rl__place(rl__synth *S, int wx, int wy, const float *cand, float pin_radius)
 {
     double cost;
-    int nover;
+    int nover, i, j;
+    float c = 0.5f * (float)S->P - 0.5f;
     rl_result r;
     if (wx >= S->w || wy >= S->h || wx + S->P <= 0 || wy + S->P <= 0) return RL_OK;
     if ((r = rl__cut(S, wx, wy, cand, pin_radius, &cost, &nover)) != RL_OK) return r;
-    return rl__commit(S, wx, wy, cand);
+    if ((r = rl__commit(S, wx, wy, cand)) != RL_OK || pin_radius <= 0.0f) return r;
+    for (j = 0; j < S->P; j++)
+        for (i = 0; i < S->P; i++) {
+            int x = wx + i, y = wy + j;
+            size_t p;
+            if (x < 0 || y < 0 || x >= S->w || y >= S->h) continue;
+            p = (size_t)y * S->w + x;
+            if (S->owner[p] == S->patch_id && ((float)i - c) * ((float)i - c) + ((float)j - c) * ((float)j - c) <= pin_radius * pin_radius)
+                S->locked[p] = 1;
+        }
+    return RL_OK;
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -1177,23 +1194,38 @@ static int rl__feature_samples(const uint8_t *edges, int w, int h, int valley, i
     return count;
 }
 
-/* the example's feature points of one polarity far enough from its border for a rotated patch,
-   thinned to at most `cap` per kind by a fixed stride */
-static int rl__example_features(const rl__synth *S, const uint8_t *edges, int valley, rl__feat *f, int cap, int32_t *tmp)
+static int rl__u64_cmp(const void *p, const void *q)
 {
-    int margin = (int)ceilf(0.7072f * (float)S->P) + 2, kind, count = 0, x, y;
+    uint64_t a = *(const uint64_t *)p, b = *(const uint64_t *)q;
+    return a < b ? -1 : a > b;
+}
+
+/* The example's feature points of one polarity far enough from its border for a rotated patch:
+   per kind, the most prominent first (highest ridge texels, lowest valley texels; ties by
+   index), skipping any closer than patch / 4 to one already taken, at most `cap`. Prominence
+   first because a ridge of the example is a ridge at any height: taking them in raster order
+   put crests under white strokes that stood barely above the mean. keys: ew*eh scratch. */
+static int rl__example_features(const rl__synth *S, const uint8_t *edges, int valley, rl__feat *f, int cap, uint64_t *keys)
+{
+    int margin = (int)ceilf(0.7072f * (float)S->P) + 2, kind, count = 0, x, y, sep = S->P / 4;
     for (kind = 0; kind < 3; kind++) {
-        int total = 0, k;
+        size_t total = 0, k;
+        int first = count;
         for (y = margin; y < S->eh - margin; y++)
             for (x = margin; x < S->ew - margin; x++) {
-                uint8_t e = edges[(size_t)y * S->ew + x];
-                if (e && rl__kind(e) == kind) tmp[total++] = (int32_t)((size_t)y * S->ew + x);
+                size_t q = (size_t)y * S->ew + x;
+                uint8_t e = edges[q];
+                if (e && rl__kind(e) == kind) keys[total++] = ((uint64_t)rl__weight_key(valley ? -S->ex[q] : S->ex[q]) << 32) | (uint64_t)q;
             }
-        for (k = 0; k < cap && k < total; k++) {
-            int32_t q = tmp[(size_t)k * (size_t)total / (size_t)(cap < total ? cap : total)];
-            f[count].x = (int)(q % S->ew); f[count].y = (int)(q / S->ew);
+        qsort(keys, total, sizeof *keys, rl__u64_cmp);
+        for (k = 0; k < total && count - first < cap; k++) {
+            uint32_t q = (uint32_t)(keys[k] & 0xFFFFFFFFu);
+            int qx = (int)(q % (uint32_t)S->ew), qy = (int)(q / (uint32_t)S->ew), j, close = 0;
+            for (j = first; j < count && !close; j++) close = abs(f[j].x - qx) < sep && abs(f[j].y - qy) < sep;
+            if (close) continue;
+            f[count].x = qx; f[count].y = qy;
             f[count].kind = kind; f[count].valley = valley;
-            f[count].angle = rl__direction(edges, S->ew, S->eh, f[count].x, f[count].y, 4);
+            f[count].angle = rl__direction(edges, S->ew, S->eh, qx, qy, 4);
             count++;
         }
     }
@@ -1403,7 +1435,7 @@ static rl_result rl__emphasis(const uint8_t *stroke, int w, int h, float amount,
 
 static void rl__synth_free(rl__synth *S)
 {
-    rl__free(&S->a, S->owner); rl__free(&S->a, S->stroke); rl__free(&S->a, S->sk_edges[0]); rl__free(&S->a, S->sk_edges[1]);
+    rl__free(&S->a, S->owner); rl__free(&S->a, S->stroke); rl__free(&S->a, S->locked); rl__free(&S->a, S->sk_edges[0]); rl__free(&S->a, S->sk_edges[1]);
     rl__free(&S->a, S->cand); rl__free(&S->a, S->best); rl__free(&S->a, S->ga); rl__free(&S->a, S->gb);
     rl__free(&S->a, S->cons); rl__free(&S->a, S->lab); rl__free(&S->a, S->band); rl__free(&S->a, S->queue);
     rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab); rl__free(&S->a, S->fill_off); rl__free(&S->a, S->fill_val);
@@ -1447,6 +1479,8 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
     pp = (size_t)S->P * (size_t)S->P;
     S->owner = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * n);
     S->stroke = (uint8_t *)rl__alloc(&S->a, n);
+    S->locked = (uint8_t *)rl__alloc(&S->a, n);
+    if (!S->locked) S->stroke = (rl__free(&S->a, S->stroke), (uint8_t *)NULL);
     S->cand = (float *)rl__alloc(&S->a, sizeof(float) * pp);
     S->best = (float *)rl__alloc(&S->a, sizeof(float) * pp);
     S->ga = (float *)rl__alloc(&S->a, sizeof(float) * pp);
@@ -1468,6 +1502,7 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
         return RL_ERR_OUT_OF_MEMORY;
     }
     memset(S->owner, 0xFF, sizeof(int32_t) * n);
+    memset(S->locked, 0, n);
     return RL_OK;
 }
 
@@ -1479,7 +1514,7 @@ static rl_result rl__features(rl__synth *S, int32_t *scratch_a, int32_t *scratch
     int pol, nt = 0, ns = 0, cap = 4 * S->w + 4 * S->h + 64, k;
     rl__feat *tf = (rl__feat *)rl__alloc(&S->a, sizeof(rl__feat) * (size_t)cap);
     rl__feat *sf = (rl__feat *)rl__alloc(&S->a, sizeof(rl__feat) * (size_t)(6 * S->o.feature_candidates));
-    int32_t *tmp = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * (size_t)S->ew * (size_t)S->eh);
+    uint64_t *tmp = (uint64_t *)rl__alloc(&S->a, sizeof(uint64_t) * (size_t)S->ew * (size_t)S->eh);
     rl_result r = RL_OK;
     if (!tf || !sf || !tmp) { rl__free(&S->a, tf); rl__free(&S->a, sf); rl__free(&S->a, tmp); return RL_ERR_OUT_OF_MEMORY; }
     ex.width = S->ew; ex.height = S->eh; ex.data = (float *)(size_t)S->ex;

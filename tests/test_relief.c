@@ -421,13 +421,14 @@ static void test_synthesis(void)
     contrast = stroke_contrast(out.data, sk, n);
     printf("synthesis: mean under white - under black = %.3f of the example's range\n", contrast);
     T_CHECK(contrast >= 0.5);
-    {   /* away from the strokes: farther than 3 stroke widths from any stroke texel */
+    {   /* away from the strokes: farther than half a patch (the feature patches, which carry the
+           example's most prominent crests and valleys, reach that far) from any stroke texel */
         for (i = 0; i < n; i++) away[i] = sk[i] > 0.75f || sk[i] < 0.25f;
         {
             float *dist = (float *)malloc(sizeof(float) * n);
             rl_allocator a = rl__allocator(NULL);
             rl__distance(away, 1, N, N, &a, dist);
-            for (i = 0; i < n; i++) away[i] = dist[i] > 9.0f;
+            for (i = 0; i < n; i++) away[i] = dist[i] > 0.5f * (float)o.patch; /* beyond the feature patches' reach */
             free(dist);
         }
         gradient(ex, E, g_ex);
