@@ -5790,170 +5790,213 @@ static int dm__pz_push_pull(dm__pz_scratch *sc, float *val, const uint8_t *known
     return 1;
 }
 
-DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size_t base_vertex_count,
-                        const uint32_t *base_indices, size_t base_triangle_count,
-                        const float *orig_positions, size_t orig_vertex_count,
-                        const uint32_t *orig_indices, size_t orig_triangle_count,
-                        const dm_bake_options *options, dm_dispmap **out)
-{
+/* dm_bake's working state: the two meshes, the options, the map being filled, the search
+   structure over the original and the temporaries (in sc, freed together on the one exit path) */
+typedef struct dm__bk_run {
+    const dm_param *param;
+    const float *bpos, *opos;                 /* base and original positions */
+    const uint32_t *bidx, *oidx;
+    size_t bnv, bnt, onv, ont;
     dm_bake_options o;
     dm__pz_scratch sc;
-    dm_dispmap *m = NULL;
-    dm_bvh *bvh = NULL;
-    dm_bvh_options bo;
+    dm_dispmap *m;
+    dm_bvh *bvh;
+    float *bnrm, *onrm, *fill;                /* vertex normals of both meshes; push-pull values */
+    double *acc;
+    float maxd;                               /* search distance */
+} dm__bk_run;
+
+/* the options and both meshes checked, the parameterization matched to the base */
+static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
+{
     dm_result res;
-    size_t n, i, t;
-    int W, H, y;
-    float *bnrm, *onrm, *fill;
-    double *acc, lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, diag;
-    float maxd;
-
-    if (out) *out = NULL;
-    if (!out || !param) return DM_ERR_INVALID_ARGUMENT;
-    memset(&o, 0, sizeof o);
-    if (options) o = *options;
-    if (!(o.max_distance >= 0.0f) || o.max_distance > 1e30f) return DM_ERR_INVALID_ARGUMENT;
-    res = dm__pz_check_mesh(base_positions, base_vertex_count, base_indices, base_triangle_count);
+    memset(&r->o, 0, sizeof r->o);
+    if (options) r->o = *options;
+    if (!(r->o.max_distance >= 0.0f) || r->o.max_distance > 1e30f) return DM_ERR_INVALID_ARGUMENT;
+    res = dm__pz_check_mesh(r->bpos, r->bnv, r->bidx, r->bnt);
     if (res != DM_OK) return res;
-    res = dm__pz_check_mesh(orig_positions, orig_vertex_count, orig_indices, orig_triangle_count);
+    res = dm__pz_check_mesh(r->opos, r->onv, r->oidx, r->ont);
     if (res != DM_OK) return res;
-    if (param->triangle_count != base_triangle_count) return DM_ERR_INVALID_ARGUMENT;
-    W = param->width;
-    H = param->height;
-    n = (size_t)W * (size_t)H;
+    if (r->param->triangle_count != r->bnt) return DM_ERR_INVALID_ARGUMENT;
+    return DM_OK;
+}
 
-    memset(&sc, 0, sizeof sc);
-    sc.a = dm__resolve_allocator(o.allocator);
-    m = (dm_dispmap *)sc.a.alloc(sc.a.user, sizeof(dm_dispmap));
+/* the map (its arrays owned by it) and the temporaries */
+static dm_result dm__bk_alloc(dm__bk_run *r)
+{
+    dm__pz_scratch *sc = &r->sc;
+    int W = r->param->width, H = r->param->height;
+    size_t n = (size_t)W * (size_t)H;
+    dm_dispmap *m;
+    sc->a = dm__resolve_allocator(r->o.allocator);
+    m = r->m = (dm_dispmap *)sc->a.alloc(sc->a.user, sizeof(dm_dispmap));
     if (!m) return DM_ERR_OUT_OF_MEMORY;
     memset(m, 0, sizeof *m);
-    m->allocator = sc.a;
+    m->allocator = sc->a;
     m->width = W;
     m->height = H;
-    m->pos = (float *)dm__alloc_array(&sc.a, 3 * n, sizeof(float), &sc.overflow);
-    m->nrm = (float *)dm__alloc_array(&sc.a, 3 * n, sizeof(float), &sc.overflow);
-    m->disp = (float *)dm__alloc_array(&sc.a, n, sizeof(float), &sc.overflow);
-    m->normal = (float *)dm__alloc_array(&sc.a, 3 * n, sizeof(float), &sc.overflow);
-    m->area = (float *)dm__alloc_array(&sc.a, n, sizeof(float), &sc.overflow);
-    m->valid = (uint8_t *)dm__alloc_array(&sc.a, n, 1, &sc.overflow);
-    m->status = (uint8_t *)dm__alloc_array(&sc.a, n, 1, &sc.overflow);
-    m->nbr = param->nbr;
-    m->nbr_rot = param->nbr_rot;
-    bnrm = (float *)dm__pz_take(&sc, 3 * base_vertex_count, sizeof(float));
-    onrm = (float *)dm__pz_take(&sc, 3 * orig_vertex_count, sizeof(float));
-    acc = (double *)dm__pz_take(&sc, 3 * (base_vertex_count > orig_vertex_count ? base_vertex_count : orig_vertex_count),
-                                sizeof(double));
-    fill = (float *)dm__pz_take(&sc, 4 * n, sizeof(float));
-    if (!m->pos || !m->nrm || !m->disp || !m->normal || !m->area || !m->valid || !m->status || !bnrm || !onrm || !acc || !fill) {
-        res = dm__pz_fail(&sc);
-        goto fail;
-    }
-    dm__pz_vertex_normals(base_positions, base_vertex_count, base_indices, base_triangle_count, acc, bnrm);
-    dm__pz_vertex_normals(orig_positions, orig_vertex_count, orig_indices, orig_triangle_count, acc, onrm);
-    for (t = 0; t < 3 * orig_triangle_count; t++) {
+    m->pos = (float *)dm__alloc_array(&sc->a, 3 * n, sizeof(float), &sc->overflow);
+    m->nrm = (float *)dm__alloc_array(&sc->a, 3 * n, sizeof(float), &sc->overflow);
+    m->disp = (float *)dm__alloc_array(&sc->a, n, sizeof(float), &sc->overflow);
+    m->normal = (float *)dm__alloc_array(&sc->a, 3 * n, sizeof(float), &sc->overflow);
+    m->area = (float *)dm__alloc_array(&sc->a, n, sizeof(float), &sc->overflow);
+    m->valid = (uint8_t *)dm__alloc_array(&sc->a, n, 1, &sc->overflow);
+    m->status = (uint8_t *)dm__alloc_array(&sc->a, n, 1, &sc->overflow);
+    m->nbr = r->param->nbr;
+    m->nbr_rot = r->param->nbr_rot;
+    r->bnrm = (float *)dm__pz_take(sc, 3 * r->bnv, sizeof(float));
+    r->onrm = (float *)dm__pz_take(sc, 3 * r->onv, sizeof(float));
+    r->acc = (double *)dm__pz_take(sc, 3 * (r->bnv > r->onv ? r->bnv : r->onv), sizeof(double));
+    r->fill = (float *)dm__pz_take(sc, 4 * n, sizeof(float));
+    if (!m->pos || !m->nrm || !m->disp || !m->normal || !m->area || !m->valid || !m->status || !r->bnrm ||
+        !r->onrm || !r->acc || !r->fill)
+        return dm__pz_fail(sc);
+    return DM_OK;
+}
+
+/* vertex normals of both meshes, the search distance (default 5% of the original's box
+   diagonal) and the BVH over the original */
+static dm_result dm__bk_prepare(dm__bk_run *r)
+{
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, diag;
+    dm_bvh_options bo;
+    size_t t;
+    dm__pz_vertex_normals(r->bpos, r->bnv, r->bidx, r->bnt, r->acc, r->bnrm);
+    dm__pz_vertex_normals(r->opos, r->onv, r->oidx, r->ont, r->acc, r->onrm);
+    for (t = 0; t < 3 * r->ont; t++) {
         int k;
         for (k = 0; k < 3; k++) {
-            double v = orig_positions[3 * (size_t)orig_indices[t] + (size_t)k];
+            double v = r->opos[3 * (size_t)r->oidx[t] + (size_t)k];
             if (v < lo[k]) lo[k] = v;
             if (v > hi[k]) hi[k] = v;
         }
     }
     diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    maxd = o.max_distance > 0.0f ? o.max_distance : (float)(0.05 * diag);
-    m->max_distance = maxd;
+    r->maxd = r->o.max_distance > 0.0f ? r->o.max_distance : (float)(0.05 * diag);
+    r->m->max_distance = r->maxd;
     memset(&bo, 0, sizeof bo);
-    bo.allocator = &sc.a;
-    res = dm_bvh_build(orig_positions, orig_vertex_count, orig_indices, orig_triangle_count, &bo, &bvh);
-    if (res != DM_OK) goto fail;
+    bo.allocator = &r->sc.a;
+    return dm_bvh_build(r->opos, r->onv, r->oidx, r->ont, &bo, &r->bvh);
+}
 
-    /* per-triangle texel area: 3D area over the UV area in texels */
+/* texel id on base triangle tt: its base point, unit interpolated normal and the surface area
+   it stands for (3D area over the UV area in texels); returns the normal's length before
+   normalizing (0: no direction to search) */
+static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt)
+{
+    const dm_param *param = r->param;
+    dm_dispmap *m = r->m;
+    const uint32_t *bi = r->bidx + 3 * (size_t)tt;
+    double p[3][3], nv[3], bu, bv, b0, len, fnv[3], e1[3], e2[3], uva;
+    const float *uv;
+    int k, c;
+    bu = param->texel_bary[2 * id];
+    bv = param->texel_bary[2 * id + 1];
+    b0 = 1.0 - bu - bv;
+    for (c = 0; c < 3; c++) dm__pz_load(r->bpos, bi[c], p[c]);
+    for (k = 0; k < 3; k++) {
+        const float *n0 = r->bnrm + 3 * (size_t)bi[0];
+        const float *n1 = r->bnrm + 3 * (size_t)bi[1];
+        const float *n2 = r->bnrm + 3 * (size_t)bi[2];
+        m->pos[3 * id + (size_t)k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
+        nv[k] = b0 * n0[k] + bu * n1[k] + bv * n2[k];
+    }
+    dm__pz_sub(p[1], p[0], e1);
+    dm__pz_sub(p[2], p[0], e2);
+    dm__cross3(e1, e2, fnv);
+    len = dm__pz_len(nv);
+    if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__pz_len(nv); }
+    for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
+    uv = param->uv + 6 * (size_t)tt;
+    uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
+          (double)param->width * (double)param->height;
+    m->area[id] = uva > 0.0 ? (float)(0.5 * dm__pz_len(fnv) / uva) : 0.0f;
+    return len;
+}
+
+/* the ray from texel id's base point along -normal (inward first where asked, else the whole
+   line): the depth and the original's normal at the hit, or a miss */
+static void dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len)
+{
+    dm_dispmap *m = r->m;
+    float maxd = r->maxd;
+    dm_ray ray;
+    dm_hit hit;
+    int got, in_t, k;
+    for (k = 0; k < 3; k++) {
+        ray.org[k] = m->pos[3 * id + (size_t)k];
+        ray.dir[k] = -m->nrm[3 * id + (size_t)k];
+    }
+    in_t = r->o.inward && !(r->o.both_ways && r->o.both_ways[tt]);
+    ray.tmin = in_t ? -0.1f * maxd : -maxd;
+    ray.tmax = maxd;
+    got = 0;
+    if (len > 0.0 && in_t) got = dm_bvh_intersect(r->bvh, &ray, &hit);
+    if (len > 0.0 && !got) {
+        ray.tmin = -maxd;
+        got = dm_bvh_intersect_line(r->bvh, &ray, &hit);
+    }
+    if (got) {
+        const uint32_t *oi = r->oidx + 3 * (size_t)hit.triangle;
+        const float *onrm = r->onrm;
+        double hn[3], hl, w0 = 1.0 - (double)hit.u - (double)hit.v;
+        for (k = 0; k < 3; k++)
+            hn[k] = w0 * onrm[3 * (size_t)oi[0] + (size_t)k] + hit.u * onrm[3 * (size_t)oi[1] + (size_t)k] +
+                    hit.v * onrm[3 * (size_t)oi[2] + (size_t)k];
+        hl = dm__pz_len(hn);
+        if (!(hl > 1e-12)) {
+            dm__pz_face_normal(r->opos, r->oidx, hit.triangle, hn);
+            hl = dm__pz_len(hn);
+        }
+        m->disp[id] = hit.t;
+        for (k = 0; k < 3; k++) m->normal[3 * id + (size_t)k] = hl > 0.0 ? (float)(hn[k] / hl) : 0.0f;
+        m->status[id] = DM_TEXEL_HIT;
+        m->valid[id] = 1;
+        m->hit_count++;
+    } else {
+        m->status[id] = DM_TEXEL_MISS;
+        m->miss_count++;
+    }
+}
+
+/* every texel: EMPTY off the charts, else its base point and its ray */
+static dm_result dm__bk_cast(dm__bk_run *r)
+{
+    const dm_param *param = r->param;
+    dm_dispmap *m = r->m;
+    int W = param->width, H = param->height, y, x, k;
     for (y = 0; y < H; y++) {
-        int x;
         for (x = 0; x < W; x++) {
             size_t id = (size_t)y * (size_t)W + (size_t)x;
             uint32_t tt = param->texel_triangle[id];
-            double p[3][3], nv[3], bu, bv, b0, len, fnv[3], e1[3], e2[3], uva;
-            const float *uv;
-            dm_ray ray;
-            dm_hit hit;
-            int got, in_t;
-            int k, c;
             m->valid[id] = 0;
-            if (tt == DM_NO_HIT || tt >= base_triangle_count) {
+            if (tt == DM_NO_HIT || tt >= r->bnt) {
                 m->status[id] = DM_TEXEL_EMPTY;
                 for (k = 0; k < 3; k++) m->pos[3 * id + (size_t)k] = m->nrm[3 * id + (size_t)k] = 0.0f;
                 m->area[id] = 0.0f;
                 continue;
             }
-            bu = param->texel_bary[2 * id];
-            bv = param->texel_bary[2 * id + 1];
-            b0 = 1.0 - bu - bv;
-            for (c = 0; c < 3; c++) dm__pz_load(base_positions, base_indices[3 * (size_t)tt + (size_t)c], p[c]);
-            for (k = 0; k < 3; k++) {
-                const float *n0 = bnrm + 3 * (size_t)base_indices[3 * (size_t)tt];
-                const float *n1 = bnrm + 3 * (size_t)base_indices[3 * (size_t)tt + 1];
-                const float *n2 = bnrm + 3 * (size_t)base_indices[3 * (size_t)tt + 2];
-                m->pos[3 * id + (size_t)k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
-                nv[k] = b0 * n0[k] + bu * n1[k] + bv * n2[k];
-            }
-            dm__pz_sub(p[1], p[0], e1);
-            dm__pz_sub(p[2], p[0], e2);
-            dm__cross3(e1, e2, fnv);
-            len = dm__pz_len(nv);
-            if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__pz_len(nv); }
-            for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
-            uv = param->uv + 6 * (size_t)tt;
-            uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
-                  (double)W * (double)H;
-            m->area[id] = uva > 0.0 ? (float)(0.5 * dm__pz_len(fnv) / uva) : 0.0f;
-            for (k = 0; k < 3; k++) {
-                ray.org[k] = m->pos[3 * id + (size_t)k];
-                ray.dir[k] = -m->nrm[3 * id + (size_t)k];
-            }
-            in_t = o.inward && !(o.both_ways && o.both_ways[tt]);
-            ray.tmin = in_t ? -0.1f * maxd : -maxd;
-            ray.tmax = maxd;
-            got = 0;
-            if (len > 0.0 && in_t) got = dm_bvh_intersect(bvh, &ray, &hit);
-            if (len > 0.0 && !got) {
-                ray.tmin = -maxd;
-                got = dm_bvh_intersect_line(bvh, &ray, &hit);
-            }
-            if (got) {
-                const uint32_t *oi = orig_indices + 3 * (size_t)hit.triangle;
-                double hn[3], hl, w0 = 1.0 - (double)hit.u - (double)hit.v;
-                for (k = 0; k < 3; k++)
-                    hn[k] = w0 * onrm[3 * (size_t)oi[0] + (size_t)k] + hit.u * onrm[3 * (size_t)oi[1] + (size_t)k] +
-                            hit.v * onrm[3 * (size_t)oi[2] + (size_t)k];
-                hl = dm__pz_len(hn);
-                if (!(hl > 1e-12)) {
-                    dm__pz_face_normal(orig_positions, orig_indices, hit.triangle, hn);
-                    hl = dm__pz_len(hn);
-                }
-                m->disp[id] = hit.t;
-                for (k = 0; k < 3; k++) m->normal[3 * id + (size_t)k] = hl > 0.0 ? (float)(hn[k] / hl) : 0.0f;
-                m->status[id] = DM_TEXEL_HIT;
-                m->valid[id] = 1;
-                m->hit_count++;
-            } else {
-                m->status[id] = DM_TEXEL_MISS;
-                m->miss_count++;
-            }
+            dm__bk_shoot(r, id, tt, dm__bk_base_point(r, id, tt));
         }
-        if ((y & 15) == 15 && o.progress && o.progress(o.progress_user, 0.95f * (float)(y + 1) / (float)H)) {
-            res = DM_CANCELLED;
-            goto fail;
-        }
+        if ((y & 15) == 15 && r->o.progress && r->o.progress(r->o.progress_user, 0.95f * (float)(y + 1) / (float)H))
+            return DM_CANCELLED;
     }
+    return DM_OK;
+}
 
-    /* push-pull fill of everything that is not a hit, for filtering only */
+/* push-pull fill of everything that is not a hit, for filtering only */
+static dm_result dm__bk_fill(dm__bk_run *r)
+{
+    dm_dispmap *m = r->m;
+    float *fill = r->fill;
+    size_t i, n = (size_t)m->width * (size_t)m->height;
     for (i = 0; i < n; i++) {
         fill[4 * i] = m->valid[i] ? m->disp[i] : 0.0f;
         fill[4 * i + 1] = m->valid[i] ? m->normal[3 * i] : 0.0f;
         fill[4 * i + 2] = m->valid[i] ? m->normal[3 * i + 1] : 0.0f;
         fill[4 * i + 3] = m->valid[i] ? m->normal[3 * i + 2] : 0.0f;
     }
-    if (!dm__pz_push_pull(&sc, fill, m->valid, W, H)) { res = dm__pz_fail(&sc); goto fail; }
+    if (!dm__pz_push_pull(&r->sc, fill, m->valid, m->width, m->height)) return dm__pz_fail(&r->sc);
     for (i = 0; i < n; i++) {
         double l;
         if (m->valid[i]) continue;
@@ -5970,16 +6013,38 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
             m->normal[3 * i] = 0.0f; m->normal[3 * i + 1] = 0.0f; m->normal[3 * i + 2] = 1.0f;
         }
     }
-    if (o.progress && o.progress(o.progress_user, 1.0f)) { res = DM_CANCELLED; goto fail; }
-    dm_bvh_free(bvh);
-    dm__pz_release(&sc);
-    *out = m;
+    if (r->o.progress && r->o.progress(r->o.progress_user, 1.0f)) return DM_CANCELLED;
     return DM_OK;
-fail:
-    dm_bvh_free(bvh);
-    dm__pz_release(&sc);
-    dm_dispmap_free(m);
-    return res;
+}
+
+DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size_t base_vertex_count,
+                        const uint32_t *base_indices, size_t base_triangle_count,
+                        const float *orig_positions, size_t orig_vertex_count,
+                        const uint32_t *orig_indices, size_t orig_triangle_count,
+                        const dm_bake_options *options, dm_dispmap **out)
+{
+    dm__bk_run r;
+    dm_result res;
+    if (out) *out = NULL;
+    if (!out || !param) return DM_ERR_INVALID_ARGUMENT;
+    memset(&r, 0, sizeof r);
+    r.param = param;
+    r.bpos = base_positions; r.bnv = base_vertex_count; r.bidx = base_indices; r.bnt = base_triangle_count;
+    r.opos = orig_positions; r.onv = orig_vertex_count; r.oidx = orig_indices; r.ont = orig_triangle_count;
+    res = dm__bk_check(&r, options);
+    if (res != DM_OK) return res;
+    res = dm__bk_alloc(&r);
+    if (res == DM_OK) res = dm__bk_prepare(&r);  /* normals, search distance, BVH */
+    if (res == DM_OK) res = dm__bk_cast(&r);     /* one ray per texel */
+    if (res == DM_OK) res = dm__bk_fill(&r);     /* push-pull over the misses */
+    dm_bvh_free(r.bvh);
+    dm__pz_release(&r.sc);
+    if (res != DM_OK) {
+        dm_dispmap_free(r.m);
+        return res;
+    }
+    *out = r.m;
+    return DM_OK;
 }
 
 /* ---------------------------------------------------------------------------------------------
