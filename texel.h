@@ -1381,23 +1381,27 @@ TVTDEF void tvt_texel_free(tvt_texel *t)
    --------------------------------------------------------------------------------------------- */
 static float tvt__luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
-/* The rest state of a point of blade b: root moved to the image nearest the point. */
-static void tvt__rest_from_blade(const tvt_blade *b, int res, tvt_point *p)
+/* A voxel's share of its blade's rest state: the root moved to the periodic image nearest the
+   voxel centre (cx, cy), the blade's axis, bend and colour delay. */
+static void tvt__blade_proto(const tvt_blade *b, int res, float cx, float cy, tvt_point *p)
 {
-    float d[3];
-    int c;
-    for (c = 0; c < 2; c++) {
-        float off = p->pos[c] - b->root[c];
-        p->root[c] = b->root[c] + (float)res * floorf(off / (float)res + 0.5f);
-    }
+    p->root[0] = b->root[0] + (float)res * floorf((cx - b->root[0]) / (float)res + 0.5f);
+    p->root[1] = b->root[1] + (float)res * floorf((cy - b->root[1]) / (float)res + 0.5f);
     p->root[2] = 0.0f;
     memcpy(p->axis, b->axis, sizeof(p->axis));
     memcpy(p->bend, b->bend, sizeof(p->bend));
-    for (c = 0; c < 3; c++) d[c] = p->pos[c] - p->root[c];
-    p->ell = tvt__dot(d, b->axis);
-    if (p->ell < 0) p->ell = 0;
-    for (c = 0; c < 3; c++) p->radial[c] = d[c] - p->ell * b->axis[c];
     p->wd_delay = b->wd_delay;
+}
+
+/* The rest of a blade point's state: arc length along the axis and radial offset. */
+static void tvt__rest_from_blade(tvt_point *p)
+{
+    float d[3];
+    int c;
+    for (c = 0; c < 3; c++) d[c] = p->pos[c] - p->root[c];
+    p->ell = tvt__dot(d, p->axis);
+    if (p->ell < 0) p->ell = 0;
+    for (c = 0; c < 3; c++) p->radial[c] = d[c] - p->ell * p->axis[c];
 }
 
 /* The paper's rest state (Fig 6a): the root is where the tangent line through the point meets
@@ -1477,13 +1481,14 @@ static void tvt__sample_voxel(tvt__sampler *S, long x, long y, long z, size_t sl
         proto.specular = proto.specular0 = v.specular;
         proto.mass = 1.0f;
         proto.brightness = tvt__luminance(v.color) / S->green_lum;
+        if (blade < t->blade_count) tvt__blade_proto(t->blades + blade, t->res, (float)x + 0.5f, (float)y + 0.5f, &proto);
         for (i = 0; i < n; i++) {
             tvt_point *p = S->out + S->count + i;
             *p = proto;
             p->pos[0] = (float)x + tvt__rand(&s);
             p->pos[1] = (float)y + tvt__rand(&s);
             p->pos[2] = (float)z + tvt__rand(&s);
-            if (blade < t->blade_count) tvt__rest_from_blade(t->blades + blade, t->res, p);
+            if (blade < t->blade_count) tvt__rest_from_blade(p);
             else tvt__rest_from_tangent(&s, p);
         }
     }
