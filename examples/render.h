@@ -1539,12 +1539,22 @@ static int sr__relief_frame_init(const sr_relief_desc *d, sr__relief_frame *f)
     return 1;
 }
 
+/* floorf for |x| < 2^23 (exact there: the same bits), without the libm call that plain x86-64
+   builds make; NaN and huge values go to -2^22 */
+static SR__INLINE int sr__floor_int(float x)
+{
+    int i;
+    if (!(x > -4194304.0f && x < 4194304.0f)) return -4194304;
+    i = (int)x;
+    return (float)i > x ? i - 1 : i;
+}
+
 /* sr__sample of channel 0 alone (the same arithmetic, so the same bits), the marchers' inner loop */
-static float sr__depth_at(const sr_image *img, float u, float v)
+static SR__INLINE float sr__depth_at(const sr_image *img, float u, float v)
 {
     float x = u * (float)img->width - 0.5f, y = v * (float)img->height - 0.5f;
-    float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy, a, b, e, f;
-    int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1, w = img->width, h = img->height;
+    int x0 = sr__floor_int(x), y0 = sr__floor_int(y), x1 = x0 + 1, y1 = y0 + 1, w = img->width, h = img->height;
+    float ax = x - (float)x0, ay = y - (float)y0, a, b, e, f;
     size_t ch = (size_t)img->channels, r0, r1;
     if (img->wrap) {
         x0 %= w; if (x0 < 0) x0 += w;
