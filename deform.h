@@ -812,23 +812,43 @@ done:
    Section: mesh Laplacians
    --------------------------------------------------------------------------------------------- */
 
+static void dfm__sub3(const double *a, const double *b, double *r)
+{
+    r[0] = a[0] - b[0];
+    r[1] = a[1] - b[1];
+    r[2] = a[2] - b[2];
+}
+static double dfm__dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void dfm__cross3(const double *a, const double *b, double *r)
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 /* cot of the angle at o in triangle (o, a, b); 0 for a degenerate corner */
-static double dfm__cot(const float *o, const float *a, const float *b)
+static double dfm__cot_d(const double *o, const double *a, const double *b)
 {
     double u[3], v[3], c[3], d, s;
+    dfm__sub3(a, o, u);
+    dfm__sub3(b, o, v);
+    dfm__cross3(u, v, c);
+    d = dfm__dot3(u, v);
+    s = sqrt(dfm__dot3(c, c));
+    if (!(s > 1e-12 * sqrt(dfm__dot3(u, u) * dfm__dot3(v, v)))) return 0.0;
+    return d / s;
+}
+
+static double dfm__cot(const float *o, const float *a, const float *b)
+{
+    double od[3], ad[3], bd[3];
     int k;
     for (k = 0; k < 3; k++) {
-        u[k] = (double)a[k] - (double)o[k];
-        v[k] = (double)b[k] - (double)o[k];
+        od[k] = o[k];
+        ad[k] = a[k];
+        bd[k] = b[k];
     }
-    c[0] = u[1] * v[2] - u[2] * v[1];
-    c[1] = u[2] * v[0] - u[0] * v[2];
-    c[2] = u[0] * v[1] - u[1] * v[0];
-    d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-    s = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    if (!(s > 1e-12 * sqrt((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))))
-        return 0.0;
-    return d / s;
+    return dfm__cot_d(od, ad, bd);
 }
 
 DFMDEF dfm_result dfm_mesh_laplacian(const float *positions, size_t vertex_count, const uint32_t *indices,
@@ -3566,30 +3586,6 @@ static dfm_result dfm__check_welded(const double *pos, const dfm__graph *g, cons
         if (!memcmp(keys[v].p, keys[v - 1].p, 3 * sizeof(double))) err = DFM_ERR_UNWELDED;
     dfm__free(al, keys);
     return err;
-}
-
-static void dfm__sub3(const double *a, const double *b, double *r)
-{
-    r[0] = a[0] - b[0];
-    r[1] = a[1] - b[1];
-    r[2] = a[2] - b[2];
-}
-static double dfm__dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void dfm__cross3(const double *a, const double *b, double *r)
-{
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* cot of the angle at corner o of a triangle with (non-degenerate) corners o, a, b */
-static double dfm__cot_d(const double *o, const double *a, const double *b)
-{
-    double u[3], v[3], c[3];
-    dfm__sub3(a, o, u);
-    dfm__sub3(b, o, v);
-    dfm__cross3(u, v, c);
-    return dfm__dot3(u, v) / sqrt(dfm__dot3(c, c));
 }
 
 /* A triangle is degenerate when an index repeats or its area is below 1e-12 of |e1| |e2|. */
