@@ -4009,6 +4009,226 @@ static dm_result dm__qem_make_pm(dm__qem_simp *s, dm_pm **out)
     return DM_OK;
 }
 
+/* dm_simplify's setup: the working state, the vertex classes (boundary, frozen), the locks;
+   frozen gets the count of frozen vertices */
+static dm_result dm__qem_prepare(dm__qem_simp *s, const float *positions, size_t vertex_count,
+                                 const uint32_t *indices, size_t triangle_count, size_t *dropped, size_t *frozen)
+{
+    const dm_simplify_options *opt = s->opt;
+    uint32_t *tmp;
+    size_t v;
+    int overflow = 0;
+    dm_result r = dm__qem_simp_init(s, positions, vertex_count, indices, triangle_count, dropped);
+    if (r != DM_OK) return r;
+    tmp = (uint32_t *)dm__alloc_array(&s->al, 4 * vertex_count, sizeof(uint32_t), &overflow);
+    if (!tmp) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    memset(tmp + 3 * vertex_count, 0, vertex_count * sizeof(uint32_t));
+    dm__qem_classify(s, tmp);
+    s->al.free(s->al.user, tmp);
+    for (v = 0; v < vertex_count; v++) {
+        if (opt->locked && opt->locked[v]) s->vx[v].flag |= DM__QEM_V_LOCKED;
+        if ((opt->flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s->vx[v].flag & DM__QEM_V_BOUNDARY)) s->vx[v].flag |= DM__QEM_V_LOCKED;
+        if (s->vx[v].flag & DM__QEM_V_FROZEN) (*frozen)++;
+    }
+    return DM_OK;
+}
+
+/* the first candidates: every collapsible edge once, from its lower endpoint. A vertex that is
+   not frozen is manifold: its neighbours are the next vertices of its corners, each once, and
+   on a boundary also the one previous vertex that is nobody's next. Costed and pushed by
+   batches. */
+static dm_result dm__qem_seed_edges(dm__qem_simp *s, size_t vertex_count)
+{
+    uint32_t ea[DM__QEM_BATCH], eb[DM__QEM_BATCH];
+    size_t v, nedge;
+    for (v = 0, nedge = 0; v < vertex_count; v++) {
+        uint32_t i, j, nc = s->vx[v].count;
+        const uint32_t *cl = s->adj + s->vx[v].first;
+        if (s->vx[v].flag & DM__QEM_V_FROZEN) continue;
+        for (i = 0; i < 2 * nc; i++) {
+            uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x;
+            const uint32_t *t = s->idx + (ci - slot);
+            if (i < nc) {
+                x = t[DM__QEM_NEXT(slot)];
+            } else {
+                if (!(s->vx[v].flag & DM__QEM_V_BOUNDARY)) break;
+                x = t[DM__QEM_PREV(slot)];
+                for (j = 0; j < nc; j++) {
+                    const uint32_t *u = s->idx + 3 * (size_t)(cl[j] / 3);
+                    uint32_t sj = cl[j] % 3;
+                    if (u[DM__QEM_NEXT(sj)] == x) break;
+                }
+                if (j < nc) continue;
+            }
+            if (x < v) continue;
+            if (nedge == DM__QEM_BATCH) {
+                if (!dm__qem_push_edges(s, ea, eb, nedge)) return DM_ERR_OUT_OF_MEMORY;
+                nedge = 0;
+            }
+            ea[nedge] = (uint32_t)v;
+            eb[nedge++] = x;
+        }
+    }
+    if (nedge && !dm__qem_push_edges(s, ea, eb, nedge)) return DM_ERR_OUT_OF_MEMORY;
+    return DM_OK;
+}
+
+/* the records for the collapses to come (one per 2 triangles, about 6 ops each): grown by
+   doubling they would be copied several times */
+static dm_result dm__qem_reserve(dm__qem_simp *s, size_t to_remove, size_t vertex_count)
+{
+    size_t expect = to_remove / 2 + 16;
+    if (s->opt->max_collapses && expect > s->opt->max_collapses) expect = s->opt->max_collapses;
+    if (expect > vertex_count) expect = vertex_count;
+    if (!dm__qem_grow(&s->al, (void **)&s->rec, &s->caprec, expect, sizeof(dm__qem_rec)) ||
+        !dm__qem_grow(&s->al, (void **)&s->ops, &s->capops, 7 * expect, sizeof(uint32_t)))
+        return DM_ERR_OUT_OF_MEMORY;
+    return DM_OK;
+}
+
+/* the user's constraint on collapse (keep, rem) of candidate e to at: 1 = go on (at, cost and
+   err as the constraint moved them), 0 = skip it (vetoed: both ends parked; or moved to where it
+   costs much more: back in the queue at that cost), -1 = out of memory. Called once, inlined. */
+static int dm__qem_ask_constraint(dm__qem_simp *s, const dm__qem_cand *e, uint32_t keep, uint32_t rem, float at[3],
+                                  double *cost, double *err, size_t ring_count)
+{
+    const dm_simplify_options *opt = s->opt;
+    uint32_t ea = DM__QEM_CAND_A(e);
+    dm_collapse cand;
+    float corrected[3];
+    int verdict, k;
+    cand.keep = keep;
+    cand.remove = rem;
+    for (k = 0; k < 3; k++) cand.position[k] = corrected[k] = at[k];
+    cand.error = *err;
+    cand.positions = s->pos;
+    cand.triangles = s->ring;
+    cand.triangle_count = ring_count;
+    cand.old_triangles = s->oring;
+    cand.old_triangle_count = dm__qem_old_ring(s, keep, rem);
+    cand.level = s->nrec;
+    verdict = opt->constraint(opt->constraint_user, &cand, corrected);
+    if (verdict == DM_COLLAPSE_MOVE) {
+        double q[3];
+        dm__qem_quadric qs;
+        int ok = 1;
+        for (k = 0; k < 3; k++) {
+            ok &= corrected[k] >= -DM__MAX_COORD && corrected[k] <= DM__MAX_COORD;
+            at[k] = corrected[k];
+            q[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
+        }
+        if (((s->vx[keep].flag & DM__QEM_V_LOCKED) || ((s->vx[keep].flag ^ s->vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
+            memcmp(at, s->pos + 3 * (size_t)keep, 3 * sizeof(float)) != 0)
+            ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
+        if (ok && dm__qem_check_geometry(s, keep, rem, at) == (size_t)-1) ok = 0;
+        if (!ok) verdict = DM_COLLAPSE_VETO;
+        dm__qem_quadric_sum(&qs, &s->vx[keep].q, &s->vx[rem].q);
+        *cost = dm__qem_quadric_eval(&qs, q);
+        *err = qs.w > 0.0 ? sqrt(*cost / qs.w) * s->scale : 0.0;
+        if (ok) { /* costs much more where the constraint puts it: back in the queue at that cost */
+            dm__qem_cand e2 = dm__qem_make_cand(s, ea, e->b, *cost);
+            if ((e2.key >> 32) > (e->key >> 32) && (double)*cost > DM__QEM_REQUEUE * (double)dm__qem_key_cost(e->key)) {
+                if (!dm__qem_heap_push(s, &e2)) return -1;
+                s->requeued++;
+                return 0;
+            }
+        }
+    } else if (verdict != DM_COLLAPSE_ALLOW) {
+        verdict = DM_COLLAPSE_VETO;
+    }
+    if (verdict == DM_COLLAPSE_VETO) {
+        s->vetoed++;
+        s->vx[ea].flag |= DM__QEM_V_PARKED;
+        s->vx[e->b].flag |= DM__QEM_V_PARKED;
+        return 0;
+    }
+    return 1;
+}
+
+/* the user's on_collapse told of collapse (keep, rem) to at, before it is made */
+static void dm__qem_tell_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3], double err,
+                                  size_t ring_count)
+{
+    dm_collapse done_c;
+    int k;
+    done_c.keep = keep;
+    done_c.remove = rem;
+    for (k = 0; k < 3; k++) done_c.position[k] = at[k];
+    done_c.error = err;
+    done_c.positions = s->pos;
+    done_c.triangles = s->ring; /* filled by the geometry check at `at` */
+    done_c.triangle_count = ring_count;
+    done_c.old_triangles = s->oring;
+    done_c.old_triangle_count = dm__qem_old_ring(s, keep, rem);
+    done_c.level = s->nrec;
+    s->opt->on_collapse(s->opt->constraint_user, &done_c);
+}
+
+/* the collapse loop: the cheapest candidate first, checked (stale, placement, error bound,
+   topology, geometry, the user's constraint), then made; until the target, the collapse bound
+   or an empty queue (after which the constraint may relax and the parked edges come back) */
+static dm_result dm__qem_collapse_loop(dm__qem_simp *s, dm_simplify_report *rep, size_t to_remove)
+{
+    const dm_simplify_options *opt = s->opt;
+    size_t next_progress = 0;
+    while ((s->target == 0 || s->live > s->target) && (opt->max_collapses == 0 || s->nrec < opt->max_collapses)) {
+        dm__qem_cand e;
+        uint32_t ea, keep, rem;
+        double x[3], cost, err;
+        float at[3];
+        size_t ring_count;
+        int k, placed, got = dm__qem_next(s, &e);
+        if (got < 0) return DM_ERR_OUT_OF_MEMORY;
+        if (got == 0) {
+            int again = 0;
+            if (opt->relax && s->target && s->live > s->target && s->vetoed > 0 && opt->relax(opt->constraint_user)) {
+                rep->relaxed++;
+                if (!dm__qem_requeue_parked(s, &again)) return DM_ERR_OUT_OF_MEMORY;
+            }
+            if (!again) break;
+            continue;
+        }
+        s->floor = e.key;
+        dm__qem_ahead(s, 0, 1); /* the next one: its triangles */
+        ea = DM__QEM_CAND_A(&e);
+        DM__QEM_PREFETCH(&s->vx[ea]); /* in flight while the versions are read */
+        DM__QEM_PREFETCH(&s->vx[e.b]);
+        if (dm__qem_stale(s, &e)) continue; /* a collapse bumped a version (removed ones too) */
+        DM__QEM_PREFETCH(s->adj + s->vx[ea].first); /* for the topology check, while placing */
+        DM__QEM_PREFETCH(s->adj + s->vx[e.b].first);
+        placed = dm__qem_place(s, ea, e.b, &keep, &rem, x, &cost);
+        if (!placed) continue;
+        err = dm__qem_error(s, ea, e.b, cost);
+        if (opt->target_error > 0.0 && err > opt->target_error) continue;
+        for (k = 0; k < 3; k++)
+            at[k] = placed == 2 ? s->pos[3 * (size_t)keep + k] : (float)(s->center[k] + x[k] * s->scale);
+        if (!dm__qem_check_topology(s, keep, rem, e.key == s->ahead_key) ||
+            (ring_count = dm__qem_check_geometry(s, keep, rem, at)) == (size_t)-1) {
+            s->rejected++;
+            s->vx[ea].flag |= DM__QEM_V_PARKED;
+            s->vx[e.b].flag |= DM__QEM_V_PARKED;
+            continue;
+        }
+        dm__qem_ahead(s, 1, 0); /* the one after the next (popped at the start): its corner lists */
+        if (opt->constraint) {
+            int go = dm__qem_ask_constraint(s, &e, keep, rem, at, &cost, &err, ring_count);
+            if (go < 0) return DM_ERR_OUT_OF_MEMORY;
+            if (go == 0) continue;
+        }
+        if (opt->on_collapse) dm__qem_tell_collapse(s, keep, rem, at, err, ring_count);
+        if (!dm__qem_collapse(s, keep, rem, at) || !dm__qem_refresh(s, keep)) return DM_ERR_OUT_OF_MEMORY;
+        dm__qem_ahead(s, 0, 2); /* the next one: its neighbours */
+        if (s->hsize > 4096 && s->hsize / 3 > s->live && !dm__qem_heap_purge(s)) return DM_ERR_OUT_OF_MEMORY;
+        if (err > s->max_error) s->max_error = err;
+        if (opt->progress && s->nrec >= next_progress) {
+            float done = to_remove ? (float)(s->t - s->live) / (float)to_remove : 0.0f;
+            if (opt->progress(opt->progress_user, done > 1.0f ? 1.0f : done)) return DM_CANCELLED;
+            next_progress = s->nrec + 1024;
+        }
+    }
+    return DM_OK;
+}
+
 DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const uint32_t *indices,
                             size_t triangle_count, const dm_simplify_options *options, dm_pm **out,
                             dm_simplify_report *report)
@@ -4017,10 +4237,7 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     dm_simplify_options opt;
     dm_simplify_report rep;
     dm_result r;
-    size_t v, dropped = 0, frozen = 0, to_remove, next_progress, nedge;
-    uint32_t ea[DM__QEM_BATCH], eb[DM__QEM_BATCH];
-    uint32_t *tmp = NULL;
-    int overflow = 0;
+    size_t v, dropped = 0, frozen = 0, to_remove = 0;
     memset(&s, 0, sizeof s);
     memset(&rep, 0, sizeof rep);
     for (v = 0; v < DM__QEM_BUCKETS; v++) s.bucket[v].fill = DM__QEM_CHUNK;
@@ -4032,223 +4249,28 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     if (!out) return DM_ERR_INVALID_ARGUMENT;
     *out = NULL;
     if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
-    r = dm__qem_simp_init(&s, positions, vertex_count, indices, triangle_count, &dropped);
-    if (r != DM_OK) goto done;
-    tmp = (uint32_t *)dm__alloc_array(&s.al, 4 * vertex_count, sizeof(uint32_t), &overflow);
-    if (!tmp) {
-        r = overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
-        goto done;
+    r = dm__qem_prepare(&s, positions, vertex_count, indices, triangle_count, &dropped, &frozen);
+    if (r == DM_OK) r = dm__qem_seed_edges(&s, vertex_count); /* every edge a candidate */
+    if (r == DM_OK) {
+        s.target = opt.target_triangles;
+        to_remove = s.live > s.target ? s.live - s.target : 0;
+        r = dm__qem_reserve(&s, to_remove, vertex_count);
     }
-    memset(tmp + 3 * vertex_count, 0, vertex_count * sizeof(uint32_t));
-    dm__qem_classify(&s, tmp);
-    s.al.free(s.al.user, tmp);
-    tmp = NULL;
-    for (v = 0; v < vertex_count; v++) {
-        if (opt.locked && opt.locked[v]) s.vx[v].flag |= DM__QEM_V_LOCKED;
-        if ((opt.flags & DM_SIMPLIFY_LOCK_BOUNDARY) && (s.vx[v].flag & DM__QEM_V_BOUNDARY)) s.vx[v].flag |= DM__QEM_V_LOCKED;
-        if (s.vx[v].flag & DM__QEM_V_FROZEN) frozen++;
+    if (r == DM_OK) r = dm__qem_collapse_loop(&s, &rep, to_remove); /* the cheapest first */
+    if (r == DM_OK && opt.progress && opt.progress(opt.progress_user, 1.0f)) r = DM_CANCELLED;
+    if (r == DM_OK) {
+        rep.input_triangles = s.t;
+        rep.dropped_triangles = dropped;
+        rep.triangle_count = s.live;
+        rep.collapse_count = s.nrec;
+        rep.rejected = s.rejected;
+        rep.vetoed = s.vetoed;
+        rep.frozen_vertices = frozen;
+        rep.error = s.max_error;
+        rep.reached_target = s.target == 0 || s.live <= s.target;
+        r = dm__qem_make_pm(&s, out); /* the records become the progressive mesh */
+        if (r == DM_OK) rep.vertex_count = (*out)->live_vertices;
     }
-    /* every collapsible edge once, from its lower endpoint. A vertex that is not frozen is
-       manifold: its neighbours are the next vertices of its corners, each once, and on a
-       boundary also the one previous vertex that is nobody's next. */
-    for (v = 0, nedge = 0; v < vertex_count; v++) { /* costed and pushed by batches */
-        uint32_t i, j, nc = s.vx[v].count;
-        const uint32_t *cl = s.adj + s.vx[v].first;
-        if (s.vx[v].flag & DM__QEM_V_FROZEN) continue;
-        for (i = 0; i < 2 * nc; i++) {
-            uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x;
-            const uint32_t *t = s.idx + (ci - slot);
-            if (i < nc) {
-                x = t[DM__QEM_NEXT(slot)];
-            } else {
-                if (!(s.vx[v].flag & DM__QEM_V_BOUNDARY)) break;
-                x = t[DM__QEM_PREV(slot)];
-                for (j = 0; j < nc; j++) {
-                    const uint32_t *u = s.idx + 3 * (size_t)(cl[j] / 3);
-                    uint32_t sj = cl[j] % 3;
-                    if (u[DM__QEM_NEXT(sj)] == x) break;
-                }
-                if (j < nc) continue;
-            }
-            if (x < v) continue;
-            if (nedge == DM__QEM_BATCH) {
-                if (!dm__qem_push_edges(&s, ea, eb, nedge)) {
-                    r = DM_ERR_OUT_OF_MEMORY;
-                    goto done;
-                }
-                nedge = 0;
-            }
-            ea[nedge] = (uint32_t)v;
-            eb[nedge++] = x;
-        }
-    }
-    if (nedge && !dm__qem_push_edges(&s, ea, eb, nedge)) {
-        r = DM_ERR_OUT_OF_MEMORY;
-        goto done;
-    }
-
-    s.target = opt.target_triangles;
-    to_remove = s.live > s.target ? s.live - s.target : 0;
-    { /* the records for the collapses to come (one per 2 triangles, about 6 ops each): grown
-         by doubling they would be copied several times */
-        size_t expect = to_remove / 2 + 16;
-        if (opt.max_collapses && expect > opt.max_collapses) expect = opt.max_collapses;
-        if (expect > vertex_count) expect = vertex_count;
-        if (!dm__qem_grow(&s.al, (void **)&s.rec, &s.caprec, expect, sizeof(dm__qem_rec)) ||
-            !dm__qem_grow(&s.al, (void **)&s.ops, &s.capops, 7 * expect, sizeof(uint32_t))) {
-            r = DM_ERR_OUT_OF_MEMORY;
-            goto done;
-        }
-    }
-    next_progress = 0;
-    while ((s.target == 0 || s.live > s.target) && (opt.max_collapses == 0 || s.nrec < opt.max_collapses)) {
-        dm__qem_cand e;
-        uint32_t ea, keep, rem;
-        double x[3], cost, err;
-        float at[3];
-        size_t ring_count;
-        int k, placed, got = dm__qem_next(&s, &e);
-        if (got < 0) {
-            r = DM_ERR_OUT_OF_MEMORY;
-            goto done;
-        }
-        if (got == 0) {
-            int again = 0;
-            if (opt.relax && s.target && s.live > s.target && s.vetoed > 0 && opt.relax(opt.constraint_user)) {
-                rep.relaxed++;
-                if (!dm__qem_requeue_parked(&s, &again)) {
-                    r = DM_ERR_OUT_OF_MEMORY;
-                    goto done;
-                }
-            }
-            if (!again) break;
-            continue;
-        }
-        s.floor = e.key;
-        dm__qem_ahead(&s, 0, 1); /* the next one: its triangles */
-        ea = DM__QEM_CAND_A(&e);
-        DM__QEM_PREFETCH(&s.vx[ea]); /* in flight while the versions are read */
-        DM__QEM_PREFETCH(&s.vx[e.b]);
-        if (dm__qem_stale(&s, &e)) continue; /* a collapse bumped a version (removed ones too) */
-        DM__QEM_PREFETCH(s.adj + s.vx[ea].first); /* for the topology check, while placing */
-        DM__QEM_PREFETCH(s.adj + s.vx[e.b].first);
-        placed = dm__qem_place(&s, ea, e.b, &keep, &rem, x, &cost);
-        if (!placed) continue;
-        err = dm__qem_error(&s, ea, e.b, cost);
-        if (opt.target_error > 0.0 && err > opt.target_error) continue;
-        for (k = 0; k < 3; k++)
-            at[k] = placed == 2 ? s.pos[3 * (size_t)keep + k] : (float)(s.center[k] + x[k] * s.scale);
-        if (!dm__qem_check_topology(&s, keep, rem, e.key == s.ahead_key) ||
-            (ring_count = dm__qem_check_geometry(&s, keep, rem, at)) == (size_t)-1) {
-            s.rejected++;
-            s.vx[ea].flag |= DM__QEM_V_PARKED;
-            s.vx[e.b].flag |= DM__QEM_V_PARKED;
-            continue;
-        }
-        dm__qem_ahead(&s, 1, 0); /* the one after the next (popped at the start): its corner lists */
-        if (opt.constraint) {
-            dm_collapse cand;
-            float corrected[3];
-            int verdict;
-            cand.keep = keep;
-            cand.remove = rem;
-            for (k = 0; k < 3; k++) cand.position[k] = corrected[k] = at[k];
-            cand.error = err;
-            cand.positions = s.pos;
-            cand.triangles = s.ring;
-            cand.triangle_count = ring_count;
-            cand.old_triangles = s.oring;
-            cand.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
-            cand.level = s.nrec;
-            verdict = opt.constraint(opt.constraint_user, &cand, corrected);
-            if (verdict == DM_COLLAPSE_MOVE) {
-                double q[3];
-                dm__qem_quadric qs;
-                int ok = 1;
-                for (k = 0; k < 3; k++) {
-                    ok &= corrected[k] >= -DM__MAX_COORD && corrected[k] <= DM__MAX_COORD;
-                    at[k] = corrected[k];
-                    q[k] = ((double)at[k] - s.center[k]) * s.inv_scale;
-                }
-                if (((s.vx[keep].flag & DM__QEM_V_LOCKED) || ((s.vx[keep].flag ^ s.vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
-                    memcmp(at, s.pos + 3 * (size_t)keep, sizeof at) != 0)
-                    ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
-                if (ok && dm__qem_check_geometry(&s, keep, rem, at) == (size_t)-1) ok = 0;
-                if (!ok) verdict = DM_COLLAPSE_VETO;
-                dm__qem_quadric_sum(&qs, &s.vx[keep].q, &s.vx[rem].q);
-                cost = dm__qem_quadric_eval(&qs, q);
-                err = qs.w > 0.0 ? sqrt(cost / qs.w) * s.scale : 0.0;
-                if (ok) { /* costs much more where the constraint puts it: back in the queue at that cost */
-                    dm__qem_cand e2 = dm__qem_make_cand(&s, ea, e.b, cost);
-                    if ((e2.key >> 32) > (e.key >> 32) && (double)cost > DM__QEM_REQUEUE * (double)dm__qem_key_cost(e.key)) {
-                        if (!dm__qem_heap_push(&s, &e2)) {
-                            r = DM_ERR_OUT_OF_MEMORY;
-                            goto done;
-                        }
-                        s.requeued++;
-                        continue;
-                    }
-                }
-            } else if (verdict != DM_COLLAPSE_ALLOW) {
-                verdict = DM_COLLAPSE_VETO;
-            }
-            if (verdict == DM_COLLAPSE_VETO) {
-                s.vetoed++;
-                s.vx[ea].flag |= DM__QEM_V_PARKED;
-                s.vx[e.b].flag |= DM__QEM_V_PARKED;
-                continue;
-            }
-        }
-        if (opt.on_collapse) {
-            dm_collapse done_c;
-            done_c.keep = keep;
-            done_c.remove = rem;
-            for (k = 0; k < 3; k++) done_c.position[k] = at[k];
-            done_c.error = err;
-            done_c.positions = s.pos;
-            done_c.triangles = s.ring; /* filled by the geometry check at `at` */
-            done_c.triangle_count = ring_count;
-            done_c.old_triangles = s.oring;
-            done_c.old_triangle_count = dm__qem_old_ring(&s, keep, rem);
-            done_c.level = s.nrec;
-            opt.on_collapse(opt.constraint_user, &done_c);
-        }
-        if (!dm__qem_collapse(&s, keep, rem, at) || !dm__qem_refresh(&s, keep)) {
-            r = DM_ERR_OUT_OF_MEMORY;
-            goto done;
-        }
-        dm__qem_ahead(&s, 0, 2); /* the next one: its neighbours */
-        if (s.hsize > 4096 && s.hsize / 3 > s.live && !dm__qem_heap_purge(&s)) {
-            r = DM_ERR_OUT_OF_MEMORY;
-            goto done;
-        }
-        if (err > s.max_error) s.max_error = err;
-        if (opt.progress && s.nrec >= next_progress) {
-            float done = to_remove ? (float)(s.t - s.live) / (float)to_remove : 0.0f;
-            if (opt.progress(opt.progress_user, done > 1.0f ? 1.0f : done)) {
-                r = DM_CANCELLED;
-                goto done;
-            }
-            next_progress = s.nrec + 1024;
-        }
-    }
-    if (opt.progress && opt.progress(opt.progress_user, 1.0f)) {
-        r = DM_CANCELLED;
-        goto done;
-    }
-    rep.input_triangles = s.t;
-    rep.dropped_triangles = dropped;
-    rep.triangle_count = s.live;
-    rep.collapse_count = s.nrec;
-    rep.rejected = s.rejected;
-    rep.vetoed = s.vetoed;
-    rep.frozen_vertices = frozen;
-    rep.error = s.max_error;
-    rep.reached_target = s.target == 0 || s.live <= s.target;
-    r = dm__qem_make_pm(&s, out);
-    if (r == DM_OK) rep.vertex_count = (*out)->live_vertices;
-done:
-    if (tmp) s.al.free(s.al.user, tmp);
     dm__qem_simp_free(&s);
     if (r == DM_OK && report) *report = rep;
     return r;
