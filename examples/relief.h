@@ -1313,7 +1313,7 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
                 if (c >= limit) continue;
                 c /= n;
             } else { /* nothing to match: a fixed spread of positions */
-                uint32_t hsh = (uint32_t)(wx * 73856093) ^ (uint32_t)(wy * 19349663) ^ (uint32_t)(ex * 83492791) ^ (uint32_t)(ey * 2654435761u);
+                uint32_t hsh = (uint32_t)wx * 73856093u ^ (uint32_t)wy * 19349663u ^ (uint32_t)ex * 83492791u ^ (uint32_t)ey * 2654435761u;
                 c = (double)(hsh % 1000u);
             }
             if (nk == K && c >= kc[nk - 1]) continue;
