@@ -1,11 +1,12 @@
 /* bench_deform - deform.h's three editing methods against CGAL's Surface_mesh_deformation
    (as-rigid-as-possible, SPOKES_AND_RIMS, its Eigen solver, deform(5, 0)), one thread.
 
-   build/bench_deform [MESH] [--refine K] [--free F] [--no-cgal]
+   build/bench_deform [MESH] [--refine K] [--free F] [--methods LIST] [--no-cgal]
      MESH       default /usr/share/glmark2/models/bunny.obj
      --refine K K butterfly levels (subdiv4.h, w = 1/16) first
      --free F   the ROI's share of the bounding box's longest extent, from the top (default 0.4)
-     --no-cgal  our methods only
+     --methods  a comma-separated subset of laplacian,fitting,lri,cgal_arap (default: all)
+     --no-cgal  our methods only (the same as leaving cgal_arap out of --methods)
 
    The rule (from MESH's bounding box alone): t(v) = (p_a - min_a) / h along the longest axis a
    (h its extent); the ROI is t >= 1 - F, the handle t >= 0.95, the rest is fixed. b is the
@@ -270,19 +271,20 @@ static void run_cgal(const Problem &p, const Pose *poses, const char **cases, in
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: bench_deform [MESH] [--refine K] [--free F] [--no-cgal]\n");
+    fprintf(stderr, "usage: bench_deform [MESH] [--refine K] [--free F] [--methods LIST] [--no-cgal]\n");
     return 2;
 }
 
 int main(int argc, char **argv)
 {
-    const char *path = "/usr/share/glmark2/models/bunny.obj";
+    const char *path = "/usr/share/glmark2/models/bunny.obj", *methods = "laplacian,fitting,lri,cgal_arap";
     int refine = 0, cgal = 1;
     Problem p;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--refine") && i + 1 < argc) refine = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--free") && i + 1 < argc) p.free_share = atof(argv[++i]);
         else if (!strcmp(argv[i], "--no-cgal")) cgal = 0;
+        else if (!strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
         else if (argv[i][0] == '-') return usage();
         else path = argv[i];
     }
@@ -341,10 +343,10 @@ int main(int argc, char **argv)
     fprintf(stderr, "bench_deform: %s, %zu vertices, %zu free\n", path, nv, p.nfree);
     const char *cases[3] = {"bend", "twist", "drag"};
     Pose poses[3] = {make_pose(p, cases[0]), make_pose(p, cases[1]), make_pose(p, cases[2])};
-    run_ours(p, "laplacian", DFM_METHOD_LAPLACIAN, poses, cases, 3);
-    run_ours(p, "fitting", DFM_METHOD_FITTING, poses, cases, 3);
-    run_ours(p, "lri", DFM_METHOD_LRI, poses, cases, 3);
-    if (cgal) run_cgal(p, poses, cases, 3);
+    if (strstr(methods, "laplacian")) run_ours(p, "laplacian", DFM_METHOD_LAPLACIAN, poses, cases, 3);
+    if (strstr(methods, "fitting")) run_ours(p, "fitting", DFM_METHOD_FITTING, poses, cases, 3);
+    if (strstr(methods, "lri")) run_ours(p, "lri", DFM_METHOD_LRI, poses, cases, 3);
+    if (cgal && strstr(methods, "cgal")) run_cgal(p, poses, cases, 3);
     printf("RESULT bench_deform process_peak_rss_mb=%.1f\n", bench_peak_rss_kb() / 1024.0);
     return 0;
 }
