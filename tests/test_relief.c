@@ -5,7 +5,8 @@
      +row); clamp and wrap agree away from the border;
    - skeleton: the ridge line of a Gaussian ridge along a sine curve: every skeleton texel within
      one texel of the crest, 90% of the crest covered, no loops (edges = vertices - components);
-     valley mode on the negated map gives the same bits;
+     valley mode on the negated map gives the same bits; loop elimination by Kruskal equals the
+     thesis's delete-the-lightest-edge-of-a-loop procedure on random graphs;
    - graph cut: on 8x8 overlaps with random heights and pins, the cut's cost equals the exact
      minimum over every labelling (enumerated row by row: dynamic programming over the 256
      labellings of a row), and the pins are respected;
@@ -188,10 +189,84 @@ static void test_skeleton(void)
     T_CHECK(s.edges == NULL);
 }
 
-/* ---- graph cut ---------------------------------------------------------------------------- */
-
 static uint32_t lcg(uint32_t *s) { *s = *s * 1664525u + 1013904223u; return *s >> 8; }
 static float frand(uint32_t *s) { return (float)(lcg(s) & 0xFFFF) / 65536.0f; }
+
+/* Loop elimination: Kruskal's maximum spanning forest equals the thesis's procedure (find a
+   loop, delete its lightest edge, repeat) on random 8-neighbour graphs of 6x6 texels with
+   distinct weights (where both give the unique maximum forest). */
+static int find_loop(const uint8_t *alive, const rl__edge *e, int ne, int nv, int *loop, int *len)
+{
+    /* the first alive edge (in order) whose ends the alive edges before it already connect
+       closes a loop: that edge plus the path between its ends (depth-first search) */
+    int via[36], i, k;
+    for (k = 0; k < ne; k++) {
+        int a = (int)e[k].a, b = (int)e[k].b, stack[36], sp = 0, seen[36], found = 0;
+        if (!alive[k]) continue;
+        /* depth-first search from a to b over the alive edges before k */
+        for (i = 0; i < nv; i++) { seen[i] = 0; via[i] = -1; }
+        stack[sp++] = a; seen[a] = 1;
+        while (sp && !found) {
+            int u = stack[--sp], j;
+            for (j = 0; j < k; j++) {
+                int v;
+                if (!alive[j]) continue;
+                if ((int)e[j].a == u) v = (int)e[j].b; else if ((int)e[j].b == u) v = (int)e[j].a; else continue;
+                if (seen[v]) continue;
+                seen[v] = 1; via[v] = j; stack[sp++] = v;
+                if (v == b) { found = 1; break; }
+            }
+        }
+        if (found) {
+            int v = b;
+            *len = 0;
+            loop[(*len)++] = k;
+            while (v != a) { int j = via[v]; loop[(*len)++] = j; v = (int)e[j].a == v ? (int)e[j].b : (int)e[j].a; }
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void test_loop_elimination(void)
+{
+    int trial, bad = 0, trials = g_small ? 20 : 100;
+    uint32_t seed = 21;
+    for (trial = 0; trial < trials; trial++) {
+        rl__edge e[36 * 4], sorted[36 * 4 * 2];
+        uint8_t alive[36 * 4], mask[36], naive[36];
+        uint32_t parent[36];
+        static size_t count[65536];
+        int ne = 0, x, y, k, i, loop[40], len;
+        for (y = 0; y < 6; y++)
+            for (x = 0; x < 6; x++)
+                for (k = 2; k <= 5; k++) {
+                    int px = x + rl__dx[k], py = y + rl__dy[k];
+                    if (px < 0 || py < 0 || px >= 6 || py >= 6 || (lcg(&seed) & 3) == 0) continue;
+                    e[ne].a = (uint32_t)(y * 6 + x); e[ne].b = (uint32_t)(py * 6 + px); e[ne].dir = (uint8_t)k;
+                    e[ne].weight = (float)(lcg(&seed) & 0xFFFFF) + (float)ne / 1024.0f; /* distinct */
+                    ne++;
+                }
+        memcpy(sorted, e, sizeof(rl__edge) * (size_t)ne);
+        memset(mask, 0, sizeof mask);
+        rl__ppa_forest(sorted, sorted + ne, count, (size_t)ne, parent, 36, mask);
+        for (i = 0; i < ne; i++) alive[i] = 1;
+        while (find_loop(alive, e, ne, 36, loop, &len)) { /* delete the loop's lightest edge */
+            int lightest = loop[0];
+            for (i = 1; i < len; i++) if (e[loop[i]].weight < e[lightest].weight) lightest = loop[i];
+            alive[lightest] = 0;
+        }
+        memset(naive, 0, sizeof naive);
+        for (i = 0; i < ne; i++)
+            if (alive[i]) { naive[e[i].a] |= (uint8_t)(1u << e[i].dir); naive[e[i].b] |= (uint8_t)(1u << ((e[i].dir + 4) & 7)); }
+        bad += memcmp(mask, naive, sizeof mask) != 0;
+    }
+    printf("loop elimination: %d random graphs, Kruskal and loop-by-loop deletion differ on %d\n", trials, bad);
+    T_EQ_INT(bad, 0);
+}
+
+/* ---- graph cut ---------------------------------------------------------------------------- */
+
 
 /* exact minimum over all 2^64 labellings, one row (8 labels, bit x = B) at a time */
 static double cut_exact(const float *a, const float *b, const uint8_t *cons)
@@ -545,6 +620,7 @@ int main(int argc, char **argv)
     g_small = getenv("TEST_SANITIZE") != NULL;
     test_normal_map();
     test_skeleton();
+    test_loop_elimination();
     test_graph_cut();
     test_synthesis();
     return T_END();
