@@ -62,6 +62,11 @@
      One thread, no random numbers (candidate subsets are fixed strides), ties broken by index:
      the same input gives the same bits on every run of the same build.
 
+   PERFORMANCE
+     One thread, 2-core AMD EPYC virtual machine (shared): a 512 x 512 synthesis from a 384 x 384
+     example with the defaults takes about 0.25-0.3 s (a third of it in the graph cuts, a quarter
+     in the fill search), its normal map about 1 ms, the emboss baseline about 25 ms.
+
    LIMITS
      Maps up to 16384 on a side and 2^26 texels. The sketch sets the output size. Patches up to
      1024 texels; the example must hold one patch (RL_ERR_PATCH_TOO_LARGE otherwise), and feature

@@ -90,7 +90,10 @@
      Phong shader took about 27 ms and 114 ms. With few large triangles the balance turns: a
      180-triangle sphere filling the frame takes about 21 ms here and 10 ms in llvmpipe, which
      shades 8 pixels per instruction. Each draw shades every covered pixel once, whatever the
-     overdraw. The ray marchers are plain per-pixel loops: use them at preview sizes.
+     overdraw. The ray marchers are plain per-pixel loops: use them at preview sizes. An 800 x 600
+     relief-mapped cube (6 quads of 512^2 and 384^2 maps, 10 + 5 search steps, a shadow search
+     per pixel) takes about 115 ms; llvmpipe on one thread with the same GLSL search about 93 ms
+     (bench/bench_relief).
 
    LIMITS
      Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
