@@ -6119,152 +6119,185 @@ static int dm__pz_no_break(const dm_dispmap *map, const float *pos, const uint32
     return 1;
 }
 
+/* dm_reconstruct's working state: the map, its parameterization, a vertex number per texel (a
+   hit) and the mesh being made; pass 0 counts the triangles, pass 1 writes them */
+typedef struct dm__rc_run {
+    const dm_dispmap *map;
+    const dm_param *param;
+    int W, H;
+    size_t n;         /* texels */
+    uint32_t *vid;    /* vertex of each texel, DM_NO_HIT for none */
+    dm_trimesh *mesh;
+    size_t nvtx, ntri;
+    size_t pass;
+} dm__rc_run;
+
+/* one triangle: written in pass 1, counted in both */
+static void dm__rc_emit(dm__rc_run *r, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (r->pass) {
+        uint32_t *o = r->mesh->indices + 3 * r->ntri;
+        o[0] = a; o[1] = b; o[2] = c;
+    }
+    r->ntri++;
+}
+
+/* a vertex per hit texel, at the base point moved by the depth along -normal; 0 when out of
+   memory (ov set when the size overflows) */
+static int dm__rc_vertices(dm__rc_run *r, const dm_allocator *a, int *ov)
+{
+    const dm_dispmap *map = r->map;
+    size_t i;
+    for (i = 0; i < r->n; i++) r->vid[i] = map->valid[i] ? (uint32_t)r->nvtx++ : DM_NO_HIT;
+    r->mesh->positions = (float *)dm__alloc_array(a, 3 * (r->nvtx ? r->nvtx : 1), sizeof(float), ov);
+    if (!r->mesh->positions) return 0;
+    for (i = 0; i < r->n; i++)
+        if (r->vid[i] != DM_NO_HIT) {
+            int k;
+            for (k = 0; k < 3; k++)
+                r->mesh->positions[3 * (size_t)r->vid[i] + (size_t)k] =
+                    map->pos[3 * i + (size_t)k] - map->disp[i] * map->nrm[3 * i + (size_t)k];
+        }
+    return 1;
+}
+
+/* the 2x2 block of texels at (x, y): two triangles when all four are hits of one chart, one
+   when three are; triangles across depth breaks are left out */
+static void dm__rc_cell(dm__rc_run *r, int x, int y)
+{
+    const dm_param *param = r->param;
+    const float *pos = r->mesh->positions;
+    size_t q[4];
+    uint32_t v[4], cc = DM_NO_HIT;
+    int k, nvalid = 0, missing = -1;
+    q[0] = (size_t)y * (size_t)r->W + (size_t)x;
+    q[1] = q[0] + 1;
+    q[2] = q[0] + (size_t)r->W + 1;
+    q[3] = q[0] + (size_t)r->W;
+    for (k = 0; k < 4; k++) {
+        uint32_t tt = param->texel_triangle[q[k]];
+        v[k] = r->vid[q[k]];
+        if (v[k] != DM_NO_HIT && tt != DM_NO_HIT && (cc == DM_NO_HIT || param->chart[tt] == cc)) {
+            cc = param->chart[tt];
+            nvalid++;
+        } else {
+            v[k] = DM_NO_HIT;
+            missing = k;
+        }
+    }
+    if (nvalid == 4) {
+        int t0 = dm__pz_no_break(r->map, pos, r->vid, q[0], q[1], q[2]);
+        int t1 = dm__pz_no_break(r->map, pos, r->vid, q[0], q[2], q[3]);
+        if (t0) dm__rc_emit(r, v[0], v[1], v[2]);
+        if (t1) dm__rc_emit(r, v[0], v[2], v[3]);
+    } else if (nvalid == 3) {
+        size_t c0 = q[(missing + 1) % 4], c1 = q[(missing + 2) % 4], c2 = q[(missing + 3) % 4];
+        if (!dm__pz_no_break(r->map, pos, r->vid, c0, c1, c2)) return;
+        dm__rc_emit(r, v[(missing + 1) % 4], v[(missing + 2) % 4], v[(missing + 3) % 4]);
+    }
+}
+
+/* the seam strip from border texel i across direction dc: with its neighbour i2 along the
+   border (+y for a step across in x, +x for one in y), zipped to the texels j, j2 their steps
+   across land on when those are the same or neighbouring texels of one other chart; from the
+   chart with the lower index only (the other side would lay the same strip again) */
+static void dm__rc_zip(dm__rc_run *r, size_t i, int dc)
+{
+    const dm_param *param = r->param;
+    const uint32_t *vid = r->vid;
+    size_t W = (size_t)r->W, i2, j, j2, tri[2][3];
+    uint32_t ti = param->texel_triangle[i], tj, tj2, ti2;
+    long jx, jy, j2x, j2y;
+    int nt2 = 0, m;
+    j = param->nbr[4 * i + (size_t)dc];
+    if (j == UINT32_MAX || j == i || vid[j] == DM_NO_HIT) return;
+    tj = param->texel_triangle[j];
+    if (tj == DM_NO_HIT || param->chart[tj] <= param->chart[ti]) return;
+    if (dc < 2) {
+        if ((size_t)(i / W) + 1 >= (size_t)r->H) return;
+        i2 = i + W;
+    } else {
+        if ((size_t)(i % W) + 1 >= W) return;
+        i2 = i + 1;
+    }
+    ti2 = param->texel_triangle[i2];
+    if (vid[i2] == DM_NO_HIT || ti2 == DM_NO_HIT || param->chart[ti2] != param->chart[ti]) return;
+    j2 = param->nbr[4 * i2 + (size_t)dc];
+    if (j2 == UINT32_MAX || j2 == i2 || vid[j2] == DM_NO_HIT) return;
+    tj2 = param->texel_triangle[j2];
+    if (tj2 == DM_NO_HIT || param->chart[tj2] != param->chart[tj]) return;
+    jx = (long)(j % W); jy = (long)(j / W);
+    j2x = (long)(j2 % W); j2y = (long)(j2 / W);
+    if (j2 == j) {
+        tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j;
+        nt2 = 1;
+    } else if (labs(jx - j2x) <= 1 && labs(jy - j2y) <= 1) {
+        tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j2;
+        tri[1][0] = i; tri[1][1] = j2; tri[1][2] = j;
+        nt2 = 2;
+    }
+    for (m = 0; m < nt2; m++) {
+        int flip = dc == 0 || dc == 3; /* the edge (i, i2) the other way round from the chart's own blocks */
+        if (!dm__pz_no_break(r->map, r->mesh->positions, vid, tri[m][0], tri[m][1], tri[m][2])) continue;
+        dm__rc_emit(r, vid[tri[m][0]], vid[tri[m][flip ? 2 : 1]], vid[tri[m][flip ? 1 : 2]]);
+    }
+}
+
+/* one pass over the map: the blocks of every chart, then the strips across the seams */
+static void dm__rc_triangles(dm__rc_run *r)
+{
+    size_t i;
+    int x, y, dc;
+    r->ntri = 0;
+    for (y = 0; y + 1 < r->H; y++)
+        for (x = 0; x + 1 < r->W; x++) dm__rc_cell(r, x, y);
+    for (i = 0; i < r->n; i++) {
+        if (r->vid[i] == DM_NO_HIT || r->param->texel_triangle[i] == DM_NO_HIT) continue;
+        for (dc = 0; dc < 4; dc++) dm__rc_zip(r, i, dc);
+    }
+}
+
 DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param, const dm_allocator *allocator,
                                dm_trimesh **out)
 {
+    dm__rc_run r;
     dm_allocator a;
-    dm_trimesh *r;
-    size_t n, i, nvtx = 0, ntri = 0, pass;
-    int W, H, x, y, ov = 0;
-    uint32_t *vid;
+    int ov = 0, ok;
     if (out) *out = NULL;
     if (!out || !map || !param || map->width != param->width || map->height != param->height)
         return DM_ERR_INVALID_ARGUMENT;
+    memset(&r, 0, sizeof r);
     a = dm__resolve_allocator(allocator);
-    W = map->width;
-    H = map->height;
-    n = (size_t)W * (size_t)H;
-    vid = (uint32_t *)dm__alloc_array(&a, n, sizeof(uint32_t), &ov);
-    r = (dm_trimesh *)a.alloc(a.user, sizeof(dm_trimesh));
-    if (!vid || !r) {
-        a.free(a.user, vid);
-        a.free(a.user, r);
+    r.map = map;
+    r.param = param;
+    r.W = map->width;
+    r.H = map->height;
+    r.n = (size_t)r.W * (size_t)r.H;
+    r.vid = (uint32_t *)dm__alloc_array(&a, r.n, sizeof(uint32_t), &ov);
+    r.mesh = (dm_trimesh *)a.alloc(a.user, sizeof(dm_trimesh));
+    if (!r.vid || !r.mesh) {
+        a.free(a.user, r.vid);
+        a.free(a.user, r.mesh);
         return ov ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
     }
-    memset(r, 0, sizeof *r);
-    r->allocator = a;
-    for (i = 0; i < n; i++) vid[i] = map->valid[i] ? (uint32_t)nvtx++ : DM_NO_HIT;
-    r->positions = (float *)dm__alloc_array(&a, 3 * (nvtx ? nvtx : 1), sizeof(float), &ov);
-    if (!r->positions) {
-        a.free(a.user, vid);
-        dm_trimesh_free(r);
+    memset(r.mesh, 0, sizeof *r.mesh);
+    r.mesh->allocator = a;
+    ok = dm__rc_vertices(&r, &a, &ov);                   /* a vertex per hit texel */
+    for (r.pass = 0; ok && r.pass < 2; r.pass++) {
+        dm__rc_triangles(&r);                            /* count, then write */
+        if (!r.pass) {
+            r.mesh->indices = (uint32_t *)dm__alloc_array(&a, 3 * (r.ntri ? r.ntri : 1), sizeof(uint32_t), &ov);
+            ok = r.mesh->indices != NULL;
+        }
+    }
+    a.free(a.user, r.vid);
+    if (!ok) {
+        dm_trimesh_free(r.mesh);
         return ov ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
     }
-    for (i = 0; i < n; i++)
-        if (vid[i] != DM_NO_HIT) {
-            int k;
-            for (k = 0; k < 3; k++)
-                r->positions[3 * (size_t)vid[i] + (size_t)k] = map->pos[3 * i + (size_t)k] - map->disp[i] * map->nrm[3 * i + (size_t)k];
-        }
-    for (pass = 0; pass < 2; pass++) {
-        ntri = 0;
-        for (y = 0; y + 1 < H; y++)
-            for (x = 0; x + 1 < W; x++) {
-                size_t q[4];
-                uint32_t v[4], cc = DM_NO_HIT;
-                int k, nvalid = 0, missing = -1;
-                q[0] = (size_t)y * (size_t)W + (size_t)x;
-                q[1] = q[0] + 1;
-                q[2] = q[0] + (size_t)W + 1;
-                q[3] = q[0] + (size_t)W;
-                for (k = 0; k < 4; k++) {
-                    uint32_t tt = param->texel_triangle[q[k]];
-                    v[k] = vid[q[k]];
-                    if (v[k] != DM_NO_HIT && tt != DM_NO_HIT && (cc == DM_NO_HIT || param->chart[tt] == cc)) {
-                        cc = param->chart[tt];
-                        nvalid++;
-                    } else {
-                        v[k] = DM_NO_HIT;
-                        missing = k;
-                    }
-                }
-                if (nvalid == 4) {
-                    int t0 = dm__pz_no_break(map, r->positions, vid, q[0], q[1], q[2]);
-                    int t1 = dm__pz_no_break(map, r->positions, vid, q[0], q[2], q[3]);
-                    if (pass) {
-                        uint32_t *o = r->indices + 3 * ntri;
-                        if (t0) { o[0] = v[0]; o[1] = v[1]; o[2] = v[2]; o += 3; }
-                        if (t1) { o[0] = v[0]; o[1] = v[2]; o[2] = v[3]; }
-                    }
-                    ntri += (size_t)(t0 + t1);
-                } else if (nvalid == 3) {
-                    size_t c0 = q[(missing + 1) % 4], c1 = q[(missing + 2) % 4], c2 = q[(missing + 3) % 4];
-                    if (!dm__pz_no_break(map, r->positions, vid, c0, c1, c2)) continue;
-                    if (pass) {
-                        uint32_t *o = r->indices + 3 * ntri;
-                        int j = 0;
-                        for (k = 1; k <= 3; k++) o[j++] = v[(missing + k) % 4];
-                    }
-                    ntri++;
-                }
-            }
-        /* seams: each pair of neighbouring border texels of a chart (i, i2) whose steps across
-           the seam land on the same or neighbouring texels (j, j2) of one other chart is zipped
-           to them, from the chart with the lower index only (the other side would lay the same
-           strip again); triangles across depth breaks are left out, as above */
-        for (i = 0; i < n; i++) {
-            uint32_t ti = param->texel_triangle[i];
-            int dc;
-            if (vid[i] == DM_NO_HIT || ti == DM_NO_HIT) continue;
-            for (dc = 0; dc < 4; dc++) {
-                size_t i2, j, j2, tri[2][3];
-                uint32_t tj, tj2, ti2;
-                long jx, jy, j2x, j2y;
-                int nt2 = 0, m;
-                j = param->nbr[4 * i + (size_t)dc];
-                if (j == UINT32_MAX || j == i || vid[j] == DM_NO_HIT) continue;
-                tj = param->texel_triangle[j];
-                if (tj == DM_NO_HIT || param->chart[tj] <= param->chart[ti]) continue;
-                /* the neighbour along the border: +y for a step across in x, +x for one in y */
-                if (dc < 2) {
-                    if ((size_t)(i / (size_t)W) + 1 >= (size_t)H) continue;
-                    i2 = i + (size_t)W;
-                } else {
-                    if ((size_t)(i % (size_t)W) + 1 >= (size_t)W) continue;
-                    i2 = i + 1;
-                }
-                ti2 = param->texel_triangle[i2];
-                if (vid[i2] == DM_NO_HIT || ti2 == DM_NO_HIT || param->chart[ti2] != param->chart[ti]) continue;
-                j2 = param->nbr[4 * i2 + (size_t)dc];
-                if (j2 == UINT32_MAX || j2 == i2 || vid[j2] == DM_NO_HIT) continue;
-                tj2 = param->texel_triangle[j2];
-                if (tj2 == DM_NO_HIT || param->chart[tj2] != param->chart[tj]) continue;
-                jx = (long)(j % (size_t)W); jy = (long)(j / (size_t)W);
-                j2x = (long)(j2 % (size_t)W); j2y = (long)(j2 / (size_t)W);
-                if (j2 == j) {
-                    tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j;
-                    nt2 = 1;
-                } else if (labs(jx - j2x) <= 1 && labs(jy - j2y) <= 1) {
-                    tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j2;
-                    tri[1][0] = i; tri[1][1] = j2; tri[1][2] = j;
-                    nt2 = 2;
-                }
-                for (m = 0; m < nt2; m++) {
-                    if (!dm__pz_no_break(map, r->positions, vid, tri[m][0], tri[m][1], tri[m][2])) continue;
-                    if (pass) { /* the edge (i, i2) the other way round from the chart's own blocks */
-                        uint32_t *o = r->indices + 3 * ntri;
-                        int flip = dc == 0 || dc == 3;
-                        o[0] = vid[tri[m][0]];
-                        o[1] = vid[tri[m][flip ? 2 : 1]];
-                        o[2] = vid[tri[m][flip ? 1 : 2]];
-                    }
-                    ntri++;
-                }
-            }
-        }
-        if (!pass) {
-            r->indices = (uint32_t *)dm__alloc_array(&a, 3 * (ntri ? ntri : 1), sizeof(uint32_t), &ov);
-            if (!r->indices) {
-                a.free(a.user, vid);
-                dm_trimesh_free(r);
-                return ov ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
-            }
-        }
-    }
-    r->vertex_count = nvtx;
-    r->triangle_count = ntri;
-    a.free(a.user, vid);
-    *out = r;
+    r.mesh->vertex_count = r.nvtx;
+    r.mesh->triangle_count = r.ntri;
+    *out = r.mesh;
     return DM_OK;
 }
 
