@@ -1443,6 +1443,96 @@ DMDEF void dm_bvh_free(dm_bvh *bvh)
     a.free(a.user, bvh);
 }
 
+/* every triangle checked and its box taken into b->refs (sized so that the leaf blocks usually
+   fit in their place, see dm__place_blocks) */
+static dm_result dm__ref_boxes(dm__builder *b, dm_allocator *a, const float *positions, size_t vertex_count,
+                               const uint32_t *indices, size_t triangle_count, int *overflow)
+{
+    size_t i;
+    b->refs = (dm__ref *)dm__alloc_array(a, triangle_count, DM__REF_BYTES, overflow);
+    if (!b->refs) return *overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < triangle_count; i++) {
+        float p[9];
+        dm__ref *ref = &b->refs[i];
+        int c;
+        dm_result r = dm__fetch_triangle(positions, vertex_count, indices, i, p);
+        if (r != DM_OK) return r;
+        dm__box_empty(ref->lo, ref->hi);
+        for (c = 0; c < 3; c++) dm__box_grow(ref->lo, ref->hi, p + 3 * c, p + 3 * c);
+        ref->id = (uint32_t)i;
+        ref->pad = 0.0f;
+    }
+    return DM_OK;
+}
+
+/* the builder's bins and node array (root, padding slot, then at most triangle_count - 1
+   sibling pairs; 64-byte aligned inside *wide_block) and its settings; 0 when out of memory */
+static int dm__builder_init(dm__builder *b, const dm_bvh_options *opt, dm_allocator *a, size_t triangle_count,
+                            void **wide_block, int *overflow)
+{
+    size_t slots = 2 * triangle_count;
+    *wide_block = dm__alloc_array(a, slots * sizeof(dm__node) + 64, 1, overflow);
+    b->bins = opt->bins;
+    b->all_axes = opt->quality == DM_BVH_QUALITY_HIGH;
+    b->bin_store = (dm__bin *)dm__alloc_array(a, 3 * (size_t)opt->bins, sizeof(dm__bin), overflow);
+    b->right_area = (float *)dm__alloc_array(a, (size_t)opt->bins, sizeof(float), overflow);
+    b->right_count = (uint32_t *)dm__alloc_array(a, (size_t)opt->bins, sizeof(uint32_t), overflow);
+    if (!*wide_block || !b->bin_store || !b->right_area || !b->right_count) return 0;
+    b->nodes = (dm__node *)((char *)*wide_block + ((64 - ((uintptr_t)*wide_block & 63)) & 63));
+    b->used = 2;
+    b->max_leaf = (uint32_t)opt->max_leaf_size;
+    b->total = triangle_count;
+    b->progress = opt->progress;
+    b->progress_user = opt->progress_user;
+    b->report_step = triangle_count / 64 > 4096 ? triangle_count / 64 : 4096;
+    b->next_report = b->report_step;
+    return 1;
+}
+
+/* the triangles in leaf order, four to a block, over the refs when they fit; 0 when out of
+   memory */
+static int dm__leaf_blocks(dm_bvh *bvh, dm__builder *b, dm_allocator *a, const float *positions,
+                           const uint32_t *indices, int *overflow)
+{
+    const dm__node *wide = b->nodes;
+    size_t blocks = 0, i, triangle_count = bvh->triangle_count;
+    for (i = 0; i < b->used; i++)
+        if (i != 1 && wide[i].count) blocks += (wide[i].count + 3) / 4;
+    if (blocks * sizeof(dm__tri4) + 64 <= triangle_count * DM__REF_BYTES) {
+        bvh->tri_block = b->refs;
+        bvh->tri_bytes = triangle_count * DM__REF_BYTES;
+        b->refs = NULL;
+    } else {
+        bvh->tri_bytes = blocks * sizeof(dm__tri4) + 64;
+        bvh->tri_block = dm__alloc_array(a, bvh->tri_bytes, 1, overflow);
+        if (!bvh->tri_block) return 0;
+    }
+    bvh->blocks = (dm__tri4 *)((char *)bvh->tri_block + ((64 - ((uintptr_t)bvh->tri_block & 63)) & 63));
+    bvh->block_count = blocks;
+    dm__place_blocks(b->nodes, b->refs ? b->refs : (const dm__ref *)bvh->tri_block, bvh->blocks, blocks, positions,
+                     indices);
+    return 1;
+}
+
+/* The 8-wide traversal tree, in the unused tail of the node array when it fits there (one
+   allocation fewer, and pages next to the ones just written); 0 when out of memory */
+static int dm__wide_tree(dm_bvh *bvh, dm_allocator *a, size_t slots, int *overflow)
+{
+    size_t used = bvh->node_slots;
+    size_t first_free = (used + 1) & ~(size_t)1; /* 64-byte aligned */
+    size_t need = (used / 2 + 1) * sizeof(dm__wnode);
+    if (need <= (slots - first_free) * sizeof(dm__node)) {
+        bvh->wnodes = (dm__wnode *)(void *)(bvh->nodes + first_free);
+    } else {
+        bvh->wide_bytes = need + 64;
+        bvh->wide_block = dm__alloc_array(a, bvh->wide_bytes, 1, overflow);
+        if (!bvh->wide_block) return 0;
+        bvh->wnodes = (dm__wnode *)((char *)bvh->wide_block + ((64 - ((uintptr_t)bvh->wide_block & 63)) & 63));
+    }
+    bvh->wide_count = dm__collapse(bvh->nodes, bvh->wnodes);
+    return 1;
+}
+
 /* The build pipeline: validate, triangle boxes, binned SAH splits, copy the triangles in leaf
    order, collapse the binary tree into the 4-wide traversal tree. */
 DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
@@ -1452,11 +1542,11 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     dm_allocator a;
     dm__builder b;
     dm_bvh *bvh = NULL;
-    dm__node *wide = NULL;
+    dm__node *wide;
     void *wide_block = NULL;
     dm_result r;
     int overflow = 0;
-    size_t i, slots;
+    size_t slots = 2 * triangle_count;
     float root_clo[3], root_chi[3];
 
     if (!out) return DM_ERR_INVALID_ARGUMENT;
@@ -1466,72 +1556,23 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     opt = dm__resolve_options(options);
     a = dm__resolve_allocator(opt.allocator);
     memset(&b, 0, sizeof b);
-
-    /* validate and take every triangle's box */
-    /* sized so that the leaf blocks usually fit in place of the refs (see dm__place_blocks) */
-    b.refs = (dm__ref *)dm__alloc_array(&a, triangle_count, DM__REF_BYTES, &overflow);
-    if (!b.refs) goto out_of_memory;
-    for (i = 0; i < triangle_count; i++) {
-        float p[9];
-        dm__ref *ref = &b.refs[i];
-        int c;
-        r = dm__fetch_triangle(positions, vertex_count, indices, i, p);
-        if (r != DM_OK) goto fail;
-        dm__box_empty(ref->lo, ref->hi);
-        for (c = 0; c < 3; c++) dm__box_grow(ref->lo, ref->hi, p + 3 * c, p + 3 * c);
-        ref->id = (uint32_t)i;
-        ref->pad = 0.0f;
-    }
-
+    r = dm__ref_boxes(&b, &a, positions, vertex_count, indices, triangle_count, &overflow);
+    if (r != DM_OK) goto fail;
     bvh = (dm_bvh *)a.alloc(a.user, sizeof *bvh);
     if (!bvh) goto out_of_memory;
     memset(bvh, 0, sizeof *bvh);
     bvh->allocator = a;
     bvh->triangle_count = triangle_count;
-    /* root, padding slot, then at most triangle_count - 1 sibling pairs */
-    slots = 2 * triangle_count;
-    wide_block = dm__alloc_array(&a, slots * sizeof(dm__node) + 64, 1, &overflow);
-    b.bins = opt.bins;
-    b.all_axes = opt.quality == DM_BVH_QUALITY_HIGH;
-    b.bin_store = (dm__bin *)dm__alloc_array(&a, 3 * (size_t)opt.bins, sizeof(dm__bin), &overflow);
-    b.right_area = (float *)dm__alloc_array(&a, (size_t)opt.bins, sizeof(float), &overflow);
-    b.right_count = (uint32_t *)dm__alloc_array(&a, (size_t)opt.bins, sizeof(uint32_t), &overflow);
-    if (!wide_block || !b.bin_store || !b.right_area || !b.right_count) goto out_of_memory;
-    wide = (dm__node *)((char *)wide_block + ((64 - ((uintptr_t)wide_block & 63)) & 63));
+    if (!dm__builder_init(&b, &opt, &a, triangle_count, &wide_block, &overflow)) goto out_of_memory;
+    wide = b.nodes;
 
-    b.nodes = wide;
-    b.used = 2;
-    b.max_leaf = (uint32_t)opt.max_leaf_size;
-    b.total = triangle_count;
-    b.progress = opt.progress;
-    b.progress_user = opt.progress_user;
-    b.report_step = triangle_count / 64 > 4096 ? triangle_count / 64 : 4096;
-    b.next_report = b.report_step;
+    /* binned SAH splits from the root down */
     memset(&wide[1], 0, sizeof wide[1]);
     dm__range_bounds(&b, 0, (uint32_t)triangle_count, wide[0].lo, wide[0].hi, root_clo, root_chi);
     if (opt.progress && opt.progress(opt.progress_user, 0.0f)) goto cancelled;
     if (dm__build(&b, root_clo, root_chi)) goto cancelled;
     bvh->max_depth = b.max_depth;
-
-    /* triangles in leaf order, four to a block, over the refs when they fit */
-    {
-        size_t blocks = 0;
-        for (i = 0; i < b.used; i++)
-            if (i != 1 && wide[i].count) blocks += (wide[i].count + 3) / 4;
-        if (blocks * sizeof(dm__tri4) + 64 <= triangle_count * DM__REF_BYTES) {
-            bvh->tri_block = b.refs;
-            bvh->tri_bytes = triangle_count * DM__REF_BYTES;
-            b.refs = NULL;
-        } else {
-            bvh->tri_bytes = blocks * sizeof(dm__tri4) + 64;
-            bvh->tri_block = dm__alloc_array(&a, bvh->tri_bytes, 1, &overflow);
-            if (!bvh->tri_block) goto out_of_memory;
-        }
-        bvh->blocks = (dm__tri4 *)((char *)bvh->tri_block + ((64 - ((uintptr_t)bvh->tri_block & 63)) & 63));
-        bvh->block_count = blocks;
-        dm__place_blocks(wide, b.refs ? b.refs : (const dm__ref *)bvh->tri_block, bvh->blocks, blocks, positions,
-                         indices);
-    }
+    if (!dm__leaf_blocks(bvh, &b, &a, positions, indices, &overflow)) goto out_of_memory;
 
     /* The node array keeps its worst-case size (2 slots per triangle): a copy to the used size
        (about 1.2 slots per triangle with leaves of 4) cost more time in page faults and
@@ -1541,22 +1582,7 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     bvh->node_bytes = slots * sizeof(dm__node) + 64;
     bvh->nodes = wide;
     wide_block = NULL;
-
-    /* The 8-wide traversal tree, in the unused tail of the node array when it fits there
-       (one allocation fewer, and pages next to the ones just written) */
-    {
-        size_t first_free = (b.used + 1) & ~(size_t)1; /* 64-byte aligned */
-        size_t need = (b.used / 2 + 1) * sizeof(dm__wnode);
-        if (need <= (slots - first_free) * sizeof(dm__node)) {
-            bvh->wnodes = (dm__wnode *)(void *)(wide + first_free);
-        } else {
-            bvh->wide_bytes = need + 64;
-            bvh->wide_block = dm__alloc_array(&a, bvh->wide_bytes, 1, &overflow);
-            if (!bvh->wide_block) goto out_of_memory;
-            bvh->wnodes = (dm__wnode *)((char *)bvh->wide_block + ((64 - ((uintptr_t)bvh->wide_block & 63)) & 63));
-        }
-    }
-    bvh->wide_count = dm__collapse(bvh->nodes, bvh->wnodes);
+    if (!dm__wide_tree(bvh, &a, slots, &overflow)) goto out_of_memory;
 
     if (opt.progress && opt.progress(opt.progress_user, 1.0f)) goto cancelled;
     r = DM_OK;
