@@ -4621,34 +4621,28 @@ static const double *dfm__single_rotation(const dfm_deform *d, const double *rot
     return R;
 }
 
-/* M of every active vertex into d->X (X[(3 c + k) nv + v] = M - I): with a single rotation R,
-   M = I + phi (R - I) for the one scalar solution phi (1 where R, 0 where I; the problem is
-   linear), else the 9 right-hand sides. */
+/* phi into d->X[v] for the single-rotation case (1 where R, 0 where I; one scalar solve, taken
+   with two zero columns beside it: the three-column solve is the fastest path). */
+static dfm_result dfm__lri_phi(dfm_deform *d, const double *rot, const double *R)
+{
+    size_t a, v, nv = d->nv;
+    dfm_result err;
+    for (a = 0; a < d->nactive; a++) {
+        v = (size_t)d->active[a];
+        if (d->unk[v] >= 0 && !d->soft[v]) continue;
+        d->X[v] = !memcmp(rot + 9 * v, R, 9 * sizeof(double));
+        d->X[nv + v] = d->X[2 * nv + v] = 0.0;
+    }
+    d->fsys.nrhs = 3;
+    err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
+    d->fsys.nrhs = 9;
+    return err;
+}
+
+/* M - I of every active vertex into d->X (X[(3 c + k) nv + v]), the 9 right-hand sides. */
 static dfm_result dfm__lri_rotation_field(dfm_deform *d, const double *rot)
 {
     size_t a, v, k, nv = d->nv;
-    int identity;
-    const double *R = dfm__single_rotation(d, rot, &identity);
-    dfm_result err;
-    if (identity || R) {
-        for (a = 0; a < d->nactive; a++) {
-            v = (size_t)d->active[a];
-            if (d->unk[v] < 0 || d->soft[v]) d->X[v] = identity ? 0.0 : !memcmp(rot + 9 * v, R, 9 * sizeof(double));
-        }
-        if (!identity) {
-            d->fsys.nrhs = 1;
-            err = dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
-            d->fsys.nrhs = 9;
-            if (err != DFM_OK) return err;
-        }
-        for (a = 0; a < d->nactive; a++) {
-            double phi;
-            v = (size_t)d->active[a];
-            phi = identity ? 0.0 : d->X[v];
-            for (k = 9; k-- > 0;) d->X[k * nv + v] = identity ? 0.0 : phi * (R[k] - (k % 4 == 0));
-        }
-        return DFM_OK;
-    }
     for (a = 0; a < d->nactive; a++) {
         v = (size_t)d->active[a];
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
@@ -4657,26 +4651,58 @@ static dfm_result dfm__lri_rotation_field(dfm_deform *d, const double *rot)
     return dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
 }
 
+/* The unit axis and angle of a rotation, when the angle is clear of 0 and pi. */
+static int dfm__axis_angle(const double *R, double *axis, double *angle)
+{
+    double c = 0.5 * (R[0] + R[4] + R[8] - 1.0), sn, l;
+    axis[0] = R[7] - R[5];
+    axis[1] = R[2] - R[6];
+    axis[2] = R[3] - R[1];
+    l = sqrt(dfm__dot3(axis, axis));
+    sn = 0.5 * l;
+    if (!(sn > 1e-6) || c < -1.0 + 1e-9) return 0;
+    axis[0] /= l;
+    axis[1] /= l;
+    axis[2] /= l;
+    *angle = atan2(sn, c);
+    return 1;
+}
+
 /* LRI, step 1: the frames solve in M = F' F^T (known frames are R F, so M = R there); then
-   F' = M F, orthonormalized as asked at the unknowns. d->G gets F' - F of every vertex in a row. */
+   F' = M F, orthonormalized as asked at the unknowns. When every known rotation is I or one R
+   (about axis a by t), M = I + phi (R - I) exactly (the problem is linear), and its polar factor
+   is the turn about a by atan2(phi sin t, 1 - phi + phi cos t) (M is that turn times a scaling
+   in the plane normal to a). d->G gets F' - F of every vertex in a row. */
 static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
 {
     size_t a, v, c, k, m, nv = d->nv;
-    dfm_result err = dfm__lri_rotation_field(d, rot);
+    int identity, analytic = 0;
+    double axis[3], t = 0.0;
+    const double *R = dfm__single_rotation(d, rot, &identity);
+    dfm_result err = identity ? DFM_OK : R ? dfm__lri_phi(d, rot, R) : dfm__lri_rotation_field(d, rot);
     if (err != DFM_OK) return err;
+    if (R && d->opt.orthonormalize == DFM_ORTHO_POLAR) analytic = dfm__axis_angle(R, axis, &t);
     for (a = 0; a < d->nactive; a++) {
-        double M[9], Fp[9];
+        double M[9], Fp[9], phi;
         const double *F;
+        int turned = 0;
         v = (size_t)d->active[a];
         F = d->frame + 9 * v;
-        for (k = 0; k < 9; k++) M[k] = d->X[k * nv + v] + (k % 4 == 0);
+        phi = R ? d->X[v] : 0.0;
+        if (analytic && d->unk[v] >= 0) {
+            dfm_rotation(axis, atan2(phi * sin(t), 1.0 - phi + phi * cos(t)), M);
+            turned = 1;
+        } else {
+            for (k = 0; k < 9; k++)
+                M[k] = (identity ? 0.0 : R ? phi * (R[k] - (k % 4 == 0)) : d->X[k * nv + v]) + (k % 4 == 0);
+        }
         for (c = 0; c < 3; c++)
             for (k = 0; k < 3; k++) {
                 double sum = 0.0;
                 for (m = 0; m < 3; m++) sum += M[3 * c + m] * F[3 * m + k];
                 Fp[3 * c + k] = sum;
             }
-        if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_POLAR) dfm__polar(Fp);
+        if (d->unk[v] >= 0 && !turned && d->opt.orthonormalize == DFM_ORTHO_POLAR) dfm__polar(Fp);
         if (d->unk[v] >= 0 && d->opt.orthonormalize == DFM_ORTHO_GRAM_SCHMIDT) dfm__gram_schmidt(Fp);
         for (k = 0; k < 9; k++) d->G[9 * v + k] = Fp[k] - F[k];
     }
