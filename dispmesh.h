@@ -6587,153 +6587,209 @@ static size_t dm__sh_cell_of(const dm__sh_internal *in, const float *p)
                (size_t)in->dim[0] + (size_t)dm__sh_coord(in, p[0], 0);
 }
 
-DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, size_t nt,
-                              const dm_shell_options *options, dm_shell **out)
-{
+/* dm_shell_grow's working state: the original, the options, the shell being made and the
+   temporaries (in sc, freed together on the one exit path) */
+typedef struct dm__sh_run {
+    const float *pos;
+    const uint32_t *idx;
+    size_t nv, nt;
     dm_shell_options opt;
     dm_allocator a;
-    dm_shell *sh = NULL;
-    dm__sh_internal *in = NULL;
     dm__pz_scratch sc;
-    dm_bvh_options bo;
-    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, diag, *acc;
-    dm__pz_edge *e;
-    uint32_t *twin, *twin_he;
-    uint8_t *stopped;
-    size_t i, v;
-    int k, step;
-    dm_result r;
-    if (!out) return DM_ERR_INVALID_ARGUMENT;
-    *out = NULL;
-    if (options) opt = *options;
-    else memset(&opt, 0, sizeof opt);
-    if (!(opt.thickness >= 0.0f) || opt.thickness > 1e18f || opt.steps < 0 || opt.overlap_samples < 0)
-        return DM_ERR_INVALID_ARGUMENT;
-    r = dm__pz_check_mesh(pos, nv, idx, nt);
-    if (r != DM_OK) return r;
-    a = dm__resolve_allocator(opt.allocator);
-    memset(&sc, 0, sizeof sc);
-    sc.a = a;
-    for (i = 0; i < 3 * nt; i++)
+    dm_shell *sh;
+    dm__sh_internal *in;
+    double lo[3], hi[3], diag;    /* the original's box */
+    double *acc;                  /* angle-weighted normal sums */
+    uint8_t *stopped;             /* per vertex */
+} dm__sh_run;
+
+/* the box of the referenced vertices and its diagonal */
+static void dm__sh_bounds(dm__sh_run *r)
+{
+    size_t i;
+    int k;
+    for (k = 0; k < 3; k++) { r->lo[k] = DBL_MAX; r->hi[k] = -DBL_MAX; }
+    for (i = 0; i < 3 * r->nt; i++)
         for (k = 0; k < 3; k++) {
-            double x = pos[3 * (size_t)idx[i] + (size_t)k];
-            if (x < lo[k]) lo[k] = x;
-            if (x > hi[k]) hi[k] = x;
+            double x = r->pos[3 * (size_t)r->idx[i] + (size_t)k];
+            if (x < r->lo[k]) r->lo[k] = x;
+            if (x > r->hi[k]) r->hi[k] = x;
         }
-    diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    sh = (dm_shell *)a.alloc(a.user, sizeof *sh);
+    r->diag = sqrt((r->hi[0] - r->lo[0]) * (r->hi[0] - r->lo[0]) + (r->hi[1] - r->lo[1]) * (r->hi[1] - r->lo[1]) +
+                   (r->hi[2] - r->lo[2]) * (r->hi[2] - r->lo[2]));
+}
+
+/* the shell, its internal state (thickness, overlap samples, margin) and their arrays, with a
+   copy of the original */
+static dm_result dm__sh_alloc(dm__sh_run *r)
+{
+    dm_allocator *a = &r->a;
+    size_t nv = r->nv, nt = r->nt;
+    dm_shell *sh;
+    dm__sh_internal *in;
+    sh = r->sh = (dm_shell *)a->alloc(a->user, sizeof *sh);
     if (!sh) return DM_ERR_OUT_OF_MEMORY;
     memset(sh, 0, sizeof *sh);
-    sh->allocator = a;
-    in = (dm__sh_internal *)a.alloc(a.user, sizeof *in);
-    if (!in) goto oom;
+    sh->allocator = *a;
+    in = r->in = (dm__sh_internal *)a->alloc(a->user, sizeof *in);
+    if (!in) return dm__pz_fail(&r->sc);
     memset(in, 0, sizeof *in);
     in->relaxed_keep = UINT32_MAX;
     sh->internal = in;
     sh->vertex_count = in->nv = nv;
     sh->triangle_count = in->nt = nt;
-    sh->diagonal = (float)diag;
-    sh->thickness = opt.thickness > 0.0f ? opt.thickness : (float)(0.02 * diag);
-    in->samples = opt.overlap_samples == 0 ? 4 : opt.overlap_samples > 7 ? 7 : opt.overlap_samples;
-    in->margin = 1e-6 * diag;
-    sh->positions = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
-    sh->normals = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
-    sh->offset = (float *)dm__alloc_array(&a, nv, sizeof(float), &sc.overflow);
-    sh->fallback_vertex = (uint8_t *)dm__alloc_array(&a, nv, 1, &sc.overflow);
-    in->pos = (float *)dm__alloc_array(&a, 3 * nv, sizeof(float), &sc.overflow);
-    in->idx = (uint32_t *)dm__alloc_array(&a, 3 * nt, sizeof(uint32_t), &sc.overflow);
-    if (!sh->positions || !sh->normals || !sh->offset || !sh->fallback_vertex || !in->pos || !in->idx) goto oom;
+    sh->diagonal = (float)r->diag;
+    sh->thickness = r->opt.thickness > 0.0f ? r->opt.thickness : (float)(0.02 * r->diag);
+    in->samples = r->opt.overlap_samples == 0 ? 4 : r->opt.overlap_samples > 7 ? 7 : r->opt.overlap_samples;
+    in->margin = 1e-6 * r->diag;
+    sh->positions = (float *)dm__alloc_array(a, 3 * nv, sizeof(float), &r->sc.overflow);
+    sh->normals = (float *)dm__alloc_array(a, 3 * nv, sizeof(float), &r->sc.overflow);
+    sh->offset = (float *)dm__alloc_array(a, nv, sizeof(float), &r->sc.overflow);
+    sh->fallback_vertex = (uint8_t *)dm__alloc_array(a, nv, 1, &r->sc.overflow);
+    in->pos = (float *)dm__alloc_array(a, 3 * nv, sizeof(float), &r->sc.overflow);
+    in->idx = (uint32_t *)dm__alloc_array(a, 3 * nt, sizeof(uint32_t), &r->sc.overflow);
+    if (!sh->positions || !sh->normals || !sh->offset || !sh->fallback_vertex || !in->pos || !in->idx)
+        return dm__pz_fail(&r->sc);
     memset(sh->fallback_vertex, 0, nv);
-    memcpy(in->pos, pos, 3 * nv * sizeof(float));
-    memcpy(in->idx, idx, 3 * nt * sizeof(uint32_t));
+    memcpy(in->pos, r->pos, 3 * nv * sizeof(float));
+    memcpy(in->idx, r->idx, 3 * nt * sizeof(uint32_t));
+    return DM_OK;
+}
+
+/* the BVH over the original, its vertex normals (and their sums, kept for dm_shell_collapsed),
+   and whether it is open (an edge without a consistently oriented twin) */
+static dm_result dm__sh_normals(dm__sh_run *r)
+{
+    dm__sh_internal *in = r->in;
+    size_t nv = r->nv, nt = r->nt, i;
+    dm_bvh_options bo;
+    dm__pz_edge *e;
+    uint32_t *twin, *twin_he;
+    dm_result res;
     memset(&bo, 0, sizeof bo);
-    bo.allocator = opt.allocator;
-    r = dm_bvh_build(pos, nv, idx, nt, &bo, &in->bvh);
-    if (r != DM_OK) goto fail;
-    acc = (double *)dm__pz_take(&sc, 3 * nv, sizeof(double));
-    e = (dm__pz_edge *)dm__pz_take(&sc, 3 * nt, sizeof(dm__pz_edge));
-    twin = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
-    twin_he = (uint32_t *)dm__pz_take(&sc, 3 * nt, sizeof(uint32_t));
-    stopped = (uint8_t *)dm__pz_take(&sc, nv, 1);
-    if (!acc || !e || !twin || !twin_he || !stopped) goto oom;
-    dm__pz_vertex_normals(pos, nv, idx, nt, acc, sh->normals);
-    in->vsum = (double *)dm__alloc_array(&a, 3 * nv, sizeof(double), &sc.overflow);
-    if (!in->vsum) goto oom;
-    memcpy(in->vsum, acc, 3 * nv * sizeof(double));
-    dm__pz_twins(idx, nt, e, twin, twin_he);
+    bo.allocator = r->opt.allocator;
+    res = dm_bvh_build(r->pos, nv, r->idx, nt, &bo, &in->bvh);
+    if (res != DM_OK) return res;
+    r->acc = (double *)dm__pz_take(&r->sc, 3 * nv, sizeof(double));
+    e = (dm__pz_edge *)dm__pz_take(&r->sc, 3 * nt, sizeof(dm__pz_edge));
+    twin = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
+    twin_he = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
+    r->stopped = (uint8_t *)dm__pz_take(&r->sc, nv, 1);
+    if (!r->acc || !e || !twin || !twin_he || !r->stopped) return dm__pz_fail(&r->sc);
+    dm__pz_vertex_normals(r->pos, nv, r->idx, nt, r->acc, r->sh->normals);
+    in->vsum = (double *)dm__alloc_array(&r->a, 3 * nv, sizeof(double), &r->sc.overflow);
+    if (!in->vsum) return dm__pz_fail(&r->sc);
+    memcpy(in->vsum, r->acc, 3 * nv * sizeof(double));
+    dm__pz_twins(r->idx, nt, e, twin, twin_he);
     for (i = 0; i < 3 * nt && !in->open; i++) in->open = twin[i] == DM_NO_HIT;
-    { /* the vertex grid: about two referenced vertices per cell */
-        double ext = 0.0, vol = 1.0;
-        size_t ncell, nref = 0;
-        uint32_t *cnt;
-        for (k = 0; k < 3; k++) if (hi[k] - lo[k] > ext) ext = hi[k] - lo[k];
-        for (v = 0; v < nv; v++) stopped[v] = 0;
-        for (i = 0; i < 3 * nt; i++) stopped[idx[i]] = 1;
-        for (v = 0; v < nv; v++) nref += stopped[v];
-        for (k = 0; k < 3; k++) vol *= (hi[k] - lo[k]) > 1e-3 * ext ? (hi[k] - lo[k]) : 1e-3 * ext;
-        in->cell = ext > 0.0 ? cbrt(2.0 * vol / (double)nref) : 1.0;
-        if (!(in->cell > 0.0)) in->cell = 1.0;
-        ncell = 1;
-        for (k = 0; k < 3; k++) {
-            double d = floor((hi[k] - lo[k]) / in->cell) + 1.0;
-            in->dim[k] = d > 1024.0 ? 1024 : (int)d;
-            in->lo[k] = lo[k];
-            ncell *= (size_t)in->dim[k];
-        }
-        if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
-        in->cell_first = (uint32_t *)dm__alloc_array(&a, ncell + 1, sizeof(uint32_t), &sc.overflow);
-        in->cell_vert = (uint32_t *)dm__alloc_array(&a, nref ? nref : 1, sizeof(uint32_t), &sc.overflow);
-        cnt = (uint32_t *)dm__pz_take(&sc, ncell + 1, sizeof(uint32_t));
-        if (!in->cell_first || !in->cell_vert || !cnt) goto oom;
-        memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
-        for (v = 0; v < nv; v++)
-            if (stopped[v]) cnt[dm__sh_cell_of(in, pos + 3 * v)]++;
-        in->cell_first[0] = 0;
-        for (i = 0; i < ncell; i++) in->cell_first[i + 1] = in->cell_first[i] + cnt[i];
-        for (i = 0; i < ncell; i++) cnt[i] = in->cell_first[i];
-        for (v = 0; v < nv; v++)
-            if (stopped[v]) in->cell_vert[cnt[dm__sh_cell_of(in, pos + 3 * v)]++] = (uint32_t)v;
+    return DM_OK;
+}
+
+/* the uniform grid of the original's referenced vertices: about two per cell, at most 1024
+   cells a side (stopped[] marks the referenced vertices meanwhile) */
+static dm_result dm__sh_vertex_grid(dm__sh_run *r)
+{
+    dm__sh_internal *in = r->in;
+    const double *lo = r->lo, *hi = r->hi;
+    uint8_t *stopped = r->stopped;
+    double ext = 0.0, vol = 1.0;
+    size_t ncell, nref = 0, v, i;
+    uint32_t *cnt;
+    int k;
+    for (k = 0; k < 3; k++) if (hi[k] - lo[k] > ext) ext = hi[k] - lo[k];
+    for (v = 0; v < r->nv; v++) stopped[v] = 0;
+    for (i = 0; i < 3 * r->nt; i++) stopped[r->idx[i]] = 1;
+    for (v = 0; v < r->nv; v++) nref += stopped[v];
+    for (k = 0; k < 3; k++) vol *= (hi[k] - lo[k]) > 1e-3 * ext ? (hi[k] - lo[k]) : 1e-3 * ext;
+    in->cell = ext > 0.0 ? cbrt(2.0 * vol / (double)nref) : 1.0;
+    if (!(in->cell > 0.0)) in->cell = 1.0;
+    ncell = 1;
+    for (k = 0; k < 3; k++) {
+        double d = floor((hi[k] - lo[k]) / in->cell) + 1.0;
+        in->dim[k] = d > 1024.0 ? 1024 : (int)d;
+        in->lo[k] = lo[k];
+        ncell *= (size_t)in->dim[k];
     }
-    /* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
-       normal; a vertex whose next offset point comes closer to another part of the original than
-       90% of its offset would make the offset surface run into itself, and stops. */
+    if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
+    in->cell_first = (uint32_t *)dm__alloc_array(&r->a, ncell + 1, sizeof(uint32_t), &r->sc.overflow);
+    in->cell_vert = (uint32_t *)dm__alloc_array(&r->a, nref ? nref : 1, sizeof(uint32_t), &r->sc.overflow);
+    cnt = (uint32_t *)dm__pz_take(&r->sc, ncell + 1, sizeof(uint32_t));
+    if (!in->cell_first || !in->cell_vert || !cnt) return dm__pz_fail(&r->sc);
+    memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
+    for (v = 0; v < r->nv; v++)
+        if (stopped[v]) cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++;
+    in->cell_first[0] = 0;
+    for (i = 0; i < ncell; i++) in->cell_first[i + 1] = in->cell_first[i] + cnt[i];
+    for (i = 0; i < ncell; i++) cnt[i] = in->cell_first[i];
+    for (v = 0; v < r->nv; v++)
+        if (stopped[v]) in->cell_vert[cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++] = (uint32_t)v;
+    return DM_OK;
+}
+
+/* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
+   normal; a vertex whose next offset point comes closer to another part of the original than
+   90% of its offset would make the offset surface run into itself, and stops. Then the shell's
+   positions. */
+static dm_result dm__sh_grow_offsets(dm__sh_run *r)
+{
+    dm_shell *sh = r->sh;
+    const float *pos = r->pos;
+    uint8_t *stopped = r->stopped;
+    int steps = r->opt.steps == 0 ? 8 : r->opt.steps > 256 ? 256 : r->opt.steps, step, k;
+    size_t v, nv = r->nv;
     for (v = 0; v < nv; v++) {
         sh->offset[v] = 0.0f;
         stopped[v] = sh->normals[3 * v] == 0.0f && sh->normals[3 * v + 1] == 0.0f && sh->normals[3 * v + 2] == 0.0f;
     }
-    {
-        int steps = opt.steps == 0 ? 8 : opt.steps > 256 ? 256 : opt.steps;
-        for (step = 1; step <= steps; step++) {
-            float h = sh->thickness * (float)step / (float)steps;
-            for (v = 0; v < nv; v++) {
-                float q[3];
-                dm_closest cl;
-                if (stopped[v]) continue;
-                for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
-                if (dm_bvh_closest_point(in->bvh, q, h, &cl) && cl.distance < 0.9f * h) {
-                    stopped[v] = 1;
-                    sh->stopped_vertices++;
-                } else {
-                    sh->offset[v] = h;
-                }
-            }
-            if (opt.progress && opt.progress(opt.progress_user, (float)step / (float)steps)) {
-                r = DM_CANCELLED;
-                goto fail;
+    for (step = 1; step <= steps; step++) {
+        float h = sh->thickness * (float)step / (float)steps;
+        for (v = 0; v < nv; v++) {
+            float q[3];
+            dm_closest cl;
+            if (stopped[v]) continue;
+            for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
+            if (dm_bvh_closest_point(r->in->bvh, q, h, &cl) && cl.distance < 0.9f * h) {
+                stopped[v] = 1;
+                sh->stopped_vertices++;
+            } else {
+                sh->offset[v] = h;
             }
         }
+        if (r->opt.progress && r->opt.progress(r->opt.progress_user, (float)step / (float)steps)) return DM_CANCELLED;
     }
     for (v = 0; v < nv; v++)
         for (k = 0; k < 3; k++) sh->positions[3 * v + (size_t)k] = pos[3 * v + (size_t)k] + sh->offset[v] * sh->normals[3 * v + (size_t)k];
-    dm__pz_release(&sc);
-    *out = sh;
     return DM_OK;
-oom:
-    r = dm__pz_fail(&sc);
-fail:
-    dm__pz_release(&sc);
-    dm_shell_free(sh);
-    return r;
+}
+
+DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, size_t nt,
+                              const dm_shell_options *options, dm_shell **out)
+{
+    dm__sh_run r;
+    dm_result res;
+    if (!out) return DM_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    memset(&r, 0, sizeof r);
+    if (options) r.opt = *options;
+    if (!(r.opt.thickness >= 0.0f) || r.opt.thickness > 1e18f || r.opt.steps < 0 || r.opt.overlap_samples < 0)
+        return DM_ERR_INVALID_ARGUMENT;
+    res = dm__pz_check_mesh(pos, nv, idx, nt);
+    if (res != DM_OK) return res;
+    r.pos = pos; r.nv = nv; r.idx = idx; r.nt = nt;
+    r.a = dm__resolve_allocator(r.opt.allocator);
+    r.sc.a = r.a;
+    dm__sh_bounds(&r);
+    res = dm__sh_alloc(&r);                          /* the shell, a copy of the original */
+    if (res == DM_OK) res = dm__sh_normals(&r);      /* BVH, vertex normals, open or closed */
+    if (res == DM_OK) res = dm__sh_vertex_grid(&r);  /* the original's vertices by cell */
+    if (res == DM_OK) res = dm__sh_grow_offsets(&r); /* every vertex out along its normal */
+    dm__pz_release(&r.sc);
+    if (res != DM_OK) {
+        dm_shell_free(r.sh);
+        return res;
+    }
+    *out = r.sh;
+    return DM_OK;
 }
 
 /* unit normal of triangle (p0, p1, p2); 0 if degenerate */
@@ -6953,60 +7009,88 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
     return dm__dot3(d, N) > 0.0 ? *dist : -*dist;
 }
 
-/* (1) of dm_shell_constraint. */
-static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
-                          int *moved)
+/* The box the enclosure check gathers original vertices from: the proposed position and the
+   old triangles, grown by a tenth of their span; reach is how far from the old triangles a
+   vertex still counts (1.5 thicknesses, at most the span: deeper than the one-ring is wide only
+   where the base bridges a crevice, at coarse levels, whose rings are wide). */
+typedef struct dm__sh_box {
+    double lo[3], hi[3], reach, grow;
+} dm__sh_box;
+
+static void dm__sh_enclose_box(const dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, dm__sh_box *b)
 {
-    double x0[3], *pl, *yv;
-    size_t i, no = c->old_triangle_count, nr = c->triangle_count, np = 0;
-    int k, iter;
-    /* (1) Enclosure: the original's vertices near the collapse whose closest feature of the
-       old triangles is at keep or remove (not on the ring's rim, which belongs to the rest of
-       the mesh) must stay on the inner side of the new one-ring: their signed distance, taken
-       with the angle-weighted pseudonormal at the closest feature, must not become positive.
-       Each such vertex p, nearest to new triangle (keep, u, w), asks keep to lie on the outer
-       side of the plane through p, u, w (an exact, linear condition on keep's position); the
-       position is the point nearest the proposed one that meets all of them (Dykstra's
-       alternating projections), then everything is checked again at the rounded position. */
-    double lo[3], hi[3], reach = 1.5 * (double)sh->thickness, grow = 0.0;
-    int cl[3], ch[3], cx, cy, cz;
-    size_t npts = 0;
-    for (k = 0; k < 3; k++) {
-        lo[k] = hi[k] = c->position[k];
-        x0[k] = x[k] = c->position[k];
-    }
-    for (i = 0; i < 3 * no; i++)
+    size_t i;
+    double span;
+    int k;
+    b->reach = 1.5 * (double)sh->thickness;
+    for (k = 0; k < 3; k++) b->lo[k] = b->hi[k] = c->position[k];
+    for (i = 0; i < 3 * c->old_triangle_count; i++)
         for (k = 0; k < 3; k++) {
             double q = c->positions[3 * (size_t)c->old_triangles[i] + (size_t)k];
-            if (q < lo[k]) lo[k] = q;
-            if (q > hi[k]) hi[k] = q;
+            if (q < b->lo[k]) b->lo[k] = q;
+            if (q > b->hi[k]) b->hi[k] = q;
         }
-    { /* deeper than the one-ring is wide only where the base bridges a crevice: coarse
-         levels, whose rings are wide */
-        double span = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
-        if (span < reach) reach = span;
-        grow = 0.1 * span + 4.0 * in->margin;
-    }
-    for (k = 0; k < 3; k++) {
-        cl[k] = dm__sh_coord(in, lo[k] - grow, k);
-        ch[k] = dm__sh_coord(in, hi[k] + grow, k);
-    }
+    span = sqrt((b->hi[0] - b->lo[0]) * (b->hi[0] - b->lo[0]) + (b->hi[1] - b->lo[1]) * (b->hi[1] - b->lo[1]) +
+                (b->hi[2] - b->lo[2]) * (b->hi[2] - b->lo[2]));
+    if (span < b->reach) b->reach = span;
+    b->grow = 0.1 * span + 4.0 * in->margin;
+}
+
+/* in->tri: the old triangles with keep where it is now, then the new ones with keep at x0;
+   0 when out of memory */
+static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x0[3])
+{
+    size_t no = c->old_triangle_count, nr = c->triangle_count;
+    double xk[3];
     if (no + nr > in->tri_cap) {
         int of = 0;
         float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
-        if (!nt2) return DM_COLLAPSE_VETO;
+        if (!nt2) return 0;
         sh->allocator.free(sh->allocator.user, in->tri);
         in->tri = nt2;
         in->tri_cap = 2 * (no + nr);
     }
-    { /* the old triangles with keep where it is now */
-        double xk[3];
-        dm__pz_load(c->positions, c->keep, xk);
-        dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
-    }
+    dm__pz_load(c->positions, c->keep, xk);
+    dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
     dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
-    /* gather the candidates and keep the relevant ones, with their old signed distance */
+    return 1;
+}
+
+/* vertex v with its old signed distance sd (as float bits) appended to in->pts as entry npts;
+   0 when out of memory */
+static int dm__sh_push_pt(dm_shell *sh, dm__sh_internal *in, size_t npts, uint32_t v, double sd)
+{
+    float f = (float)sd;
+    uint32_t bits;
+    if (npts >= in->pts_cap) {
+        uint32_t *np2;
+        int of = 0;
+        size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
+        np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
+        if (!np2) return 0;
+        if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
+        sh->allocator.free(sh->allocator.user, in->pts);
+        in->pts = np2;
+        in->pts_cap = cap;
+    }
+    memcpy(&bits, &f, sizeof bits);
+    in->pts[2 * npts] = v;
+    in->pts[2 * npts + 1] = bits;
+    return 1;
+}
+
+/* the relevant original vertices, from the grid cells of the box: within reach of the old
+   triangles, their closest feature at keep or remove; *npts of them in in->pts, with their old
+   signed distance; 0 when out of memory */
+static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, size_t *npts)
+{
+    const double *lo = b->lo, *hi = b->hi;
+    double grow = b->grow;
+    int cl[3], ch[3], cx, cy, cz, k;
+    for (k = 0; k < 3; k++) {
+        cl[k] = dm__sh_coord(in, lo[k] - grow, k);
+        ch[k] = dm__sh_coord(in, hi[k] + grow, k);
+    }
     for (cz = cl[2]; cz <= ch[2]; cz++)
         for (cy = cl[1]; cy <= ch[1]; cy++)
             for (cx = cl[0]; cx <= ch[0]; cx++) {
@@ -7019,32 +7103,23 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
                     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
                         pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                         continue;
-                    sd = dm__sh_signed(c, c->old_triangles, in->tri, no, pp, reach, 1, &feat, &dist, NULL);
-                    if (!feat || dist > reach) continue;
-                    if (npts >= in->pts_cap) {
-                        uint32_t *np2;
-                        int of = 0;
-                        size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
-                        np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
-                        if (!np2) return DM_COLLAPSE_VETO;
-                        if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
-                        sh->allocator.free(sh->allocator.user, in->pts);
-                        in->pts = np2;
-                        in->pts_cap = cap;
-                    }
-                    {
-                        float f = (float)sd;
-                        uint32_t bits;
-                        memcpy(&bits, &f, sizeof bits);
-                        in->pts[2 * npts] = v;
-                        in->pts[2 * npts + 1] = bits;
-                    }
-                    npts++;
+                    sd = dm__sh_signed(c, c->old_triangles, in->tri, c->old_triangle_count, pp, b->reach, 1, &feat,
+                                       &dist, NULL);
+                    if (!feat || dist > b->reach) continue;
+                    if (!dm__sh_push_pt(sh, in, *npts, v, sd)) return 0;
+                    (*npts)++;
                 }
             }
-    if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * nr + 16)) return DM_COLLAPSE_VETO;
-    pl = in->scratch;
-    /* one plane per relevant vertex, from its nearest new triangle at the proposed position */
+    return 1;
+}
+
+/* one plane per relevant vertex p, from its nearest new triangle (keep, u, w) at the proposed
+   position: the plane through p, u, w, pushed out by 2 margins (4 doubles each into pl);
+   returns their number */
+static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
+{
+    size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count;
+    int k;
     for (i = 0; i < npts; i++) {
         double pp[3], pu[3], pw[3], dist, A[3], len;
         size_t t;
@@ -7067,7 +7142,17 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
         np++;
     }
-    yv = pl + 4 * np; /* Dykstra's corrections, 3 per plane */
+    return np;
+}
+
+/* x moved to the point nearest it on the outer side of all np planes (Dykstra's alternating
+   projections, at most 200 sweeps, until none is violated by more than half a margin); the
+   corrections, 3 per plane, follow the planes in pl */
+static void dm__sh_dykstra(const dm__sh_internal *in, double *pl, size_t np, double x[3])
+{
+    double *yv = pl + 4 * np;
+    size_t i;
+    int k, iter;
     for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
     for (iter = 0; iter < 200 && np; iter++) {
         double worst = 0.0;
@@ -7088,16 +7173,13 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         }
         if (worst <= 0.5 * in->margin) break;
     }
-    for (k = 0; k < 3; k++) {
-        corrected[k] = (float)x[k];
-        x[k] = corrected[k];
-        if (corrected[k] != c->position[k]) *moved = 1;
-        if (x[k] < lo[k] - grow || x[k] > hi[k] + grow) { /* beyond the gathered box */
-            sh->vetoed_enclose++;
-            return DM_COLLAPSE_VETO;
-        }
-    }
-    /* the check at the rounded position: no relevant vertex ends outside */
+}
+
+/* the check at the rounded position x: no relevant vertex ends outside (its signed distance
+   beyond 4 margins and beyond its old one by a margin) */
+static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3], size_t npts)
+{
+    size_t i, no = c->old_triangle_count, nr = c->triangle_count;
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
     for (i = 0; i < npts; i++) {
         double pp[3], dist, sd;
@@ -7112,6 +7194,41 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         }
     }
     return DM_COLLAPSE_ALLOW;
+}
+
+/* (1) of dm_shell_constraint. Enclosure: the original's vertices near the collapse whose
+   closest feature of the old triangles is at keep or remove (not on the ring's rim, which
+   belongs to the rest of the mesh) must stay on the inner side of the new one-ring: their
+   signed distance, taken with the angle-weighted pseudonormal at the closest feature, must not
+   become positive. Each such vertex p, nearest to new triangle (keep, u, w), asks keep to lie on
+   the outer side of the plane through p, u, w (an exact, linear condition on keep's position);
+   the position is the point nearest the proposed one that meets all of them (Dykstra's
+   alternating projections), then everything is checked again at the rounded position. */
+static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
+                          int *moved)
+{
+    double x0[3], *pl;
+    dm__sh_box b;
+    size_t npts = 0, np;
+    int k;
+    dm__sh_enclose_box(sh, in, c, &b);
+    for (k = 0; k < 3; k++) x0[k] = x[k] = c->position[k];
+    if (!dm__sh_old_new_tris(sh, in, c, x0)) return DM_COLLAPSE_VETO;
+    if (!dm__sh_gather(sh, in, c, &b, &npts)) return DM_COLLAPSE_VETO;
+    if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
+    pl = in->scratch;
+    np = dm__sh_planes(in, c, npts, pl);
+    dm__sh_dykstra(in, pl, np, x);
+    for (k = 0; k < 3; k++) {
+        corrected[k] = (float)x[k];
+        x[k] = corrected[k];
+        if (corrected[k] != c->position[k]) *moved = 1;
+        if (x[k] < b.lo[k] - b.grow || x[k] > b.hi[k] + b.grow) { /* beyond the gathered box */
+            sh->vetoed_enclose++;
+            return DM_COLLAPSE_VETO;
+        }
+    }
+    return dm__sh_recheck(sh, in, c, x, npts);
 }
 
 /* The corner normals of the new one-ring, 9 doubles per triangle, into the scratch (keep at x):
