@@ -56,7 +56,8 @@ rendered=$((rendered + 3))
 # relief.h: paper 003's sketch fused into a rock example and relief-mapped on a cube (each: the render and
 # a contact sheet example | sketch | fused height | normal map | render): a letter engraved in the asteroid
 # height map of glmark2-data (its Fig 6-9 carves a character into a rock cube), white strokes embossed on a
-# generated rock (its Figs 6-1/6-2), and the distance-transform baseline on the same input
+# generated rock (its Figs 6-1/6-2) and on a cylinder with curved silhouettes (its Fig 6-7), and the
+# distance-transform baseline on the same input
 printf 'size 512 512\nwhite 80,420 160,300 260,250 380,120 440,90 width 10\nwhite 160,300 120,150 width 8\nwhite 260,250 330,330 420,360 width 8\n' > "$OUT/relief_strokes.txt"
 asteroid=/usr/share/glmark2/textures/asteroid-height-map.png
 if [ -f "$asteroid" ]; then
@@ -66,8 +67,9 @@ else
   echo "demo: $asteroid not found (apt-get install glmark2-data): the asteroid relief skipped"
 fi
 "$B/relief" gen:rock "$OUT/relief_strokes.txt" -o "$OUT/relief_fig6-2_cube_embossed.png" --sheet "$OUT/relief_fig6-2_sheet.png" --height "$OUT/relief_fig6-2_height.png"
+"$B/relief" gen:rock "$OUT/relief_strokes.txt" --cylinder -o "$OUT/relief_fig6-7_cylinder.png"
 "$B/relief" gen:rock "$OUT/relief_strokes.txt" --emboss -o "$OUT/relief_baseline_emboss.png" --sheet "$OUT/relief_baseline_sheet.png"
-rendered=$((rendered + 2))
+rendered=$((rendered + 3))
 for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done

@@ -1,5 +1,5 @@
 /* relief - paper 003's pipeline: a sketch fused into an example height map (examples/relief.h),
-   its normal map, and a relief-mapped rock cube rendered with render.h to a PNG.
+   its normal map, and a relief-mapped rock cube (or cylinder) rendered with render.h to a PNG.
 
    usage: relief EXAMPLE SKETCH -o OUT.png [options]
      EXAMPLE   a height map: PNG (8/16-bit, grey or colour: channel 0), PGM or PFM; or gen:rock
@@ -22,6 +22,7 @@
      --frame WxH        rendering size (default 800x600)
      --light X,Y,Z      direction toward the light (default 0.6,0.7,0.5)
      --no-shadows       no shadow rays
+     --cylinder         a cylinder (the map once around, curved silhouettes) instead of the cube
      --height FILE      also write the fused height map (.pfm, or 16-bit .png)
      --normal FILE      also write the normal map as an RGB PNG
      --sheet FILE       also write a contact sheet: example | sketch | fused | normal map | render
@@ -41,7 +42,7 @@
 
 typedef struct args {
     const char *example, *sketch, *out, *height_out, *normal_out, *sheet_out;
-    int crop[3], size, white, emboss, patch, fw, fh, shadows;
+    int crop[3], size, white, emboss, patch, fw, fh, shadows, cylinder;
     float emphasis, depth, light[3];
 } args;
 
@@ -55,7 +56,7 @@ static double now_ms(void)
 static void usage(FILE *to)
 {
     fprintf(to, "usage: relief EXAMPLE SKETCH -o OUT.png [--crop X,Y,N] [--size N] [--white] [--emboss] [--patch P]\n"
-                "              [--emphasis E] [--depth D] [--frame WxH] [--light X,Y,Z] [--no-shadows]\n"
+                "              [--emphasis E] [--depth D] [--frame WxH] [--light X,Y,Z] [--no-shadows] [--cylinder]\n"
                 "              [--height FILE.pfm|.png] [--normal FILE.png] [--sheet FILE.png]\n"
                 "  SKETCH: an image, a stroke file (lines: size W H / white|black x,y x,y ... width W), or text:STRING\n");
 }
@@ -87,6 +88,7 @@ static int parse_args(int argc, char **argv, args *a)
             if (!strcmp(s, "--white")) a->white = 1;
             else if (!strcmp(s, "--emboss")) a->emboss = 1;
             else if (!strcmp(s, "--no-shadows")) a->shadows = 0;
+            else if (!strcmp(s, "--cylinder")) a->cylinder = 1;
             else if (s[0] == '-' && s[1]) { fprintf(stderr, "relief: unknown option %s\n", s); return 0; }
             else if (pos == 0) { a->example = s; pos++; }
             else if (pos == 1) { a->sketch = s; pos++; }
@@ -293,7 +295,7 @@ static float *normalized(const rl_map *m) { return normalized_rows(m, 0); }
 /* one face's maps: depth (1 - height), tangent-space normals, a rock albedo */
 typedef struct face_maps { float *depth, *normal, *albedo; int w, h; } face_maps;
 
-static int make_face(const float *h01, int w, int h, float depth_world, face_maps *f)
+static int make_face(const float *h01, int w, int h, float depth_world, float width_world, face_maps *f)
 {
     size_t n = (size_t)w * (size_t)h, i;
     rl_normal_options no = rl_normal_default_options();
@@ -307,7 +309,7 @@ static int make_face(const float *h01, int w, int h, float depth_world, face_map
         f->depth[i] = 1.0f - v;
         f->albedo[3 * i] = 0.42f + 0.30f * v; f->albedo[3 * i + 1] = 0.38f + 0.26f * v; f->albedo[3 * i + 2] = 0.33f + 0.22f * v;
     }
-    no.strength = depth_world * (float)w / 2.0f; /* the cube's side is 2 */
+    no.strength = depth_world * (float)w / width_world;
     return rl_normal_map(h01, w, h, &no, f->normal) == RL_OK;
 }
 
@@ -344,6 +346,55 @@ static sr_result render_cube(sr_framebuffer *fb, const face_maps *front, const f
         d.material.shininess = 25.0f;
         r = sr_draw_relief(fb, &cam, &d);
     }
+    return r;
+}
+
+/* Paper 003's Fig 6-7: the fused map three times around a cylinder of radius 1 and height 2
+   (so that a texel is about as wide as it is high), as 18 relief quads tangent to it, each a
+   sixth of the map, with the bend 1/R, which gives the cylinder its silhouette; open ends,
+   seen from nearly level. */
+static sr_result render_cylinder(sr_framebuffer *fb, const face_maps *m, const args *a)
+{
+    enum { N = 18, PER_MAP = 6 };
+    float eye[3] = {0.0f, 0.45f, 4.6f}, at[3] = {0, 0, 0}, clear[4] = {0.16f, 0.17f, 0.20f, 1.0f};
+    float half = 3.14159265f / (float)N, w = 2.0f * tanf(half);
+    int sw = m->w / PER_MAP, k, y;
+    sr_camera cam;
+    sr_light light;
+    sr_result r = SR_OK;
+    float *strip = (float *)malloc(sizeof(float) * 7 * (size_t)sw * (size_t)m->h);
+    if (!strip || sw < 2) { free(strip); return SR_ERR_INVALID_ARGUMENT; }
+    sr_camera_look_at(&cam, eye, at, NULL, 34.0f, (float)a->fw / (float)a->fh, 0.1f, 20.0f);
+    sr_light_default(&light, a->light);
+    sr_framebuffer_clear(fb, clear, 1.0f);
+    for (k = 0; k < N && r == SR_OK; k++) {
+        float th = ((float)k + 0.5f - (float)PER_MAP / 2.0f) / (float)N * 6.2831853f, c = cosf(th), s = sinf(th); /* map 0 faces +z */
+        float *dd = strip, *nn = strip + (size_t)sw * m->h, *aa = nn + 3 * (size_t)sw * m->h;
+        sr_image dimg, nimg, aimg;
+        sr_relief_desc d;
+        for (y = 0; y < m->h; y++) { /* the strip's columns */
+            size_t src = (size_t)y * m->w + (size_t)(k % PER_MAP) * sw, dst = (size_t)y * sw;
+            memcpy(dd + dst, m->depth + src, sizeof(float) * (size_t)sw);
+            memcpy(nn + 3 * dst, m->normal + 3 * src, sizeof(float) * 3 * (size_t)sw);
+            memcpy(aa + 3 * dst, m->albedo + 3 * src, sizeof(float) * 3 * (size_t)sw);
+        }
+        sr_relief_desc_default(&d);
+        d.axis_u[0] = w * c; d.axis_u[1] = 0.0f; d.axis_u[2] = -w * s;
+        d.axis_v[0] = 0.0f; d.axis_v[1] = 2.0f; d.axis_v[2] = 0.0f;
+        d.origin[0] = s - 0.5f * d.axis_u[0]; d.origin[1] = -1.0f; d.origin[2] = c - 0.5f * d.axis_u[2];
+        d.depth_scale = a->depth;
+        d.curvature_u = 1.0f;
+        dimg.width = sw; dimg.height = m->h; dimg.channels = 1; dimg.data = dd; dimg.wrap = 0;
+        nimg = dimg; nimg.channels = 3; nimg.data = nn;
+        aimg = dimg; aimg.channels = 3; aimg.data = aa;
+        d.depth = dimg; d.normal_map = &nimg; d.albedo = &aimg;
+        d.shadows = a->shadows; d.shadow_search = 1; d.shadow_light = 0.35f;
+        d.lights = &light; d.light_count = 1;
+        d.material.specular[0] = d.material.specular[1] = d.material.specular[2] = 0.25f;
+        d.material.shininess = 25.0f;
+        r = sr_draw_relief(fb, &cam, &d);
+    }
+    free(strip);
     return r;
 }
 
@@ -429,12 +480,12 @@ int main(int argc, char **argv)
     h01 = normalized_rows(&fused, 1);
     e01 = normalized_rows(&ex, 1);
     t0 = now_ms();
-    if (!h01 || !e01 || !make_face(h01, fused.width, fused.height, a.depth, &front)) goto done;
+    if (!h01 || !e01 || !make_face(h01, fused.width, fused.height, a.depth, a.cylinder ? 6.2831853f / 3.0f : 2.0f, &front)) goto done;
     t_normal = now_ms() - t0;
-    if (!make_face(e01, ex.width, ex.height, a.depth, &side)) goto done;
+    if (!make_face(e01, ex.width, ex.height, a.depth, 2.0f, &side)) goto done;
     if (sr_framebuffer_create(&fb, a.fw, a.fh, NULL) != SR_OK) goto done;
     t0 = now_ms();
-    if (render_cube(&fb, &front, &side, &a) != SR_OK) { sr_framebuffer_free(&fb); goto done; }
+    if ((a.cylinder ? render_cylinder(&fb, &front, &a) : render_cube(&fb, &front, &side, &a)) != SR_OK) { sr_framebuffer_free(&fb); goto done; }
     t_render = now_ms() - t0;
     if (sr_write_framebuffer_png(&fb, a.out, 0) != SR_OK) { fprintf(stderr, "relief: cannot write %s\n", a.out); sr_framebuffer_free(&fb); goto done; }
     status = 0;

@@ -99,9 +99,9 @@
      Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
      triangles per draw. Vertices must be finite (checked). One draw is opaque (no blending);
      volumes blend over what is in the framebuffer. A curved relief quad (curvature_u / _v) is
-     the tangent plane of a convex bend: rays must cross that plane over the quad (a ray that
-     enters only through the shell's side is a miss), its shadow rays use the flat frame, and
-     its shading normal is tilted by the bend's slope. Read images up to 32768 on a side and 2^28
+     the tangent plane of a convex bend, approximated by a parabola (for a cylinder cut into
+     16 quads the bend's error at a quad's edge is 0.02% of the radius): its shadow rays use the
+     flat frame, and its shading normal is tilted by the bend's slope. Read images up to 32768 on a side and 2^28
      samples (width x height x channels). PNG ancillary chunks are skipped, so gamma, colour
      profiles and a grey / RGB tRNS colour key are not applied: samples are as stored (height
      maps want exactly that); a palette's tRNS does become an alpha channel.
@@ -1600,9 +1600,11 @@ static float sr__relief_search(const sr_image *img, float s0, float t0, float ds
 /* Curved mode (Oliveira & Policarpo 2005's idea, with the bend given per quad): the reference
    surface lies sag = (cu x^2 + cv y^2) / 2 below the quad's plane, x and y the world offsets from
    the quad's centre along u and v; the map's depth is measured from it. The ray is followed from
-   where it crosses the plane to where it is below the deepest possible surface, in linear_steps
-   uniform steps and binary_steps halvings of the step that first finds it at or below the map:
-   a ray that passes the bend without that is a miss, which draws the silhouette. */
+   where it crosses the plane (over the quad or beside it: the bend lies below the plane) to
+   where it is below the deepest possible surface, in linear_steps uniform steps and
+   binary_steps halvings of the step that first finds it at or below the map; the hit must lie
+   over the quad: a ray that passes the bend, or meets the extended bend beside the quad (a
+   neighbouring quad's part of the surface), is a miss, which draws the silhouette. */
 static float sr__relief_shell_gap(const sr_relief_desc *d, const sr__relief_frame *f, const float o[3], const float dir[3],
                                   float lam, float *s, float *tm, float *r)
 {
@@ -1631,7 +1633,6 @@ static int sr__relief_intersect_curved(const sr_relief_desc *d, const sr__relief
     for (i = 1; i <= linear; i++) {
         float lam = lam0 + (float)i * step;
         float gap = sr__relief_shell_gap(d, f, o, dir, lam, &s, &tm, &r);
-        if (!d->depth.wrap && (s < 0.0f || s > 1.0f || tm < 0.0f || tm > 1.0f)) return 0; /* passed the bend */
         if (gap >= 0.0f && r >= 0.0f) break;
         lo = lam;
     }
@@ -1664,11 +1665,11 @@ static int sr__relief_hit(const sr_relief_desc *d, const sr__relief_frame *fp, c
     sr__sub(E, d->origin, rel);
     s0 = sr__dot(rel, f.du);
     tm0 = sr__dot(rel, f.dv);
-    if (s0 < 0.0f || s0 > 1.0f || tm0 < 0.0f || tm0 > 1.0f) return 0;
-    if (d->curvature_u != 0.0f || d->curvature_v != 0.0f) {
+    if (d->curvature_u != 0.0f || d->curvature_v != 0.0f) { /* may cross the plane beside the quad */
         if (!(d->curvature_u >= 0.0f) || !(d->curvature_v >= 0.0f)) return 0;
         return sr__relief_intersect_curved(d, &f, origin, dir, t0, t, uvd);
     }
+    if (s0 < 0.0f || s0 > 1.0f || tm0 < 0.0f || tm0 > 1.0f) return 0;
     /* world offset per unit of map depth: depth_scale along -n */
     for (k = 0; k < 3; k++) step[k] = dir[k] * d->depth_scale / -denom;
     ds = sr__dot(step, f.du);
