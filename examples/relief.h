@@ -93,10 +93,12 @@
        the stroke keeps its crest height); c_g for feature patches is the mean squared
        mismatch over the filled texels (the graph cut runs once, for the chosen patch).
      - The fill visits a grid of windows (step patch - overlap) in raster order, skipping
-       filled ones; of the K best by SSD it takes the least SSD + alpha_g x cut cost per
-       overlap texel, or with tolerance > 0 a fixed pseudo-random one of those within
-       (1 + tolerance) of it: always taking the best favours smooth, mid-height patches and
-       narrows the height and slope histograms.
+       filled ones. It searches coarse to fine (the 4 best positions on a grid of twice the
+       stride, then one stride step around each: a third of the work of the full stride grid,
+       and no worse on a rock-like example). Of the K best by SSD it takes the least SSD +
+       alpha_g x cut cost per overlap texel, or with tolerance > 0 a fixed pseudo-random one of
+       those within (1 + tolerance) of it: always taking the best favours smooth, mid-height
+       patches and narrows the height and slope histograms.
      - Graph cut: texels not filled yet are pinned to the new patch, filled texels on the
        window's border beside filled ones outside it to the old output, a feature patch's
        centre disc (radius patch / 6) to the patch. Pinned texels are folded into the terminal
@@ -214,7 +216,8 @@ typedef struct rl_synth_options {
     int patch;              /* patch side in texels, 0 = 48 */
     int overlap;            /* overlap of neighbouring fill patches, 0 = patch / 3 */
     int candidates;         /* K best fill candidates by SSD that get a graph cut, 0 = 2 */
-    int search_stride;      /* stride of the fill candidates' positions in the example, 0 = 4 */
+    int search_stride;      /* fill candidates' positions: a grid of 2 x stride in the example, then
+                               stride steps around the best 4, 0 = 8 */
     int feature_candidates; /* example feature points tried per sketch feature, 0 = 48 */
     float alpha_g, alpha_f; /* weights of seam and feature cost (Eq. 5-1), 0 = 1 and 3 */
     float emphasis;         /* extra relief under the strokes in units of the example's height
@@ -1283,17 +1286,47 @@ static rl_result rl__place_feature(rl__synth *S, const rl__feat *t, const rl__fe
    Section: non-feature fill (K best by SSD, then SSD + seam cost), the pipeline, the baseline
    --------------------------------------------------------------------------------------------- */
 
-/* the window's best example position: the K least SSD over the filled texels (every other
-   texel, positions on a stride grid, a candidate dropped as soon as its partial sum passes the
-   K-th best), then the least full SSD + alpha_g * cut cost */
+/* mean squared difference of the example patch at (ex, ey) over the window's n listed texels
+   (float partial sums of 32), or -1 as soon as the sum passes limit * n; with nothing to match,
+   a fixed spread of costs in [0, 1000) */
+static double rl__fill_score(const rl__synth *S, int wx, int wy, int ex, int ey, int n, double limit)
+{
+    const float *base = S->ex + (size_t)ey * S->ew + ex;
+    double c = 0.0, stop = limit * n;
+    int i = 0;
+    if (!n) return (double)(((uint32_t)wx * 73856093u ^ (uint32_t)wy * 19349663u ^ (uint32_t)ex * 83492791u ^ (uint32_t)ey * 2654435761u) % 1000u);
+    while (i < n && c < stop) {
+        float part = 0.0f;
+        int end = i + 32 < n ? i + 32 : n;
+        for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; part += d * d; }
+        c += (double)part;
+    }
+    return c >= stop ? -1.0 : c / n;
+}
+
+/* keeps the k best (least cost) positions, sorted, ties to the earlier one */
+static void rl__keep_best(double *cost, int *px, int *py, int *count, int k, double c, int x, int y)
+{
+    int i;
+    if (*count == k && c >= cost[k - 1]) return;
+    i = *count < k ? (*count)++ : k - 1;
+    while (i > 0 && cost[i - 1] > c) { cost[i] = cost[i - 1]; px[i] = px[i - 1]; py[i] = py[i - 1]; i--; }
+    cost[i] = c; px[i] = x; py[i] = y;
+}
+
+/* The window's best example position. The filled texels it is compared on: every other one.
+   Coarse to fine: the 4 best positions on a grid of 2 x stride, then the stride neighbourhoods
+   (3 x 3) of those give the K least SSD; of these the least full SSD + alpha_g * cut cost is
+   placed (or, with tolerance, a fixed pick among the near-best). */
 static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
 {
-    enum { KMAX = 16 };
-    double kc[KMAX], costs[KMAX], best_cost = 0.0;
-    int kx[KMAX], ky[KMAX], nk = 0, K = S->o.candidates, stride = S->o.search_stride, ex, ey, k, n = 0, best = -1, i, j;
+    enum { KMAX = 16, COARSE = 4 };
+    double kc[KMAX], costs[KMAX], cc[COARSE], best_cost = 0.0;
+    int kx[KMAX], ky[KMAX], cx[COARSE], cy[COARSE], nk = 0, nc = 0, K = S->o.candidates, stride = S->o.search_stride;
+    int ex, ey, k, n = 0, best = -1, i, j, q;
     rl_result r;
     K = K > KMAX ? KMAX : K;
-    for (j = 0; j < S->P; j += 2) /* the filled texels compared: example offsets and output values */
+    for (j = 0; j < S->P; j += 2)
         for (i = 0; i < S->P; i += 2) {
             int x = wx + i, y = wy + j;
             size_t p;
@@ -1304,28 +1337,23 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
             S->fill_val[n] = S->out[p];
             n++;
         }
-    for (ey = 0; ey + S->P <= S->eh; ey += stride)
-        for (ex = 0; ex + S->P <= S->ew; ex += stride) {
-            const float *base = S->ex + (size_t)ey * S->ew + ex;
-            double c = 0.0, limit = nk == K ? kc[nk - 1] * n : 1e300;
-            if (n) {
-                for (i = 0; i < n && c < limit;) { /* float sums of 32 terms at a time */
-                    float part = 0.0f;
-                    int end = i + 32 < n ? i + 32 : n;
-                    for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; part += d * d; }
-                    c += (double)part;
-                }
-                if (c >= limit) continue;
-                c /= n;
-            } else { /* nothing to match: a fixed spread of positions */
-                uint32_t hsh = (uint32_t)wx * 73856093u ^ (uint32_t)wy * 19349663u ^ (uint32_t)ex * 83492791u ^ (uint32_t)ey * 2654435761u;
-                c = (double)(hsh % 1000u);
-            }
-            if (nk == K && c >= kc[nk - 1]) continue;
-            i = nk < K ? nk++ : nk - 1;
-            while (i > 0 && kc[i - 1] > c) { kc[i] = kc[i - 1]; kx[i] = kx[i - 1]; ky[i] = ky[i - 1]; i--; }
-            kc[i] = c; kx[i] = ex; ky[i] = ey;
+    for (ey = 0; ey + S->P <= S->eh; ey += 2 * stride)
+        for (ex = 0; ex + S->P <= S->ew; ex += 2 * stride) {
+            double c = rl__fill_score(S, wx, wy, ex, ey, n, nc == COARSE ? cc[COARSE - 1] : 1e300);
+            if (c >= 0.0) rl__keep_best(cc, cx, cy, &nc, COARSE, c, ex, ey);
         }
+    for (q = 0; q < nc; q++)
+        for (j = -1; j <= 1; j++)
+            for (i = -1; i <= 1; i++) {
+                int t, dup = 0;
+                double c;
+                ex = cx[q] + i * stride; ey = cy[q] + j * stride;
+                if (ex < 0 || ey < 0 || ex + S->P > S->ew || ey + S->P > S->eh) continue;
+                for (t = 0; t < nk; t++) dup |= kx[t] == ex && ky[t] == ey;
+                if (dup) continue;
+                c = rl__fill_score(S, wx, wy, ex, ey, n, nk == K ? kc[K - 1] : 1e300);
+                if (c >= 0.0) rl__keep_best(kc, kx, ky, &nk, K, c, ex, ey);
+            }
     for (k = 0; k < nk; k++) {
         double cut, c;
         int nover;
