@@ -16,6 +16,7 @@ status=0
 for mesh in "$@"; do
   for prog in "$B"/bench_*; do
     [ -x "$prog" ] || continue
+    case "$(basename "$prog")" in bench_texel|bench_relief|bench_deform) continue ;; esac # run once below
     echo "bench: $(basename "$prog") $mesh" >&2
     if ! "$prog" "$mesh" | sed "s|^RESULT |RESULT $(basename "$mesh") |" >>"$tmp"; then
       echo "bench: $(basename "$prog") failed on $mesh" >&2
@@ -23,12 +24,24 @@ for mesh in "$@"; do
     fi
   done
 done
-# extra cases a bench asks for beyond one run per mesh: paper 000's base on the bunny refined twice by
-# subdiv4.h's butterfly (1,114,656 triangles)
+# runs a bench with its own arguments once: once LABEL PROG ARGS...
+once() {
+  label="$1"; prog="$B/$2"; shift 2
+  [ -x "$prog" ] || return 0
+  echo "bench: $(basename "$prog") $*" >&2
+  if ! "$prog" "$@" | sed "s|^RESULT |RESULT $label |" >>"$tmp"; then
+    echo "bench: $(basename "$prog") $* failed" >&2
+    status=1
+  fi
+}
+# the benches that take no mesh (their own fixed inputs), and the cases beyond one run per mesh
+once texel bench_texel
+once asteroid bench_relief
 bunny=/usr/share/glmark2/models/bunny.obj
-if [ -x "$B/bench_dispmesh" ] && [ -f "$bunny" ]; then
-  echo "bench: bench_dispmesh $bunny --refine 2 --base-only" >&2
-  "$B/bench_dispmesh" "$bunny" --refine 2 --base-only | sed "s|^RESULT |RESULT bunny_x2 |" >>"$tmp" || status=1
+if [ -f "$bunny" ]; then
+  once bunny_x1 bench_deform "$bunny" --refine 1                                  # deform.h, 139k vertices
+  once bunny_x1_free1 bench_deform "$bunny" --refine 1 --free 1 --methods laplacian,lri,cgal_arap
+  once bunny_x2 bench_dispmesh "$bunny" --refine 2 --base-only                    # 1,114,656 triangles
 fi
 {
   echo "# Benchmark results"
