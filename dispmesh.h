@@ -795,7 +795,7 @@ extern "C" {
 #endif
 
 /* ---------------------------------------------------------------------------------------------
-   Section: results and allocation
+   Section: results, allocation, scratch memory
    --------------------------------------------------------------------------------------------- */
 
 DMDEF const char *dm_result_string(dm_result r)
@@ -836,6 +836,150 @@ static void *dm__alloc_array(const dm_allocator *a, size_t count, size_t size, i
         return NULL;
     }
     return a->alloc(a->user, count * size > 0 ? count * size : 1);
+}
+
+/* Temporaries of one call, all freed together on every exit path. */
+#define DM__SLOTS 40
+typedef struct dm__scratch {
+    dm_allocator a;
+    void *p[DM__SLOTS];
+    int n;
+    int overflow;
+} dm__scratch;
+
+static void *dm__take(dm__scratch *s, size_t count, size_t size)
+{
+    void *p;
+    if (s->n >= DM__SLOTS) return NULL;
+    p = dm__alloc_array(&s->a, count, size, &s->overflow);
+    if (p) s->p[s->n++] = p;
+    return p;
+}
+
+static void dm__release(dm__scratch *s)
+{
+    while (s->n > 0) s->a.free(s->a.user, s->p[--s->n]);
+}
+
+static dm_result dm__scratch_fail(const dm__scratch *s)
+{
+    return s->overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: small maths in double, vertex normals, edge twins (shared by parts 3 and 4)
+   --------------------------------------------------------------------------------------------- */
+
+static double dm__dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static void dm__cross3(const double a[3], const double b[3], double r[3])
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void dm__load3(const float *pos, uint32_t v, double out[3])
+{
+    out[0] = pos[3 * (size_t)v];
+    out[1] = pos[3 * (size_t)v + 1];
+    out[2] = pos[3 * (size_t)v + 2];
+}
+
+static void dm__sub3(const double a[3], const double b[3], double r[3])
+{
+    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
+}
+
+
+static double dm__len3(const double a[3]) { return sqrt(dm__dot3(a, a)); }
+
+/* The angle of triangle p at corner j (radians), or -1 when an edge there has zero length:
+   the weight of an angle-weighted vertex normal (Thurmer and Wuthrich 1998). */
+static double dm__corner_angle(const double p[3][3], int j)
+{
+    double ea[3], eb[3], la, lb, ang;
+    dm__sub3(p[(j + 1) % 3], p[j], ea);
+    dm__sub3(p[(j + 2) % 3], p[j], eb);
+    la = dm__len3(ea);
+    lb = dm__len3(eb);
+    if (!(la > 0.0 && lb > 0.0)) return -1.0;
+    ang = dm__dot3(ea, eb) / (la * lb);
+    return acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
+}
+
+/* twice the area normal of triangle t */
+static void dm__face_normal(const float *pos, const uint32_t *idx, size_t t, double n[3])
+{
+    double p0[3], p1[3], p2[3], e1[3], e2[3];
+    dm__load3(pos, idx[3 * t], p0);
+    dm__load3(pos, idx[3 * t + 1], p1);
+    dm__load3(pos, idx[3 * t + 2], p2);
+    dm__sub3(p1, p0, e1);
+    dm__sub3(p2, p0, e2);
+    dm__cross3(e1, e2, n);
+}
+
+/* Angle-weighted vertex normals (Thurmer and Wüthrich 1998), unit or zero, into nrm[3 nv]. */
+static void dm__vertex_normals(const float *pos, size_t nv, const uint32_t *idx, size_t nt, double *acc,
+                               float *nrm)
+{
+    size_t t, v;
+    int c, k;
+    memset(acc, 0, 3 * nv * sizeof(double));
+    for (t = 0; t < nt; t++) {
+        double n[3], len, p[3][3];
+        dm__face_normal(pos, idx, t, n);
+        len = dm__len3(n);
+        if (!(len > 0.0)) continue;
+        for (c = 0; c < 3; c++) dm__load3(pos, idx[3 * t + (size_t)c], p[c]);
+        for (c = 0; c < 3; c++) {
+            double ang = dm__corner_angle((const double(*)[3])p, c);
+            if (ang < 0.0) continue;
+            for (k = 0; k < 3; k++) acc[3 * (size_t)idx[3 * t + (size_t)c] + (size_t)k] += ang * n[k] / len;
+        }
+    }
+    for (v = 0; v < nv; v++) {
+        double len = dm__len3(acc + 3 * v);
+        for (k = 0; k < 3; k++) nrm[3 * v + (size_t)k] = len > 0.0 ? (float)(acc[3 * v + (size_t)k] / len) : 0.0f;
+    }
+}
+
+typedef struct dm__edge {
+    uint64_t key; /* min vertex << 32 | max vertex */
+    uint32_t he;  /* 3 triangle + corner */
+} dm__edge;
+
+static int dm__edge_cmp(const void *a, const void *b)
+{
+    const dm__edge *x = (const dm__edge *)a, *y = (const dm__edge *)b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->he < y->he ? -1 : x->he > y->he ? 1 : 0;
+}
+
+/* twin[he]: the opposite half-edge's triangle, when exactly two triangles share the edge and
+   run it in opposite directions (a consistently oriented manifold edge); DM_NO_HIT otherwise. */
+static void dm__twins(const uint32_t *idx, size_t nt, dm__edge *e, uint32_t *twin, uint32_t *twin_he)
+{
+    size_t i, j, n = 3 * nt;
+    for (i = 0; i < n; i++) {
+        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
+        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+        e[i].he = (uint32_t)i;
+        twin[i] = DM_NO_HIT;
+        twin_he[i] = DM_NO_HIT;
+    }
+    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    for (i = 0; i < n; i = j) {
+        for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
+        if (j - i == 2) {
+            uint32_t h0 = e[i].he, h1 = e[i + 1].he;
+            if (idx[h0] != idx[h1] && h0 / 3 != h1 / 3) { /* opposite directions, two triangles */
+                twin[h0] = h1 / 3; twin_he[h0] = h1;
+                twin[h1] = h0 / 3; twin_he[h1] = h0;
+            }
+        }
+    }
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -1417,6 +1561,19 @@ static dm_result dm__check_sizes(const float *positions, size_t vertex_count, co
         return DM_ERR_TOO_LARGE;
     if (triangle_count > ((size_t)-1 - 64) / (2 * sizeof(dm__node))) return DM_ERR_TOO_LARGE;
     return DM_OK;
+}
+
+/* the checks every mesh argument gets (as dm_bvh_build's) */
+static dm_result dm__check_mesh(const float *pos, size_t nv, const uint32_t *idx, size_t nt)
+{
+    size_t i;
+    dm_result r = dm__check_sizes(pos, nv, idx, nt); /* the BVH's checks, as for every mesh argument */
+    if (r == DM_OK && !pos) r = DM_ERR_INVALID_ARGUMENT;
+    for (i = 0; r == DM_OK && i < nt; i++) {
+        float p[9];
+        r = dm__fetch_triangle(pos, nv, idx, i, p);
+    }
+    return r;
 }
 
 /* Sum over nodes of area * (1 for interior, count for leaves), over the root's area. */
@@ -2294,8 +2451,6 @@ DMDEF size_t dm_bvh_occluded_batch(const dm_bvh *bvh, const dm_ray *rays, size_t
 /* ---------------------------------------------------------------------------------------------
    Section: closest point (Ericson 2005, 5.1.5), in double
    --------------------------------------------------------------------------------------------- */
-
-static double dm__dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /* squared distance from p to segment a + s (b - a), s in [0, 1]; *s receives s */
 static double dm__segment_d2(const double p[3], const double a[3], const double b[3], double *s)
@@ -3220,13 +3375,6 @@ static int dm__qem_push_list(dm__qem_simp *s, uint32_t v, const uint32_t *nbr, s
     return n == 0 || dm__qem_push_edges(s, ea, eb, n);
 }
 
-static void dm__cross3(const double a[3], const double b[3], double r[3])
-{
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* Geometry: every triangle of keep or rem that survives, with both moved to `at`, keeps its
    orientation (normal turns by less than acos(DM__QEM_MIN_COS)) and is not degenerate. Writes the
    new one-ring into s->ring. Returns the triangle count, or (size_t)-1 if refused. Each triangle
@@ -3763,19 +3911,6 @@ DMDEF void dm_pm_free(dm_pm *pm)
     a.free(a.user, pm);
 }
 
-/* the checks every mesh argument gets (as dm_bvh_build's) */
-static dm_result dm__pz_check_mesh(const float *pos, size_t nv, const uint32_t *idx, size_t nt)
-{
-    size_t i;
-    dm_result r = dm__check_sizes(pos, nv, idx, nt); /* the BVH's checks, as for every mesh argument */
-    if (r == DM_OK && !pos) r = DM_ERR_INVALID_ARGUMENT;
-    for (i = 0; r == DM_OK && i < nt; i++) {
-        float p[9];
-        r = dm__fetch_triangle(pos, nv, idx, i, p);
-    }
-    return r;
-}
-
 /* ---- welding ---- */
 
 /* a position's bits with -0 read as +0, for hashing and comparing */
@@ -3850,7 +3985,7 @@ DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint3
     dm_result r;
     if (!out_positions || !out_indices || !out_vertex_count) return DM_ERR_INVALID_ARGUMENT;
     *out_vertex_count = 0;
-    r = dm__pz_check_mesh(positions, vertex_count, indices, triangle_count);
+    r = dm__check_mesh(positions, vertex_count, indices, triangle_count);
     if (r != DM_OK) return r;
     remap = (uint32_t *)dm__alloc_array(&a, vertex_count, sizeof(uint32_t), &overflow);
     if (!remap) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
@@ -4395,157 +4530,8 @@ DMDEF size_t dm_pm_merged_vertices(const dm_pm *pm, uint32_t vertex, const uint3
 }
 
 /* ---------------------------------------------------------------------------------------------
-   Section: part 3 helpers (mesh checks, scratch memory, small vector maths in double)
-   --------------------------------------------------------------------------------------------- */
-
-
-/* Temporaries of one call, all freed together on every exit path. */
-#define DM__PZ_SLOTS 40
-typedef struct dm__pz_scratch {
-    dm_allocator a;
-    void *p[DM__PZ_SLOTS];
-    int n;
-    int overflow;
-} dm__pz_scratch;
-
-static void *dm__pz_take(dm__pz_scratch *s, size_t count, size_t size)
-{
-    void *p;
-    if (s->n >= DM__PZ_SLOTS) return NULL;
-    p = dm__alloc_array(&s->a, count, size, &s->overflow);
-    if (p) s->p[s->n++] = p;
-    return p;
-}
-
-static void dm__pz_release(dm__pz_scratch *s)
-{
-    while (s->n > 0) s->a.free(s->a.user, s->p[--s->n]);
-}
-
-static dm_result dm__pz_fail(const dm__pz_scratch *s)
-{
-    return s->overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
-}
-
-static void dm__pz_load(const float *pos, uint32_t v, double out[3])
-{
-    out[0] = pos[3 * (size_t)v];
-    out[1] = pos[3 * (size_t)v + 1];
-    out[2] = pos[3 * (size_t)v + 2];
-}
-
-static void dm__pz_sub(const double a[3], const double b[3], double r[3])
-{
-    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
-}
-
-
-static double dm__pz_len(const double a[3]) { return sqrt(dm__dot3(a, a)); }
-
-/* The angle of triangle p at corner j (radians), or -1 when an edge there has zero length:
-   the weight of an angle-weighted vertex normal (Thurmer and Wuthrich 1998). */
-static double dm__pz_corner_angle(const double p[3][3], int j)
-{
-    double ea[3], eb[3], la, lb, ang;
-    dm__pz_sub(p[(j + 1) % 3], p[j], ea);
-    dm__pz_sub(p[(j + 2) % 3], p[j], eb);
-    la = dm__pz_len(ea);
-    lb = dm__pz_len(eb);
-    if (!(la > 0.0 && lb > 0.0)) return -1.0;
-    ang = dm__dot3(ea, eb) / (la * lb);
-    return acos(ang < -1.0 ? -1.0 : ang > 1.0 ? 1.0 : ang);
-}
-
-/* twice the area normal of triangle t */
-static void dm__pz_face_normal(const float *pos, const uint32_t *idx, size_t t, double n[3])
-{
-    double p0[3], p1[3], p2[3], e1[3], e2[3];
-    dm__pz_load(pos, idx[3 * t], p0);
-    dm__pz_load(pos, idx[3 * t + 1], p1);
-    dm__pz_load(pos, idx[3 * t + 2], p2);
-    dm__pz_sub(p1, p0, e1);
-    dm__pz_sub(p2, p0, e2);
-    dm__cross3(e1, e2, n);
-}
-
-/* Angle-weighted vertex normals (Thurmer and Wüthrich 1998), unit or zero, into nrm[3 nv]. */
-static void dm__pz_vertex_normals(const float *pos, size_t nv, const uint32_t *idx, size_t nt, double *acc,
-                                  float *nrm)
-{
-    size_t t, v;
-    int c, k;
-    memset(acc, 0, 3 * nv * sizeof(double));
-    for (t = 0; t < nt; t++) {
-        double n[3], len, p[3][3];
-        dm__pz_face_normal(pos, idx, t, n);
-        len = dm__pz_len(n);
-        if (!(len > 0.0)) continue;
-        for (c = 0; c < 3; c++) dm__pz_load(pos, idx[3 * t + (size_t)c], p[c]);
-        for (c = 0; c < 3; c++) {
-            double ang = dm__pz_corner_angle((const double(*)[3])p, c);
-            if (ang < 0.0) continue;
-            for (k = 0; k < 3; k++) acc[3 * (size_t)idx[3 * t + (size_t)c] + (size_t)k] += ang * n[k] / len;
-        }
-    }
-    for (v = 0; v < nv; v++) {
-        double len = dm__pz_len(acc + 3 * v);
-        for (k = 0; k < 3; k++) nrm[3 * v + (size_t)k] = len > 0.0 ? (float)(acc[3 * v + (size_t)k] / len) : 0.0f;
-    }
-}
-
-static uint64_t dm__pz_hash(uint64_t x)
-{
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-static double dm__pz_unit(uint64_t i, uint64_t stream)
-{
-    return (double)(dm__pz_hash(i * 8 + stream) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-/* ---------------------------------------------------------------------------------------------
    Section: parameterization (charts, Floater 2003, Yoshizawa-Belyaev-Seidel 2004, packing)
    --------------------------------------------------------------------------------------------- */
-
-typedef struct dm__pz_edge {
-    uint64_t key; /* min vertex << 32 | max vertex */
-    uint32_t he;  /* 3 triangle + corner */
-} dm__pz_edge;
-
-static int dm__pz_edge_cmp(const void *a, const void *b)
-{
-    const dm__pz_edge *x = (const dm__pz_edge *)a, *y = (const dm__pz_edge *)b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->he < y->he ? -1 : x->he > y->he ? 1 : 0;
-}
-
-/* twin[he]: the opposite half-edge's triangle, when exactly two triangles share the edge and
-   run it in opposite directions (a consistently oriented manifold edge); DM_NO_HIT otherwise. */
-static void dm__pz_twins(const uint32_t *idx, size_t nt, dm__pz_edge *e, uint32_t *twin, uint32_t *twin_he)
-{
-    size_t i, j, n = 3 * nt;
-    for (i = 0; i < n; i++) {
-        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
-        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
-        e[i].he = (uint32_t)i;
-        twin[i] = DM_NO_HIT;
-        twin_he[i] = DM_NO_HIT;
-    }
-    qsort(e, n, sizeof(dm__pz_edge), dm__pz_edge_cmp);
-    for (i = 0; i < n; i = j) {
-        for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
-        if (j - i == 2) {
-            uint32_t h0 = e[i].he, h1 = e[i + 1].he;
-            if (idx[h0] != idx[h1] && h0 / 3 != h1 / 3) { /* opposite directions, two triangles */
-                twin[h0] = h1 / 3; twin_he[h0] = h1;
-                twin[h1] = h0 / 3; twin_he[h1] = h0;
-            }
-        }
-    }
-}
 
 /* Grows disk-shaped charts from the lowest unassigned triangle, breadth first. A triangle joins
    when it shares one edge with the chart and its third vertex is not yet in it, or shares two
@@ -4565,7 +4551,7 @@ static size_t dm__pz_grow_charts(const float *pos, const uint32_t *idx, size_t n
         if (chart[t] != DM_NO_HIT) continue;
         count++;
         chart[t] = cid;
-        dm__pz_face_normal(pos, idx, t, nsum);
+        dm__face_normal(pos, idx, t, nsum);
         for (c = 0; c < 3; c++) {
             vstamp[idx[3 * t + (size_t)c]] = cid;
             if (twin[3 * t + (size_t)c] != DM_NO_HIT) queue[tail++] = twin[3 * t + (size_t)c];
@@ -4582,9 +4568,9 @@ static size_t dm__pz_grow_charts(const float *pos, const uint32_t *idx, size_t n
                 }
             if (k == 0 || k == 3) continue;
             if (k == 1 && vstamp[idx[3 * (size_t)q + (size_t)((shared + 2) % 3)]] == cid) continue;
-            dm__pz_face_normal(pos, idx, q, n);
-            ln = dm__pz_len(n);
-            ls = dm__pz_len(nsum);
+            dm__face_normal(pos, idx, q, n);
+            ln = dm__len3(n);
+            ls = dm__len3(nsum);
             if (ln > 0.0 && ls > 0.0 && dm__dot3(n, nsum) < cos_max * ln * ls) continue;
             chart[q] = cid;
             size++;
@@ -4712,10 +4698,10 @@ static double dm__pz_stretch(const dm__pz_chart *ch, double *sig_t)
         double s3 = ch->uv[2 * l[2]], t3 = ch->uv[2 * l[2] + 1];
         double a2 = (s2 - s1) * (t3 - t1) - (s3 - s1) * (t2 - t1), ss[3], st[3], a3[3], b3[3], c3[3], area3, k2, sg;
         int k;
-        dm__pz_sub(q2, q1, a3);
-        dm__pz_sub(q3, q1, b3);
+        dm__sub3(q2, q1, a3);
+        dm__sub3(q3, q1, b3);
         dm__cross3(a3, b3, c3);
-        area3 = 0.5 * dm__pz_len(c3);
+        area3 = 0.5 * dm__len3(c3);
         if (!(a2 > 0.0) || !(area3 > 0.0) || !(ch->target[t] > 0.0)) { sig_t[t] = 1.0; continue; }
         for (k = 0; k < 3; k++) {
             ss[k] = (q1[k] * (t2 - t3) + q2[k] * (t3 - t1) + q3[k] * (t1 - t2)) / a2;
@@ -4741,13 +4727,13 @@ static void dm__pz_mean_value_weights(dm__pz_chart *ch)
             const double *xj = ch->x + 3 * ch->lv[3 * t + (size_t)((c + 1) % 3)];
             const double *xk = ch->x + 3 * ch->lv[3 * t + (size_t)((c + 2) % 3)];
             double a[3], b[3], ab[3], la, lb, den, tn;
-            dm__pz_sub(xj, xi, a);
-            dm__pz_sub(xk, xi, b);
+            dm__sub3(xj, xi, a);
+            dm__sub3(xk, xi, b);
             dm__cross3(a, b, ab);
-            la = dm__pz_len(a);
-            lb = dm__pz_len(b);
+            la = dm__len3(a);
+            lb = dm__len3(b);
             den = la * lb + dm__dot3(a, b);
-            tn = den > 1e-300 ? dm__pz_len(ab) / den : 1e6;
+            tn = den > 1e-300 ? dm__len3(ab) / den : 1e6;
             if (tn > 1e6) tn = 1e6;
             if (tn < 1e-12) tn = 1e-12;
             ch->w[6 * t + 2 * (size_t)c] = la > 1e-300 ? tn / la : 1e-12;
@@ -4771,8 +4757,8 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
     v = (uint32_t)start;
     do {
         double d[3];
-        dm__pz_sub(ch->x + 3 * ch->bnext[v], ch->x + 3 * v, d);
-        total += dm__pz_len(d);
+        dm__sub3(ch->x + 3 * ch->bnext[v], ch->x + 3 * v, d);
+        total += dm__len3(d);
         v = ch->bnext[v];
         len++;
     } while (v != start && v != DM_NO_HIT && len <= nb);
@@ -4781,7 +4767,7 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
     if (fabs(nrm[0]) < 0.6) { e1[0] = 0.0; e1[1] = nrm[2]; e1[2] = -nrm[1]; }
     else { e1[0] = -nrm[2]; e1[1] = 0.0; e1[2] = nrm[0]; }
     {
-        double l = dm__pz_len(e1);
+        double l = dm__len3(e1);
         e1[0] /= l; e1[1] /= l; e1[2] /= l;
     }
     dm__cross3(nrm, e1, e2);
@@ -4794,8 +4780,8 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
             double ang = total > 0.0 ? 6.283185307179586 * run / total : 0.0, d[3];
             ch->uv[2 * v] = cos(ang);
             ch->uv[2 * v + 1] = sin(ang);
-            dm__pz_sub(ch->x + 3 * ch->bnext[v], ch->x + 3 * v, d);
-            run += dm__pz_len(d);
+            dm__sub3(ch->x + 3 * ch->bnext[v], ch->x + 3 * v, d);
+            run += dm__len3(d);
         }
         v = ch->bnext[v];
     } while (v != start);
@@ -4881,14 +4867,14 @@ static int dm__pz_layout(dm__pz_chart *ch, const double nrm[3], int rounds, doub
 static void dm__pz_single(const float *pos, const uint32_t *idx, size_t t, double *cuv)
 {
     double p0[3], p1[3], p2[3], e1[3], e2[3], n[3], l1, h;
-    dm__pz_load(pos, idx[3 * t], p0);
-    dm__pz_load(pos, idx[3 * t + 1], p1);
-    dm__pz_load(pos, idx[3 * t + 2], p2);
-    dm__pz_sub(p1, p0, e1);
-    dm__pz_sub(p2, p0, e2);
+    dm__load3(pos, idx[3 * t], p0);
+    dm__load3(pos, idx[3 * t + 1], p1);
+    dm__load3(pos, idx[3 * t + 2], p2);
+    dm__sub3(p1, p0, e1);
+    dm__sub3(p2, p0, e2);
     dm__cross3(e1, e2, n);
-    l1 = dm__pz_len(e1);
-    h = dm__pz_len(n);
+    l1 = dm__len3(e1);
+    h = dm__len3(n);
     cuv[0] = 0.0; cuv[1] = 0.0;
     if (l1 > 0.0 && h > 0.0 && h / (l1 * l1) > 1e-9) {
         cuv[2] = l1; cuv[3] = 0.0;
@@ -5182,9 +5168,9 @@ typedef struct dm__pz_run {
     dm_param_options o;
     int W, H, g, max_tris, rounds;
     double cos_max;
-    dm__pz_scratch sc;
+    dm__scratch sc;
     dm_param *pm;
-    dm__pz_edge *edges;
+    dm__edge *edges;
     uint32_t *twin_he, *chart0, *vstamp, *queue, *gl;
     uint32_t *cstart, *ctris;                   /* triangles bucketed by chart */
     uint32_t *order, *otmp, *bstart, *blist;    /* packing order; boundary half-edges by chart */
@@ -5221,7 +5207,7 @@ static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *opti
         o.max_chart_angle > 180.0f)
         return DM_ERR_INVALID_ARGUMENT;
     r->cos_max = cos((o.max_chart_angle > 0.0f ? o.max_chart_angle : 30.0f) * 0.017453292519943295);
-    res = dm__pz_check_mesh(r->positions, r->nv, r->indices, r->nt);
+    res = dm__check_mesh(r->positions, r->nv, r->indices, r->nt);
     if (res != DM_OK) return res;
     if (o.triangle_weight)
         for (t = 0; t < r->nt; t++)
@@ -5232,7 +5218,7 @@ static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *opti
 /* the result (its arrays owned by it) and the first temporaries */
 static dm_result dm__pz_alloc_result(dm__pz_run *r)
 {
-    dm__pz_scratch *sc = &r->sc;
+    dm__scratch *sc = &r->sc;
     size_t nt = r->nt, nv = r->nv, n;
     dm_param *pm;
     sc->a = dm__resolve_allocator(r->o.allocator);
@@ -5251,19 +5237,19 @@ static dm_result dm__pz_alloc_result(dm__pz_run *r)
     pm->texel_bary = (float *)dm__alloc_array(&sc->a, 2 * n, sizeof(float), &sc->overflow);
     pm->nbr = (uint32_t *)dm__alloc_array(&sc->a, 4 * n, sizeof(uint32_t), &sc->overflow);
     pm->nbr_rot = (uint8_t *)dm__alloc_array(&sc->a, 4 * n, sizeof(uint8_t), &sc->overflow);
-    r->edges = (dm__pz_edge *)dm__pz_take(sc, 3 * nt, sizeof(dm__pz_edge));
-    r->twin_he = (uint32_t *)dm__pz_take(sc, 3 * nt, sizeof(uint32_t));
-    r->chart0 = (uint32_t *)dm__pz_take(sc, nt, sizeof(uint32_t));
-    r->vstamp = (uint32_t *)dm__pz_take(sc, nv, sizeof(uint32_t));
-    r->queue = (uint32_t *)dm__pz_take(sc, 3 * nt + 3, sizeof(uint32_t));
-    r->gl = (uint32_t *)dm__pz_take(sc, nv, sizeof(uint32_t));
-    r->target = (double *)dm__pz_take(sc, nt, sizeof(double));
-    r->cuv = (double *)dm__pz_take(sc, 6 * nt, sizeof(double));
-    r->sig_t = (double *)dm__pz_take(sc, nt, sizeof(double));
+    r->edges = (dm__edge *)dm__take(sc, 3 * nt, sizeof(dm__edge));
+    r->twin_he = (uint32_t *)dm__take(sc, 3 * nt, sizeof(uint32_t));
+    r->chart0 = (uint32_t *)dm__take(sc, nt, sizeof(uint32_t));
+    r->vstamp = (uint32_t *)dm__take(sc, nv, sizeof(uint32_t));
+    r->queue = (uint32_t *)dm__take(sc, 3 * nt + 3, sizeof(uint32_t));
+    r->gl = (uint32_t *)dm__take(sc, nv, sizeof(uint32_t));
+    r->target = (double *)dm__take(sc, nt, sizeof(double));
+    r->cuv = (double *)dm__take(sc, 6 * nt, sizeof(double));
+    r->sig_t = (double *)dm__take(sc, nt, sizeof(double));
     if (!pm->uv || !pm->chart || !pm->twin || !pm->texel_triangle || !pm->texel_bary || !pm->nbr || !pm->nbr_rot ||
         !r->edges || !r->twin_he || !r->chart0 || !r->vstamp || !r->queue || !r->gl || !r->target || !r->cuv ||
         !r->sig_t)
-        return dm__pz_fail(sc);
+        return dm__scratch_fail(sc);
     return DM_OK;
 }
 
@@ -5271,7 +5257,7 @@ static dm_result dm__pz_alloc_result(dm__pz_run *r)
 static dm_result dm__pz_find_charts(dm__pz_run *r)
 {
     size_t i;
-    dm__pz_twins(r->indices, r->nt, r->edges, r->pm->twin, r->twin_he);
+    dm__twins(r->indices, r->nt, r->edges, r->pm->twin, r->twin_he);
     for (i = 0; i < r->nv; i++) { r->vstamp[i] = DM_NO_HIT; r->gl[i] = DM_NO_HIT; }
     r->nc0 = dm__pz_grow_charts(r->positions, r->indices, r->nt, r->pm->twin, r->max_tris, r->cos_max, r->chart0,
                                 r->vstamp, r->queue);
@@ -5286,8 +5272,8 @@ static dm_result dm__pz_targets(dm__pz_run *r)
     double *target = r->target;
     for (t = 0; t < nt; t++) {
         double fnv[3];
-        dm__pz_face_normal(r->positions, r->indices, t, fnv);
-        r->sig_t[t] = 0.5 * dm__pz_len(fnv);
+        dm__face_normal(r->positions, r->indices, t, fnv);
+        r->sig_t[t] = 0.5 * dm__len3(fnv);
         total_area += r->sig_t[t];
         target[t] = r->o.triangle_weight ? (double)r->o.triangle_weight[t] : r->sig_t[t];
         total_w += target[t];
@@ -5306,17 +5292,17 @@ static dm_result dm__pz_bucket_charts(dm__pz_run *r)
 {
     size_t t, i, nc0 = r->nc0;
     uint32_t *fillp;
-    r->cstart = (uint32_t *)dm__pz_take(&r->sc, nc0 + 1, sizeof(uint32_t));
-    r->ctris = (uint32_t *)dm__pz_take(&r->sc, r->nt, sizeof(uint32_t));
-    if (!r->cstart || !r->ctris) return dm__pz_fail(&r->sc);
+    r->cstart = (uint32_t *)dm__take(&r->sc, nc0 + 1, sizeof(uint32_t));
+    r->ctris = (uint32_t *)dm__take(&r->sc, r->nt, sizeof(uint32_t));
+    if (!r->cstart || !r->ctris) return dm__scratch_fail(&r->sc);
     memset(r->cstart, 0, (nc0 + 1) * sizeof(uint32_t));
     for (t = 0; t < r->nt; t++) r->cstart[r->chart0[t] + 1]++;
     for (i = 0; i < nc0; i++) {
         if (r->cstart[i + 1] > r->maxc) r->maxc = r->cstart[i + 1];
         r->cstart[i + 1] += r->cstart[i];
     }
-    fillp = (uint32_t *)dm__pz_take(&r->sc, nc0, sizeof(uint32_t));
-    if (!fillp) return dm__pz_fail(&r->sc);
+    fillp = (uint32_t *)dm__take(&r->sc, nc0, sizeof(uint32_t));
+    if (!fillp) return dm__scratch_fail(&r->sc);
     memcpy(fillp, r->cstart, nc0 * sizeof(uint32_t));
     for (t = 0; t < r->nt; t++) r->ctris[fillp[r->chart0[t]]++] = (uint32_t)t;
     return DM_OK;
@@ -5325,28 +5311,28 @@ static dm_result dm__pz_bucket_charts(dm__pz_run *r)
 /* the working arrays of one chart's layout, sized for the largest chart */
 static dm_result dm__pz_alloc_chart(dm__pz_run *r)
 {
-    dm__pz_scratch *sc = &r->sc;
+    dm__scratch *sc = &r->sc;
     dm__pz_chart *ch = &r->ch;
     size_t maxc = r->maxc;
     memset(ch, 0, sizeof *ch);
-    ch->tri = (uint32_t *)dm__pz_take(sc, maxc, sizeof(uint32_t));
-    ch->lv = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
-    ch->gv = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
-    ch->x = (double *)dm__pz_take(sc, 9 * maxc, sizeof(double));
-    ch->uv = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
-    ch->uv_prev = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
-    ch->w = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
-    ch->target = (double *)dm__pz_take(sc, maxc, sizeof(double));
-    ch->sigma = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
-    ch->sig_w = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
-    ch->interior = (int *)dm__pz_take(sc, 3 * maxc, sizeof(int));
-    ch->bnext = (uint32_t *)dm__pz_take(sc, 3 * maxc, sizeof(uint32_t));
-    ch->mat = (double *)dm__pz_take(sc, 9 * maxc * maxc, sizeof(double));
-    ch->rhs = (double *)dm__pz_take(sc, 6 * maxc, sizeof(double));
-    r->chart_n = (double *)dm__pz_take(sc, 3 * maxc, sizeof(double));
+    ch->tri = (uint32_t *)dm__take(sc, maxc, sizeof(uint32_t));
+    ch->lv = (uint32_t *)dm__take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->gv = (uint32_t *)dm__take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->x = (double *)dm__take(sc, 9 * maxc, sizeof(double));
+    ch->uv = (double *)dm__take(sc, 6 * maxc, sizeof(double));
+    ch->uv_prev = (double *)dm__take(sc, 6 * maxc, sizeof(double));
+    ch->w = (double *)dm__take(sc, 6 * maxc, sizeof(double));
+    ch->target = (double *)dm__take(sc, maxc, sizeof(double));
+    ch->sigma = (double *)dm__take(sc, 3 * maxc, sizeof(double));
+    ch->sig_w = (double *)dm__take(sc, 3 * maxc, sizeof(double));
+    ch->interior = (int *)dm__take(sc, 3 * maxc, sizeof(int));
+    ch->bnext = (uint32_t *)dm__take(sc, 3 * maxc, sizeof(uint32_t));
+    ch->mat = (double *)dm__take(sc, 9 * maxc * maxc, sizeof(double));
+    ch->rhs = (double *)dm__take(sc, 6 * maxc, sizeof(double));
+    r->chart_n = (double *)dm__take(sc, 3 * maxc, sizeof(double));
     if (!ch->tri || !ch->lv || !ch->gv || !ch->x || !ch->uv || !ch->uv_prev || !ch->w || !ch->target || !ch->sigma ||
         !ch->sig_w || !ch->interior || !ch->bnext || !ch->mat || !ch->rhs || !r->chart_n)
-        return dm__pz_fail(sc);
+        return dm__scratch_fail(sc);
     return DM_OK;
 }
 
@@ -5366,14 +5352,14 @@ static void dm__pz_gather_chart(dm__pz_run *r, size_t i, double nsum[3])
         t = r->ctris[r->cstart[i] + lt];
         ch->tri[lt] = (uint32_t)t;
         ch->target[lt] = r->target[t];
-        dm__pz_face_normal(r->positions, r->indices, t, fn);
+        dm__face_normal(r->positions, r->indices, t, fn);
         nsum[0] += fn[0]; nsum[1] += fn[1]; nsum[2] += fn[2];
         for (c = 0; c < 3; c++) {
             uint32_t v = r->indices[3 * t + (size_t)c];
             if (r->gl[v] == DM_NO_HIT) {
                 r->gl[v] = (uint32_t)ch->nv;
                 ch->gv[ch->nv] = v;
-                dm__pz_load(r->positions, v, ch->x + 3 * ch->nv);
+                dm__load3(r->positions, v, ch->x + 3 * ch->nv);
                 ch->bnext[ch->nv] = DM_NO_HIT;
                 ch->nv++;
             }
@@ -5388,7 +5374,7 @@ static void dm__pz_gather_chart(dm__pz_run *r, size_t i, double nsum[3])
         }
     ch->n_int = 0;
     for (k = 0; k < ch->nv; k++) ch->interior[k] = ch->bnext[k] == DM_NO_HIT ? (int)ch->n_int++ : -1;
-    ln = dm__pz_len(nsum);
+    ln = dm__len3(nsum);
     if (ln > 0.0) { nsum[0] /= ln; nsum[1] /= ln; nsum[2] /= ln; } else { nsum[2] = 1.0; }
 }
 
@@ -5506,12 +5492,12 @@ static dm_result dm__pz_box_charts(dm__pz_run *r)
 {
     size_t t, i, nt = r->nt, nc = r->pm->chart_count;
     const uint32_t *chart = r->pm->chart;
-    r->pk = (dm__pz_pack *)dm__pz_take(&r->sc, nc, sizeof(dm__pz_pack));
-    r->order = (uint32_t *)dm__pz_take(&r->sc, nc, sizeof(uint32_t));
-    r->otmp = (uint32_t *)dm__pz_take(&r->sc, nc, sizeof(uint32_t));
-    r->bstart = (uint32_t *)dm__pz_take(&r->sc, nc + 1, sizeof(uint32_t));
-    r->blist = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
-    if (!r->pk || !r->order || !r->otmp || !r->bstart || !r->blist) return dm__pz_fail(&r->sc);
+    r->pk = (dm__pz_pack *)dm__take(&r->sc, nc, sizeof(dm__pz_pack));
+    r->order = (uint32_t *)dm__take(&r->sc, nc, sizeof(uint32_t));
+    r->otmp = (uint32_t *)dm__take(&r->sc, nc, sizeof(uint32_t));
+    r->bstart = (uint32_t *)dm__take(&r->sc, nc + 1, sizeof(uint32_t));
+    r->blist = (uint32_t *)dm__take(&r->sc, 3 * nt, sizeof(uint32_t));
+    if (!r->pk || !r->order || !r->otmp || !r->bstart || !r->blist) return dm__scratch_fail(&r->sc);
     memset(r->bstart, 0, (nc + 1) * sizeof(uint32_t));
     for (t = 0; t < nt; t++) r->bstart[chart[t] + 1]++;
     for (i = 0; i < nc; i++) r->bstart[i + 1] += r->bstart[i];
@@ -5714,7 +5700,7 @@ static dm_result dm__pz_statistics(dm__pz_run *r)
         double xs[9], sg;
         ok += ratio >= 0.8 && ratio <= 1.25;
         memset(&one, 0, sizeof one);
-        for (c = 0; c < 3; c++) dm__pz_load(r->positions, r->indices[3 * t + (size_t)c], xs + 3 * c);
+        for (c = 0; c < 3; c++) dm__load3(r->positions, r->indices[3 * t + (size_t)c], xs + 3 * c);
         one.nt = 1; one.nv = 3; one.lv = lv; one.x = xs; one.uv = cuv + 6 * t; one.target = target + t;
         dm__pz_stretch(&one, &sg);
         sg *= scale / sqrt(dm__pz_cuv_area(cuv + 6 * t) / target[t]);
@@ -5752,7 +5738,7 @@ DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, con
     if (res == DM_OK) res = dm__pz_link_texels(&r);    /* 7. texel neighbours, across seams */
     if (res == DM_OK) res = dm__pz_repair_links(&r);   /* 7b. walks across seams come back */
     if (res == DM_OK) res = dm__pz_statistics(&r);     /* 8. utilization, stretch, area ratios */
-    dm__pz_release(&r.sc);
+    dm__release(&r.sc);
     if (res != DM_OK) {
         dm_param_free(r.pm);
         return res;
@@ -5783,7 +5769,7 @@ DMDEF void dm_dispmap_free(dm_dispmap *m)
 /* Push-pull (Gortler et al. 1996): averages of the known texels down a pyramid, then every
    unknown texel takes its parent's value on the way back up. val has 4 channels per texel;
    known[i] says which texels are given. */
-static int dm__pz_push_pull(dm__pz_scratch *sc, float *val, const uint8_t *known, int W, int H)
+static int dm__pz_push_pull(dm__scratch *sc, float *val, const uint8_t *known, int W, int H)
 {
     int levels = 0, w = W, h = H, l;
     float *lv[32];
@@ -5793,14 +5779,14 @@ static int dm__pz_push_pull(dm__pz_scratch *sc, float *val, const uint8_t *known
     lv[0] = val;
     lw[0] = W;
     lh[0] = H;
-    lk[0] = (uint8_t *)dm__pz_take(sc, (size_t)W * (size_t)H, 1);
+    lk[0] = (uint8_t *)dm__take(sc, (size_t)W * (size_t)H, 1);
     if (!lk[0]) return 0;
     for (i = 0; i < (size_t)W * (size_t)H; i++) lk[0][i] = known[i];
     while ((w > 1 || h > 1) && levels < 30) {
         int nw = (w + 1) / 2, nh = (h + 1) / 2, x, y;
         levels++;
-        lv[levels] = (float *)dm__pz_take(sc, 4 * (size_t)nw * (size_t)nh, sizeof(float));
-        lk[levels] = (uint8_t *)dm__pz_take(sc, (size_t)nw * (size_t)nh, 1);
+        lv[levels] = (float *)dm__take(sc, 4 * (size_t)nw * (size_t)nh, sizeof(float));
+        lk[levels] = (uint8_t *)dm__take(sc, (size_t)nw * (size_t)nh, 1);
         if (!lv[levels] || !lk[levels]) return 0;
         lw[levels] = nw;
         lh[levels] = nh;
@@ -5846,7 +5832,7 @@ typedef struct dm__bk_run {
     const uint32_t *bidx, *oidx;
     size_t bnv, bnt, onv, ont;
     dm_bake_options o;
-    dm__pz_scratch sc;
+    dm__scratch sc;
     dm_dispmap *m;
     dm_bvh *bvh;
     float *bnrm, *onrm, *fill;                /* vertex normals of both meshes; push-pull values */
@@ -5861,9 +5847,9 @@ static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
     memset(&r->o, 0, sizeof r->o);
     if (options) r->o = *options;
     if (!(r->o.max_distance >= 0.0f) || r->o.max_distance > 1e30f) return DM_ERR_INVALID_ARGUMENT;
-    res = dm__pz_check_mesh(r->bpos, r->bnv, r->bidx, r->bnt);
+    res = dm__check_mesh(r->bpos, r->bnv, r->bidx, r->bnt);
     if (res != DM_OK) return res;
-    res = dm__pz_check_mesh(r->opos, r->onv, r->oidx, r->ont);
+    res = dm__check_mesh(r->opos, r->onv, r->oidx, r->ont);
     if (res != DM_OK) return res;
     if (r->param->triangle_count != r->bnt) return DM_ERR_INVALID_ARGUMENT;
     return DM_OK;
@@ -5872,7 +5858,7 @@ static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
 /* the map (its arrays owned by it) and the temporaries */
 static dm_result dm__bk_alloc(dm__bk_run *r)
 {
-    dm__pz_scratch *sc = &r->sc;
+    dm__scratch *sc = &r->sc;
     int W = r->param->width, H = r->param->height;
     size_t n = (size_t)W * (size_t)H;
     dm_dispmap *m;
@@ -5892,13 +5878,13 @@ static dm_result dm__bk_alloc(dm__bk_run *r)
     m->status = (uint8_t *)dm__alloc_array(&sc->a, n, 1, &sc->overflow);
     m->nbr = r->param->nbr;
     m->nbr_rot = r->param->nbr_rot;
-    r->bnrm = (float *)dm__pz_take(sc, 3 * r->bnv, sizeof(float));
-    r->onrm = (float *)dm__pz_take(sc, 3 * r->onv, sizeof(float));
-    r->acc = (double *)dm__pz_take(sc, 3 * (r->bnv > r->onv ? r->bnv : r->onv), sizeof(double));
-    r->fill = (float *)dm__pz_take(sc, 4 * n, sizeof(float));
+    r->bnrm = (float *)dm__take(sc, 3 * r->bnv, sizeof(float));
+    r->onrm = (float *)dm__take(sc, 3 * r->onv, sizeof(float));
+    r->acc = (double *)dm__take(sc, 3 * (r->bnv > r->onv ? r->bnv : r->onv), sizeof(double));
+    r->fill = (float *)dm__take(sc, 4 * n, sizeof(float));
     if (!m->pos || !m->nrm || !m->disp || !m->normal || !m->area || !m->valid || !m->status || !r->bnrm ||
         !r->onrm || !r->acc || !r->fill)
-        return dm__pz_fail(sc);
+        return dm__scratch_fail(sc);
     return DM_OK;
 }
 
@@ -5909,8 +5895,8 @@ static dm_result dm__bk_prepare(dm__bk_run *r)
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, diag;
     dm_bvh_options bo;
     size_t t;
-    dm__pz_vertex_normals(r->bpos, r->bnv, r->bidx, r->bnt, r->acc, r->bnrm);
-    dm__pz_vertex_normals(r->opos, r->onv, r->oidx, r->ont, r->acc, r->onrm);
+    dm__vertex_normals(r->bpos, r->bnv, r->bidx, r->bnt, r->acc, r->bnrm);
+    dm__vertex_normals(r->opos, r->onv, r->oidx, r->ont, r->acc, r->onrm);
     for (t = 0; t < 3 * r->ont; t++) {
         int k;
         for (k = 0; k < 3; k++) {
@@ -5941,7 +5927,7 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt)
     bu = param->texel_bary[2 * id];
     bv = param->texel_bary[2 * id + 1];
     b0 = 1.0 - bu - bv;
-    for (c = 0; c < 3; c++) dm__pz_load(r->bpos, bi[c], p[c]);
+    for (c = 0; c < 3; c++) dm__load3(r->bpos, bi[c], p[c]);
     for (k = 0; k < 3; k++) {
         const float *n0 = r->bnrm + 3 * (size_t)bi[0];
         const float *n1 = r->bnrm + 3 * (size_t)bi[1];
@@ -5949,16 +5935,16 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt)
         m->pos[3 * id + (size_t)k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
         nv[k] = b0 * n0[k] + bu * n1[k] + bv * n2[k];
     }
-    dm__pz_sub(p[1], p[0], e1);
-    dm__pz_sub(p[2], p[0], e2);
+    dm__sub3(p[1], p[0], e1);
+    dm__sub3(p[2], p[0], e2);
     dm__cross3(e1, e2, fnv);
-    len = dm__pz_len(nv);
-    if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__pz_len(nv); }
+    len = dm__len3(nv);
+    if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__len3(nv); }
     for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
     uv = param->uv + 6 * (size_t)tt;
     uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
           (double)param->width * (double)param->height;
-    m->area[id] = uva > 0.0 ? (float)(0.5 * dm__pz_len(fnv) / uva) : 0.0f;
+    m->area[id] = uva > 0.0 ? (float)(0.5 * dm__len3(fnv) / uva) : 0.0f;
     return len;
 }
 
@@ -5991,10 +5977,10 @@ static void dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len)
         for (k = 0; k < 3; k++)
             hn[k] = w0 * onrm[3 * (size_t)oi[0] + (size_t)k] + hit.u * onrm[3 * (size_t)oi[1] + (size_t)k] +
                     hit.v * onrm[3 * (size_t)oi[2] + (size_t)k];
-        hl = dm__pz_len(hn);
+        hl = dm__len3(hn);
         if (!(hl > 1e-12)) {
-            dm__pz_face_normal(r->opos, r->oidx, hit.triangle, hn);
-            hl = dm__pz_len(hn);
+            dm__face_normal(r->opos, r->oidx, hit.triangle, hn);
+            hl = dm__len3(hn);
         }
         m->disp[id] = hit.t;
         for (k = 0; k < 3; k++) m->normal[3 * id + (size_t)k] = hl > 0.0 ? (float)(hn[k] / hl) : 0.0f;
@@ -6044,7 +6030,7 @@ static dm_result dm__bk_fill(dm__bk_run *r)
         fill[4 * i + 2] = m->valid[i] ? m->normal[3 * i + 1] : 0.0f;
         fill[4 * i + 3] = m->valid[i] ? m->normal[3 * i + 2] : 0.0f;
     }
-    if (!dm__pz_push_pull(&r->sc, fill, m->valid, m->width, m->height)) return dm__pz_fail(&r->sc);
+    if (!dm__pz_push_pull(&r->sc, fill, m->valid, m->width, m->height)) return dm__scratch_fail(&r->sc);
     for (i = 0; i < n; i++) {
         double l;
         if (m->valid[i]) continue;
@@ -6086,7 +6072,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
     if (res == DM_OK) res = dm__bk_cast(&r);     /* one ray per texel */
     if (res == DM_OK) res = dm__bk_fill(&r);     /* push-pull over the misses */
     dm_bvh_free(r.bvh);
-    dm__pz_release(&r.sc);
+    dm__release(&r.sc);
     if (res != DM_OK) {
         dm_dispmap_free(r.m);
         return res;
@@ -6133,10 +6119,10 @@ static int dm__pz_no_break(const dm_dispmap *map, const float *pos, const uint32
     }
     if (longest > DM__PZ_BREAK * DM__PZ_BREAK * s) return 0;
     if (longest <= DM__PZ_BREAK_TILTED * DM__PZ_BREAK_TILTED * s) return 1;
-    dm__pz_sub(p[1], p[0], e1);
-    dm__pz_sub(p[2], p[0], e2);
+    dm__sub3(p[1], p[0], e1);
+    dm__sub3(p[2], p[0], e2);
     dm__cross3(e1, e2, fn);
-    len = dm__pz_len(fn);
+    len = dm__len3(fn);
     if (!(len > 0.0)) return 0;
     for (e = 0; e < 3; e++) {
         const float *n = map->normal + 3 * q[e];
@@ -6341,6 +6327,19 @@ static int dm__pz_tick(dm__pz_count *c)
     return c->opt->progress && c->opt->progress(c->opt->progress_user, (float)((double)c->done / (double)c->total)) != 0;
 }
 
+static uint64_t dm__pz_hash(uint64_t x)
+{
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+static double dm__pz_unit(uint64_t i, uint64_t stream)
+{
+    return (double)(dm__pz_hash(i * 8 + stream) >> 11) * (1.0 / 9007199254740992.0);
+}
+
 /* one side: samples on mesh P measured to the BVH of mesh Q; sums squared distances, max.
    0, or 1 when cancelled. */
 static int dm__pz_sample_side(const float *pos, size_t nv, const uint32_t *idx, size_t nt, const double *cum,
@@ -6364,9 +6363,9 @@ static int dm__pz_sample_side(const float *pos, size_t nv, const uint32_t *idx, 
         }
         t = lo;
         sa = sqrt(a);
-        dm__pz_load(pos, idx[3 * t], p0);
-        dm__pz_load(pos, idx[3 * t + 1], p1);
-        dm__pz_load(pos, idx[3 * t + 2], p2);
+        dm__load3(pos, idx[3 * t], p0);
+        dm__load3(pos, idx[3 * t + 1], p1);
+        dm__load3(pos, idx[3 * t + 2], p2);
         for (k = 0; k < 3; k++) pt[k] = (float)((1.0 - sa) * p0[k] + sa * (1.0 - b) * p1[k] + sa * b * p2[k]);
         if (dm_bvh_closest_point(q, pt, INFINITY, &cl)) {
             *sum2 += (double)cl.distance * cl.distance;
@@ -6390,7 +6389,7 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     dm_distance_options opt;
     dm__pz_count cnt;
     size_t samples;
-    dm__pz_scratch sc;
+    dm__scratch sc;
     dm_bvh *ba = NULL, *bb = NULL;
     dm_bvh_options bo;
     dm_result res;
@@ -6399,9 +6398,9 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     int k;
     if (!out) return DM_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    res = dm__pz_check_mesh(ap, anv, ai, ant);
+    res = dm__check_mesh(ap, anv, ai, ant);
     if (res != DM_OK) return res;
-    res = dm__pz_check_mesh(bp, bnv, bi, bnt);
+    res = dm__check_mesh(bp, bnv, bi, bnt);
     if (res != DM_OK) return res;
     if (options) opt = *options;
     else memset(&opt, 0, sizeof opt);
@@ -6412,19 +6411,19 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     cnt.next = 4096;
     memset(&sc, 0, sizeof sc);
     sc.a = dm__resolve_allocator(opt.allocator);
-    ca = (double *)dm__pz_take(&sc, ant + 1, sizeof(double));
-    cb = (double *)dm__pz_take(&sc, bnt + 1, sizeof(double));
-    if (!ca || !cb) { res = dm__pz_fail(&sc); goto done; }
+    ca = (double *)dm__take(&sc, ant + 1, sizeof(double));
+    cb = (double *)dm__take(&sc, bnt + 1, sizeof(double));
+    if (!ca || !cb) { res = dm__scratch_fail(&sc); goto done; }
     ca[0] = cb[0] = 0.0;
     for (t = 0; t < ant; t++) {
         double n[3];
-        dm__pz_face_normal(ap, ai, t, n);
-        ca[t + 1] = ca[t] + 0.5 * dm__pz_len(n);
+        dm__face_normal(ap, ai, t, n);
+        ca[t + 1] = ca[t] + 0.5 * dm__len3(n);
     }
     for (t = 0; t < bnt; t++) {
         double n[3];
-        dm__pz_face_normal(bp, bi, t, n);
-        cb[t + 1] = cb[t] + 0.5 * dm__pz_len(n);
+        dm__face_normal(bp, bi, t, n);
+        cb[t + 1] = cb[t] + 0.5 * dm__len3(n);
     }
     for (t = 0; t < 3 * ant; t++)
         for (k = 0; k < 3; k++) {
@@ -6456,7 +6455,7 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
 done:
     dm_bvh_free(ba);
     dm_bvh_free(bb);
-    dm__pz_release(&sc);
+    dm__release(&sc);
     return res;
 }
 
@@ -6476,8 +6475,8 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
     else memset(&opt, 0, sizeof opt);
     a = dm__resolve_allocator(opt.allocator);
     if (!weights || !(opt.floor >= 0.0f && opt.floor <= 1.0f)) return DM_ERR_INVALID_ARGUMENT;
-    r = dm__pz_check_mesh(bp, bnv, bi, bnt);
-    if (r == DM_OK) r = dm__pz_check_mesh(op, onv, oi, ont);
+    r = dm__check_mesh(bp, bnv, bi, bnt);
+    if (r == DM_OK) r = dm__check_mesh(op, onv, oi, ont);
     if (r != DM_OK) return r;
     sum = (double *)dm__alloc_array(&a, bnt, sizeof(double), &overflow);
     if (!sum) return overflow ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
@@ -6494,7 +6493,7 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
         float c[3];
         dm_closest cl;
         int k;
-        for (k = 0; k < 3; k++) dm__pz_load(op, oi[3 * t + (size_t)k], p[k]);
+        for (k = 0; k < 3; k++) dm__load3(op, oi[3 * t + (size_t)k], p[k]);
         for (k = 0; k < 3; k++) {
             e1[k] = p[1][k] - p[0][k];
             e2[k] = p[2][k] - p[0][k];
@@ -6595,7 +6594,7 @@ typedef struct dm__sh_run {
     size_t nv, nt;
     dm_shell_options opt;
     dm_allocator a;
-    dm__pz_scratch sc;
+    dm__scratch sc;
     dm_shell *sh;
     dm__sh_internal *in;
     double lo[3], hi[3], diag;    /* the original's box */
@@ -6632,7 +6631,7 @@ static dm_result dm__sh_alloc(dm__sh_run *r)
     memset(sh, 0, sizeof *sh);
     sh->allocator = *a;
     in = r->in = (dm__sh_internal *)a->alloc(a->user, sizeof *in);
-    if (!in) return dm__pz_fail(&r->sc);
+    if (!in) return dm__scratch_fail(&r->sc);
     memset(in, 0, sizeof *in);
     in->relaxed_keep = UINT32_MAX;
     sh->internal = in;
@@ -6649,7 +6648,7 @@ static dm_result dm__sh_alloc(dm__sh_run *r)
     in->pos = (float *)dm__alloc_array(a, 3 * nv, sizeof(float), &r->sc.overflow);
     in->idx = (uint32_t *)dm__alloc_array(a, 3 * nt, sizeof(uint32_t), &r->sc.overflow);
     if (!sh->positions || !sh->normals || !sh->offset || !sh->fallback_vertex || !in->pos || !in->idx)
-        return dm__pz_fail(&r->sc);
+        return dm__scratch_fail(&r->sc);
     memset(sh->fallback_vertex, 0, nv);
     memcpy(in->pos, r->pos, 3 * nv * sizeof(float));
     memcpy(in->idx, r->idx, 3 * nt * sizeof(uint32_t));
@@ -6663,24 +6662,24 @@ static dm_result dm__sh_normals(dm__sh_run *r)
     dm__sh_internal *in = r->in;
     size_t nv = r->nv, nt = r->nt, i;
     dm_bvh_options bo;
-    dm__pz_edge *e;
+    dm__edge *e;
     uint32_t *twin, *twin_he;
     dm_result res;
     memset(&bo, 0, sizeof bo);
     bo.allocator = r->opt.allocator;
     res = dm_bvh_build(r->pos, nv, r->idx, nt, &bo, &in->bvh);
     if (res != DM_OK) return res;
-    r->acc = (double *)dm__pz_take(&r->sc, 3 * nv, sizeof(double));
-    e = (dm__pz_edge *)dm__pz_take(&r->sc, 3 * nt, sizeof(dm__pz_edge));
-    twin = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
-    twin_he = (uint32_t *)dm__pz_take(&r->sc, 3 * nt, sizeof(uint32_t));
-    r->stopped = (uint8_t *)dm__pz_take(&r->sc, nv, 1);
-    if (!r->acc || !e || !twin || !twin_he || !r->stopped) return dm__pz_fail(&r->sc);
-    dm__pz_vertex_normals(r->pos, nv, r->idx, nt, r->acc, r->sh->normals);
+    r->acc = (double *)dm__take(&r->sc, 3 * nv, sizeof(double));
+    e = (dm__edge *)dm__take(&r->sc, 3 * nt, sizeof(dm__edge));
+    twin = (uint32_t *)dm__take(&r->sc, 3 * nt, sizeof(uint32_t));
+    twin_he = (uint32_t *)dm__take(&r->sc, 3 * nt, sizeof(uint32_t));
+    r->stopped = (uint8_t *)dm__take(&r->sc, nv, 1);
+    if (!r->acc || !e || !twin || !twin_he || !r->stopped) return dm__scratch_fail(&r->sc);
+    dm__vertex_normals(r->pos, nv, r->idx, nt, r->acc, r->sh->normals);
     in->vsum = (double *)dm__alloc_array(&r->a, 3 * nv, sizeof(double), &r->sc.overflow);
-    if (!in->vsum) return dm__pz_fail(&r->sc);
+    if (!in->vsum) return dm__scratch_fail(&r->sc);
     memcpy(in->vsum, r->acc, 3 * nv * sizeof(double));
-    dm__pz_twins(r->idx, nt, e, twin, twin_he);
+    dm__twins(r->idx, nt, e, twin, twin_he);
     for (i = 0; i < 3 * nt && !in->open; i++) in->open = twin[i] == DM_NO_HIT;
     return DM_OK;
 }
@@ -6713,8 +6712,8 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
     in->cell_first = (uint32_t *)dm__alloc_array(&r->a, ncell + 1, sizeof(uint32_t), &r->sc.overflow);
     in->cell_vert = (uint32_t *)dm__alloc_array(&r->a, nref ? nref : 1, sizeof(uint32_t), &r->sc.overflow);
-    cnt = (uint32_t *)dm__pz_take(&r->sc, ncell + 1, sizeof(uint32_t));
-    if (!in->cell_first || !in->cell_vert || !cnt) return dm__pz_fail(&r->sc);
+    cnt = (uint32_t *)dm__take(&r->sc, ncell + 1, sizeof(uint32_t));
+    if (!in->cell_first || !in->cell_vert || !cnt) return dm__scratch_fail(&r->sc);
     memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
     for (v = 0; v < r->nv; v++)
         if (stopped[v]) cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++;
@@ -6773,7 +6772,7 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
     if (options) r.opt = *options;
     if (!(r.opt.thickness >= 0.0f) || r.opt.thickness > 1e18f || r.opt.steps < 0 || r.opt.overlap_samples < 0)
         return DM_ERR_INVALID_ARGUMENT;
-    res = dm__pz_check_mesh(pos, nv, idx, nt);
+    res = dm__check_mesh(pos, nv, idx, nt);
     if (res != DM_OK) return res;
     r.pos = pos; r.nv = nv; r.idx = idx; r.nt = nt;
     r.a = dm__resolve_allocator(r.opt.allocator);
@@ -6783,7 +6782,7 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
     if (res == DM_OK) res = dm__sh_normals(&r);      /* BVH, vertex normals, open or closed */
     if (res == DM_OK) res = dm__sh_vertex_grid(&r);  /* the original's vertices by cell */
     if (res == DM_OK) res = dm__sh_grow_offsets(&r); /* every vertex out along its normal */
-    dm__pz_release(&r.sc);
+    dm__release(&r.sc);
     if (res != DM_OK) {
         dm_shell_free(r.sh);
         return res;
@@ -6796,10 +6795,10 @@ DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, 
 static int dm__sh_plane(const double *p0, const double *p1, const double *p2, double n[3])
 {
     double e1[3], e2[3], len;
-    dm__pz_sub(p1, p0, e1);
-    dm__pz_sub(p2, p0, e2);
+    dm__sub3(p1, p0, e1);
+    dm__sub3(p2, p0, e2);
     dm__cross3(e1, e2, n);
-    len = dm__pz_len(n);
+    len = dm__len3(n);
     if (!(len > 0.0)) return 0;
     n[0] /= len; n[1] /= len; n[2] /= len;
     return 1;
@@ -6811,7 +6810,7 @@ static void dm__sh_at(const dm_collapse *c, uint32_t v, const double x[3], doubl
     if (v == c->keep) {
         out[0] = x[0]; out[1] = x[1]; out[2] = x[2];
     } else {
-        dm__pz_load(c->positions, v, out);
+        dm__load3(c->positions, v, out);
     }
 }
 
@@ -6836,7 +6835,7 @@ static void dm__sh_contrib(const dm_collapse *c, const uint32_t *t, int j, const
     out[0] = out[1] = out[2] = 0.0;
     for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
     if (!dm__sh_plane(p[0], p[1], p[2], n)) return;
-    ang = dm__pz_corner_angle((const double(*)[3])p, j);
+    ang = dm__corner_angle((const double(*)[3])p, j);
     if (ang < 0.0) return;
     for (k = 0; k < 3; k++) out[k] = ang * n[k];
 }
@@ -6847,7 +6846,7 @@ static void dm__sh_contrib(const dm_collapse *c, const uint32_t *t, int j, const
 static void dm__sh_run_check(dm_shell *sh, dm__sh_internal *in, size_t level)
 {
     if (level == 0 && (in->collapsed > 0 || in->last_level > 0)) {
-        dm__pz_vertex_normals(in->pos, in->nv, in->idx, in->nt, in->vsum, sh->normals);
+        dm__vertex_normals(in->pos, in->nv, in->idx, in->nt, in->vsum, sh->normals);
         in->collapsed = in->accepted = 0;
         sh->moved = sh->vetoed_enclose = sh->vetoed_shell = sh->vetoed_overlap = 0;
         sh->fallback = 0;
@@ -6874,7 +6873,7 @@ DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
         sh->fallback_collapses++;
     }
     in->relaxed_keep = UINT32_MAX;
-    dm__pz_load(done->positions, done->keep, xk);
+    dm__load3(done->positions, done->keep, xk);
     for (k = 0; k < 3; k++) xn[k] = done->position[k];
     for (i = 0; i < done->old_triangle_count; i++)
         for (j = 0; j < 3; j++) {
@@ -6994,10 +6993,10 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
             for (j = 0; j < 3; j++)
                 for (k = 0; k < 3; k++) pt[j][k] = tf[16 * i + 3 * (size_t)j + (size_t)k];
             double ea[3], eb[3], la, lb2, cs;
-            dm__pz_sub(pt[(corner + 1) % 3], pt[corner], ea);
-            dm__pz_sub(pt[(corner + 2) % 3], pt[corner], eb);
-            la = dm__pz_len(ea);
-            lb2 = dm__pz_len(eb);
+            dm__sub3(pt[(corner + 1) % 3], pt[corner], ea);
+            dm__sub3(pt[(corner + 2) % 3], pt[corner], eb);
+            la = dm__len3(ea);
+            lb2 = dm__len3(eb);
             if (!(la > 0.0 && lb2 > 0.0)) continue;
             cs = dm__dot3(ea, eb) / (la * lb2);
             ang = acos(cs < -1.0 ? -1.0 : cs > 1.0 ? 1.0 : cs);
@@ -7005,7 +7004,7 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
         for (k = 0; k < 3; k++) N[k] += ang * fn[k];
         if (nf == 3) break;
     }
-    dm__pz_sub(p, q, d);
+    dm__sub3(p, q, d);
     return dm__dot3(d, N) > 0.0 ? *dist : -*dist;
 }
 
@@ -7050,7 +7049,7 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
         in->tri = nt2;
         in->tri_cap = 2 * (no + nr);
     }
-    dm__pz_load(c->positions, c->keep, xk);
+    dm__load3(c->positions, c->keep, xk);
     dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
     dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
     return 1;
@@ -7099,7 +7098,7 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                     uint32_t v = in->cell_vert[q];
                     double pp[3], sd, dist;
                     int feat;
-                    dm__pz_load(in->pos, v, pp);
+                    dm__load3(in->pos, v, pp);
                     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
                         pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                         continue;
@@ -7125,18 +7124,18 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
         size_t t;
         int feat, j;
         const uint32_t *tr;
-        dm__pz_load(in->pos, in->pts[2 * i], pp);
+        dm__load3(in->pos, in->pts[2 * i], pp);
         dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, &t);
         if (t == (size_t)-1) continue;
         tr = c->triangles + 3 * t;
         for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
         if (j == 3) continue;
-        dm__pz_load(c->positions, tr[(j + 1) % 3], pu);
-        dm__pz_load(c->positions, tr[(j + 2) % 3], pw);
-        dm__pz_sub(pu, pp, pu);
-        dm__pz_sub(pw, pp, pw);
+        dm__load3(c->positions, tr[(j + 1) % 3], pu);
+        dm__load3(c->positions, tr[(j + 2) % 3], pw);
+        dm__sub3(pu, pp, pu);
+        dm__sub3(pw, pp, pw);
         dm__cross3(pu, pw, A);
-        len = dm__pz_len(A);
+        len = dm__len3(A);
         if (!(len > 0.0)) continue;
         for (k = 0; k < 3; k++) pl[4 * np + (size_t)k] = A[k] / len;
         pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
@@ -7186,7 +7185,7 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         float f;
         int feat;
         memcpy(&f, &in->pts[2 * i + 1], sizeof f);
-        dm__pz_load(in->pos, in->pts[2 * i], pp);
+        dm__load3(in->pos, in->pts[2 * i], pp);
         sd = dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, NULL);
         if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
             sh->vetoed_enclose++;
@@ -7249,7 +7248,7 @@ static double *dm__sh_ring_normals(dm_shell *sh, dm__sh_internal *in, const dm_c
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
         if (!dm__sh_plane(p[0], p[1], p[2], n)) continue;
         for (j = 0; j < 3; j++) {
-            double ang = dm__pz_corner_angle((const double(*)[3])p, (int)j);
+            double ang = dm__corner_angle((const double(*)[3])p, (int)j);
             if (ang < 0.0) continue;
             /* add to every ring triangle's corner at this vertex (all of them contain keep) */
             {
@@ -7266,7 +7265,7 @@ static double *dm__sh_ring_normals(dm_shell *sh, dm__sh_internal *in, const dm_c
     }
     if (in->collapsed > 0 || in->accepted < 2) { /* dm_shell_collapsed follows the mesh: exact */
         double xk[3];
-        dm__pz_load(c->positions, c->keep, xk);
+        dm__load3(c->positions, c->keep, xk);
         for (i = 0; i < nr; i++)
             for (j = 0; j < 3; j++) {
                 uint32_t w = c->triangles[3 * i + j];
@@ -7317,7 +7316,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
                 y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
                 n[k] = w[0] * vn[9 * i + (size_t)k] + w[1] * vn[9 * i + 3 + (size_t)k] + w[2] * vn[9 * i + 6 + (size_t)k];
             }
-            len = dm__pz_len(n);
+            len = dm__len3(n);
             if (!(len > 0.0)) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
@@ -7334,7 +7333,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
                 return DM_COLLAPSE_VETO;
             }
             ot = in->idx + 3 * (size_t)hit.triangle;
-            for (k = 0; k < 3; k++) dm__pz_load(in->pos, ot[k], q[k]);
+            for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
             if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
@@ -7355,7 +7354,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
                     ray.tmin = hit.t + (float)in->margin;
                     if (!(ray.tmin < ray.tmax) || !dm_bvh_intersect(in->bvh, &ray, &hit)) break;
                     ot = in->idx + 3 * (size_t)hit.triangle;
-                    for (k = 0; k < 3; k++) dm__pz_load(in->pos, ot[k], q[k]);
+                    for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
                     if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) > 0.0) {
                         sh->vetoed_overlap++;
                         return DM_COLLAPSE_VETO;
@@ -7390,7 +7389,7 @@ static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_co
                 n[k] = dm__sh_bary[s][0] * vn[9 * i + (size_t)k] + dm__sh_bary[s][1] * vn[9 * i + 3 + (size_t)k] +
                        dm__sh_bary[s][2] * vn[9 * i + 6 + (size_t)k];
             }
-            len = dm__pz_len(n);
+            len = dm__len3(n);
             if (!(len > 0.0)) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
@@ -7407,7 +7406,7 @@ static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_co
                 return DM_COLLAPSE_VETO;
             }
             ot = in->idx + 3 * (size_t)hit.triangle;
-            for (k = 0; k < 3; k++) dm__pz_load(in->pos, ot[k], q[k]);
+            for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
             if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
