@@ -1671,13 +1671,21 @@ static int dm__leaf_blocks(dm_bvh *bvh, dm__builder *b, dm_allocator *a, const f
     return 1;
 }
 
-/* The 8-wide traversal tree, in the unused tail of the node array when it fits there (one
-   allocation fewer, and pages next to the ones just written); 0 when out of memory */
-static int dm__wide_tree(dm_bvh *bvh, dm_allocator *a, size_t slots, int *overflow)
+/* The builder's node array goes to the BVH at its worst-case size (2 slots per triangle): a
+   copy to the used size (about 1.2 slots per triangle with leaves of 4) cost more time in page
+   faults and copying than it saved, and the pages past the used slots are never touched. The
+   8-wide traversal tree goes in its unused tail when it fits there (one allocation fewer, and
+   pages next to the ones just written); 0 when out of memory */
+static int dm__wide_tree(dm_bvh *bvh, const dm__builder *b, void **wide_block, dm_allocator *a, int *overflow)
 {
-    size_t used = bvh->node_slots;
+    size_t slots = 2 * bvh->triangle_count, used = b->used;
     size_t first_free = (used + 1) & ~(size_t)1; /* 64-byte aligned */
     size_t need = (used / 2 + 1) * sizeof(dm__wnode);
+    bvh->node_slots = used;
+    bvh->node_block = *wide_block;
+    bvh->node_bytes = slots * sizeof(dm__node) + 64;
+    bvh->nodes = b->nodes;
+    *wide_block = NULL;
     if (need <= (slots - first_free) * sizeof(dm__node)) {
         bvh->wnodes = (dm__wnode *)(void *)(bvh->nodes + first_free);
     } else {
@@ -1691,7 +1699,7 @@ static int dm__wide_tree(dm_bvh *bvh, dm_allocator *a, size_t slots, int *overfl
 }
 
 /* The build pipeline: validate, triangle boxes, binned SAH splits, copy the triangles in leaf
-   order, collapse the binary tree into the 4-wide traversal tree. */
+   order, collapse the binary tree into the 8-wide traversal tree. */
 DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const dm_bvh_options *options, dm_bvh **out)
 {
@@ -1699,11 +1707,9 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     dm_allocator a;
     dm__builder b;
     dm_bvh *bvh = NULL;
-    dm__node *wide;
     void *wide_block = NULL;
     dm_result r;
     int overflow = 0;
-    size_t slots = 2 * triangle_count;
     float root_clo[3], root_chi[3];
 
     if (!out) return DM_ERR_INVALID_ARGUMENT;
@@ -1721,25 +1727,15 @@ DMDEF dm_result dm_bvh_build(const float *positions, size_t vertex_count, const 
     bvh->allocator = a;
     bvh->triangle_count = triangle_count;
     if (!dm__builder_init(&b, &opt, &a, triangle_count, &wide_block, &overflow)) goto out_of_memory;
-    wide = b.nodes;
 
-    /* binned SAH splits from the root down */
-    memset(&wide[1], 0, sizeof wide[1]);
-    dm__range_bounds(&b, 0, (uint32_t)triangle_count, wide[0].lo, wide[0].hi, root_clo, root_chi);
+    /* binned SAH splits from the root down, then the triangles in leaf order and the wide tree */
+    memset(&b.nodes[1], 0, sizeof b.nodes[1]);
+    dm__range_bounds(&b, 0, (uint32_t)triangle_count, b.nodes[0].lo, b.nodes[0].hi, root_clo, root_chi);
     if (opt.progress && opt.progress(opt.progress_user, 0.0f)) goto cancelled;
     if (dm__build(&b, root_clo, root_chi)) goto cancelled;
     bvh->max_depth = b.max_depth;
     if (!dm__leaf_blocks(bvh, &b, &a, positions, indices, &overflow)) goto out_of_memory;
-
-    /* The node array keeps its worst-case size (2 slots per triangle): a copy to the used size
-       (about 1.2 slots per triangle with leaves of 4) cost more time in page faults and
-       copying than it saved, and the pages past the used slots are never touched. */
-    bvh->node_slots = b.used;
-    bvh->node_block = wide_block;
-    bvh->node_bytes = slots * sizeof(dm__node) + 64;
-    bvh->nodes = wide;
-    wide_block = NULL;
-    if (!dm__wide_tree(bvh, &a, slots, &overflow)) goto out_of_memory;
+    if (!dm__wide_tree(bvh, &b, &wide_block, &a, &overflow)) goto out_of_memory;
 
     if (opt.progress && opt.progress(opt.progress_user, 1.0f)) goto cancelled;
     r = DM_OK;
