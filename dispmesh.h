@@ -6743,7 +6743,7 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
             dm_closest cl;
             if (stopped[v]) continue;
             for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
-            if (dm_bvh_closest_point(r->in->bvh, q, h, &cl) && cl.distance < 0.9f * h) {
+            if (dm_bvh_closest_point(r->in->bvh, q, 0.9f * h, &cl) && cl.distance < 0.9f * h) {
                 stopped[v] = 1;
                 sh->stopped_vertices++;
             } else {
