@@ -7282,6 +7282,29 @@ static double *dm__sh_ring_normals(dm_shell *sh, dm__sh_internal *in, const dm_c
 }
 
 /* (2, along the rays) and (3) of dm_shell_constraint, with the corner normals vn. */
+/* The sample at barycentric w of a ring triangle (corners p, corner normals vn9): the point y and
+   the interpolated normal n (not normalised). */
+static void dm__sh_sample(const double p[3][3], const double *vn9, const double w[3], double y[3], double n[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
+        n[k] = w[0] * vn9[k] + w[1] * vn9[3 + k] + w[2] * vn9[6 + k];
+    }
+}
+
+/* Which way the original's triangle faces against direction n: 1 along it, -1 against it (or
+   across), 0 when it is degenerate. */
+static int dm__sh_side(const dm__sh_internal *in, uint32_t tri, const double n[3])
+{
+    const uint32_t *ot = in->idx + 3 * (size_t)tri;
+    double q[3][3], fn[3];
+    int k;
+    for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
+    if (!dm__sh_plane(q[0], q[1], q[2], fn)) return 0;
+    return dm__dot3(fn, n) > 0.0 ? 1 : -1;
+}
+
 static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, const double x[3],
                           const double *vn)
 {
@@ -7299,7 +7322,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
         int kc;
         for (kc = 0; kc < 2 && t[kc] != c->keep; kc++) {}
         for (s = 0; s <= in->samples; s++) {
-            double y[3], n[3], len, fn[3], q[3][3], w[3] = {0.0, 0.0, 0.0};
+            double y[3], n[3], len, w[3] = {0.0, 0.0, 0.0};
             dm_ray ray;
             dm_hit hit;
             const uint32_t *ot;
@@ -7308,10 +7331,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
             } else {
                 w[kc] = w[(kc + 1) % 3] = 0.5;
             }
-            for (k = 0; k < 3; k++) {
-                y[k] = w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k];
-                n[k] = w[0] * vn[9 * i + (size_t)k] + w[1] * vn[9 * i + 3 + (size_t)k] + w[2] * vn[9 * i + 6 + (size_t)k];
-            }
+            dm__sh_sample((const double(*)[3])p, vn + 9 * i, w, y, n);
             len = dm__len3(n);
             if (!(len > 0.0)) {
                 sh->vetoed_overlap++;
@@ -7329,8 +7349,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
                 return DM_COLLAPSE_VETO;
             }
             ot = in->idx + 3 * (size_t)hit.triangle;
-            for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
-            if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
+            if (dm__sh_side(in, hit.triangle, n) < 0) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
             }
@@ -7349,9 +7368,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
                 for (crossings = 0; crossings < 8; crossings++) {
                     ray.tmin = hit.t + (float)in->margin;
                     if (!(ray.tmin < ray.tmax) || !dm_bvh_intersect(in->bvh, &ray, &hit)) break;
-                    ot = in->idx + 3 * (size_t)hit.triangle;
-                    for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
-                    if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) > 0.0) {
+                    if (dm__sh_side(in, hit.triangle, n) > 0) {
                         sh->vetoed_overlap++;
                         return DM_COLLAPSE_VETO;
                     }
@@ -7376,15 +7393,10 @@ static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_co
         double p[3][3];
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
         for (s = 0; s < in->samples; s++) {
-            double y[3], n[3], len, fn[3], q[3][3];
+            double y[3], n[3], len;
             dm_ray ray;
             dm_hit hit;
-            const uint32_t *ot;
-            for (k = 0; k < 3; k++) {
-                y[k] = dm__sh_bary[s][0] * p[0][k] + dm__sh_bary[s][1] * p[1][k] + dm__sh_bary[s][2] * p[2][k];
-                n[k] = dm__sh_bary[s][0] * vn[9 * i + (size_t)k] + dm__sh_bary[s][1] * vn[9 * i + 3 + (size_t)k] +
-                       dm__sh_bary[s][2] * vn[9 * i + 6 + (size_t)k];
-            }
+            dm__sh_sample((const double(*)[3])p, vn + 9 * i, dm__sh_bary[s], y, n);
             len = dm__len3(n);
             if (!(len > 0.0)) {
                 sh->vetoed_overlap++;
@@ -7401,9 +7413,7 @@ static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_co
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
             }
-            ot = in->idx + 3 * (size_t)hit.triangle;
-            for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
-            if (dm__sh_plane(q[0], q[1], q[2], fn) && dm__dot3(fn, n) <= 0.0) {
+            if (dm__sh_side(in, hit.triangle, n) < 0) {
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
             }
