@@ -3662,6 +3662,11 @@ static int dm__qem_requeue_parked(dm__qem_simp *s, int *queued)
 {
     size_t v, i, m;
     *queued = 0;
+    /* the queue is empty: it starts again from cost 0, so that the requeued edges go to their
+       buckets at their own costs (above the last popped key they would all join the short front
+       list, which is searched linearly) */
+    s->last = 0;
+    s->floor = 0;
     for (v = 0; v < s->n; v++)
         if (s->vx[v].flag & DM__QEM_V_PARKED) s->ver[v]++;
     for (v = 0; v < s->n; v++) {
