@@ -16,6 +16,7 @@
 #define _POSIX_C_SOURCE 200809L
 #define SR_IMPLEMENTATION
 #include "render.h"
+#include "failalloc.h"
 #include "test.h"
 
 #include <stdlib.h>
@@ -24,21 +25,6 @@
 static uint32_t lcg(uint32_t *s) { *s = *s * 1664525u + 1013904223u; return *s >> 8; }
 
 /* counting allocator that fails the k-th allocation (k = 0: never) */
-typedef struct fail_alloc { long calls, fail_at, live; } fail_alloc;
-static void *fa_alloc(void *user, size_t n)
-{
-    fail_alloc *f = (fail_alloc *)user;
-    void *p;
-    if (++f->calls == f->fail_at) return NULL;
-    p = malloc(n);
-    if (p) f->live++;
-    return p;
-}
-static void fa_free(void *user, void *p)
-{
-    fail_alloc *f = (fail_alloc *)user;
-    if (p) { f->live--; free(p); }
-}
 
 /* a test image: noise, runs and gradients, so that literals and matches both occur */
 static void fill(uint16_t *s, int w, int h, int ch, unsigned maxv, uint32_t seed)

@@ -21,6 +21,7 @@
    enough patches). */
 #define RL_IMPLEMENTATION
 #include "relief.h"
+#include "failalloc.h"
 #include "test.h"
 
 #include <stdlib.h>
@@ -459,21 +460,6 @@ static void seam_steps(const float *out, const uint8_t *seams, int n, float *acr
     free(in);
 }
 
-typedef struct fail_alloc { long calls, fail_at, live; } fail_alloc;
-static void *fa_alloc(void *user, size_t n)
-{
-    fail_alloc *f = (fail_alloc *)user;
-    void *p;
-    if (++f->calls == f->fail_at) return NULL;
-    p = malloc(n);
-    if (p) f->live++;
-    return p;
-}
-static void fa_free(void *user, void *p)
-{
-    fail_alloc *f = (fail_alloc *)user;
-    if (p) { f->live--; free(p); }
-}
 static int cancel_at(void *user, float done) { (void)done; return --*(int *)user <= 0; }
 
 static void test_synthesis(void)
