@@ -35,6 +35,7 @@
 #include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include "osmesa_gl.h"
 
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
@@ -107,71 +108,7 @@ static int ours_run(void *user)
 
 /* ---- llvmpipe -------------------------------------------------------------------------------- */
 
-#define GLFN(type, name) static type p_##name;
-GLFN(PFNGLCREATESHADERPROC, glCreateShader)
-GLFN(PFNGLSHADERSOURCEPROC, glShaderSource)
-GLFN(PFNGLCOMPILESHADERPROC, glCompileShader)
-GLFN(PFNGLGETSHADERIVPROC, glGetShaderiv)
-GLFN(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog)
-GLFN(PFNGLCREATEPROGRAMPROC, glCreateProgram)
-GLFN(PFNGLATTACHSHADERPROC, glAttachShader)
-GLFN(PFNGLLINKPROGRAMPROC, glLinkProgram)
-GLFN(PFNGLGETPROGRAMIVPROC, glGetProgramiv)
-GLFN(PFNGLGETPROGRAMINFOLOGPROC, glGetProgramInfoLog)
-GLFN(PFNGLUSEPROGRAMPROC, glUseProgram)
-GLFN(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)
-GLFN(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)
-GLFN(PFNGLUNIFORM3FVPROC, glUniform3fv)
-GLFN(PFNGLUNIFORM1FPROC, glUniform1f)
-GLFN(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays)
-GLFN(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)
-GLFN(PFNGLGENBUFFERSPROC, glGenBuffers)
-GLFN(PFNGLBINDBUFFERPROC, glBindBuffer)
-GLFN(PFNGLBUFFERDATAPROC, glBufferData)
-GLFN(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)
-GLFN(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray)
-GLFN(PFNGLBINDATTRIBLOCATIONPROC, glBindAttribLocation)
-typedef void (*pfn_clear)(GLbitfield);
-typedef void (*pfn_clearcolor)(GLfloat, GLfloat, GLfloat, GLfloat);
-typedef void (*pfn_enable)(GLenum);
-typedef void (*pfn_enum)(GLenum);
-typedef void (*pfn_drawelements)(GLenum, GLsizei, GLenum, const void *);
-typedef void (*pfn_void)(void);
-typedef void (*pfn_viewport)(GLint, GLint, GLsizei, GLsizei);
-typedef void (*pfn_readpixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
-typedef GLenum (*pfn_geterror)(void);
-typedef const GLubyte *(*pfn_getstring)(GLenum);
-static pfn_clear p_glClear;
-static pfn_clearcolor p_glClearColor;
-static pfn_enable p_glEnable;
-static pfn_enum p_glCullFace, p_glFrontFace, p_glDepthFunc;
-static pfn_drawelements p_glDrawElements;
-static pfn_void p_glFinish;
-static pfn_viewport p_glViewport;
-static pfn_readpixels p_glReadPixels;
-static pfn_geterror p_glGetError;
-static pfn_getstring p_glGetString;
-
-static int load_gl(void)
-{
-    int ok = 1;
-#define LOAD(name)                                                            \
-    do {                                                                      \
-        *(void **)(&p_##name) = (void *)OSMesaGetProcAddress(#name);          \
-        if (!p_##name) { fprintf(stderr, "bench_raster: no %s\n", #name); ok = 0; } \
-    } while (0)
-    LOAD(glCreateShader); LOAD(glShaderSource); LOAD(glCompileShader); LOAD(glGetShaderiv);
-    LOAD(glGetShaderInfoLog); LOAD(glCreateProgram); LOAD(glAttachShader); LOAD(glLinkProgram);
-    LOAD(glGetProgramiv); LOAD(glGetProgramInfoLog); LOAD(glUseProgram); LOAD(glGetUniformLocation);
-    LOAD(glUniformMatrix4fv); LOAD(glUniform3fv); LOAD(glUniform1f); LOAD(glGenVertexArrays);
-    LOAD(glBindVertexArray); LOAD(glGenBuffers); LOAD(glBindBuffer); LOAD(glBufferData);
-    LOAD(glVertexAttribPointer); LOAD(glEnableVertexAttribArray); LOAD(glBindAttribLocation);
-    LOAD(glClear); LOAD(glClearColor); LOAD(glEnable); LOAD(glCullFace); LOAD(glFrontFace);
-    LOAD(glDepthFunc); LOAD(glDrawElements); LOAD(glFinish); LOAD(glViewport); LOAD(glReadPixels);
-    LOAD(glGetError); LOAD(glGetString);
-#undef LOAD
-    return ok;
-}
+static int load_gl(void) { return bench_gl_load("bench_raster"); }
 
 /* the fragment shader evaluates the formula of sr__shade_light in render.h (which computes
    (N.H/|H|)^s as ((N.H)^2/|H|^2)^(s/2), the same value) */

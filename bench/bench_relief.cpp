@@ -34,6 +34,7 @@
 #include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include "osmesa_gl.h"
 
 #define RL_IMPLEMENTATION
 #include "relief.h"
@@ -152,77 +153,7 @@ static int render_run(void *user)
 
 /* ---- llvmpipe -------------------------------------------------------------------------------- */
 
-#define GLFN(type, name) static type p_##name;
-GLFN(PFNGLCREATESHADERPROC, glCreateShader)
-GLFN(PFNGLSHADERSOURCEPROC, glShaderSource)
-GLFN(PFNGLCOMPILESHADERPROC, glCompileShader)
-GLFN(PFNGLGETSHADERIVPROC, glGetShaderiv)
-GLFN(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog)
-GLFN(PFNGLCREATEPROGRAMPROC, glCreateProgram)
-GLFN(PFNGLATTACHSHADERPROC, glAttachShader)
-GLFN(PFNGLLINKPROGRAMPROC, glLinkProgram)
-GLFN(PFNGLGETPROGRAMIVPROC, glGetProgramiv)
-GLFN(PFNGLUSEPROGRAMPROC, glUseProgram)
-GLFN(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)
-GLFN(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)
-GLFN(PFNGLUNIFORM3FVPROC, glUniform3fv)
-GLFN(PFNGLUNIFORM1FPROC, glUniform1f)
-GLFN(PFNGLUNIFORM1IPROC, glUniform1i)
-GLFN(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays)
-GLFN(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)
-GLFN(PFNGLGENBUFFERSPROC, glGenBuffers)
-GLFN(PFNGLBINDBUFFERPROC, glBindBuffer)
-GLFN(PFNGLBUFFERDATAPROC, glBufferData)
-GLFN(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)
-GLFN(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray)
-GLFN(PFNGLACTIVETEXTUREPROC, glActiveTexture)
-typedef void (*pfn_clear)(GLbitfield);
-typedef void (*pfn_clearcolor)(GLfloat, GLfloat, GLfloat, GLfloat);
-typedef void (*pfn_enum)(GLenum);
-typedef void (*pfn_drawarrays)(GLenum, GLint, GLsizei);
-typedef void (*pfn_void)(void);
-typedef void (*pfn_viewport)(GLint, GLint, GLsizei, GLsizei);
-typedef void (*pfn_readpixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
-typedef GLenum (*pfn_geterror)(void);
-typedef const GLubyte *(*pfn_getstring)(GLenum);
-typedef void (*pfn_gentextures)(GLsizei, GLuint *);
-typedef void (*pfn_bindtexture)(GLenum, GLuint);
-typedef void (*pfn_teximage2d)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum, const void *);
-typedef void (*pfn_texparameteri)(GLenum, GLenum, GLint);
-static pfn_clear p_glClear;
-static pfn_clearcolor p_glClearColor;
-static pfn_enum p_glEnable, p_glDepthFunc;
-static pfn_drawarrays p_glDrawArrays;
-static pfn_void p_glFinish;
-static pfn_viewport p_glViewport;
-static pfn_readpixels p_glReadPixels;
-static pfn_geterror p_glGetError;
-static pfn_getstring p_glGetString;
-static pfn_gentextures p_glGenTextures;
-static pfn_bindtexture p_glBindTexture;
-static pfn_teximage2d p_glTexImage2D;
-static pfn_texparameteri p_glTexParameteri;
-
-static int load_gl(void)
-{
-    int ok = 1;
-#define LOAD(name)                                                            \
-    do {                                                                      \
-        *(void **)(&p_##name) = (void *)OSMesaGetProcAddress(#name);          \
-        if (!p_##name) { fprintf(stderr, "bench_relief: no %s\n", #name); ok = 0; } \
-    } while (0)
-    LOAD(glCreateShader); LOAD(glShaderSource); LOAD(glCompileShader); LOAD(glGetShaderiv);
-    LOAD(glGetShaderInfoLog); LOAD(glCreateProgram); LOAD(glAttachShader); LOAD(glLinkProgram);
-    LOAD(glGetProgramiv); LOAD(glUseProgram); LOAD(glGetUniformLocation); LOAD(glUniformMatrix4fv);
-    LOAD(glUniform3fv); LOAD(glUniform1f); LOAD(glUniform1i); LOAD(glGenVertexArrays); LOAD(glBindVertexArray);
-    LOAD(glGenBuffers); LOAD(glBindBuffer); LOAD(glBufferData); LOAD(glVertexAttribPointer);
-    LOAD(glEnableVertexAttribArray); LOAD(glActiveTexture); LOAD(glClear); LOAD(glClearColor); LOAD(glEnable);
-    LOAD(glDepthFunc); LOAD(glDrawArrays); LOAD(glFinish); LOAD(glViewport); LOAD(glReadPixels);
-    LOAD(glGetError); LOAD(glGetString); LOAD(glGenTextures); LOAD(glBindTexture); LOAD(glTexImage2D);
-    LOAD(glTexParameteri);
-#undef LOAD
-    return ok;
-}
+static int load_gl(void) { return bench_gl_load("bench_relief"); }
 
 /* One face per draw range (6 vertices); the face's frame comes as per-vertex attributes so that
    one glDrawArrays draws the cube: attribute 1 = origin, 2 = axis_u, 3 = axis_v, 4 = which maps. */
