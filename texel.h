@@ -97,13 +97,15 @@
        under an equal-energy illuminant and converted to linear sRGB. Each blade ages with a
        delay in [-colour_jitter, colour_jitter] (0.05) of wd for its colour, so a patch is not
        one flat tint. Specular: ms = ms0 (0.4 + 0.6 w(wd)) (dry grass is less glossy).
-     Merging (paper Algorithm 1): after each step, each point, in the order of its voxel (z, y,
-       x; points of a voxel in index order), absorbs its nearest later point closer than
-       merge_threshold (0.15 voxel): position, normal, tangent,
-       colour, specular and rest state are mass-weighted means and masses add. Density counts
-       mass, so merging keeps the grass (the paper counts each point as 1, which would make
-       merged grass thinner). Points sorted by voxel (radix sort) and a hash table of voxels make
-       it O(n); pairs across the side borders merge too (nearest periodic image). Time is the outer
+     Merging (paper Algorithm 1): after each step, each point, in the order of its voxel (the
+       texel's storage order: 4^3 bricks in z, y, x order, voxels in a brick likewise; points of
+       a voxel in index order), absorbs its nearest later point closer than merge_threshold
+       (0.15 voxel): position, normal, tangent, colour, specular and rest state are
+       mass-weighted means and masses add. Density counts mass, so merging keeps the grass (the
+       paper counts each point as 1, which would make merged grass thinner). Points sorted by
+       voxel (radix sort; sampling emits them in that order, so the sort moves little) and a
+       search of the sorted keys make it O(n log n) at worst, nearly O(n) in practice; pairs
+       across the side borders merge too (nearest periodic image). Time is the outer
        loop (the paper's Algorithm 1 loops over points outside time, which cannot merge).
 
    KEY FRAMES AND MINGLING (paper sections 2.2, 4.1)
@@ -178,7 +180,7 @@
      index of a static texel. A voxel's place is the brick's offset plus the number of mask bits
      below its own (one popcount), so thin blades cost what they fill, not whole bricks. 8-bit
      density is stored as the square root of density / density_max (fine steps for the faint
-     voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly. A tvt_points holds 132 bytes per point. Building,
+     voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly. A tvt_points holds 112 bytes per point. Building,
      splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
      each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
      tvt_lod_free / tvt_tvt_free free them; tvt_lod_bytes / tvt_tvt_bytes count them.
@@ -315,16 +317,19 @@ typedef struct tvt_grass_desc {
     void *progress_user;
 } tvt_grass_desc;
 
-/* One point of the PBS, voxel units. The rest state (root ... specular0) is where the point
-   was at wd = 0 relative to its blade; tvt_age computes pos, normal, tangent, color and
-   specular from it. */
+/* One point of the PBS, voxel units, 112 bytes. The rest state (root ... normal0) is where
+   the point was at wd = 0 relative to its blade; tvt_age computes pos, normal, tangent, color
+   and specular from it. The rest directions are unit vectors (normal0: length <= 1) stored as
+   v * 32767 rounded (error below 2e-5, far under the 8-bit texel's); tvt_point_rest_dirs
+   decodes them. */
 typedef struct tvt_point {
     float pos[3], normal[3], tangent[3], color[3], specular, mass;
-    float root[3], axis[3], bend[3]; /* the blade's root (unwrapped, near pos), axis, bend */
+    float root[2];                   /* the blade's root on the ground (z = 0), unwrapped near pos */
     float ell;                       /* arc length from the root along the axis at wd = 0 */
     float radial[3];                 /* offset from the axis at wd = 0 */
-    float normal0[3];                /* normal at wd = 0 */
     float brightness, specular0, wd_delay;
+    int16_t axis[3], bend[3];        /* the blade's axis and droop direction */
+    int16_t normal0[3];              /* normal at wd = 0 */
 } tvt_point;
 
 typedef struct tvt_points {
@@ -427,6 +432,8 @@ TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *op
 TVTDEF tvt_result tvt_splat(const tvt_points *pts, const tvt_splat_options *options, tvt_texel *out);
 
 TVTDEF void tvt_points_free(tvt_points *pts);
+/* The rest directions of a point decoded: axis, bend (unit) and normal0 (length <= 1). */
+TVTDEF void tvt_point_rest_dirs(const tvt_point *p, float axis[3], float bend[3], float normal0[3]);
 
 /* ---- LOD pyramid (paper section 4.2) -------------------------------------------------------- */
 #define TVT_MAX_LEVELS 8
@@ -1381,27 +1388,51 @@ TVTDEF void tvt_texel_free(tvt_texel *t)
    --------------------------------------------------------------------------------------------- */
 static float tvt__luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
+/* directions of length <= 1 as int16: v * 32767 rounded, and back */
+static void tvt__dir_encode(const float *v, int16_t *q)
+{
+    int c;
+    for (c = 0; c < 3; c++) {
+        float f = v[c] < -1.0f ? -1.0f : v[c] > 1.0f ? 1.0f : v[c];
+        q[c] = (int16_t)lrintf(f * 32767.0f);
+    }
+}
+
+static void tvt__dir_decode(const int16_t *q, float *v)
+{
+    int c;
+    for (c = 0; c < 3; c++) v[c] = (float)q[c] * (1.0f / 32767.0f);
+}
+
+TVTDEF void tvt_point_rest_dirs(const tvt_point *p, float axis[3], float bend[3], float normal0[3])
+{
+    if (axis) tvt__dir_decode(p->axis, axis);
+    if (bend) tvt__dir_decode(p->bend, bend);
+    if (normal0) tvt__dir_decode(p->normal0, normal0);
+}
+
 /* A voxel's share of its blade's rest state: the root moved to the periodic image nearest the
    voxel centre (cx, cy), the blade's axis, bend and colour delay. */
 static void tvt__blade_proto(const tvt_blade *b, int res, float cx, float cy, tvt_point *p)
 {
     p->root[0] = b->root[0] + (float)res * floorf((cx - b->root[0]) / (float)res + 0.5f);
     p->root[1] = b->root[1] + (float)res * floorf((cy - b->root[1]) / (float)res + 0.5f);
-    p->root[2] = 0.0f;
-    memcpy(p->axis, b->axis, sizeof(p->axis));
-    memcpy(p->bend, b->bend, sizeof(p->bend));
+    tvt__dir_encode(b->axis, p->axis);
+    tvt__dir_encode(b->bend, p->bend);
     p->wd_delay = b->wd_delay;
 }
 
-/* The rest of a blade point's state: arc length along the axis and radial offset. */
-static void tvt__rest_from_blade(tvt_point *p)
+/* The rest of a blade point's state: arc length along the (stored) axis and radial offset. */
+static void tvt__rest_from_blade(tvt_point *p, const float *axis)
 {
     float d[3];
     int c;
-    for (c = 0; c < 3; c++) d[c] = p->pos[c] - p->root[c];
-    p->ell = tvt__dot(d, p->axis);
+    d[0] = p->pos[0] - p->root[0];
+    d[1] = p->pos[1] - p->root[1];
+    d[2] = p->pos[2];
+    p->ell = tvt__dot(d, axis);
     if (p->ell < 0) p->ell = 0;
-    for (c = 0; c < 3; c++) p->radial[c] = d[c] - p->ell * p->axis[c];
+    for (c = 0; c < 3; c++) p->radial[c] = d[c] - p->ell * axis[c];
 }
 
 /* The paper's rest state (Fig 6a): the root is where the tangent line through the point meets
@@ -1413,10 +1444,10 @@ static void tvt__rest_from_tangent(uint64_t *s, tvt_point *p)
     memcpy(t, p->tangent, sizeof(t));
     tvt__normalize(t);
     if (t[2] < 0.2f) { t[0] = 0; t[1] = 0; t[2] = 1; }
-    for (c = 0; c < 3; c++) p->root[c] = p->pos[c] - t[c] * (p->pos[2] / t[2]);
-    p->root[2] = 0.0f;
+    tvt__dir_encode(t, p->axis);
+    tvt__dir_decode(p->axis, t); /* the stored axis, so that root + ell axis is the point */
+    for (c = 0; c < 2; c++) p->root[c] = p->pos[c] - t[c] * (p->pos[2] / t[2]);
     p->ell = p->pos[2] / t[2];
-    memcpy(p->axis, t, sizeof(t));
     memset(p->radial, 0, sizeof(p->radial));
     d[0] = t[0]; d[1] = t[1]; d[2] = 0.0f;
     dl = sqrtf(d[0] * d[0] + d[1] * d[1]);
@@ -1425,8 +1456,9 @@ static void tvt__rest_from_tangent(uint64_t *s, tvt_point *p)
         d[0] = cosf(az); d[1] = sinf(az);
     } else { d[0] /= dl; d[1] /= dl; }
     dl = tvt__dot(d, t);
-    for (c = 0; c < 3; c++) p->bend[c] = d[c] - dl * t[c];
-    tvt__normalize(p->bend);
+    for (c = 0; c < 3; c++) d[c] -= dl * t[c];
+    tvt__normalize(d);
+    tvt__dir_encode(d, p->bend);
     p->wd_delay = 2.0f * tvt__rand(s) - 1.0f;
 }
 
@@ -1471,24 +1503,26 @@ static void tvt__sample_voxel(tvt__sampler *S, long x, long y, long z, size_t sl
     if (S->out && n) {
         unsigned blade = t->blade_of_voxel ? t->blade_of_voxel[slot] : TVT_NO_BLADE;
         tvt_point proto;
+        float axis[3];
         tvt__load(t, slot, q);
         tvt__decode(q, t->density_max, t->bits, &v);
         memset(&proto, 0, sizeof(proto));
         memcpy(proto.normal, v.normal, sizeof(proto.normal));
-        memcpy(proto.normal0, v.normal, sizeof(proto.normal0));
+        tvt__dir_encode(v.normal, proto.normal0);
         memcpy(proto.tangent, v.tangent, sizeof(proto.tangent));
         memcpy(proto.color, v.color, sizeof(proto.color));
         proto.specular = proto.specular0 = v.specular;
         proto.mass = 1.0f;
         proto.brightness = tvt__luminance(v.color) / S->green_lum;
         if (blade < t->blade_count) tvt__blade_proto(t->blades + blade, t->res, (float)x + 0.5f, (float)y + 0.5f, &proto);
+        tvt__dir_decode(proto.axis, axis);
         for (i = 0; i < n; i++) {
             tvt_point *p = S->out + S->count + i;
             *p = proto;
             p->pos[0] = (float)x + tvt__rand(&s);
             p->pos[1] = (float)y + tvt__rand(&s);
             p->pos[2] = (float)z + tvt__rand(&s);
-            if (blade < t->blade_count) tvt__rest_from_blade(p);
+            if (blade < t->blade_count) tvt__rest_from_blade(p, axis);
             else tvt__rest_from_tangent(&s, p);
         }
     }
@@ -1569,6 +1603,7 @@ typedef struct tvt__ageing {
     tvt_model_state st;
     float theta, beta, jitter, length;
     float gc[TVT__BEND_N + 1], gs[TVT__BEND_N + 1];
+    float pc[TVT__BEND_N + 1], ps[TVT__BEND_N + 1]; /* cos and sin of phi at the same nodes */
     float color[TVT__COLOR_N + 1][3];
 } tvt__ageing;
 
@@ -1586,6 +1621,11 @@ static void tvt__ageing_init(const tvt_model_options *o, float wd, tvt__ageing *
     A->length = o->droop_length;
     A->jitter = o->colour_jitter;
     A->gc[0] = A->gs[0] = 0.0f;
+    for (k = 0; k <= TVT__BEND_N; k++) {
+        double phi = tvt__phi(A, (float)k * h);
+        A->pc[k] = (float)cos(phi);
+        A->ps[k] = (float)sin(phi);
+    }
     for (k = 0; k < TVT__BEND_N; k++) {
         float phi = tvt__phi(A, ((float)k + 0.5f) * h);
         c += h * cos(phi);
@@ -1599,20 +1639,29 @@ static void tvt__ageing_init(const tvt_model_options *o, float wd, tvt__ageing *
     }
 }
 
-static void tvt__bend_at(const tvt__ageing *A, float u, float *gc, float *gs)
+/* The centre line G(u) and the direction (cos phi, sin phi) at u, both interpolated in the
+   tables (the direction renormalised); past the table phi is constant (u > 1). */
+static void tvt__bend_at(const tvt__ageing *A, float u, float *gc, float *gs, float *c, float *s)
 {
-    float f = u * 512.0f, t;
+    float f = u * 512.0f, t, len;
     int k;
     if (f >= (float)TVT__BEND_N) {
-        float phi = tvt__phi(A, 1.0f), extra = (f - (float)TVT__BEND_N) / 512.0f;
-        *gc = A->gc[TVT__BEND_N] + extra * cosf(phi);
-        *gs = A->gs[TVT__BEND_N] + extra * sinf(phi);
+        float extra = (f - (float)TVT__BEND_N) / 512.0f;
+        *c = A->pc[TVT__BEND_N];
+        *s = A->ps[TVT__BEND_N];
+        *gc = A->gc[TVT__BEND_N] + extra * *c;
+        *gs = A->gs[TVT__BEND_N] + extra * *s;
         return;
     }
     k = (int)f;
     t = f - (float)k;
     *gc = A->gc[k] + t * (A->gc[k + 1] - A->gc[k]);
     *gs = A->gs[k] + t * (A->gs[k + 1] - A->gs[k]);
+    *c = A->pc[k] + t * (A->pc[k + 1] - A->pc[k]);
+    *s = A->ps[k] + t * (A->ps[k + 1] - A->ps[k]);
+    len = 1.0f / sqrtf(*c * *c + *s * *s);
+    *c *= len;
+    *s *= len;
 }
 
 /* v turned by angle (c, s) in the plane (axis, bend), toward bend */
@@ -1628,23 +1677,22 @@ static void tvt__turn(const float *v, const float *axis, const float *bend, floa
 
 static void tvt__age_point(const tvt__ageing *A, float wd, int res, tvt_point *p)
 {
-    float L = A->length * (float)res, u = p->ell * (1.0f - A->st.axial_shrink) / L, gc, gs, phi, c, s, r[3], rr[3], w, f;
+    float L = A->length * (float)res, u = p->ell * (1.0f - A->st.axial_shrink) / L, gc, gs, c, s, r[3], rr[3], w, f;
+    float axis[3], bend[3], normal0[3];
     int i, k;
-    tvt__bend_at(A, u, &gc, &gs);
-    phi = tvt__phi(A, u);
-    c = cosf(phi);
-    s = sinf(phi);
+    tvt_point_rest_dirs(p, axis, bend, normal0);
+    tvt__bend_at(A, u, &gc, &gs, &c, &s);
     for (i = 0; i < 3; i++) r[i] = p->radial[i] * (1.0f - A->st.radial_shrink);
-    tvt__turn(r, p->axis, p->bend, c, s, rr);
+    tvt__turn(r, axis, bend, c, s, rr);
     for (i = 0; i < 3; i++) {
-        p->pos[i] = p->root[i] + L * (gc * p->axis[i] + gs * p->bend[i]) + rr[i];
-        p->tangent[i] = c * p->axis[i] + s * p->bend[i];
+        p->pos[i] = (i < 2 ? p->root[i] : 0.0f) + L * (gc * axis[i] + gs * bend[i]) + rr[i];
+        p->tangent[i] = c * axis[i] + s * bend[i];
     }
     if (p->pos[2] < 0) p->pos[2] = 0;
     if (p->pos[2] >= (float)res) p->pos[2] = (float)res - 1e-3f;
     for (i = 0; i < 2; i++) p->pos[i] -= (float)res * floorf(p->pos[i] / (float)res);
     for (i = 0; i < 2; i++) if (p->pos[i] >= (float)res) p->pos[i] = 0.0f;
-    tvt__turn(p->normal0, p->axis, p->bend, c, s, p->normal);
+    tvt__turn(normal0, axis, bend, c, s, p->normal);
     w = wd + A->jitter * p->wd_delay;
     w = w < 0 ? 0 : w > 1 ? 1 : w;
     f = w * (float)TVT__COLOR_N;
@@ -1675,6 +1723,15 @@ typedef struct tvt__merge_grid {
                                               voxel mostly come one after another) */
 } tvt__merge_grid;
 
+/* a voxel's key in the texel's own order: bricks of 4^3 in (z, y, x) order, voxels within a
+   brick in (z, y, x) order (points are sampled in this order, so sorting them moves little) */
+static uint32_t tvt__cell_key(long x, long y, long z, int res)
+{
+    uint32_t nb = (uint32_t)res / TVT_BRICK;
+    uint32_t brick = ((uint32_t)(z >> 2) * nb + (uint32_t)(y >> 2)) * nb + (uint32_t)(x >> 2);
+    return brick * TVT__BV + (uint32_t)(((z & 3) << 4) | ((y & 3) << 2) | (x & 3));
+}
+
 static uint32_t tvt__voxel_key(const float *p, int res)
 {
     long x = (long)p[0], y = (long)p[1], z = (long)p[2];
@@ -1684,7 +1741,7 @@ static uint32_t tvt__voxel_key(const float *p, int res)
     if (x < 0) x = 0;
     if (y < 0) y = 0;
     if (z < 0) z = 0;
-    return (uint32_t)(((uint64_t)z * (uint64_t)res + (uint64_t)y) * (uint64_t)res + (uint64_t)x);
+    return tvt__cell_key(x, y, z, res);
 }
 
 /* stable LSD radix sort of (key, index) by key, 11 bits a pass (res <= 1024: 30-bit keys) */
@@ -1772,7 +1829,8 @@ static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t
         if (z < 0 || z >= g->res) continue;
         x &= g->res - 1;
         y &= g->res - 1;
-        k2 = (uint32_t)((z * g->res + y) * g->res + x);
+        k2 = tvt__cell_key(x, y, z, g->res);
+        if (k2 < g->key[i]) continue; /* a voxel sorted before p's holds no later point */
         if (g->cache_key[m] == k2) start = g->cache_start[m];
         else {
             start = (uint32_t)tvt__lower_bound_from(g->key, n, i, k2);
@@ -1798,8 +1856,9 @@ static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t
 static void tvt__merge_into(tvt_point *a, const tvt_point *b, int res)
 {
     float m = a->mass + b->mass, wa = a->mass / m, wb = b->mass / m, *fa = &a->pos[0], d, shift[2];
+    float da[3][3], db[3][3];
     const float *fb = &b->pos[0];
-    size_t k, n = sizeof(tvt_point) / sizeof(float);
+    size_t k, n = offsetof(tvt_point, axis) / sizeof(float); /* the float fields come first */
     for (k = 0; k < 2; k++) shift[k] = (float)res * floorf((b->pos[k] - a->pos[k]) / (float)res + 0.5f);
     for (k = 0; k < n; k++) fa[k] = wa * fa[k] + wb * fb[k];
     for (k = 0; k < 2; k++) {
@@ -1810,10 +1869,16 @@ static void tvt__merge_into(tvt_point *a, const tvt_point *b, int res)
     }
     a->mass = m;
     tvt__normalize(a->tangent);
-    tvt__normalize(a->axis);
-    d = tvt__dot(a->bend, a->axis);
-    for (k = 0; k < 3; k++) a->bend[k] -= d * a->axis[k];
-    tvt__normalize(a->bend);
+    tvt_point_rest_dirs(a, da[0], da[1], da[2]);
+    tvt_point_rest_dirs(b, db[0], db[1], db[2]);
+    for (k = 0; k < 9; k++) da[k / 3][k % 3] = wa * da[k / 3][k % 3] + wb * db[k / 3][k % 3];
+    tvt__normalize(da[0]);
+    d = tvt__dot(da[1], da[0]);
+    for (k = 0; k < 3; k++) da[1][k] -= d * da[0][k];
+    tvt__normalize(da[1]);
+    tvt__dir_encode(da[0], a->axis);
+    tvt__dir_encode(da[1], a->bend);
+    tvt__dir_encode(da[2], a->normal0);
 }
 
 static tvt_result tvt__merge(tvt_points *pts, float thr)
@@ -1847,7 +1912,10 @@ static tvt_result tvt__merge(tvt_points *pts, float thr)
             dead[j] = 1;
         }
         for (i = 0; i < n; i++) /* the survivors in their index order */
-            if (!dead[g.rank[i]]) pts->p[kept++] = pts->p[i];
+            if (!dead[g.rank[i]]) {
+                if (kept != i) pts->p[kept] = pts->p[i];
+                kept++;
+            }
         pts->count = kept;
     }
     tvt__free(a, g.order); tvt__free(a, g.rank); tvt__free(a, g.key); tvt__free(a, g.pos);
