@@ -7,13 +7,16 @@
 
    build/bench_simplify [MESH]     (default build/sphere1m.off)
 
-   Timed (median of 5 after a warm-up, one thread):
+   Timed, the three sides interleaved (bench.h: one warm-up each, then 11 rounds of meshopt,
+   OpenMesh, ours; medians with min/max), one thread:
      ours      dm_simplify + dm_pm_counts + dm_pm_get_mesh (compact positions and indices)
      meshopt   meshopt_simplify(target_index_count, target_error = 1.0 so only the count stops it)
      openmesh  Decimater construction, add modules, initialize, decimate_to_faces, garbage_collection
                (the TriMesh is built from the arrays outside the timer). On meshes above 200k
-               triangles OpenMesh gets one timed run after the warm-up (it takes ~20 s a run);
-               the line then says openmesh_runs=1. */
+               triangles OpenMesh stops after 3 rounds (it takes ~10 s a run there); the line then
+               says openmesh_runs=3.
+   Ours' target is known from the peers' warm-up runs, which come before ours'. Ratios are ours
+   over each peer, per round. */
 #include "bench.h"
 
 #include <meshoptimizer.h>
@@ -33,12 +36,15 @@
 
 struct ctx {
     const mio_mesh *m;
-    size_t target;
+    size_t target;      /* the peers' target */
     /* meshopt */
     std::vector<unsigned> mo_idx;
     size_t mo_count;
-    /* openmesh */
+    /* openmesh: its result of the first run, kept for the distances */
     TriMesh *om;
+    std::vector<float> om_pos;
+    std::vector<uint32_t> om_idx;
+    bool om_kept;
     /* ours */
     std::vector<float> d_pos;
     std::vector<uint32_t> d_idx;
@@ -62,19 +68,30 @@ static int run_openmesh(void *u)
     return 0;
 }
 
-static void rebuild_openmesh(void *u)
+static void build_openmesh(ctx *c)
 {
-    ctx *c = (ctx *)u;
-    delete c->om;
     c->om = new TriMesh;
     om_build(c->m->positions, c->m->vertex_count, c->m->indices, c->m->triangle_count, *c->om);
 }
+
+/* after an OpenMesh run, outside the timer: keep the first result, build the next run's input */
+static void openmesh_after(void *u)
+{
+    ctx *c = (ctx *)u;
+    if (!c->om_kept) om_extract(*c->om, c->om_pos, c->om_idx);
+    c->om_kept = true;
+    delete c->om;
+    build_openmesh(c);
+}
+
+/* ours never gets more triangles than either peer reached */
+static size_t ours_target(const ctx *c) { return std::min(c->mo_count / 3, c->om_idx.size() / 3); }
 
 static int run_ours(void *u)
 {
     ctx *c = (ctx *)u;
     dm_simplify_options o = {};
-    o.target_triangles = c->target;
+    o.target_triangles = ours_target(c);
     c->pm = nullptr;
     if (dm_simplify(c->m->positions, c->m->vertex_count, c->m->indices, c->m->triangle_count, &o, &c->pm, nullptr) != DM_OK)
         return 1;
@@ -119,52 +136,42 @@ int main(int argc, char **argv)
     for (double f : fractions) {
         ctx c;
         c.m = &m;
-        c.om = nullptr;
+        c.mo_count = 0;
+        c.om_kept = false;
         c.pm = nullptr;
         c.target = (size_t)(f * (double)m.triangle_count);
-        fprintf(stderr, "bench_simplify: %s at %g%%: meshoptimizer\n", path, 100 * f);
-        double mo_s = bench_median(run_meshopt, nullptr, &c);
-        fprintf(stderr, "bench_simplify: openmesh\n");
-        double om_s;
-        rebuild_openmesh(&c);
-        if (big) {
-            double t0 = bench_now();
-            run_openmesh(&c);
-            (void)t0;
-            rebuild_openmesh(&c); /* the warm-up */
-            t0 = bench_now();
-            run_openmesh(&c);
-            om_s = bench_now() - t0;
-        } else {
-            om_s = bench_median(run_openmesh, rebuild_openmesh, &c);
-            rebuild_openmesh(&c);
-            run_openmesh(&c);
-        }
-        std::vector<float> op;
-        std::vector<uint32_t> oi;
-        om_extract(*c.om, op, oi);
+        fprintf(stderr, "bench_simplify: %s at %g%%: meshoptimizer, OpenMesh and ours interleaved\n", path, 100 * f);
+        build_openmesh(&c);
+        bench_side sides[3] = {bench_make_side("meshopt", run_meshopt, nullptr, &c),
+                               bench_make_side("openmesh", run_openmesh, openmesh_after, &c),
+                               bench_make_side("ours", run_ours, free_ours, &c)};
+        if (big) sides[1].max_runs = 3;
+        int failed = bench_interleave(sides, 3, 0);
         delete c.om;
-        size_t mo_tris = c.mo_count / 3, om_tris = oi.size() / 3;
-        c.target = std::min(mo_tris, om_tris);
-        fprintf(stderr, "bench_simplify: ours\n");
-        double d_s = bench_median(run_ours, free_ours, &c);
-        if (d_s < 0) {
-            fprintf(stderr, "bench_simplify: dm_simplify failed\n");
+        if (failed) {
+            fprintf(stderr, "bench_simplify: a run failed (dm_simplify)\n");
             return 1;
         }
+        /* ours' last result is still in d_pos / d_idx (free_ours frees only the pm) */
         fprintf(stderr, "bench_simplify: measuring distances\n");
+        size_t mo_tris = c.mo_count / 3, om_tris = c.om_idx.size() / 3;
         sd_mesh mo = {m.positions, m.vertex_count, c.mo_idx.data(), mo_tris};
-        sd_mesh om = {op.data(), op.size() / 3, oi.data(), om_tris};
+        sd_mesh om = {c.om_pos.data(), c.om_pos.size() / 3, c.om_idx.data(), om_tris};
         sd_mesh ours = {c.d_pos.data(), c.d_nv, c.d_idx.data(), c.d_nt};
         sd_result r_mo = {}, r_om = {}, r_d = {};
         sd_distance(in, mo, 200000, &r_mo);
         sd_distance(in, om, 200000, &r_om);
         sd_distance(in, ours, 200000, &r_d);
-        printf("RESULT simplify target=%g tris=%zu ours_tris=%zu meshopt_tris=%zu openmesh_tris=%zu ours_ms=%.1f "
-               "meshopt_ms=%.1f openmesh_ms=%.1f ours_rms=%.3e ours_max=%.3e meshopt_rms=%.3e meshopt_max=%.3e "
-               "openmesh_rms=%.3e openmesh_max=%.3e%s\n",
-               100 * f, m.triangle_count, c.d_nt, mo_tris, om_tris, 1e3 * d_s, 1e3 * mo_s, 1e3 * om_s, r_d.rms, r_d.max,
-               r_mo.rms, r_mo.max, r_om.rms, r_om.max, big ? " openmesh_runs=1" : "");
+        printf("RESULT simplify target=%g tris=%zu ours_tris=%zu meshopt_tris=%zu openmesh_tris=%zu", 100 * f,
+               m.triangle_count, c.d_nt, mo_tris, om_tris);
+        bench_print_ms("ours", &sides[2]);
+        bench_print_ms("meshopt", &sides[0]);
+        bench_print_ms("openmesh", &sides[1]);
+        bench_print_ratio_named("ratio_meshopt", &sides[2], &sides[0]);
+        bench_print_ratio_named("ratio_openmesh", &sides[2], &sides[1]);
+        printf(" openmesh_runs=%d ours_rms=%.3e ours_max=%.3e meshopt_rms=%.3e meshopt_max=%.3e openmesh_rms=%.3e "
+               "openmesh_max=%.3e\n",
+               sides[1].runs, r_d.rms, r_d.max, r_mo.rms, r_mo.max, r_om.rms, r_om.max);
         fflush(stdout);
     }
     mio_free_mesh(&m);

@@ -12,9 +12,10 @@
          stencils, output arrays); OpenMesh - the subdivider's attach + operator()(2) + detach on a
          TriMesh built beforehand. maxdiff: largest distance between corresponding vertices over
          the bounding-box diagonal (tests/butterfly_compare.hpp), vertices near a boundary apart.
-   Each side: one warm-up run and the median of 5 (bench/bench.h), one thread. For inputs above
-   300k triangles OpenMesh runs once, untimed warm-up skipped (om_runs=1), and maxdiff is not
-   computed (maxdiff=skipped): its two levels take over 15 s and several GB there. */
+   Timing (bench.h): ours and OpenMesh interleaved, one warm-up each and 11 rounds, medians with
+   min/max (the grid alone, 11 runs); the peak memory is each side's warm-up run's. One thread.
+   For inputs above 300k triangles OpenMesh stops after one timed run (om_runs=1) and maxdiff is
+   not computed (maxdiff=skipped): its two levels take over 15 s and several GB there. */
 #include "bench.h"
 
 #include "openmesh.hpp"
@@ -97,9 +98,11 @@ int main(int argc, char **argv)
         sd4_grid_size(9, 9, 7, NULL, &W, &H);
         g.out.assign(W * H, 0.0);
         std::fprintf(stderr, "bench_subdiv4: grid 9x9 -> %zux%zu\n", W, H);
-        double t = bench_median(grid_run, NULL, &g);
-        if (t < 0) { std::printf("RESULT subdiv4_grid error=refine_failed\n"); return 1; }
-        std::printf("RESULT subdiv4_grid size=%zux%zu levels=7 ms=%.3f\n", W, H, 1e3 * t);
+        bench_side side = bench_make_side("grid", grid_run, NULL, &g);
+        if (bench_interleave(&side, 1, 0) != 0) { std::printf("RESULT subdiv4_grid error=refine_failed\n"); return 1; }
+        std::printf("RESULT subdiv4_grid size=%zux%zu levels=7", W, H);
+        bench_print_ms("", &side);
+        std::printf("\n");
         std::fflush(stdout);
     }
     /* ---- butterfly ---- */
@@ -115,31 +118,20 @@ int main(int argc, char **argv)
     o.in = &in;
     std::memset(&o.out, 0, sizeof o.out);
     o.tris_out = 0;
-    bench_reset_peak_rss();
-    long rss0 = bench_current_rss_kb();
-    double t_ours = bench_median(ours_run, ours_after, &o);
-    long ours_peak = bench_peak_rss_kb() - rss0;
     om_side s;
     s.in = &in;
     s.mesh = new TriMesh;
     s.faces_out = 0;
     if (!bf_to_openmesh(in.positions, in.vertex_count, in.indices, in.triangle_count, *s.mesh))
         std::fprintf(stderr, "bench_subdiv4: OpenMesh rejected some faces of %s\n", path);
-    std::fprintf(stderr, "bench_subdiv4: OpenMesh ModifiedButterflyT\n");
-    bench_reset_peak_rss();
-    rss0 = bench_current_rss_kb();
-    double t_om;
-    int om_runs = 5;
-    if (large) {
-        double start = bench_now();
-        om_run(&s);
-        t_om = bench_now() - start;
-        s.faces_out = s.mesh->n_faces();
-        om_runs = 1;
-    } else {
-        t_om = bench_median(om_run, om_after, &s);
+    std::fprintf(stderr, "bench_subdiv4: ours and OpenMesh ModifiedButterflyT interleaved\n");
+    bench_side sides[2] = {bench_make_side("ours", ours_run, ours_after, &o),
+                           bench_make_side("openmesh", om_run, om_after, &s)};
+    if (large) sides[1].max_runs = 1;
+    if (bench_interleave(sides, 2, 0) != 0) {
+        std::printf("RESULT butterfly error=subdivision_failed\n");
+        return 1;
     }
-    long om_peak = bench_peak_rss_kb() - rss0;
     delete s.mesh;
     char maxdiff[64] = "skipped", maxdiff_b[64] = "skipped";
     if (!large) {
@@ -152,10 +144,13 @@ int main(int argc, char **argv)
             std::snprintf(maxdiff, sizeof maxdiff, "mismatch");
         }
     }
-    std::printf("RESULT butterfly tris_in=%zu tris_out=%zu ours_ms=%.1f openmesh_ms=%.1f ratio=%.3f maxdiff=%s "
-                "maxdiff_near_boundary=%s om_faces_out=%zu om_runs=%d ours_peak_rss_mb=%.1f openmesh_peak_rss_mb=%.1f\n",
-                in.triangle_count, o.tris_out, 1e3 * t_ours, 1e3 * t_om, t_ours / t_om, maxdiff, maxdiff_b, s.faces_out,
-                om_runs, ours_peak / 1024.0, om_peak / 1024.0);
+    std::printf("RESULT butterfly tris_in=%zu tris_out=%zu", in.triangle_count, o.tris_out);
+    bench_print_ms("ours", &sides[0]);
+    bench_print_ms("openmesh", &sides[1]);
+    bench_print_ratio(&sides[0], &sides[1]);
+    std::printf(" maxdiff=%s maxdiff_near_boundary=%s om_faces_out=%zu om_runs=%d ours_peak_rss_mb=%.1f "
+                "openmesh_peak_rss_mb=%.1f\n",
+                maxdiff, maxdiff_b, s.faces_out, sides[1].runs, sides[0].peak_kb / 1024.0, sides[1].peak_kb / 1024.0);
     mio_free_mesh(&in);
     return o.tris_out == s.faces_out ? 0 : 1;
 }
