@@ -2,8 +2,8 @@
 
    build/bench_bvh [MESH]      (default build/sphere1m.off)
 
-   Figures (each side in this process, on the same mesh and the same rays, median of 5 after a
-   warm-up, see bench.h):
+   Figures (each side in this process, on the same mesh and the same rays; the sides of a figure
+   interleaved, one warm-up each and 11 rounds, medians with min/max, see bench.h):
      RESULT bvh_build tris=<n> ours_ms=<t> embree_ms=<t> ratio=<ours/embree>
          ours: dm_bvh_build (default options, the huge-page allocator of bench.h as dispmesh.h
          recommends on Linux, like Embree's own allocator): validation, triangle boxes, binned
@@ -21,8 +21,9 @@
          RTC_SCENE_FLAG_ROBUST disagree on hit/miss or |dt| > 1e-5 max(t, 1e-3 diagonal); ties:
          hits at the same t on a different triangle (shared edges), not mismatches.
      RESULT bvh_build_malloc / bvh_trace_malloc ...: ours with plain malloc (NULL allocator), for
-         comparison; the ratio is against the same Embree figure.
-     RESULT bvh_trace_batch ...: ours through dm_bvh_intersect_batch.
+         comparison; the ratio is against the same Embree figure (a third side of the build's
+         interleaving, a fourth of the trace's).
+     RESULT bvh_trace_batch ...: ours through dm_bvh_intersect_batch (the third side of the trace).
      RESULT bvh_memory ours_mb=<m> nodes=<n> leaves=<n> depth=<d> sah=<c>
    ratio < 1 for build time means we are faster; ratio > 1 for Mrays/s means we are faster.
    Rays are a pure function of the mesh (splitmix64 hashes, no rand()). */
@@ -73,8 +74,10 @@ struct state {
     std::vector<dm_hit> ours;
     std::vector<float> embree_t;
     std::vector<unsigned> embree_prim;
-    size_t hits = 0;
+    size_t hits = 0, embree_hits = 0, ours_hits = 0;
     const dm_allocator *alloc = nullptr; /* ours: NULL = malloc, else the huge-page allocator */
+    const dm_allocator *hugepages = nullptr;
+    dm_bvh *bvh_malloc = nullptr; /* ours with malloc, for bvh_trace_malloc */
 };
 
 static RTCScene embree_scene(state &s, RTCSceneFlags flags)
@@ -110,6 +113,18 @@ static int run_ours_build(void *user)
     dm_bvh_options o = {};
     o.allocator = s.alloc;
     return dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, &o, &s.bvh) == DM_OK ? 0 : 1;
+}
+static int run_ours_build_hugepages(void *user)
+{
+    state &s = *(state *)user;
+    s.alloc = s.hugepages;
+    return run_ours_build(user);
+}
+static int run_ours_build_malloc(void *user)
+{
+    state &s = *(state *)user;
+    s.alloc = nullptr;
+    return run_ours_build(user);
 }
 static void free_ours(void *user)
 {
@@ -152,14 +167,40 @@ static int run_embree_trace(void *user)
     embree_trace(s.scene, *s.rays, s.embree_t, s.embree_prim, &s.hits);
     return 0;
 }
+static void embree_trace_after(void *user)
+{
+    state &s = *(state *)user;
+    s.embree_hits = s.hits;
+}
+static size_t ours_trace(const dm_bvh *bvh, const std::vector<dm_ray> &rays, std::vector<dm_hit> &hits)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < rays.size(); i++) n += (size_t)dm_bvh_intersect(bvh, &rays[i], &hits[i]);
+    return n;
+}
 static int run_ours_trace(void *user)
 {
     state &s = *(state *)user;
-    const std::vector<dm_ray> &rays = *s.rays;
-    size_t n = 0;
-    for (size_t i = 0; i < rays.size(); i++) n += (size_t)dm_bvh_intersect(s.bvh, &rays[i], &s.ours[i]);
-    s.hits = n;
+    s.hits = ours_trace(s.bvh, *s.rays, s.ours);
     return 0;
+}
+static void ours_trace_after(void *user)
+{
+    state &s = *(state *)user;
+    s.ours_hits = s.hits;
+}
+static int run_ours_trace_malloc(void *user)
+{
+    state &s = *(state *)user;
+    s.hits = ours_trace(s.bvh_malloc, *s.rays, s.ours);
+    return 0;
+}
+
+/* " <key>_mrays=<median> <key>_mrays_min=<...> <key>_mrays_max=<...>": rays over the run times */
+static void print_mrays(const char *key, const bench_side &side, size_t rays)
+{
+    printf(" %s_mrays=%.3f %s_mrays_min=%.3f %s_mrays_max=%.3f", key, rays / side.median * 1e-6, key,
+           rays / side.max * 1e-6, key, rays / side.min * 1e-6);
 }
 static int run_ours_batch(void *user)
 {
@@ -202,20 +243,28 @@ int main(int argc, char **argv)
     bounds(s.m);
     const double diag = s.m.diag;
 
-    fprintf(stderr, "bench_bvh: %s, %zu triangles: build\n", path, s.m.nt);
-    double embree_build = bench_median(run_embree_build, free_embree, &s);
+    fprintf(stderr, "bench_bvh: %s, %zu triangles: build, Embree and ours (huge pages, malloc) interleaved\n", path,
+            s.m.nt);
     static const dm_allocator hugepages = {bench_hugepage_alloc, bench_hugepage_free, nullptr};
-    double ours_build_malloc = bench_median(run_ours_build, free_ours, &s);
-    s.alloc = &hugepages;
-    double ours_build = bench_median(run_ours_build, free_ours, &s);
-    printf("RESULT bvh_build tris=%zu ours_ms=%.3f embree_ms=%.3f ratio=%.3f\n", s.m.nt, 1e3 * ours_build,
-           1e3 * embree_build, ours_build / embree_build);
-    printf("RESULT bvh_build_malloc tris=%zu ours_ms=%.3f ratio=%.3f\n", s.m.nt, 1e3 * ours_build_malloc,
-           ours_build_malloc / embree_build);
+    s.hugepages = &hugepages;
+    bench_side build[3] = {bench_make_side("embree", run_embree_build, free_embree, &s),
+                           bench_make_side("ours", run_ours_build_hugepages, free_ours, &s),
+                           bench_make_side("ours_malloc", run_ours_build_malloc, free_ours, &s)};
+    if (bench_interleave(build, 3, 0) != 0) {
+        fprintf(stderr, "a BVH build failed\n");
+        return 1;
+    }
+    printf("RESULT bvh_build tris=%zu", s.m.nt);
+    bench_print_ms("ours", &build[1]);
+    bench_print_ms("embree", &build[0]);
+    bench_print_ratio(&build[1], &build[0]);
+    printf("\nRESULT bvh_build_malloc tris=%zu", s.m.nt);
+    bench_print_ms("ours", &build[2]);
+    bench_print_ratio(&build[2], &build[0]);
+    printf("\n");
     fflush(stdout);
 
-    dm_bvh *with_malloc = nullptr;
-    if (dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, NULL, &with_malloc) != DM_OK || run_ours_build(&s) != 0) {
+    if (dm_bvh_build(s.m.pos, s.m.nv, s.m.idx, s.m.nt, NULL, &s.bvh_malloc) != DM_OK || run_ours_build_hugepages(&s) != 0) {
         fprintf(stderr, "dm_bvh_build failed\n");
         return 1;
     }
@@ -241,10 +290,13 @@ int main(int argc, char **argv)
         s.ours.assign(count, dm_hit());
         s.embree_t.assign(count, 0.0f);
         s.embree_prim.assign(count, 0);
-        double embree_s = bench_median(run_embree_trace, NULL, &s);
-        size_t embree_hits = s.hits;
-        double ours_s = bench_median(run_ours_trace, NULL, &s);
-        size_t ours_hits = s.hits;
+        bench_side trace[4] = {bench_make_side("embree", run_embree_trace, embree_trace_after, &s),
+                               bench_make_side("ours", run_ours_trace, ours_trace_after, &s),
+                               bench_make_side("ours_batch", run_ours_batch, nullptr, &s),
+                               bench_make_side("ours_malloc", run_ours_trace_malloc, nullptr, &s)};
+        if (bench_interleave(trace, 4, 0) != 0) return 1;
+        run_ours_trace(&s); /* s.ours from dm_bvh_intersect on the huge-page BVH, for the check */
+        size_t embree_hits = s.embree_hits, ours_hits = s.ours_hits;
 
         /* mismatches against the robust scene */
         std::vector<float> rt(count);
@@ -269,25 +321,23 @@ int main(int argc, char **argv)
                 }
             }
         }
-        printf("RESULT bvh_trace kind=%s rays=%zu ours_mrays=%.3f embree_mrays=%.3f ratio=%.3f mismatches=%zu "
-               "ties=%zu ours_hits=%zu embree_hits=%zu robust_hits=%zu",
-               name, count, count / ours_s * 1e-6, count / embree_s * 1e-6, embree_s / ours_s, mismatches, ties,
-               ours_hits, embree_hits, robust_hits);
+        printf("RESULT bvh_trace kind=%s rays=%zu", name, count);
+        print_mrays("ours", trace[1], count);
+        print_mrays("embree", trace[0], count);
+        bench_print_ratio(&trace[0], &trace[1]); /* Embree's time over ours: ours' Mrays/s over Embree's */
+        printf(" mismatches=%zu ties=%zu ours_hits=%zu embree_hits=%zu robust_hits=%zu", mismatches, ties, ours_hits,
+               embree_hits, robust_hits);
         if (kind) printf(" simplified_tris=%zu", simplified);
+        printf("\nRESULT bvh_trace_batch kind=%s rays=%zu", name, count);
+        print_mrays("ours", trace[2], count);
+        bench_print_ratio(&trace[0], &trace[2]);
+        printf("\nRESULT bvh_trace_malloc kind=%s rays=%zu", name, count);
+        print_mrays("ours", trace[3], count);
+        bench_print_ratio(&trace[0], &trace[3]);
         printf("\n");
         fflush(stdout);
-        double batch_s = bench_median(run_ours_batch, NULL, &s);
-        printf("RESULT bvh_trace_batch kind=%s rays=%zu ours_mrays=%.3f ratio=%.3f\n", name, count,
-               count / batch_s * 1e-6, embree_s / batch_s);
-        dm_bvh *thp_bvh = s.bvh;
-        s.bvh = with_malloc;
-        double malloc_s = bench_median(run_ours_trace, NULL, &s);
-        s.bvh = thp_bvh;
-        printf("RESULT bvh_trace_malloc kind=%s rays=%zu ours_mrays=%.3f ratio=%.3f\n", name, count,
-               count / malloc_s * 1e-6, embree_s / malloc_s);
-        fflush(stdout);
     }
-    dm_bvh_free(with_malloc);
+    dm_bvh_free(s.bvh_malloc);
     rtcReleaseScene(robust);
     free_embree(&s);
     free_ours(&s);
