@@ -13,12 +13,14 @@
    compilation, vertex/index buffer upload, one warm-up frame per side.
    Timed, per frame: ours - sr_framebuffer_clear + sr_draw_mesh (the float framebuffer is final;
    no 8-bit conversion); llvmpipe - glClear + glDrawElements + glFinish.
-   Median of 5 frames after the warm-up (bench/bench.h). glibc's mmap threshold is fixed high
+   The sides interleaved frame by frame: one warm-up frame each, then 11 rounds (bench/bench.h),
+   medians with min/max. glibc's mmap threshold is fixed high
    for the whole process (see main) so that neither side page-faults fresh mappings every frame.
    diff_pixels: fraction of the pixels covered by either side whose 8-bit colours differ by more
    than 4/255 in any channel (ours converted with round-to-nearest, GL read back with glReadPixels).
 
-   Output: RESULT raster tris=<n> ours_ms=<t> llvmpipe_ms=<t> ratio=<ours/llvmpipe> diff_pixels=<f>
+   Output: RESULT raster tris=<n> ours_ms=<t> ours_ms_min=.. ours_ms_max=.. llvmpipe_ms=<t> ..
+               ratio=<ours/llvmpipe> ratio_min=.. ratio_max=.. diff_pixels=<f>
    Exit status 0; 1 bad arguments or unreadable mesh; 2 setup failure; 3 diff_pixels > 0.01.
    Build: c++ -O2 -Iexamples -Ibench bench/bench_raster.cpp -o bench_raster -lOSMesa -lm */
 #include "bench.h"
@@ -234,7 +236,7 @@ int main(int argc, char **argv)
     ours_side o;
     gl_side g;
     mio_error err;
-    double ours, gl;
+    bench_side sides[2];
     unsigned char *mine;
     size_t covered = 0, differ = 0;
     int i, x, y, status = 0;
@@ -276,13 +278,13 @@ int main(int argc, char **argv)
     o.d.cull = SR_CULL_BACK;
     o.d.lights = &s.light; o.d.light_count = 1;
     o.d.material = s.mat;
-    ours = bench_median(ours_run, NULL, &o);
 
     memset(&g, 0, sizeof g);
     g.s = &s;
     if (!gl_setup(&g)) { fprintf(stderr, "bench_raster: OpenGL setup failed\n"); return 2; }
-    gl = bench_median(gl_run, NULL, &g);
-    if (ours < 0 || gl < 0) return 2;
+    sides[0] = bench_make_side("ours", ours_run, NULL, &o);
+    sides[1] = bench_make_side("llvmpipe", gl_run, NULL, &g);
+    if (bench_interleave(sides, 2, 0) != 0) return 2;
 
     /* compare the last frames (GL rows are bottom-up) */
     mine = (unsigned char *)malloc((size_t)W * H * 4);
@@ -308,8 +310,11 @@ int main(int argc, char **argv)
         sr_write_png(name, rgb, W, H, 3, 1);
         free(rgb);
     }
-    printf("RESULT raster tris=%zu ours_ms=%.2f llvmpipe_ms=%.2f ratio=%.3f diff_pixels=%.5f\n", s.mesh.triangle_count,
-           1e3 * ours, 1e3 * gl, ours / gl, covered ? (double)differ / (double)covered : 0.0);
+    printf("RESULT raster tris=%zu", s.mesh.triangle_count);
+    bench_print_ms("ours", &sides[0]);
+    bench_print_ms("llvmpipe", &sides[1]);
+    bench_print_ratio(&sides[0], &sides[1]);
+    printf(" diff_pixels=%.5f\n", covered ? (double)differ / (double)covered : 0.0);
     fflush(stdout);
     if (covered == 0 || (double)differ > 0.01 * (double)covered) {
         fprintf(stderr, "bench_raster: the two pictures differ (%zu of %zu covered pixels): not the same work\n", differ, covered);

@@ -19,9 +19,11 @@
               GL_LINEAR, clamp to edge: the same bilinear lookups), writes gl_FragDepth of the hit,
               and shades with render.h's formula and the same shadow search. Shaders compiled and
               textures uploaded before timing; timed: glClear + glDrawArrays + glFinish.
-   Median of 5 runs after one warm-up (bench/bench.h). diff_pixels: the share of the frame's
+   Timing (bench/bench.h): render and llvmpipe interleaved frame by frame, one warm-up each and 11
+   rounds; synthesis and normal map (no peer) one warm-up and 11 runs; medians with min/max. diff_pixels: the share of the frame's
    pixels whose 8-bit colours differ by more than 4/255 in any channel, as bench_raster counts.
-   Output: RESULT relief res=512 synth_ms=<t> normal_ms=<t> render_ms=<t> llvmpipe_ms=<t> ratio=<ours/llvmpipe> diff_pixels=<share>
+   Output: RESULT relief res=512 synth_ms=<t> synth_ms_min=.. synth_ms_max=.. normal_ms=.. ..
+               render_ms=.. .. llvmpipe_ms=.. .. ratio=<ours/llvmpipe> ratio_min=.. ratio_max=.. diff_pixels=<share>
    Exit status 0; 1 bad arguments or unreadable example; 2 setup failure. */
 #include "bench.h"
 
@@ -384,23 +386,25 @@ int main(int argc, char **argv)
     fprintf(stderr, "bench_relief: example %dx%d, output %dx%d, frame %dx%d\n", s.example.width, s.example.height, RES, RES, FW, FH);
 
     synth_side so = {&s, {0, 0, NULL}};
-    double synth = bench_median(synth_run, synth_after, &so);
+    bench_side synth = bench_make_side("synthesis", synth_run, synth_after, &so);
+    int failed = bench_interleave(&synth, 1, 0);
     rl_synth_options opt = rl_synth_default_options();
-    if (synth < 0 || rl_synthesize(&s.example, &s.sketch, &opt, &s.fused) != RL_OK) { fprintf(stderr, "bench_relief: synthesis failed\n"); return 2; }
+    if (failed || rl_synthesize(&s.example, &s.sketch, &opt, &s.fused) != RL_OK) { fprintf(stderr, "bench_relief: synthesis failed\n"); return 2; }
     normal_side no = {s.fused.data, (float *)malloc(sizeof(float) * 3 * RES * RES)};
-    double normal = no.out ? bench_median(normal_run, NULL, &no) : -1.0;
+    bench_side normal = bench_make_side("normal map", normal_run, NULL, &no);
+    if (!no.out || bench_interleave(&normal, 1, 0) != 0) return 2;
     free(no.out);
     if (!make_face(&s.fused, s.depth_scale, &s.front) || !make_face(&s.example, s.depth_scale, &s.side)) return 2;
 
     render_side ro;
     ro.s = &s;
     if (sr_framebuffer_create(&ro.fb, FW, FH, NULL) != SR_OK) return 2;
-    double ours = bench_median(render_run, NULL, &ro);
 
     gl_side g;
     g.s = &s;
     if (!gl_setup(&g)) return 2;
-    double gl = bench_median(gl_run, NULL, &g);
+    bench_side frame[2] = {bench_make_side("ours", render_run, NULL, &ro), bench_make_side("llvmpipe", gl_run, NULL, &g)};
+    if (bench_interleave(frame, 2, 0) != 0) return 2;
     p_glReadPixels(0, 0, FW, FH, GL_RGBA, GL_UNSIGNED_BYTE, g.buf);
 
     unsigned char *mine = (unsigned char *)malloc((size_t)FW * FH * 4);
@@ -422,8 +426,13 @@ int main(int argc, char **argv)
         sr_write_png(p1, mine, FW, FH, 4, 0);
         sr_write_png(p2, g.buf, FW, FH, 4, 1);
     }
-    printf("RESULT relief res=%d synth_ms=%.1f normal_ms=%.3f render_ms=%.2f llvmpipe_ms=%.2f ratio=%.3f diff_pixels=%.5f\n", RES, 1e3 * synth,
-           1e3 * normal, 1e3 * ours, 1e3 * gl, ours / gl, (double)differ / ((double)FW * FH));
+    printf("RESULT relief res=%d", RES);
+    bench_print_ms("synth", &synth);
+    bench_print_ms("normal", &normal);
+    bench_print_ms("render", &frame[0]);
+    bench_print_ms("llvmpipe", &frame[1]);
+    bench_print_ratio(&frame[0], &frame[1]);
+    printf(" diff_pixels=%.5f\n", (double)differ / ((double)FW * FH));
     free(mine);
     sr_framebuffer_free(&ro.fb);
     OSMesaDestroyContext(g.ctx);
