@@ -60,6 +60,11 @@
                           DFM_ORTHO_NONE (0), DFM_ORTHO_POLAR (the closest rotation, scaled
                           Newton iteration), DFM_ORTHO_GRAM_SCHMIDT (N first, then b1).
        refine_steps       iterative refinement steps per solve (0: none).
+       rigid_steps        LRI: as-rigid-as-possible steps after the LRI solve (0: none, the
+                          thesis; at most 100). Each step fits every unknown's rotation to the
+                          solved positions (R_i maximizing tr(R^T sum_j w_ij e'_ij e_ij^T), started
+                          from its LRI rotation) and solves the positions system again with the
+                          same factor: one 3-column solve a step, no memory. See DECISIONS.
        allocator, progress, progress_user: as in part 2; progress runs during the setup only.
      WHEN THE FRAME CHOICE CHANGES THE RESULT
        Only with DFM_ORTHO_GRAM_SCHMIDT. Choosing another b1 replaces F_i by F_i Q_i (Q_i a turn
@@ -123,6 +128,18 @@
          differ by the orthogonal factor F_j), a ninth of the factor and a third of the work.
          When every known rotation is I or one R (a rigid handle), M = I + phi (R - I) with one
          scalar solve for phi, exactly (the problem is linear); other poses take 9 solves.
+       - LRI's rotations come from the frames solve alone (M harmonic between the fixed
+         frames and the handle's), whatever the handle's positions ask for: when a pose's
+         positions and rotations disagree along the way (a thick part bent about a line off its
+         centre, a handle far off the region's axis) the positions solve absorbs the mismatch
+         as stretch. With polar frames the positions system is exactly the global step of
+         as-rigid-as-possible editing (Sorkine and Alexa 2007): F'_i c_ij = R_i (x_j - x_i), so
+         the row is x'_j - x'_i = (R_i + R_j) (x_j - x_i) / 2. rigid_steps therefore adds that
+         method's local-global steps, started from LRI's rotations instead of identities; each
+         lowers the ARAP energy, keeps rigid motions exact and the frame choice irrelevant.
+         The local fit is the iteration R <- rot(w) R, w = sum_k R_k x S_k / |sum_k R_k . S_k|
+         over the columns (Mueller et al. 2016), at most 4 rounds from the previous rotation: no
+         inverse (a flat 1-ring's S has rank 2, where Newton's polar iteration fails) and no SVD.
        - The ROI's outside neighbours enter as known values (the thesis leaves this open), and
          only rows that touch an unknown are assembled, so the cost follows the ROI, not the mesh.
 
@@ -476,6 +493,7 @@ typedef struct dfm_deform_options {
     int frames;            /* LRI: DFM_FRAMES_FIRST_EDGE (0) or DFM_FRAMES_MAX_ELEVATION (ch. 4) */
     int orthonormalize;    /* LRI: DFM_ORTHO_NONE (0), DFM_ORTHO_POLAR, DFM_ORTHO_GRAM_SCHMIDT */
     int refine_steps;      /* iterative refinement steps per solve (0 = none) */
+    int rigid_steps;       /* LRI: local-global (as-rigid-as-possible) steps after the solve (0) */
     const dfm_allocator *allocator;
     int (*progress)(void *user, float done);
     void *progress_user;
@@ -4038,7 +4056,7 @@ static dfm_result dfm__deform_check(const double *pos, size_t nv, const uint32_t
     if (o->handle_constraint < DFM_HANDLE_HARD || o->handle_constraint > DFM_HANDLE_SOFT) return DFM_ERR_INVALID_ARGUMENT;
     if (o->frames < DFM_FRAMES_FIRST_EDGE || o->frames > DFM_FRAMES_MAX_ELEVATION) return DFM_ERR_INVALID_ARGUMENT;
     if (o->orthonormalize < DFM_ORTHO_NONE || o->orthonormalize > DFM_ORTHO_GRAM_SCHMIDT) return DFM_ERR_INVALID_ARGUMENT;
-    if (o->refine_steps < 0) return DFM_ERR_INVALID_ARGUMENT;
+    if (o->refine_steps < 0 || o->rigid_steps < 0 || o->rigid_steps > 100) return DFM_ERR_INVALID_ARGUMENT;
     if (!dfm__finite(o->handle_weight) || o->handle_weight < 0.0) return DFM_ERR_BAD_VALUE;
     if (nv > DFM__MAX_N / 9 || nt > ((size_t)-1 >> 4) / 6) return DFM_ERR_TOO_LARGE;
     for (v = 0; v < 3 * nt; v++)
@@ -4726,10 +4744,84 @@ static void dfm__lri_position_rhs(dfm_deform *d)
     }
 }
 
+/* R <- the rotation by |w| about w, times R (Rodrigues' formula). */
+static void dfm__turn(const double *w, double *R)
+{
+    double t = sqrt(dfm__dot3(w, w)), a[3], K[9], T[9], sn, cs;
+    int k;
+    if (!(t > 0.0)) return;
+    for (k = 0; k < 3; k++) a[k] = w[k] / t;
+    sn = sin(t);
+    cs = 1.0 - cos(t);
+    dfm__skew(a, K);
+    dfm__mul33(K, K, T);
+    for (k = 0; k < 9; k++) T[k] = (k % 4 == 0) + sn * K[k] + cs * T[k];
+    dfm__mul33(T, R, K);
+    memcpy(R, K, sizeof K);
+}
+
+/* The rotation R maximizing tr(R^T S) (the polar factor of S when det S > 0), from a start R
+   close to it: R <- rot(w) R with w = sum_k R_k x S_k / |sum_k R_k . S_k| over the columns k
+   (Mueller, Bender, Chentanez, Macklin 2016), at most 4 steps. Unlike Newton's iteration it
+   needs no inverse (a flat ring's sum is of rank 2), and it commutes with rotations: S -> Q S,
+   R -> Q R gives Q R. */
+static void dfm__fit_rotation(const double *S, double *R)
+{
+    int it, c;
+    for (it = 0; it < 4; it++) {
+        double w[3] = {0, 0, 0}, dot = 0.0, r[3], s[3], x[3];
+        for (c = 0; c < 3; c++) {
+            r[0] = R[c], r[1] = R[3 + c], r[2] = R[6 + c];
+            s[0] = S[c], s[1] = S[3 + c], s[2] = S[6 + c];
+            dfm__cross3(r, s, x);
+            w[0] += x[0], w[1] += x[1], w[2] += x[2];
+            dot += dfm__dot3(r, s);
+        }
+        dot = fabs(dot) + 1e-300;
+        for (c = 0; c < 3; c++) w[c] /= dot;
+        if (!(dfm__dot3(w, w) > 1e-18)) return;
+        dfm__turn(w, R);
+    }
+}
+
+/* LRI's rigid step, local part: each unknown's rotation refitted to the solved positions, R_i =
+   argmax tr(R^T S_i), S_i = sum_j w_ij e'_ij e_ij^T, e = x_j - x_i (the as-rigid-as-possible local
+   step), started from the rotation it had (its polar factor on the first step, unless the frames
+   were orthonormalized that way). d->G gets R_i F_i - F_i, so that dfm__lri_position_rhs builds
+   the global step's right-hand side. */
+static void dfm__lri_fit_rotations(dfm_deform *d, int first)
+{
+    size_t u, p, k, c, nv = d->nv;
+    for (u = 0; u < d->nu; u++) {
+        size_t i = (size_t)d->unk_v[u];
+        const double *F = d->frame + 9 * i;
+        double *G = d->G + 9 * i, S[9] = {0}, R[9];
+        for (p = d->g.start[i]; p < d->g.start[i + 1]; p++) {
+            size_t j = (size_t)d->g.adj[p];
+            double e[3], ep[3], w = d->g.w[p];
+            for (k = 0; k < 3; k++) {
+                e[k] = d->pos[3 * j + k] - d->pos[3 * i + k];
+                ep[k] = w * (e[k] + d->X[k * nv + j] - d->X[k * nv + i]);
+            }
+            for (k = 0; k < 9; k++) S[k] += ep[k / 3] * e[k % 3];
+        }
+        for (c = 0; c < 3; c++) /* R_i = (G_i + F_i) F_i^T */
+            for (k = 0; k < 3; k++)
+                R[3 * c + k] = (G[3 * c] + F[3 * c]) * F[3 * k] + (G[3 * c + 1] + F[3 * c + 1]) * F[3 * k + 1] +
+                               (G[3 * c + 2] + F[3 * c + 2]) * F[3 * k + 2];
+        if (first && d->opt.orthonormalize != DFM_ORTHO_POLAR) dfm__polar(R);
+        dfm__fit_rotation(S, R);
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++)
+                G[3 * c + k] = R[3 * c] * F[k] + R[3 * c + 1] * F[3 + k] + R[3 * c + 2] * F[6 + k] - F[3 * c + k];
+    }
+}
+
 DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const double *rotations, double *out)
 {
     dfm_result err;
     size_t a, v, q, nv, bs;
+    int k;
     if (!d || !targets || !out) return DFM_ERR_INVALID_ARGUMENT;
     nv = d->nv;
     bs = d->sys.bs;
@@ -4741,6 +4833,11 @@ DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const d
     if (err != DFM_OK) return err;
     dfm__known_displacements(d, targets, bs);
     err = dfm__lsq_solve(&d->sys, d->opt.method == DFM_METHOD_LRI ? d->rowb : NULL, d->X, d->opt.refine_steps);
+    for (k = 0; err == DFM_OK && d->opt.method == DFM_METHOD_LRI && k < d->opt.rigid_steps; k++) {
+        dfm__lri_fit_rotations(d, k == 0);
+        dfm__lri_position_rhs(d);
+        err = dfm__lsq_solve(&d->sys, d->rowb, d->X, d->opt.refine_steps);
+    }
     if (err != DFM_OK) return err;
     if (out != targets) memcpy(out, targets, 3 * nv * sizeof(double)); /* the known vertices */
     for (a = 0; a < d->nu; a++) {

@@ -126,20 +126,22 @@ static double *deform(const tube *m, const dfm_deform_options *o, const double *
 }
 
 /* the configurations every property is checked on */
-#define NCONF 7
+#define NCONF 9
 static dfm_deform_options conf(int k)
 {
     dfm_deform_options o = dfm_deform_default_options();
     static const int method[NCONF] = {DFM_METHOD_LAPLACIAN, DFM_METHOD_LAPLACIAN, DFM_METHOD_FITTING,
-                                      DFM_METHOD_LRI, DFM_METHOD_LRI, DFM_METHOD_LRI, DFM_METHOD_LRI};
+                                      DFM_METHOD_LRI,       DFM_METHOD_LRI,       DFM_METHOD_LRI,
+                                      DFM_METHOD_LRI,       DFM_METHOD_LRI,       DFM_METHOD_LRI};
     o.method = method[k];
-    o.weights = k == 1 || k == 6 ? DFM_WEIGHTS_COTAN : DFM_WEIGHTS_UNIFORM;
-    o.orthonormalize = k == 4 ? DFM_ORTHO_POLAR : k == 5 ? DFM_ORTHO_GRAM_SCHMIDT : DFM_ORTHO_NONE;
-    o.handle_constraint = k == 6 ? DFM_HANDLE_SOFT : DFM_HANDLE_HARD;
+    o.weights = k == 1 || k == 6 || k == 7 ? DFM_WEIGHTS_COTAN : DFM_WEIGHTS_UNIFORM;
+    o.orthonormalize = k == 4 || k == 7 ? DFM_ORTHO_POLAR : k == 5 ? DFM_ORTHO_GRAM_SCHMIDT : DFM_ORTHO_NONE;
+    o.handle_constraint = k == 6 || k == 8 ? DFM_HANDLE_SOFT : DFM_HANDLE_HARD;
+    o.rigid_steps = k >= 7 ? 3 : 0;
     return o;
 }
-static const char *conf_name[NCONF] = {"laplacian", "laplacian-cotan", "fitting", "lri", "lri-polar", "lri-gs",
-                                       "lri-cotan-soft"};
+static const char *conf_name[NCONF] = {"laplacian", "laplacian-cotan", "fitting",     "lri",       "lri-polar",
+                                       "lri-gs",    "lri-cotan-soft",  "lri-rigid3", "lri-soft-rigid3"};
 
 /* a 90-degree bend of the tube's ROI towards +x */
 static void bend_pose(const tube *m, double angle, double *targets, double *rot)
@@ -336,10 +338,11 @@ static void test_frame_choice(const tube *m)
     T_CHECK_MSG(differ > m->nv / 2, "frames differ at %d of %d vertices", (int)differ, (int)m->nv);
     dfm_deform_free(d1);
     dfm_deform_free(d2);
-    for (ortho = DFM_ORTHO_NONE; ortho <= DFM_ORTHO_GRAM_SCHMIDT; ortho++) {
+    for (ortho = DFM_ORTHO_NONE; ortho <= DFM_ORTHO_GRAM_SCHMIDT + 1; ortho++) { /* last: polar + rigid steps */
         dfm_result e1, e2;
         double *a, *b, e;
-        o = method_options(DFM_METHOD_LRI, ortho);
+        o = method_options(DFM_METHOD_LRI, ortho > DFM_ORTHO_GRAM_SCHMIDT ? DFM_ORTHO_POLAR : ortho);
+        o.rigid_steps = ortho > DFM_ORTHO_GRAM_SCHMIDT ? 4 : 0;
         a = deform(m, &o, tg, rot, &e1);
         o.frames = DFM_FRAMES_MAX_ELEVATION;
         b = deform(m, &o, tg, rot, &e2);
@@ -420,6 +423,79 @@ static void test_bend_quality(void)
     printf("bend 90, edge distortion (the ideal bend has its own): laplacian %.4f fitting %.4f lri %.4f\n", ed[0],
            ed[1], ed[2]);
     T_CHECK_MSG(err[2] <= err[0] / 3.0, "lri %.4f vs laplacian %.4f", err[2], err[0]);
+    free(tg);
+    free(rot);
+    free_tube(&m);
+}
+
+/* The as-rigid-as-possible energy sum_i sum_j w_ij |e'_ij - R_i e_ij|^2 of a result over the
+   setup's mesh graph, with R_i the best rotation (the polar factor of sum_j w_ij e'_ij e_ij^T) at
+   the unknowns and the given rotation at the known vertices. */
+static double arap_energy(const dfm_deform *d, const double *out, const double *rot)
+{
+    size_t i, p, k;
+    double E = 0.0;
+    for (i = 0; i < d->nv; i++) {
+        double S[9] = {0}, R[9];
+        for (k = 0; k < 9; k++) R[k] = rot[9 * i + k];
+        if (d->unk[i] >= 0) {
+            for (p = d->g.start[i]; p < d->g.start[i + 1]; p++) {
+                size_t j = (size_t)d->g.adj[p];
+                for (k = 0; k < 9; k++)
+                    S[k] += d->g.w[p] * (out[3 * j + k / 3] - out[3 * i + k / 3]) *
+                            (d->pos[3 * j + k % 3] - d->pos[3 * i + k % 3]);
+            }
+            memcpy(R, S, sizeof S);
+            dfm__polar(R);
+        }
+        for (p = d->g.start[i]; p < d->g.start[i + 1]; p++) {
+            size_t j = (size_t)d->g.adj[p];
+            double e[3], r;
+            int c;
+            for (c = 0; c < 3; c++) e[c] = d->pos[3 * j + c] - d->pos[3 * i + c];
+            for (c = 0; c < 3; c++) {
+                r = out[3 * j + c] - out[3 * i + c] - (R[3 * c] * e[0] + R[3 * c + 1] * e[1] + R[3 * c + 2] * e[2]);
+                E += d->g.w[p] * r * r;
+            }
+        }
+    }
+    return E;
+}
+
+/* LRI's rigid steps are local-global steps on the ARAP energy started from LRI's result: the
+   energy (each unknown's rotation the best one) never rises from one step count to the next
+   (block descent; 1e-9 relative for rounding and the local fit's last iteration) and falls in all.
+   Uniform and cotangent weights. */
+static void test_rigid_steps(void)
+{
+    tube m = make_tube(40, 16, 8.0, 0.02);
+    double *tg = (double *)malloc(3 * m.nv * sizeof(double)), *rot = (double *)malloc(9 * m.nv * sizeof(double));
+    int weights;
+    bend_pose(&m, 0.5 * PI, tg, rot);
+    for (weights = DFM_WEIGHTS_UNIFORM; weights <= DFM_WEIGHTS_COTAN; weights++) {
+        dfm_deform_options o = method_options(DFM_METHOD_LRI, DFM_ORTHO_POLAR);
+        dfm_deform *d = NULL;
+        double E[6], ed[6], *out = (double *)malloc(3 * m.nv * sizeof(double));
+        int k, monotone = 1;
+        o.weights = weights;
+        for (k = 0; k < 6; k++) {
+            o.rigid_steps = k == 0 ? 0 : 1 << (k - 1); /* 0 1 2 4 8 16 */
+            T_EQ_INT(dfm_deform_setup(m.pos, m.nv, m.idx, m.nt, m.roi, m.handle, &o, &d), DFM_OK);
+            E[k] = ed[k] = HUGE_VAL;
+            if (d && dfm_deform_solve(d, tg, rot, out) == DFM_OK) {
+                E[k] = arap_energy(d, out, rot);
+                ed[k] = edge_distortion(&m, out);
+            }
+            dfm_deform_free(d);
+            if (k > 0) monotone &= E[k] <= E[k - 1] * (1.0 + 1e-9);
+        }
+        printf("rigid steps 0 1 2 4 8 16 (%s weights): ARAP energy %.4g %.4g %.4g %.4g %.4g %.4g, edge distortion "
+               "%.4f -> %.4f\n",
+               weights ? "cotangent" : "uniform", E[0], E[1], E[2], E[3], E[4], E[5], ed[0], ed[5]);
+        T_CHECK_MSG(monotone, "the ARAP energy rose with more steps");
+        T_CHECK_MSG(E[5] < E[0], "16 steps: energy %.4g, none: %.4g", E[5], E[0]);
+        free(out);
+    }
     free(tg);
     free(rot);
     free_tube(&m);
@@ -606,6 +682,11 @@ static void test_bad_input(const tube *m)
     T_EQ_INT(setup_code(m, NULL, m->idx, m->nv, m->nt, m->roi, m->handle, &o), DFM_ERR_INVALID_ARGUMENT);
     T_EQ_INT(dfm_deform_setup(m->pos, m->nv, m->idx, m->nt, m->roi, m->handle, &o, NULL), DFM_ERR_INVALID_ARGUMENT);
     o.method = 3;
+    T_EQ_INT(setup_code(m, m->pos, m->idx, m->nv, m->nt, m->roi, m->handle, &o), DFM_ERR_INVALID_ARGUMENT);
+    o = dfm_deform_default_options();
+    o.rigid_steps = -1;
+    T_EQ_INT(setup_code(m, m->pos, m->idx, m->nv, m->nt, m->roi, m->handle, &o), DFM_ERR_INVALID_ARGUMENT);
+    o.rigid_steps = 101;
     T_EQ_INT(setup_code(m, m->pos, m->idx, m->nv, m->nt, m->roi, m->handle, &o), DFM_ERR_INVALID_ARGUMENT);
     o = dfm_deform_default_options();
     o.handle_weight = -1.0;
@@ -897,6 +978,7 @@ int main(int argc, char **argv)
     test_soft_to_hard(&m);
     test_frame_choice(&m);
     test_bend_quality();
+    test_rigid_steps();
     test_refine_and_lone_vertex(&m);
     test_polar();
     test_single_rotation_path(&m);
