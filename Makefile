@@ -38,6 +38,8 @@ HAVE_OSMESA   := $(wildcard /usr/include/GL/osmesa.h)
 HAVE_MESHOPT  := $(wildcard /usr/include/meshoptimizer.h)
 HAVE_CHOLMOD  := $(wildcard /usr/include/suitesparse/cholmod.h)
 HAVE_EIGEN    := $(wildcard /usr/include/eigen3/Eigen/Sparse)
+HAVE_ASSIMP   := $(wildcard /usr/include/assimp/Importer.hpp)
+HAVE_TINYOBJ  := $(wildcard /usr/include/tiny_obj_loader.h)
 
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain $(B)/dispmesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
@@ -51,7 +53,7 @@ REF_TESTS  = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/ref_openmesh $(B)/ref
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE)),$(B)/ref_embree $(B)/ref_embree_bvh $(B)/ref_dispmesh_base) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_EMBREE)),$(B)/ref_openmesh_simplify) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/ref_dispmesh_bake)
-BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_meshio) \
+BENCHES    = $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH),$(HAVE_ASSIMP),$(HAVE_TINYOBJ)),$(B)/bench_meshio) \
              $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_raster) \
              $(if $(and $(HAVE_CXX),$(HAVE_EMBREE),$(HAVE_MESHOPT)),$(B)/bench_bvh) \
              $(if $(and $(HAVE_CXX),$(HAVE_OPENMESH)),$(B)/bench_subdiv4) \
@@ -139,7 +141,7 @@ fuzz: fuzz-build
 
 # ---- benchmarks -----------------------------------------------------------------------------------
 # Each bench names the peer libraries it links in BENCH_LIBS_<name>.
-BENCH_LIBS_meshio = -lOpenMeshCore
+BENCH_LIBS_meshio = -lOpenMeshCore -lassimp -ltinyobjloader
 BENCH_LIBS_raster = -lOSMesa
 BENCH_LIBS_bvh    = -lembree3 -lmeshoptimizer
 BENCH_LIBS_subdiv4 = -lOpenMeshCore

@@ -1,24 +1,39 @@
-/* bench_meshio - loading a triangle mesh: meshio.h (mio_read_file) vs OpenMesh
-   (OpenMesh::IO::read_mesh into a TriMesh_ArrayKernelT<>, default options).
+/* bench_meshio - loading a triangle mesh: meshio.h (mio_read_file) vs loaders that also return
+   flat arrays (tinyobjloader for OBJ, assimp's importer without post-processing for every format)
+   and vs loading into OpenMesh (OpenMesh::IO::read_mesh into a TriMesh_ArrayKernelT<>, default
+   options, which also builds the halfedge connectivity).
 
    usage: bench_meshio [MESH] [-o COPY.ply]
-     MESH   input mesh, any format both read (default build/sphere1m.off)
+     MESH   input mesh, any format meshio, assimp and OpenMesh read (default build/sphere1m.off)
      -o     keep the binary little-endian PLY copy under this name (default: a temporary file
             $TMPDIR/bench_meshio_<pid>.ply, removed at the end)
 
-   Two figures: the input file as given, and a binary PLY copy of it written by mio_write_ply.
-   Per figure, each side: one warm-up read, then the median of 5 timed reads (bench/bench.h),
-   single thread, same process. Timed: meshio - mio_read_file() alone; OpenMesh - constructing
-   the empty TriMesh and OpenMesh::IO::read_mesh(). Not timed: mio_free_mesh() and deleting the
-   TriMesh. Peak RSS is measured per side from a reset high-water mark. Details in README.md. */
+   Three figures: the input file as given, a binary PLY copy of it written by mio_write_ply and a
+   binary STL copy written by this bench. Per figure the sides are interleaved (bench/bench.h:
+   one warm-up read each, then 11 rounds of meshio, tinyobjloader (OBJ only), assimp, OpenMesh),
+   single thread, same process. Timed: meshio - mio_read_file(); tinyobjloader - tinyobj::LoadObj
+   (triangulate on, as its default); assimp - constructing an Assimp::Importer and ReadFile(path,
+   0); OpenMesh - constructing the empty TriMesh and OpenMesh::IO::read_mesh(). Not timed: freeing.
+   Peak RSS per side: its warm-up run's, from a reset high-water mark. Details in README.md.
+
+   Output, per format: one line for meshio, then one per peer:
+     RESULT bench_meshio format=<f> side=meshio file_mb=.. triangles=.. vertices=.. meshio_ms=.. ..
+     RESULT bench_meshio format=<f> peer=<tinyobjloader_flat|assimp_flat|openmesh_halfedge>
+         vertices=.. peer_ms=.. .. ratio=<meshio / peer, per round> .. peak_rss_mb=..
+   Exit status 1 when a side fails or reads another number of triangles than meshio. */
 #include "bench.h"
 
 #include "openmesh.hpp"
+
+#include <assimp/Importer.hpp>
+#include <assimp/scene.h>
+#include <tiny_obj_loader.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <vector>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -69,21 +84,58 @@ static void openmesh_after(void *user)
     s->mesh = NULL;
 }
 
-struct side_result {
-    double seconds;
-    double peak_mb; /* high-water mark above the RSS at the start of the side */
+struct tinyobj_side {
+    const char *path;
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> materials;
+    std::string warn, err;
+    size_t vertices, triangles;
 };
 
-static side_result measure(int (*run)(void *), void (*after)(void *), void *user)
+static int tinyobj_run(void *user)
 {
-    side_result r;
-    long before, peak;
-    int reset = bench_reset_peak_rss();
-    before = bench_current_rss_kb();
-    r.seconds = bench_median(run, after, user);
-    peak = bench_peak_rss_kb();
-    r.peak_mb = (reset == 0 && before >= 0 && peak >= before) ? (double)(peak - before) / 1024.0 : -1.0;
-    return r;
+    tinyobj_side *s = (tinyobj_side *)user;
+    return tinyobj::LoadObj(&s->attrib, &s->shapes, &s->materials, &s->warn, &s->err, s->path, NULL, true) ? 0 : 1;
+}
+
+static void tinyobj_after(void *user)
+{
+    tinyobj_side *s = (tinyobj_side *)user;
+    s->vertices = s->attrib.vertices.size() / 3;
+    s->triangles = 0;
+    for (const tinyobj::shape_t &shape : s->shapes) s->triangles += shape.mesh.num_face_vertices.size();
+    s->attrib = tinyobj::attrib_t();
+    std::vector<tinyobj::shape_t>().swap(s->shapes);
+    std::vector<tinyobj::material_t>().swap(s->materials);
+}
+
+struct assimp_side {
+    const char *path;
+    Assimp::Importer *importer;
+    size_t vertices, triangles;
+};
+
+static int assimp_run(void *user)
+{
+    assimp_side *s = (assimp_side *)user;
+    s->importer = new Assimp::Importer;
+    return s->importer->ReadFile(s->path, 0) ? 0 : 1;
+}
+
+static void assimp_after(void *user)
+{
+    assimp_side *s = (assimp_side *)user;
+    const aiScene *scene = s->importer ? s->importer->GetScene() : NULL;
+    s->vertices = s->triangles = 0;
+    for (unsigned m = 0; scene && m < scene->mNumMeshes; m++) {
+        const aiMesh *mesh = scene->mMeshes[m];
+        s->vertices += mesh->mNumVertices;
+        for (unsigned f = 0; f < mesh->mNumFaces; f++)
+            if (mesh->mFaces[f].mNumIndices >= 3) s->triangles += mesh->mFaces[f].mNumIndices - 2;
+    }
+    delete s->importer;
+    s->importer = NULL;
 }
 
 static double file_mb(const char *path)
@@ -92,44 +144,74 @@ static double file_mb(const char *path)
     return stat(path, &st) == 0 ? (double)st.st_size / (1024.0 * 1024.0) : -1.0;
 }
 
-/* one figure: both sides on one file; 0 on success */
+/* " peak_rss_mb=<m>" of a side's warm-up run, -1 if unknown */
+static double peak_mb(const bench_side &side) { return side.peak_kb >= 0 ? (double)side.peak_kb / 1024.0 : -1.0; }
+
+/* one peer's line: its time, meshio's over it per round, its counts */
+static void print_peer(const char *format, const char *peer, const bench_side &meshio, const bench_side &side,
+                       size_t vertices)
+{
+    std::printf("RESULT bench_meshio format=%s peer=%s vertices=%zu", format, peer, vertices);
+    bench_print_ms("peer", &side);
+    bench_print_ratio(&meshio, &side);
+    std::printf(" peak_rss_mb=%.1f\n", peak_mb(side));
+}
+
+/* one figure: every side on one file; 0 on success */
 static int compare(const char *format, const char *path)
 {
-    std::fprintf(stderr, "bench_meshio: %s: meshio, 1 warm-up + %d timed reads\n", path, BENCH_RUNS);
+    bool obj = std::strcmp(format, "obj") == 0;
     meshio_side ours;
     std::memset(&ours, 0, sizeof ours);
     ours.path = path;
-    side_result a = measure(meshio_run, meshio_after, &ours);
-    if (a.seconds < 0) {
-        std::fprintf(stderr, "bench_meshio: meshio cannot read %s: %s (%s)\n", path, ours.err.message,
-                     mio_result_string(ours.err.code));
+    tinyobj_side tiny;
+    tiny.path = path;
+    tiny.vertices = tiny.triangles = 0;
+    assimp_side assimp = {path, NULL, 0, 0};
+    openmesh_side peer = {path, NULL, 0, 0};
+    bench_side sides[4] = {bench_make_side("meshio", meshio_run, meshio_after, &ours),
+                           bench_make_side("assimp", assimp_run, assimp_after, &assimp),
+                           bench_make_side("openmesh", openmesh_run, openmesh_after, &peer),
+                           bench_make_side("tinyobjloader", tinyobj_run, tinyobj_after, &tiny)};
+    std::fprintf(stderr, "bench_meshio: %s: meshio, assimp, OpenMesh%s interleaved\n", path, obj ? ", tinyobjloader" : "");
+    if (bench_interleave(sides, obj ? 4 : 3, 0) != 0) {
+        std::fprintf(stderr, "bench_meshio: a side cannot read %s (meshio: %s)\n", path, ours.err.message);
+        std::printf("RESULT bench_meshio format=%s error=read_failed\n", format);
         return 1;
     }
-
-    std::fprintf(stderr, "bench_meshio: %s: OpenMesh, 1 warm-up + %d timed reads\n", path, BENCH_RUNS);
-    openmesh_side peer;
-    peer.path = path;
-    peer.mesh = NULL;
-    peer.vertices = peer.triangles = 0;
-    side_result b = measure(openmesh_run, openmesh_after, &peer);
-    if (b.seconds < 0) {
-        std::fprintf(stderr, "bench_meshio: OpenMesh cannot read %s\n", path);
-        return 1;
-    }
-
-    if (ours.triangles != peer.triangles) {
-        std::fprintf(stderr, "bench_meshio: error: %s: meshio read %zu triangles, OpenMesh %zu faces\n", path,
-                     ours.triangles, peer.triangles);
+    if (ours.triangles != peer.triangles || ours.triangles != assimp.triangles || (obj && ours.triangles != tiny.triangles)) {
+        std::fprintf(stderr, "bench_meshio: error: %s: meshio read %zu triangles, OpenMesh %zu, assimp %zu, tinyobjloader %zu\n",
+                     path, ours.triangles, peer.triangles, assimp.triangles, tiny.triangles);
         std::printf("RESULT bench_meshio format=%s error=triangle_count_mismatch meshio_triangles=%zu "
-                    "openmesh_triangles=%zu\n", format, ours.triangles, peer.triangles);
+                    "openmesh_triangles=%zu assimp_triangles=%zu\n", format, ours.triangles, peer.triangles, assimp.triangles);
         return 1;
     }
-    std::printf("RESULT bench_meshio format=%s file_mb=%.1f triangles=%zu vertices=%zu openmesh_vertices=%zu "
-                "meshio_ms=%.2f openmesh_ms=%.2f ratio=%.3f meshio_peak_rss_mb=%.1f openmesh_peak_rss_mb=%.1f\n",
-                format, file_mb(path), ours.triangles, ours.vertices, peer.vertices, 1e3 * a.seconds,
-                1e3 * b.seconds, a.seconds / b.seconds, a.peak_mb, b.peak_mb);
+    std::printf("RESULT bench_meshio format=%s side=meshio file_mb=%.1f triangles=%zu vertices=%zu", format, file_mb(path),
+                ours.triangles, ours.vertices);
+    bench_print_ms("meshio", &sides[0]);
+    std::printf(" peak_rss_mb=%.1f\n", peak_mb(sides[0]));
+    if (obj) print_peer(format, "tinyobjloader_flat", sides[0], sides[3], tiny.vertices);
+    print_peer(format, "assimp_flat", sides[0], sides[1], assimp.vertices);
+    print_peer(format, "openmesh_halfedge", sides[0], sides[2], peer.vertices);
     std::fflush(stdout);
     return 0;
+}
+
+/* a binary STL copy (80-byte header, count, per triangle a zero normal, 3 corners, 0 attribute) */
+static bool write_stl(const char *path, const mio_mesh &m)
+{
+    FILE *f = std::fopen(path, "wb");
+    if (!f) return false;
+    char header[80] = "bench_meshio binary STL copy";
+    uint32_t count = (uint32_t)m.triangle_count;
+    bool ok = std::fwrite(header, 1, 80, f) == 80 && std::fwrite(&count, 4, 1, f) == 1;
+    for (size_t t = 0; ok && t < m.triangle_count; t++) {
+        float rec[12] = {0, 0, 0};
+        for (int c = 0; c < 3; c++) std::memcpy(rec + 3 + 3 * c, m.positions + 3 * (size_t)m.indices[3 * t + c], 3 * sizeof(float));
+        uint16_t attr = 0;
+        ok = std::fwrite(rec, sizeof rec, 1, f) == 1 && std::fwrite(&attr, 2, 1, f) == 1;
+    }
+    return std::fclose(f) == 0 && ok;
 }
 
 static const char *extension(const char *path)
@@ -164,7 +246,7 @@ int main(int argc, char **argv)
     std::fflush(stdout);
 
     /* the binary PLY copy, written by meshio from meshio's own reading (not timed) */
-    std::fprintf(stderr, "bench_meshio: writing binary PLY copy of %s to %s\n", input, copy_path);
+    std::fprintf(stderr, "bench_meshio: writing binary PLY and STL copies of %s to %s(.stl)\n", input, copy_path);
     mio_mesh mesh;
     mio_error err;
     mio_result r = mio_read_file(input, NULL, &mesh, &err);
@@ -173,16 +255,22 @@ int main(int argc, char **argv)
         return 1;
     }
     r = mio_write_ply(copy_path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, 1, &err);
+    std::string stl_path = std::string(copy_path) + ".stl";
+    bool stl_ok = write_stl(stl_path.c_str(), mesh);
     mio_free_mesh(&mesh);
-    if (r != MIO_OK) {
-        std::fprintf(stderr, "bench_meshio: cannot write %s: %s (%s)\n", copy_path, err.message, mio_result_string(r));
+    if (r != MIO_OK || !stl_ok) {
+        std::fprintf(stderr, "bench_meshio: cannot write %s or %s: %s\n", copy_path, stl_path.c_str(),
+                     r != MIO_OK ? err.message : "write error");
         std::remove(copy_path);
+        std::remove(stl_path.c_str());
         return 1;
     }
 
     int status = compare(extension(input), input);
     if (status == 0) status = compare("ply_binary", copy_path);
+    if (status == 0) status = compare("stl_binary", stl_path.c_str());
     if (copy_path == temp.c_str()) std::remove(copy_path);
+    std::remove(stl_path.c_str());
 
     std::printf("RESULT bench_meshio process_peak_rss_mb=%.1f threads=1\n", (double)bench_peak_rss_kb() / 1024.0);
     return status;
