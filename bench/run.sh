@@ -48,8 +48,10 @@ fi
   echo
   echo "Written by \`make bench\` on $(date -u '+%Y-%m-%d %H:%M UTC'); machine: $(nproc) cores,"
   echo "$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //')."
-  echo "Every figure is the median of 5 runs after a warm-up, both sides in one process, one thread each,
-timed in the process's CPU time (bench/README.md says why);"
+  echo "A time with \`_min\` / \`_max\` beside it is the median of 11 runs after a warm-up, the sides of a comparison"
+  echo "interleaved run by run (A B A B ...) in one process; a time without them is the median of 5 runs after a warm-up."
+  echo "One thread per side (bench_chol checks CHOLMOD's), the process's CPU time, every bench built with -DNDEBUG"
+  echo "(bench/README.md says why);"
   echo "the timed regions are described in bench/README.md. Ratios are ours / peer: for times (\`_ms\`)"
   echo "below 1 means we are faster, for throughputs (\`_mrays\`) above 1 means we are faster."
   echo
