@@ -148,7 +148,12 @@
      step's optical depth by the trapezoid rule), so it costs one lookup per voxel. tvt_march
      composites front to back along a straight segment in one tile, half a voxel of the level
      per step, skipping space the coarsest level calls empty, stopping at transmittance 0.005.
-     The level comes from the pixel's footprint: tvt_lod_level_for.
+     The level comes from the pixel's footprint: tvt_lod_level_for. A renderer with its own
+     shading takes tvt_tvt_sample instead (the level's voxel and its extinction along the ray,
+     the fibre model included) plus tvt_shadow_at; that is how a terrain driver that marches a
+     shell over a height field uses a TVT: per sample, the level for the footprint, one voxel
+     of it per step, and, after an empty step, a skip of half a coarsest-level voxel wherever
+     that level is empty.
 
    OPTIONS
      Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
@@ -566,6 +571,11 @@ typedef struct tvt_shade_desc {
 } tvt_shade_desc;
 
 TVTDEF tvt_shade_desc tvt_shade_default_desc(void);
+
+/* What another renderer needs at p (level-0 units) along unit dir: the voxel of the level at wd
+   (density, frame, colour, specular) in *out, and the return value, its extinction per level-0
+   unit along dir (the level's fibre model; 0 where the grass is empty). */
+TVTDEF float tvt_tvt_sample(const tvt_tvt *t, float wd, int level, const float p[3], const float dir[3], tvt_voxel *out);
 
 /* One step of length step (level-0 units) at p along unit dir: returns its opacity
    alpha = 1 - exp(-sigma step) and writes its colour (not premultiplied) to rgb. */
@@ -2787,20 +2797,26 @@ static void tvt__kajiya_kay(const tvt_shade_desc *s, const tvt_voxel *v, const f
         rgb[c] = v->color[c] * (s->ambient_rgb[c] + s->light_rgb[c] * shadow * diff) + s->light_rgb[c] * shadow * spec;
 }
 
+TVTDEF float tvt_tvt_sample(const tvt_tvt *t, float wd, int level, const float p[3], const float dir[3], tvt_voxel *out)
+{
+    int f;
+    float w;
+    tvt_tvt_voxel(t, wd, level, p, out);
+    if (!(out->density > 0)) return 0.0f;
+    tvt_tvt_frames_at(t, wd, &f, &w);
+    return tvt__sigma(&t->frames[w < 0.5f ? f : f + 1], level, out, dir);
+}
+
 TVTDEF float tvt_shade_point(const tvt_tvt *t, float wd, int level, const tvt_shade_desc *s, const float p[3],
                              const float dir[3], float step, float rgb[3])
 {
     tvt_shade_desc sd;
     tvt_voxel v;
     float sigma, shadow = 1.0f;
-    int f;
-    float w;
     tvt__shade_resolve(s, &sd);
-    tvt_tvt_voxel(t, wd, level, p, &v);
+    sigma = tvt_tvt_sample(t, wd, level, p, dir, &v);
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (!(v.density > 0)) return 0.0f;
-    tvt_tvt_frames_at(t, wd, &f, &w);
-    sigma = tvt__sigma(&t->frames[w < 0.5f ? f : f + 1], level, &v, dir);
+    if (!(sigma > 0)) return 0.0f;
     if (sd.shadow) shadow = tvt_shadow_at(sd.shadow, wd, p);
     tvt__kajiya_kay(&sd, &v, dir, shadow, rgb);
     return 1.0f - expf(-sigma * step);

@@ -15,13 +15,14 @@
    Each panel prints "RESULT grass scene=... wd=... coverage=... render_ms=...". Progress goes to
    stderr. Exit status 0 on success, 2 on bad arguments, 1 on failure.
 
-   The terrain driver here is what a renderer does with texel.h: a world point (x, y, z), z up,
-   maps to tile (floor(x / S), floor(y / S)) and texel point (frac(x / S) res, frac(y / S) res,
-   (z - h(x, y)) / S res), a vertical shear that keeps blades upright on slopes; rays march the
-   shell between the ground and S above it with half-voxel steps of the level that the pixel's
-   footprint picks, skip what lies above the shell and what the coarsest level calls empty, and
-   stop on the ground (soil colour) or when opaque. Each tile has its own wd (drier on slopes
-   facing the sun, plus a per-tile jitter) and one of four mingled TVT variants. */
+   The terrain is drawn by render.h's shell marcher (sr_draw_shell): it clips rays to the grass
+   shell between the ground and one tile above it, jumps over the space above the shell, maps
+   each sample to its tile's sheared frame (blades stay upright on slopes), does Kajiya-Kay
+   shading with the sample's self-shadow, and stops on the ground or when opaque. texel.h
+   supplies the content through one callback (grass_sample): the LOD level from the pixel's
+   footprint, one voxel of that level per step, empty space skipped with the coarsest level.
+   Each tile has its own wd (drier on slopes facing the sun, plus a per-tile jitter) and one of
+   four mingled TVT variants. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,7 +44,7 @@ typedef struct scene {
     float tile;                /* world size of a tile (and of the shell height) */
     int hn;                    /* height samples per side */
     float *h;                  /* hn * hn heights over [0, tiles * tile]^2, NULL = flat */
-    float hmax, slope_max;
+    float hmax;
     const tvt_tvt *variant[VARIANTS];
     const tvt_shadow *shadow[VARIANTS];
     int variant_count;
@@ -73,25 +74,6 @@ static void progress_end(const char *what)
 }
 
 /* ---- terrain ------------------------------------------------------------------------------- */
-static float height_at(const scene *s, float x, float y, float *gx, float *gy)
-{
-    float scale, fx, fy, h00, h10, h01, h11;
-    int i, j, n = s->hn;
-    if (!s->h) { *gx = *gy = 0.0f; return 0.0f; }
-    scale = (float)(n - 1) / ((float)s->tiles * s->tile); /* height samples per world unit */
-    fx = x * scale;
-    fy = y * scale;
-    if (fx < 0) fx = 0;
-    if (fy < 0) fy = 0;
-    if (fx > (float)(n - 1) - 1e-3f) fx = (float)(n - 1) - 1e-3f;
-    if (fy > (float)(n - 1) - 1e-3f) fy = (float)(n - 1) - 1e-3f;
-    i = (int)fx; j = (int)fy; fx -= (float)i; fy -= (float)j;
-    h00 = s->h[j * n + i]; h10 = s->h[j * n + i + 1]; h01 = s->h[(j + 1) * n + i]; h11 = s->h[(j + 1) * n + i + 1];
-    *gx = ((h10 - h00) * (1 - fy) + (h11 - h01) * fy) * scale;
-    *gy = ((h01 - h00) * (1 - fx) + (h11 - h10) * fx) * scale;
-    return (h00 * (1 - fx) + h10 * fx) * (1 - fy) + (h01 * (1 - fx) + h11 * fx) * fy;
-}
-
 /* A 9x9 random control grid refined 4 levels by the four-point scheme (paper 001's mountain5
    look: w 0.2, amplitude 0.3 of the span), lifted so that its lowest point is 0. */
 static int make_mountain(scene *s, uint64_t seed)
@@ -120,16 +102,21 @@ static int make_mountain(scene *s, uint64_t seed)
         if (s->h[i] > s->hmax) s->hmax = s->h[i];
     }
     free(fine);
-    s->slope_max = 0.0f;
-    for (i = 0; i + 1 < nx * ny; i++) {
-        float d = fabsf(s->h[i + 1] - s->h[i]) * (float)(nx - 1) / span;
-        if (d > s->slope_max) s->slope_max = d;
-    }
-    s->slope_max *= 1.5f;
     return 1;
 }
 
-/* ---- the march over the terrain ------------------------------------------------------------ */
+/* ---- the shell over the terrain: render.h's marcher, texel.h's content ------------------------- */
+/* the terrain as render.h's shell: heights over [0, tiles * tile]^2, one tile of the TVT per tile */
+static void shell_of(const scene *s, sr_shell_desc *d)
+{
+    sr_shell_desc_default(d);
+    d->heights = s->h;
+    d->nx = d->ny = s->hn;
+    d->spacing = s->h ? (float)s->tiles * s->tile / (float)(s->hn - 1) : 1.0f;
+    d->tile = s->tile;
+    d->tiles_x = d->tiles_y = s->tiles;
+}
+
 static uint32_t tile_hash(int i, int j)
 {
     uint32_t h = (uint32_t)i * 73856093u ^ (uint32_t)j * 19349663u;
@@ -137,116 +124,65 @@ static uint32_t tile_hash(int i, int j)
     return h;
 }
 
-static float tile_wd(const scene *s, int i, int j)
+static float tile_wd(const scene *s, const sr_shell_desc *shell, int i, int j)
 {
-    float gx, gy, n[3], l, facing, wd;
-    height_at(s, ((float)i + 0.5f) * s->tile, ((float)j + 0.5f) * s->tile, &gx, &gy);
-    n[0] = -gx; n[1] = -gy; n[2] = 1.0f;
+    float g[2], n[3], l, facing, wd;
+    sr_shell_height(shell, ((float)i + 0.5f) * s->tile, ((float)j + 0.5f) * s->tile, g);
+    n[0] = -g[0]; n[1] = -g[1]; n[2] = 1.0f;
     l = sqrtf(n[0] * n[0] + n[1] * n[1] + 1.0f);
     facing = (n[0] * s->sun[0] + n[1] * s->sun[1] + n[2] * s->sun[2]) / l - s->sun[2]; /* 0 on flat ground */
     wd = s->wd + s->wd_sun * facing + s->wd_jitter * ((float)(tile_hash(i, j) & 1023) / 1023.0f - 0.5f);
     return wd < 0 ? 0 : wd > 1 ? 1 : wd;
 }
 
-typedef struct pixel_out { float rgb[3]; int grass; } pixel_out;
+/* the sample callback's state: the scene and the last tile's variant and wd */
+typedef struct grass_view {
+    const scene *s;
+    const sr_shell_desc *shell;
+    int ci, cj, v;
+    float wd;
+} grass_view;
+
+/* One sample for render.h: the level whose voxel fits the pixel's footprint, one voxel of it per
+   step; after an empty sample, space the coarsest level calls empty is skipped half a coarse
+   voxel at a time. The tangent drives Kajiya-Kay; voxels without one are lit by their normal. */
+static void grass_sample(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    grass_view *g = (grass_view *)user;
+    const scene *s = g->s;
+    const tvt_tvt *tv;
+    float res = (float)s->res, p[3], sigma;
+    int level, coarse;
+    tvt_voxel v;
+    if (q->tile_x != g->ci || q->tile_y != g->cj) { /* a new tile: its variant and wd */
+        g->ci = q->tile_x; g->cj = q->tile_y;
+        g->v = (int)(tile_hash(g->cj, g->ci) % (uint32_t)s->variant_count);
+        g->wd = tile_wd(s, g->shell, g->ci, g->cj);
+    }
+    tv = s->variant[g->v];
+    p[0] = q->p[0] * res; p[1] = q->p[1] * res; p[2] = q->p[2] * res;
+    level = tvt_lod_level_for(&tv->frames[0], q->footprint * res);
+    coarse = tv->frames[0].levels - 1;
+    if (coarse > level && q->after_empty && tvt_tvt_density(tv, g->wd, coarse, p) <= 0.0f) {
+        out->step = 0.5f * (float)(1 << coarse) / res;
+        return;
+    }
+    out->step = (float)(1 << level) / res; /* one voxel of the level: the trilinear field has no finer detail */
+    sigma = tvt_tvt_sample(tv, g->wd, level, p, q->dir, &v);
+    if (!(sigma > 0.0f)) return;
+    out->sigma = sigma * res;
+    memcpy(out->rgb, v.color, sizeof(out->rgb));
+    out->specular = v.specular;
+    if (v.tangent[0] * v.tangent[0] + v.tangent[1] * v.tangent[1] + v.tangent[2] * v.tangent[2] > 0.01f)
+        memcpy(out->tangent, v.tangent, sizeof(out->tangent));
+    else memcpy(out->normal, v.normal, sizeof(out->normal));
+    out->light = s->shadow[g->v] ? tvt_shadow_at(s->shadow[g->v], g->wd, p) : 1.0f;
+}
 
 static void sky(const float *d, float *rgb)
 {
     float t = d[2] > 0 ? d[2] : 0;
     rgb[0] = 0.55f + 0.25f * (1 - t); rgb[1] = 0.7f + 0.15f * (1 - t); rgb[2] = 0.95f;
-}
-
-/* The segment of the ray inside the box of the shell, or 0. */
-static int clip_box(const scene *s, const float *o, const float *d, float *t0, float *t1)
-{
-    float lo[3], hi[3];
-    int c;
-    lo[0] = lo[1] = 0.0f; lo[2] = -1e-3f;
-    hi[0] = hi[1] = (float)s->tiles * s->tile; hi[2] = s->hmax + s->tile;
-    *t0 = 0.0f; *t1 = 1e30f;
-    for (c = 0; c < 3; c++) {
-        float a, b;
-        if (fabsf(d[c]) < 1e-12f) { if (o[c] < lo[c] || o[c] > hi[c]) return 0; continue; }
-        a = (lo[c] - o[c]) / d[c]; b = (hi[c] - o[c]) / d[c];
-        if (a > b) { float x = a; a = b; b = x; }
-        if (a > *t0) *t0 = a;
-        if (b < *t1) *t1 = b;
-    }
-    return *t0 < *t1;
-}
-
-static void soil(const scene *s, float gx, float gy, float *rgb)
-{
-    float n[3] = {-gx, -gy, 1.0f}, l = sqrtf(gx * gx + gy * gy + 1.0f), lam;
-    lam = (n[0] * s->sun[0] + n[1] * s->sun[1] + n[2] * s->sun[2]) / l;
-    lam = lam > 0 ? lam : 0;
-    rgb[0] = 0.30f * (0.3f + lam); rgb[1] = 0.22f * (0.3f + lam); rgb[2] = 0.14f * (0.3f + lam);
-}
-
-static void trace(const scene *s, const float *o, const float *d, float pixel_angle, pixel_out *out)
-{
-    float t0, t1, T = 1.0f, rgb[3] = {0, 0, 0}, vox = s->tile / (float)s->res, t;
-    tvt_shade_desc sd = tvt_shade_default_desc();
-    memcpy(sd.light_dir, s->sun, sizeof(sd.light_dir));
-    out->grass = 0;
-    if (!clip_box(s, o, d, &t0, &t1)) { sky(d, out->rgb); return; }
-    t = t0;
-    int ci = -1, cj = -1, v = 0, empty = 1;
-    float wd = 0.0f;
-    while (t < t1 && T > 0.01f) {
-        float p[3], gx, gy, h, zrel, q[3], dt[3], dl, fx, fy, step_w, c[3], alpha;
-        int i, j, level, coarse;
-        const tvt_tvt *tv;
-        p[0] = o[0] + t * d[0]; p[1] = o[1] + t * d[1]; p[2] = o[2] + t * d[2];
-        h = height_at(s, p[0], p[1], &gx, &gy);
-        zrel = p[2] - h;
-        if (zrel < 0) { /* the ground */
-            soil(s, gx, gy, c);
-            rgb[0] += T * c[0]; rgb[1] += T * c[1]; rgb[2] += T * c[2];
-            T = 0;
-            break;
-        }
-        if (zrel >= s->tile) { /* above the shell: the nearest the shell can be */
-            float gap = (zrel - s->tile) / (fabsf(d[2]) + s->slope_max * sqrtf(d[0] * d[0] + d[1] * d[1]) + 1e-6f);
-            t += gap > 0.5f * vox ? gap : 0.5f * vox;
-            continue;
-        }
-        level = tvt_lod_level_for(&s->variant[0]->frames[0], t * pixel_angle / vox);
-        step_w = vox * (float)(1 << level); /* one voxel of the level: the trilinear field has no finer detail */
-        fx = p[0] / s->tile; fy = p[1] / s->tile;
-        i = (int)floorf(fx); j = (int)floorf(fy);
-        if (i >= s->tiles) i = s->tiles - 1;
-        if (j >= s->tiles) j = s->tiles - 1;
-        if (i != ci || j != cj) { /* a new tile: its variant and wd */
-            ci = i; cj = j;
-            v = (int)(tile_hash(j, i) % (uint32_t)s->variant_count);
-            wd = tile_wd(s, i, j);
-        }
-        tv = s->variant[v];
-        q[0] = (fx - (float)i) * (float)s->res; q[1] = (fy - (float)j) * (float)s->res; q[2] = zrel / vox;
-        /* the ray's direction in texel space (the shear), and its step there */
-        dt[0] = d[0] / vox; dt[1] = d[1] / vox; dt[2] = (d[2] - gx * d[0] - gy * d[1]) / vox;
-        dl = sqrtf(dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]);
-        dt[0] /= dl; dt[1] /= dl; dt[2] /= dl;
-        coarse = tv->frames[0].levels - 1;
-        if (coarse > level && empty && tvt_tvt_density(tv, wd, coarse, q) <= 0.0f) { /* only after an empty step */
-            t += 0.5f * vox * (float)(1 << coarse) / (dl * vox);
-            continue;
-        }
-        sd.shadow = s->shadow[v];
-        alpha = tvt_shade_point(tv, wd, level, &sd, q, dt, step_w * dl, c);
-        empty = alpha <= 0.0f;
-        rgb[0] += T * alpha * c[0]; rgb[1] += T * alpha * c[1]; rgb[2] += T * alpha * c[2];
-        T *= 1.0f - alpha;
-        t += step_w;
-    }
-    out->grass = T < 0.5f && rgb[1] > 0; /* mostly grass (not soil only) */
-    if (T > 0) {
-        float c[3];
-        sky(d, c);
-        rgb[0] += T * c[0]; rgb[1] += T * c[1]; rgb[2] += T * c[2];
-    }
-    memcpy(out->rgb, rgb, sizeof(rgb));
 }
 
 static uint8_t to_srgb8(float x)
@@ -256,33 +192,59 @@ static uint8_t to_srgb8(float x)
     return (uint8_t)(y * 255.0f + 0.5f);
 }
 
-/* Renders a panel; returns the share of pixels whose opacity came mostly from grass. */
+/* Renders a panel (sky, then render.h's shell marcher over it); returns the share of pixels
+   whose grass opacity reached 0.5, or -1 on failure. */
 static double render(const scene *s, int w, int hgt, sr_image8 *img, const char *what)
 {
+    sr_framebuffer fb;
     sr_camera cam;
-    float up[3] = {0, 0, 1}, pixel_angle;
-    long grass = 0;
+    sr_shell_desc shell;
+    sr_shell_stats stats;
+    sr_light sun;
+    grass_view view;
+    float up[3] = {0, 0, 1};
+    size_t i;
     int x, y;
+    sr_result r;
+    img->pixels = NULL;
+    if (sr_framebuffer_create(&fb, w, hgt, NULL) != SR_OK) return -1;
     sr_camera_look_at(&cam, s->eye, s->target, up, s->fovy, (float)w / (float)hgt, 0.1f, 1e4f);
-    pixel_angle = 2.0f * cam.tan_half_fovy / (float)hgt;
-    img->width = w; img->height = hgt; img->channels = 3;
-    img->pixels = (uint8_t *)malloc((size_t)w * hgt * 3);
-    if (!img->pixels) return -1;
-    for (y = 0; y < hgt; y++) {
+    sr_framebuffer_clear(&fb, NULL, 1.0f);
+    for (y = 0; y < hgt; y++)
         for (x = 0; x < w; x++) {
             float o[3], d[3];
-            pixel_out px;
             sr_camera_ray(&cam, w, hgt, (float)x + 0.5f, (float)y + 0.5f, o, d);
-            trace(s, o, d, pixel_angle, &px);
-            grass += px.grass;
-            img->pixels[3 * ((size_t)y * w + x) + 0] = to_srgb8(px.rgb[0]);
-            img->pixels[3 * ((size_t)y * w + x) + 1] = to_srgb8(px.rgb[1]);
-            img->pixels[3 * ((size_t)y * w + x) + 2] = to_srgb8(px.rgb[2]);
+            sky(d, fb.color + 4 * ((size_t)y * w + x));
         }
-        if ((y & 15) == 15) progress_print((void *)what, (float)(y + 1) / (float)hgt);
-    }
+    shell_of(s, &shell);
+    sr_light_default(&sun, s->sun);
+    sun.ambient[0] = 0.22f; sun.ambient[1] = 0.25f; sun.ambient[2] = 0.30f; /* a blue sky's fill light */
+    sun.diffuse[0] = sun.diffuse[1] = sun.diffuse[2] = 1.0f;
+    sun.specular[0] = sun.specular[1] = sun.specular[2] = 1.0f;
+    shell.lights = &sun; shell.light_count = 1;
+    shell.material.specular[0] = shell.material.specular[1] = shell.material.specular[2] = 0.35f;
+    shell.material.shininess = 24.0f;
+    memset(shell.material.emission, 0, sizeof(shell.material.emission));
+    memset(&view, 0, sizeof(view));
+    view.s = s; view.shell = &shell; view.ci = view.cj = -1;
+    shell.sample = grass_sample; shell.user = &view;
+    shell.progress = progress_print; shell.progress_user = (void *)what;
+    r = sr_draw_shell(&fb, &cam, &shell, &stats);
     progress_end(what);
-    return (double)grass / ((double)w * hgt);
+    img->width = w; img->height = hgt; img->channels = 3;
+    img->pixels = r == SR_OK ? (uint8_t *)malloc((size_t)w * hgt * 3) : NULL;
+    if (r != SR_OK || !img->pixels) {
+        fprintf(stderr, "grass: render: %s\n", r == SR_OK ? "out of memory" : sr_result_string(r));
+        sr_framebuffer_free(&fb);
+        return -1;
+    }
+    for (i = 0; i < (size_t)w * hgt; i++) {
+        img->pixels[3 * i + 0] = to_srgb8(fb.color[4 * i + 0]);
+        img->pixels[3 * i + 1] = to_srgb8(fb.color[4 * i + 1]);
+        img->pixels[3 * i + 2] = to_srgb8(fb.color[4 * i + 2]);
+    }
+    sr_framebuffer_free(&fb);
+    return (double)stats.covered / ((double)w * hgt);
 }
 
 /* ---- building the TVTs ---------------------------------------------------------------------- */
@@ -456,7 +418,7 @@ static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t
 /* A flat 3 x 3 patch of tiles seen from the side, for the close-up scenes. */
 static void close_up(scene *s, int res)
 {
-    s->tiles = 3; s->tile = 1.0f; s->res = res; s->h = NULL; s->hmax = 0; s->slope_max = 0;
+    s->tiles = 3; s->tile = 1.0f; s->res = res; s->h = NULL; s->hmax = 0;
     s->wd_sun = 0; s->wd_jitter = 0;
     set_sun(s);
     s->target[0] = 1.5f; s->target[1] = 1.5f; s->target[2] = 0.3f;

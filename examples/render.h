@@ -22,6 +22,9 @@
        of a box-bounded volume given by callbacks (front-to-back compositing, early termination,
        shadow rays, Kajiya-Kay hair/grass lighting). All of them write depth and so composite
        with rasterized geometry in either order (opaque ones; draw volumes last).
+     - Shell marching (sr_draw_shell): a volumetric layer (grass, fur, canopy) over a height
+       field, tiled, whose content comes from one callback in each tile's own sheared frame; see
+       SHELL below.
      - PNG (real deflate: fixed Huffman codes + LZ77; 8- and 16-bit), PPM, PFM writers; contact
        sheets with a built-in 3x5 bitmap font for captions.
      - Strict readers: PNG (every colour type and bit depth, palettes with tRNS, Adam7
@@ -48,7 +51,7 @@
 
    OPTIONS
      Compile time: SR_STATIC (all functions static), SR_MALLOC(sz)/SR_FREE(p) (both or neither).
-     Run time: sr_draw_desc, sr_relief_desc, sr_terrain_desc, sr_volume_desc. Call the matching
+     Run time: sr_draw_desc, sr_relief_desc, sr_terrain_desc, sr_volume_desc, sr_shell_desc. Call the matching
      *_default() first; zero fields then mean "default" where the field comment says so.
 
    MEMORY
@@ -75,6 +78,33 @@
      of every chunk, ancillary ones too, is checked, so that a damaged file is reported rather
      than half read. They are lenient where libpng is: bytes after the zlib stream and chunks
      after IEND are ignored.
+
+   SHELL (sr_draw_shell: the terrain driver of texel.h's grass, but it knows no texel)
+     The layer lies between the ground z = h(x, y) (bilinear in the heights, z up) and
+     `thickness` above it, over tiles_x x tiles_y square tiles of side `tile`. A world point
+     (x, y, z) maps to its tile (i, j) and to the tile frame (frac((x - ox) / tile), frac((y -
+     oy) / tile), (z - h) / tile): a vertical shear, so that content stays upright on slopes
+     (blades grow up, not along the normal) and a tile's content tiles seamlessly across slope
+     changes. Each ray is clipped to the layer's box; above the layer it jumps to where the layer
+     could begin (the height field's slope bound: 1.5 x the largest sample difference per
+     spacing); inside it calls sample() with the point and the ray in the tile frame and the
+     pixel's footprint (distance x pixel angle, or the orthographic pixel size, in tile units),
+     and steps by the sample's own step (its level of detail) or skips the empty span it reports.
+     A step of extinction sigma has opacity 1 - exp(-sigma step) and is composited front to back;
+     the ray ends on the ground (Lambert with the ground's normal), on the depth already in the
+     framebuffer, or when the opacity reaches termination. Shading: the sample's tangent and
+     normal are turned back to the world (the shear's inverse), Kajiya-Kay with the tangent
+     (diffuse sin(T, L), specular (T.L T.V' + sin sin)^shininess times material.specular times
+     sample->specular), or two-sided Lambert + Blinn with the normal, or isotropic; light 0's
+     diffuse and specular are scaled by sample->light (the content's self-shadowing, which only
+     it can know); ambient is not. The ground casts no shadow on the layer. Colour composites
+     over the framebuffer; depth is written where the opacity reaches depth_threshold.
+     Memory: none allocated. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, tile
+     <= 0, no tiles, a negative thickness, fewer than 2 x 2 heights, a spacing <= 0, a NaN or
+     infinite height; SR_CANCELLED when progress returns nonzero (the rows drawn so far stay).
+     Thread safety: sample() is called from the calling thread only, in pixel order, so its
+     user data may cache per tile. Limits: the tiles and heights need not cover the same area
+     (heights clamp at their border).
 
    THREAD SAFETY
      No global state. Different framebuffers may be drawn from different threads at once.
@@ -147,7 +177,8 @@ typedef enum sr_result {
     SR_ERR_TRUNCATED,        /* readers: the data ends before the image does */
     SR_ERR_CORRUPT,          /* readers: a malformed header, chunk, deflate stream or sample */
     SR_ERR_CHECKSUM,         /* readers: a PNG chunk's CRC-32 or the zlib stream's Adler-32 is wrong */
-    SR_ERR_UNSUPPORTED       /* readers: not a PNG / PNM / PFM file, or a feature this reader lacks */
+    SR_ERR_UNSUPPORTED,      /* readers: not a PNG / PNM / PFM file, or a feature this reader lacks */
+    SR_CANCELLED             /* a progress callback returned nonzero */
 } sr_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -304,6 +335,53 @@ typedef struct sr_volume_desc {
     sr_material material;
 } sr_volume_desc;
 
+/* A volumetric layer over a height field (sr_draw_shell), z up: heights[j * nx + i] at
+   (origin[0] + i spacing, origin[1] + j spacing), bilinear between samples. The layer, from the
+   ground to `thickness` above it, is cut into square tiles of side `tile` starting at origin,
+   and its content comes from `sample` in a tile's own frame (see sr_shell_query). */
+typedef struct sr_shell_query {
+    int tile_x, tile_y;       /* the tile, 0..tiles_x - 1, 0..tiles_y - 1 */
+    float p[3];               /* the point in tile units: x, y in [0, 1) across the tile, z the
+                                 height above the ground (the frame is sheared with the ground) */
+    float dir[3];             /* the ray's direction in that frame, unit */
+    float footprint;          /* a pixel's width at the point, in tile units (level of detail) */
+    int after_empty;          /* nonzero when the ray's previous sample was empty or above the layer */
+} sr_shell_query;
+
+typedef struct sr_shell_sample {
+    float sigma;              /* extinction per tile unit along dir, >= 0; 0 = empty here */
+    float rgb[3];             /* diffuse colour (linear) */
+    float specular;           /* weight of the material's specular, 0..1 */
+    float tangent[3];         /* fibre tangent in the tile's frame (Kajiya-Kay); zero: Lambert with */
+    float normal[3];          /*   the normal (two-sided), both zero: isotropic */
+    float light;              /* transmittance toward light 0 inside the layer (self-shadowing), 0..1 */
+    float step;               /* tile units to the next sample (the content's level of detail), or,
+                                 with sigma 0, how far along dir the content is empty; 0 = 1/256 */
+} sr_shell_sample;
+
+typedef struct sr_shell_desc {
+    const float *heights;     /* nx * ny heights, rows along x; NULL = flat ground at z = 0 */
+    int nx, ny;
+    float origin[2], spacing; /* where sample (0, 0) lies, and the sample spacing (world) */
+    float tile;               /* tile side (world), > 0 */
+    int tiles_x, tiles_y;     /* the layer covers [origin, origin + tiles * tile] */
+    float thickness;          /* layer height above the ground (world), 0 = tile */
+    void (*sample)(void *user, const sr_shell_query *q, sr_shell_sample *out); /* the content */
+    void *user;
+    float ground_rgb[3];      /* the ground's diffuse colour, lit by the lights (Lambert) */
+    const sr_light *lights; int light_count; /* NULL / 0: one head light; light 0 gets sample->light */
+    sr_material material;     /* specular colour and shininess (Kajiya-Kay), emission */
+    float termination;        /* opacity at which a ray stops, 0 = 0.99 */
+    float depth_threshold;    /* opacity at which depth is written, 0 = 0.5 */
+    int (*progress)(void *user, float done); /* per row; nonzero cancels (SR_CANCELLED) */
+    void *progress_user;
+} sr_shell_desc;
+
+typedef struct sr_shell_stats {
+    long covered;             /* pixels whose layer opacity (the ground not counted) reached 0.5 */
+    long samples;             /* sample calls, empty ones included */
+} sr_shell_stats;
+
 /* A decoded image file (sr_read_image, sr_decode_*). Integer formats (PNG, PGM, PPM) fill
    samples, PFM fills floats; the other pointer is NULL. Release with sr_picture_free. */
 typedef struct sr_picture {
@@ -389,6 +467,13 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
 
 SRDEF void sr_volume_desc_default(sr_volume_desc *d);
 SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const sr_volume_desc *d);
+
+/* The shell marcher: see sr_shell_desc and the doc block (SHELL). stats may be NULL. */
+SRDEF void sr_shell_desc_default(sr_shell_desc *d);
+SRDEF sr_result sr_draw_shell(sr_framebuffer *fb, const sr_camera *cam, const sr_shell_desc *d, sr_shell_stats *stats);
+/* The ground's height at (x, y) (bilinear, clamped at the borders) and, if grad is not NULL,
+   its gradient (dh/dx, dh/dy), as sr_draw_shell sees it. */
+SRDEF float sr_shell_height(const sr_shell_desc *d, float x, float y, float grad[2]);
 
 /* ---- images ------------------------------------------------------------------------------- */
 
@@ -487,6 +572,7 @@ SRDEF const char *sr_result_string(sr_result r)
     case SR_ERR_CORRUPT: return "SR_ERR_CORRUPT";
     case SR_ERR_CHECKSUM: return "SR_ERR_CHECKSUM";
     case SR_ERR_UNSUPPORTED: return "SR_ERR_UNSUPPORTED";
+    case SR_CANCELLED: return "SR_CANCELLED";
     }
     return "SR_ERR_?";
 }
@@ -1996,6 +2082,21 @@ static float sr__volume_shadow(const sr_volume_desc *d, const float p[3], const 
     return expf(-tau);
 }
 
+/* Kajiya & Kay 1989 for a fibre along T (any length): diffuse sin(T,L); specular
+   (T.L T.V' + sin(T,L) sin(T,V'))^p with V' = -V */
+static void sr__kajiya_kay(const float dir[3], const float L[3], const float V[3], float shininess, float *diff, float *spec)
+{
+    float T[3], tl, tv, sl, sv, c;
+    memcpy(T, dir, sizeof T);
+    sr__normalize(T);
+    tl = sr__dot(T, L); tv = -sr__dot(T, V);
+    sl = sqrtf(sr__clampf(1.0f - tl * tl, 0.0f, 1.0f));
+    sv = sqrtf(sr__clampf(1.0f - tv * tv, 0.0f, 1.0f));
+    *diff = sl;
+    c = tl * tv + sl * sv;
+    *spec = c > 0.0f ? powf(c, shininess) : 0.0f;
+}
+
 /* colour of one sample: ambient + diffuse + specular per light, with the direction model */
 static void sr__volume_light(const sr_volume_desc *d, const sr_light *lights, int nl, const float p[3], const float V[3],
                              const float kd[3], const float dir[3], float shadow_step, float rgb[3])
@@ -2016,21 +2117,21 @@ static void sr__volume_light(const sr_volume_desc *d, const sr_light *lights, in
             nh = sr__dot(N, H);
             spec = (diff > 0.0f && nh > 0.0f) ? powf(nh, d->material.shininess) : 0.0f;
         } else if (d->direction == SR_VOLUME_TANGENT) {
-            /* Kajiya & Kay 1989: diffuse sin(T,L); specular (T.L T.V' + sin(T,L) sin(T,V'))^p with V' = -V */
-            float T[3], tl, tv, sl, sv, c;
-            memcpy(T, dir, sizeof T);
-            sr__normalize(T);
-            tl = sr__dot(T, L); tv = -sr__dot(T, V);
-            sl = sqrtf(sr__clampf(1.0f - tl * tl, 0.0f, 1.0f));
-            sv = sqrtf(sr__clampf(1.0f - tv * tv, 0.0f, 1.0f));
-            diff = sl;
-            c = tl * tv + sl * sv;
-            spec = c > 0.0f ? powf(c, d->material.shininess) : 0.0f;
+            sr__kajiya_kay(dir, L, V, d->material.shininess, &diff, &spec);
         }
         if (d->shadows) vis = sr__volume_shadow(d, p, L, shadow_step);
         for (k = 0; k < 3; k++)
             rgb[k] += lights[l].ambient[k] * kd[k] + vis * (lights[l].diffuse[k] * kd[k] * diff + lights[l].specular[k] * d->material.specular[k] * spec);
     }
+}
+
+/* a ray ends at the opaque surface of depth D: ndc z(t) = (cz0 + t cz1) / (cw0 + t cw1) = 2D - 1 */
+static void sr__depth_limit(const float *m, const float o[3], const float dir[3], float D, float *t1)
+{
+    float cz0 = m[2] * o[0] + m[6] * o[1] + m[10] * o[2] + m[14], cz1 = m[2] * dir[0] + m[6] * dir[1] + m[10] * dir[2];
+    float cw0 = m[3] * o[0] + m[7] * o[1] + m[11] * o[2] + m[15], cw1 = m[3] * dir[0] + m[7] * dir[1] + m[11] * dir[2];
+    float nd = 2.0f * D - 1.0f, den = cz1 - nd * cw1;
+    if (den != 0.0f) { float ts = (nd * cw0 - cz0) / den; if (ts < *t1) *t1 = ts; }
 }
 
 SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const sr_volume_desc *d)
@@ -2057,13 +2158,7 @@ SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const s
             int k;
             sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
             if (!sr__ray_box(o, dir, d->box_min, d->box_max, &t0, &t1)) continue;
-            if (D < 1.0f) {
-                /* stop at the opaque surface: ndc z(t) = (cz0 + t cz1) / (cw0 + t cw1) = 2D - 1 */
-                float cz0 = m[2] * o[0] + m[6] * o[1] + m[10] * o[2] + m[14], cz1 = m[2] * dir[0] + m[6] * dir[1] + m[10] * dir[2];
-                float cw0 = m[3] * o[0] + m[7] * o[1] + m[11] * o[2] + m[15], cw1 = m[3] * dir[0] + m[7] * dir[1] + m[11] * dir[2];
-                float nd = 2.0f * D - 1.0f, den = cz1 - nd * cw1;
-                if (den != 0.0f) { float ts = (nd * cw0 - cz0) / den; if (ts < t1) t1 = ts; }
-            }
+            if (D < 1.0f) sr__depth_limit(m, o, dir, D, &t1);
             V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
             for (t = t0 + 0.5f * step; t < t1; t += step) {
                 float p[3], sigma, alpha, rgb[3], kd[3], sdir[3] = {0.0f, 0.0f, 1.0f};
@@ -2084,6 +2179,255 @@ SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const s
             fb->color[4 * i + 3] = A + (1.0f - A) * fb->color[4 * i + 3];
             if (zhit < fb->depth[i]) fb->depth[i] = zhit;
         }
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: shell marcher (a volumetric layer over a height field, tiled, content by callback)
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_shell_desc_default(sr_shell_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    sr_material_default(&d->material);
+    d->spacing = 1.0f;
+    d->tile = 1.0f;
+    d->tiles_x = d->tiles_y = 1;
+    d->ground_rgb[0] = 0.30f; d->ground_rgb[1] = 0.22f; d->ground_rgb[2] = 0.14f;
+}
+
+typedef struct sr__shell {
+    const sr_shell_desc *d;
+    const sr_light *lights;
+    int nl;
+    float thickness, lo[3], hi[3];  /* the layer's box */
+    float slope;                    /* a bound on |grad h| (for skipping above the layer) */
+    float pixel_angle, pixel_size;  /* footprint = distance * angle (perspective) or size (ortho) */
+    long samples;
+} sr__shell;
+
+/* the ground's height at (x, y) and its gradient, bilinear, clamped at the borders */
+static float sr__shell_height(const sr_shell_desc *d, float x, float y, float *gx, float *gy)
+{
+    float fx, fy, h00, h10, h01, h11, inv;
+    int i, j;
+    if (!d->heights) { *gx = *gy = 0.0f; return 0.0f; }
+    inv = 1.0f / d->spacing;
+    fx = sr__clampf((x - d->origin[0]) * inv, 0.0f, (float)(d->nx - 1) - 1e-3f);
+    fy = sr__clampf((y - d->origin[1]) * inv, 0.0f, (float)(d->ny - 1) - 1e-3f);
+    i = (int)fx; j = (int)fy; fx -= (float)i; fy -= (float)j;
+    h00 = d->heights[(size_t)j * (size_t)d->nx + (size_t)i]; h10 = d->heights[(size_t)j * (size_t)d->nx + (size_t)i + 1];
+    h01 = d->heights[(size_t)(j + 1) * (size_t)d->nx + (size_t)i]; h11 = d->heights[(size_t)(j + 1) * (size_t)d->nx + (size_t)i + 1];
+    *gx = ((h10 - h00) * (1 - fy) + (h11 - h01) * fy) * inv;
+    *gy = ((h01 - h00) * (1 - fx) + (h11 - h10) * fx) * inv;
+    return (h00 * (1 - fx) + h10 * fx) * (1 - fy) + (h01 * (1 - fx) + h11 * fx) * fy;
+}
+
+/* checks the description and finds the layer's box and slope bound; 0 if invalid */
+SRDEF float sr_shell_height(const sr_shell_desc *d, float x, float y, float grad[2])
+{
+    float g[2], h;
+    if (!d || (d->heights && (d->nx < 2 || d->ny < 2 || !(d->spacing > 0.0f)))) { if (grad) grad[0] = grad[1] = 0.0f; return 0.0f; }
+    h = sr__shell_height(d, x, y, &g[0], &g[1]);
+    if (grad) { grad[0] = g[0]; grad[1] = g[1]; }
+    return h;
+}
+
+static int sr__shell_init(sr__shell *S, const sr_shell_desc *d, const sr_camera *cam, int height)
+{
+    size_t i, n;
+    int x, y;
+    memset(S, 0, sizeof *S);
+    S->d = d;
+    if (!d->sample || !(d->tile > 0.0f) || d->tiles_x < 1 || d->tiles_y < 1 || !(d->thickness >= 0.0f) ||
+        !sr__finite3(d->origin) || !(d->tile * (float)d->tiles_x < 1e30f && d->tile * (float)d->tiles_y < 1e30f))
+        return 0;
+    S->thickness = d->thickness > 0.0f ? d->thickness : d->tile;
+    S->lo[0] = d->origin[0]; S->lo[1] = d->origin[1];
+    S->hi[0] = d->origin[0] + d->tile * (float)d->tiles_x; S->hi[1] = d->origin[1] + d->tile * (float)d->tiles_y;
+    S->lo[2] = 0.0f; S->hi[2] = 0.0f;
+    if (d->heights) {
+        if (d->nx < 2 || d->ny < 2 || !(d->spacing > 0.0f) || (size_t)d->nx > ((size_t)-1) / sizeof(float) / (size_t)d->ny) return 0;
+        n = (size_t)d->nx * (size_t)d->ny;
+        S->lo[2] = S->hi[2] = d->heights[0];
+        for (i = 0; i < n; i++) {
+            float h = d->heights[i];
+            if (!(h - h == 0.0f)) return 0;
+            if (h < S->lo[2]) S->lo[2] = h;
+            if (h > S->hi[2]) S->hi[2] = h;
+        }
+        for (y = 0; y < d->ny; y++)
+            for (x = 0; x < d->nx; x++) {
+                const float *h = d->heights + (size_t)y * (size_t)d->nx + (size_t)x;
+                if (x + 1 < d->nx && fabsf(h[1] - h[0]) > S->slope) S->slope = fabsf(h[1] - h[0]);
+                if (y + 1 < d->ny && fabsf(h[d->nx] - h[0]) > S->slope) S->slope = fabsf(h[d->nx] - h[0]);
+            }
+        S->slope = 1.5f * S->slope / d->spacing; /* bilinear patches: |grad| <= sqrt(2) max difference */
+    }
+    S->lo[2] -= 1e-3f * d->tile;
+    S->hi[2] += S->thickness;
+    S->pixel_angle = cam->orthographic ? 0.0f : 2.0f * cam->tan_half_fovy / (float)height;
+    S->pixel_size = cam->orthographic ? 2.0f * cam->half_height / (float)height : 0.0f;
+    return 1;
+}
+
+/* Lambert for the ground with normal (-gx, -gy, 1) */
+static void sr__shell_ground(const sr__shell *S, const float p[3], float gx, float gy, float rgb[3])
+{
+    float N[3] = {-gx, -gy, 1.0f};
+    int l, k;
+    sr__normalize(N);
+    memset(rgb, 0, 3 * sizeof(float));
+    for (l = 0; l < S->nl; l++) {
+        float L[3], ndl;
+        sr__light_dir(&S->lights[l], p, L);
+        ndl = sr__dot(N, L);
+        if (ndl < 0.0f) ndl = 0.0f;
+        for (k = 0; k < 3; k++) rgb[k] += S->d->ground_rgb[k] * (S->lights[l].ambient[k] + S->lights[l].diffuse[k] * ndl);
+    }
+}
+
+/* one sample's colour: its frame turned back to the world (the shear's inverse), then
+   Kajiya-Kay with the tangent, two-sided Lambert with the normal, or isotropic */
+static void sr__shell_light(const sr__shell *S, const sr_shell_sample *s, const float p[3], const float V[3], float gx,
+                            float gy, float rgb[3])
+{
+    const sr_material *m = &S->d->material;
+    float T[3], N[3];
+    int l, k, mode = 0;
+    T[0] = s->tangent[0]; T[1] = s->tangent[1]; T[2] = s->tangent[2] + gx * s->tangent[0] + gy * s->tangent[1];
+    N[0] = s->normal[0] + gx * s->normal[2]; N[1] = s->normal[1] + gy * s->normal[2]; N[2] = s->normal[2];
+    if (sr__dot(T, T) > 1e-12f) mode = 2;
+    else if (sr__dot(N, N) > 1e-12f) { mode = 1; sr__normalize(N); if (sr__dot(N, V) < 0.0f) { N[0] = -N[0]; N[1] = -N[1]; N[2] = -N[2]; } }
+    memcpy(rgb, m->emission, 3 * sizeof(float));
+    for (l = 0; l < S->nl; l++) {
+        float L[3], diff = 1.0f, spec = 0.0f, vis = l == 0 ? sr__clampf(s->light, 0.0f, 1.0f) : 1.0f;
+        sr__light_dir(&S->lights[l], p, L);
+        if (mode == 2) sr__kajiya_kay(T, L, V, m->shininess, &diff, &spec);
+        else if (mode == 1) {
+            float H[3], nh;
+            diff = sr__dot(N, L); if (diff < 0.0f) diff = 0.0f;
+            H[0] = L[0] + V[0]; H[1] = L[1] + V[1]; H[2] = L[2] + V[2];
+            sr__normalize(H);
+            nh = sr__dot(N, H);
+            spec = (diff > 0.0f && nh > 0.0f) ? powf(nh, m->shininess) : 0.0f;
+        }
+        for (k = 0; k < 3; k++)
+            rgb[k] += S->lights[l].ambient[k] * s->rgb[k] +
+                      vis * (S->lights[l].diffuse[k] * s->rgb[k] * diff + S->lights[l].specular[k] * m->specular[k] * s->specular * spec);
+    }
+}
+
+/* the tile of world point p and the point in its frame; dir's image in the frame (unit) and
+   the frame's length per world unit along dir */
+static float sr__shell_frame(const sr__shell *S, const float p[3], const float dir[3], float zrel, float gx, float gy,
+                             sr_shell_query *q)
+{
+    const sr_shell_desc *d = S->d;
+    float fx = (p[0] - d->origin[0]) / d->tile, fy = (p[1] - d->origin[1]) / d->tile, len;
+    int i = (int)floorf(fx), j = (int)floorf(fy);
+    if (i < 0) i = 0;
+    if (j < 0) j = 0;
+    if (i >= d->tiles_x) i = d->tiles_x - 1;
+    if (j >= d->tiles_y) j = d->tiles_y - 1;
+    q->tile_x = i; q->tile_y = j;
+    q->p[0] = sr__clampf(fx - (float)i, 0.0f, 0.99999994f);
+    q->p[1] = sr__clampf(fy - (float)j, 0.0f, 0.99999994f);
+    q->p[2] = zrel / d->tile;
+    q->dir[0] = dir[0]; q->dir[1] = dir[1]; q->dir[2] = dir[2] - gx * dir[0] - gy * dir[1];
+    len = sqrtf(sr__dot(q->dir, q->dir));
+    q->dir[0] /= len; q->dir[1] /= len; q->dir[2] /= len;
+    return len / d->tile;
+}
+
+typedef struct sr__shell_ray { float rgb[3], T, layer_T, depth_t; } sr__shell_ray;
+
+/* Marches one ray over [t0, t1]: above the layer it jumps to where the layer could begin (the
+   slope bound), in it the callback's steps (or its empty-space skips) composite front to back,
+   and the ground ends the ray. */
+static void sr__shell_trace(sr__shell *S, const float o[3], const float dir[3], float t0, float t1, sr__shell_ray *r)
+{
+    const sr_shell_desc *d = S->d;
+    float t = t0, term = d->termination > 0.0f ? 1.0f - d->termination : 0.01f, V[3], min_step = d->tile / 4096.0f;
+    float horiz = sqrtf(dir[0] * dir[0] + dir[1] * dir[1]);
+    int after_empty = 1;
+    V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
+    r->rgb[0] = r->rgb[1] = r->rgb[2] = 0.0f;
+    r->T = r->layer_T = 1.0f;
+    r->depth_t = -1.0f;
+    while (t < t1 && r->T > term) {
+        float p[3], gx, gy, zrel, per_world, alpha, c[3], step;
+        sr_shell_query q;
+        sr_shell_sample s;
+        int k;
+        for (k = 0; k < 3; k++) p[k] = o[k] + t * dir[k];
+        zrel = p[2] - sr__shell_height(d, p[0], p[1], &gx, &gy);
+        if (zrel < 0.0f) { /* the ground */
+            sr__shell_ground(S, p, gx, gy, c);
+            for (k = 0; k < 3; k++) r->rgb[k] += r->T * c[k];
+            r->T = 0.0f;
+            if (r->depth_t < 0.0f) r->depth_t = t;
+            return;
+        }
+        if (zrel >= S->thickness) { /* above the layer: the nearest it can be */
+            float gap = (zrel - S->thickness) / (fabsf(dir[2]) + S->slope * horiz + 1e-6f);
+            t += gap > min_step ? gap : min_step;
+            after_empty = 1;
+            continue;
+        }
+        per_world = sr__shell_frame(S, p, dir, zrel, gx, gy, &q);
+        q.footprint = (S->pixel_angle * t + S->pixel_size) / d->tile;
+        q.after_empty = after_empty;
+        memset(&s, 0, sizeof s);
+        s.light = 1.0f;
+        d->sample(d->user, &q, &s);
+        S->samples++;
+        step = s.step > 0.0f ? s.step : 1.0f / 256.0f;
+        t += fmaxf(step / per_world, min_step);
+        if (!(s.sigma > 0.0f)) { after_empty = 1; continue; }
+        after_empty = 0;
+        alpha = 1.0f - expf(-s.sigma * step);
+        sr__shell_light(S, &s, p, V, gx, gy, c);
+        for (k = 0; k < 3; k++) r->rgb[k] += r->T * alpha * c[k];
+        r->T *= 1.0f - alpha;
+        r->layer_T *= 1.0f - alpha;
+        if (r->depth_t < 0.0f && 1.0f - r->T >= (d->depth_threshold > 0.0f ? d->depth_threshold : 0.5f)) r->depth_t = t;
+    }
+}
+
+SRDEF sr_result sr_draw_shell(sr_framebuffer *fb, const sr_camera *cam, const sr_shell_desc *d, sr_shell_stats *stats)
+{
+    sr__shell S;
+    sr_light head;
+    long covered = 0;
+    int x, y;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!fb || !fb->color || !cam || !d || !sr__shell_init(&S, d, cam, fb->height)) return SR_ERR_INVALID_ARGUMENT;
+    S.lights = sr__lights(d->lights, d->light_count, cam, &head, &S.nl);
+    for (y = 0; y < fb->height; y++) {
+        for (x = 0; x < fb->width; x++) {
+            float o[3], dir[3], t0, t1, z;
+            size_t i = (size_t)y * (size_t)fb->width + (size_t)x;
+            sr__shell_ray r;
+            int k;
+            sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            if (!sr__ray_box(o, dir, S.lo, S.hi, &t0, &t1)) continue;
+            if (fb->depth[i] < 1.0f) sr__depth_limit(cam->viewproj, o, dir, fb->depth[i], &t1);
+            sr__shell_trace(&S, o, dir, t0, t1, &r);
+            if (r.T >= 1.0f) continue;
+            if (r.layer_T <= 0.5f) covered++;
+            if (r.depth_t >= 0.0f) {
+                float p[3];
+                for (k = 0; k < 3; k++) p[k] = o[k] + r.depth_t * dir[k];
+                if (sr_camera_depth(cam, p, &z) && z < fb->depth[i]) fb->depth[i] = z;
+            }
+            for (k = 0; k < 3; k++) fb->color[4 * i + (size_t)k] = r.rgb[k] + r.T * fb->color[4 * i + (size_t)k];
+            fb->color[4 * i + 3] = 1.0f - r.T * (1.0f - fb->color[4 * i + 3]);
+        }
+        if (d->progress && d->progress(d->progress_user, (float)(y + 1) / (float)fb->height)) return SR_CANCELLED;
+    }
+    if (stats) { stats->covered = covered; stats->samples = S.samples; }
     return SR_OK;
 }
 

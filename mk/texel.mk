@@ -5,3 +5,4 @@ EXAMPLES += $(B)/grass
 BENCHES += $(B)/bench_texel
 $(B)/bench_texel: bench/bench_texel.c examples/grass.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) -DNDEBUG -DBENCH_FLAGS='"$(CC) $(CFLAGS_ALL) -DNDEBUG"' $< -o $@ -lm
+C_TESTS += $(B)/test_texel_shell
