@@ -2099,12 +2099,9 @@ static tvt_result tvt__downsample(const tvt_texel *t, const tvt_allocator *a, tv
     return r;
 }
 
-static float tvt__voxel_density(const tvt_texel *t, long x, long y, long z)
+static float tvt__slot_density(const tvt_texel *t, size_t slot)
 {
-    int ok;
-    size_t slot = tvt__slot(t, x, y, z, &ok);
     float d;
-    if (!ok) return 0.0f;
     if (t->bits == 8) {
         d = (float)((const uint8_t *)t->data)[slot * TVT_CHANNELS] * (1.0f / 255.0f);
         return t->density_max * d * d;
@@ -2123,15 +2120,20 @@ static void tvt__trilinear(const float *p, long *base, float *f)
     }
 }
 
+static void tvt__corner_slots(const tvt_texel *t, const long *b, size_t *slot, int *ok);
+
 static float tvt__level_density(const tvt_texel *t, const float *p)
 {
     long b[3];
     float f[3], sum = 0.0f;
-    int n;
+    size_t slots[8];
+    int n, oks[8];
     tvt__trilinear(p, b, f);
+    if (!t->brick_index) return 0.0f;
+    tvt__corner_slots(t, b, slots, oks);
     for (n = 0; n < 8; n++) {
         float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
-        if (w > 0) sum += w * tvt__voxel_density(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1));
+        if (w > 0) sum += w * (oks[n] ? tvt__slot_density(t, slots[n]) : 0.0f);
     }
     return sum;
 }
@@ -2145,23 +2147,46 @@ TVTDEF float tvt_lod_density(const tvt_lod *l, int level, const float p[3])
 
 /* The channels are linear in their codes (density apart), so the density-weighted mean of the
    8 corners is taken on the codes and decoded once. */
+/* The slots of the 8 corners from base b (ok[n] = 0: not stored). When all 8 lie in one brick
+   (a base not on a brick's last row along any axis, z inside) the brick is looked up once. */
+static void tvt__corner_slots(const tvt_texel *t, const long *b, size_t *slot, int *ok)
+{
+    int n;
+    if ((b[0] & 3) != 3 && (b[1] & 3) != 3 && (b[2] & 3) != 3 && b[2] >= 0 && b[2] + 1 < t->res) {
+        long x = b[0] & (t->res - 1), y = b[1] & (t->res - 1), z = b[2];
+        size_t nb = (size_t)t->bricks_per_side;
+        uint32_t k = t->brick_index[((size_t)(z >> 2) * nb + (size_t)(y >> 2)) * nb + (size_t)(x >> 2)];
+        unsigned i0 = (unsigned)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
+        uint64_t mask;
+        if (k == TVT_EMPTY_BRICK) { for (n = 0; n < 8; n++) ok[n] = 0; return; }
+        mask = t->brick_mask[k];
+        for (n = 0; n < 8; n++) {
+            unsigned i = i0 + (unsigned)(n & 1) + ((n & 2) ? 4u : 0u) + ((n & 4) ? 16u : 0u);
+            ok[n] = (int)((mask >> i) & 1);
+            slot[n] = ok[n] ? (size_t)t->brick_offset[k] + tvt__popcount(mask & (((uint64_t)1 << i) - 1)) : 0;
+        }
+        return;
+    }
+    for (n = 0; n < 8; n++) slot[n] = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok[n]);
+}
+
 TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_voxel *out)
 {
     const tvt_texel *t = &l->level[level];
     float s = 1.0f / (float)(1 << level), q[3], f[3], wsum = 0.0f, code[TVT_CHANNELS] = {0}, inv;
     long b[3];
-    int n, c;
+    size_t slots[8];
+    int n, c, oks[8];
     q[0] = p[0] * s; q[1] = p[1] * s; q[2] = p[2] * s;
     tvt__trilinear(q, b, f);
     memset(out, 0, sizeof(*out));
+    if (!t->brick_index) return;
+    tvt__corner_slots(t, b, slots, oks);
     for (n = 0; n < 8; n++) {
         float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), d, wd;
         unsigned qc[TVT_CHANNELS];
-        size_t slot;
-        int ok;
-        if (!(w > 0)) continue;
-        slot = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok);
-        if (!ok) continue;
+        size_t slot = slots[n];
+        if (!(w > 0) || !oks[n]) continue;
         tvt__load(t, slot, qc);
         d = (float)qc[0] * (t->bits == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f);
         d = t->density_max * (t->bits == 8 ? d * d : d);
@@ -2185,19 +2210,18 @@ static float tvt__level_density_tangent(const tvt_texel *t, const float *p, floa
 {
     long b[3];
     float f[3], sum = 0.0f;
-    int n, c;
+    size_t slots[8];
+    int n, c, oks[8];
     tvt__trilinear(p, b, f);
     tangent[0] = tangent[1] = tangent[2] = 0.0f;
+    if (!t->brick_index) return 0.0f;
+    tvt__corner_slots(t, b, slots, oks);
     for (n = 0; n < 8; n++) {
         float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]);
-        int ok;
-        size_t slot;
         unsigned q[TVT_CHANNELS] = {0};
         tvt_voxel v;
-        if (!(w > 0)) continue;
-        slot = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok);
-        if (!ok) continue;
-        tvt__load_density_tangent(t, slot, q);
+        if (!(w > 0) || !oks[n]) continue;
+        tvt__load_density_tangent(t, slots[n], q);
         if (!q[0]) continue;
         tvt__decode(q, t->density_max, t->bits, &v);
         sum += w * v.density;

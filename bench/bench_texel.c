@@ -7,39 +7,20 @@
    Figures (details and timed regions in bench/README.md):
      RESULT texel res=256 blades=100 points=<n> sample_ms=<t> step_ms=<t> splat_ms=<t> keyframe_mb=<m> ...
      RESULT texel_render scene=mountain width=800 height=600 blades=2560000 coverage=<c> render_ms=<t> peak_mb=<m>
-   Each figure: one warm-up run, then the median of 5 (min and max beside it), one thread. */
+   Each figure: one warm-up run, then the median of 11 with its min and max (bench.h's
+   bench_interleave, one side), one thread. sample_cold_ms is the process's first tvt_sample
+   (fresh heap pages: the page faults of the points array are in it), before the warm-up. */
 #include "bench.h"
 
 #define GRASS_NO_MAIN
 #include "../examples/grass.c"
 
-#define RUNS 5
-
-typedef struct timing { double median, lo, hi; } timing;
-
-static int cmp_double(const void *a, const void *b)
+/* one warm-up, then BENCH_INTERLEAVED_RUNS (11) timed runs of run(user) (bench.h's
+   bench_interleave with one side); after(user) outside the timer. Returns 0 if a run failed. */
+static int measure(bench_side *s, const char *name, int (*run)(void *), void (*after)(void *), void *user)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* one warm-up, then RUNS timed runs of run(user); after(user) outside the timer */
-static timing measure(int (*run)(void *), void (*after)(void *), void *user)
-{
-    double t[RUNS];
-    timing r = {-1, -1, -1};
-    int i;
-    for (i = 0; i <= RUNS; i++) {
-        double start = bench_now(), el;
-        int failed = run(user);
-        el = bench_now() - start;
-        if (after) after(user);
-        if (failed) return r;
-        if (i > 0) t[i - 1] = el;
-    }
-    qsort(t, RUNS, sizeof(double), cmp_double);
-    r.median = 1e3 * t[RUNS / 2]; r.lo = 1e3 * t[0]; r.hi = 1e3 * t[RUNS - 1];
-    return r;
+    *s = bench_make_side(name, run, after, user);
+    return bench_interleave(s, 1, 0) == 0;
 }
 
 typedef struct texel_case {
@@ -78,26 +59,33 @@ static int bench_texel_case(void)
 {
     texel_case c;
     tvt_grass_desc d = tvt_grass_default_desc();
-    timing ts, tp, tl;
+    bench_side ts, tp, tl;
     size_t points;
+    double cold;
     memset(&c, 0, sizeof(c));
     d.res = 256; d.blade_count = 100; d.seed = 1; /* radius 1.5 voxels, heights 0.55..0.9 of res */
     fprintf(stderr, "bench_texel: building the 256^3 texel\n");
     if (tvt_build_grass(&d, &c.grass) != TVT_OK) return 0;
-    ts = measure(run_sample, after_sample, &c);
+    cold = bench_now();
+    if (run_sample(&c)) return 0;
+    cold = bench_now() - cold;
+    after_sample(&c);
+    if (!measure(&ts, "sample", run_sample, after_sample, &c)) return 0;
     if (tvt_sample(&c.grass, NULL, &c.base) != TVT_OK || tvt_age(&c.base, 0.45f, NULL) != TVT_OK) return 0;
     points = c.base.count;
     if (!copy_points(&c.base, &c.pts)) return 0;
     fprintf(stderr, "bench_texel: step\n");
-    tp = measure(run_step, after_step, &c);
+    if (!measure(&tp, "step", run_step, after_step, &c)) return 0;
     if (!copy_points(&c.base, &c.aged) || tvt_age(&c.aged, 0.5f, NULL) != TVT_OK) return 0;
     fprintf(stderr, "bench_texel: splat\n");
-    tl = measure(run_splat, after_splat, &c);
+    if (!measure(&tl, "splat", run_splat, after_splat, &c)) return 0;
     if (tvt_splat(&c.aged, NULL, &c.frame) != TVT_OK || tvt_build_lod(&c.frame, NULL, &c.lod) != TVT_OK) return 0;
-    printf("RESULT texel res=256 blades=100 points=%zu sample_ms=%.2f step_ms=%.2f splat_ms=%.2f keyframe_mb=%.2f "
-           "sample_range=%.2f-%.2f step_range=%.2f-%.2f splat_range=%.2f-%.2f static_mb=%.2f levels=%d\n",
-           points, ts.median, tp.median, tl.median, tvt_lod_bytes(&c.lod) / 1048576.0, ts.lo, ts.hi, tp.lo, tp.hi,
-           tl.lo, tl.hi, tvt_texel_bytes(&c.grass) / 1048576.0, c.lod.levels);
+    printf("RESULT texel res=256 blades=100 points=%zu", points);
+    bench_print_ms("sample", &ts);
+    bench_print_ms("step", &tp);
+    bench_print_ms("splat", &tl);
+    printf(" keyframe_mb=%.2f sample_cold_ms=%.2f static_mb=%.2f levels=%d point_bytes=%zu\n", tvt_lod_bytes(&c.lod) / 1048576.0,
+           1e3 * cold, tvt_texel_bytes(&c.grass) / 1048576.0, c.lod.levels, sizeof(tvt_point));
     tvt_lod_free(&c.lod);
     tvt_texel_free(&c.frame);
     free(c.pts.p);
@@ -127,23 +115,26 @@ static void after_render(void *u) { render_case *c = (render_case *)u; free(c->i
 static int bench_render(void)
 {
     render_case c;
-    timing t;
+    bench_side t;
+    int ok;
     memset(&c, 0, sizeof(c));
     quiet = 1;
     fprintf(stderr, "bench_texel: building the mountain's TVTs\n");
     if (!mountain_setup(&c.s, &c.g, 64, 80, 6, 2010)) return 0;
     c.s.wd = 0.30f;
     bench_reset_peak_rss(); /* peak_mb: the process's high-water mark from here (TVTs included) */
-    fprintf(stderr, "bench_texel: rendering 6 times\n");
-    t = measure(run_render, after_render, &c);
-    printf("RESULT texel_render scene=mountain width=800 height=600 blades=2560000 coverage=%.3f render_ms=%.0f "
-           "render_range=%.0f-%.0f peak_mb=%.1f tvt_mb=%.2f\n",
-           c.coverage, t.median, t.lo, t.hi, bench_peak_rss_kb() / 1024.0,
+    fprintf(stderr, "bench_texel: rendering 12 times\n");
+    ok = measure(&t, "render", run_render, after_render, &c);
+    if (ok) {
+        printf("RESULT texel_render scene=mountain width=800 height=600 blades=2560000 coverage=%.3f", c.coverage);
+        bench_print_ms("render", &t);
+        printf(" peak_mb=%.1f tvt_mb=%.2f\n", bench_peak_rss_kb() / 1024.0,
            (tvt_tvt_bytes(&c.g.variant[0]) + tvt_tvt_bytes(&c.g.variant[1]) + tvt_tvt_bytes(&c.g.variant[2]) +
             tvt_tvt_bytes(&c.g.variant[3])) / 1048576.0);
+    }
     free(c.s.h);
     free_set(&c.g);
-    return t.median >= 0;
+    return ok;
 }
 
 int main(int argc, char **argv)
