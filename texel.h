@@ -2147,27 +2147,36 @@ TVTDEF float tvt_lod_density(const tvt_lod *l, int level, const float p[3])
 
 /* The channels are linear in their codes (density apart), so the density-weighted mean of the
    8 corners is taken on the codes and decoded once. */
-/* The slots of the 8 corners from base b (ok[n] = 0: not stored). When all 8 lie in one brick
-   (a base not on a brick's last row along any axis, z inside) the brick is looked up once. */
+/* The slots of the 8 corners from base b (ok[n] = 0: not stored; x and y wrap). A brick is
+   looked up only when it differs from the previous corner's (all 8 corners share one brick
+   in 42% of the cases, and never need more than 8). */
 static void tvt__corner_slots(const tvt_texel *t, const long *b, size_t *slot, int *ok)
 {
+    long m = t->res - 1, xs[2], ys[2];
+    size_t nb = (size_t)t->bricks_per_side, last = (size_t)-1;
+    uint32_t k = TVT_EMPTY_BRICK;
+    uint64_t mask = 0;
     int n;
-    if ((b[0] & 3) != 3 && (b[1] & 3) != 3 && (b[2] & 3) != 3 && b[2] >= 0 && b[2] + 1 < t->res) {
-        long x = b[0] & (t->res - 1), y = b[1] & (t->res - 1), z = b[2];
-        size_t nb = (size_t)t->bricks_per_side;
-        uint32_t k = t->brick_index[((size_t)(z >> 2) * nb + (size_t)(y >> 2)) * nb + (size_t)(x >> 2)];
-        unsigned i0 = (unsigned)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
-        uint64_t mask;
-        if (k == TVT_EMPTY_BRICK) { for (n = 0; n < 8; n++) ok[n] = 0; return; }
-        mask = t->brick_mask[k];
-        for (n = 0; n < 8; n++) {
-            unsigned i = i0 + (unsigned)(n & 1) + ((n & 2) ? 4u : 0u) + ((n & 4) ? 16u : 0u);
-            ok[n] = (int)((mask >> i) & 1);
-            slot[n] = ok[n] ? (size_t)t->brick_offset[k] + tvt__popcount(mask & (((uint64_t)1 << i) - 1)) : 0;
+    xs[0] = b[0] & m; xs[1] = (b[0] + 1) & m;
+    ys[0] = b[1] & m; ys[1] = (b[1] + 1) & m;
+    for (n = 0; n < 8; n++) {
+        long x = xs[n & 1], y = ys[(n >> 1) & 1], z = b[2] + ((n >> 2) & 1);
+        size_t bi;
+        unsigned i;
+        ok[n] = 0;
+        slot[n] = 0;
+        if (z < 0 || z > m) continue;
+        bi = ((size_t)(z >> 2) * nb + (size_t)(y >> 2)) * nb + (size_t)(x >> 2);
+        if (bi != last) {
+            last = bi;
+            k = t->brick_index[bi];
+            mask = k == TVT_EMPTY_BRICK ? 0 : t->brick_mask[k];
         }
-        return;
+        i = (unsigned)(((z & 3) * 4 + (y & 3)) * 4 + (x & 3));
+        if (!((mask >> i) & 1)) continue;
+        ok[n] = 1;
+        slot[n] = (size_t)t->brick_offset[k] + tvt__popcount(mask & (((uint64_t)1 << i) - 1));
     }
-    for (n = 0; n < 8; n++) slot[n] = tvt__slot(t, b[0] + (n & 1), b[1] + ((n >> 1) & 1), b[2] + ((n >> 2) & 1), &ok[n]);
 }
 
 TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_voxel *out)

@@ -55,6 +55,7 @@ typedef struct scene {
 } scene;
 
 static int quiet = 0;
+static double samples_per_pixel = 0; /* of the last render: sample calls / pixels */
 
 
 /* "\rWHAT NN%" each time another tenth is done (the final line ends with a newline) */
@@ -244,6 +245,7 @@ static double render(const scene *s, int w, int hgt, sr_image8 *img, const char 
         img->pixels[3 * i + 2] = to_srgb8(fb.color[4 * i + 2]);
     }
     sr_framebuffer_free(&fb);
+    samples_per_pixel = (double)stats.samples / ((double)w * hgt);
     return (double)stats.covered / ((double)w * hgt);
 }
 
@@ -403,8 +405,9 @@ static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t
         cov = ok ? render(&s, w, h, &panels[k], what) : -1;
         if (cov < 0) { ok = 0; break; }
         done = k + 1;
-        printf("RESULT grass scene=mountain wd=%.3f width=%d height=%d tiles=%d blades=%d coverage=%.3f render_ms=%.0f\n",
-               wds[k], w, h, tiles * tiles, tiles * tiles * 400, cov, now_ms() - t0);
+        printf("RESULT grass scene=mountain wd=%.3f width=%d height=%d tiles=%d blades=%d coverage=%.3f render_ms=%.0f "
+               "samples_per_pixel=%.1f\n", wds[k], w, h, tiles * tiles, tiles * tiles * 400, cov, now_ms() - t0,
+               samples_per_pixel);
         snprintf(caption[k], sizeof(caption[k]), "wd = %.3f", wds[k]);
         caps[k] = caption[k];
     }
