@@ -2,11 +2,16 @@
    (as-rigid-as-possible, SPOKES_AND_RIMS, its Eigen solver, deform(5, 0)), one thread.
 
    build/bench_deform [MESH] [--refine K] [--free F] [--methods LIST] [--no-cgal]
-     MESH       default /usr/share/glmark2/models/bunny.obj
-     --refine K K butterfly levels (subdiv4.h, w = 1/16) first
-     --free F   the ROI's share of the bounding box's longest extent, from the top (default 0.4)
-     --methods  a comma-separated subset of laplacian,fitting,lri,cgal_arap (default: all)
-     --no-cgal  our methods only (the same as leaving cgal_arap out of --methods)
+                      [--lri-steps K] [--lri-weights uniform|cotan] [--slow-runs N]
+     MESH          default /usr/share/glmark2/models/bunny.obj
+     --refine K    K butterfly levels (subdiv4.h, w = 1/16) first
+     --free F      the ROI's share of the bounding box's longest extent, from the top (default 0.4)
+     --methods     a comma-separated subset of laplacian,fitting,lri,lri_rigid,cgal_arap (default:
+                   all)
+     --no-cgal     our methods only (the same as leaving cgal_arap out of --methods)
+     --lri-steps   lri_rigid's rigid_steps (default 5, CGAL's iteration count)
+     --lri-weights lri_rigid's weights (default cotan, as CGAL's)
+     --slow-runs   timed runs of fitting (default 3: its setup takes about 10 s at 40k free)
 
    The rule (from MESH's bounding box alone): t(v) = (p_a - min_a) / h along the longest axis a
    (h its extent); the ROI is t >= 1 - F, the handle t >= 0.95, the rest is fixed. b is the
@@ -15,20 +20,28 @@
             box) along +a over length (F - 0.05) h, bent by 90 degrees towards +b;
      twist  dfm_pose_twist: 90 degrees about the box's axis line along a;
      drag   a translation by 0.25 h along +b (rotation identity).
+   Methods: laplacian, fitting, lri (uniform weights, polar frames, rigid_steps 0: the thesis's
+   LRI), lri_rigid (LRI then --lri-steps as-rigid-as-possible steps, --lri-weights), cgal_arap.
+   Every method with hard handle constraints.
+   Timing (bench.h's bench_interleave): the setups of all methods take turns, A B C .. A B C,
+   after one warm-up each, 11 timed runs each (fitting: --slow-runs); then per case the frames
+   the same way, with every method's object alive. Medians with min and max.
    Figures, per method and case:
-     RESULT deform method=<laplacian|fitting|lri|cgal_arap> case=<bend|twist|drag> n=<vertices>
-         n_free=<free vertices> init_ms=<t> frame_ms=<t> peak_mb=<m> edge_distortion=<d>
-         angle_distortion=<d>
+     RESULT deform method=<laplacian|fitting|lri|lri_rigid|cgal_arap> case=<bend|twist|drag>
+         n=<vertices> n_free=<free vertices> [rigid_steps=K weights=W] init_ms=<t> init_ms_min=
+         init_ms_max= frame_ms=<t> frame_ms_min= frame_ms_max= [runs=N] [frame_vs_cgal=<r>
+         frame_vs_cgal_min= frame_vs_cgal_max=] peak_mb=<m> edge_distortion=<d>
+         angle_distortion=<d> [edge_vs_cgal=<r> angle_vs_cgal=<r>]
      init_ms: dfm_deform_setup (checks, rows, normal matrices, analysis, factorization; the same
-       for every case, measured once per method); CGAL: the deformation object, insert_roi /
-       insert_control and preprocess(). frame_ms: one dfm_deform_solve; CGAL: set_target_position
-       for the handle and deform(5, 0). Medians of 5 after a warm-up (bench.h).
-     peak_mb: RSS high-water mark during the method's setup and frames minus the RSS before.
+       for every case); CGAL: the deformation object, insert_roi / insert_control and
+       preprocess(). frame_ms: one dfm_deform_solve; CGAL: set_target_position for the handle and
+       deform(5, 0) from the rest pose (reset() after each run, outside the timer).
+       frame_vs_cgal: the per-round ratios of the frame times.
+     peak_mb: the larger of the setup's RSS high-water mark (its warm-up run, above the RSS
+       before it) and the live object's RSS plus what a frame's warm-up run adds.
      edge_distortion: RMS of |e'| / |e| - 1 over the edges with an end in the ROI;
      angle_distortion: RMS change, in radians, of the corner angles of the triangles with a
-       vertex in the ROI. Both on the first frame's result.
-   LRI runs with polar orthonormalization of the frames (DFM_ORTHO_POLAR); every method with
-   hard handle constraints and uniform weights (the defaults). */
+       vertex in the ROI. Both on the first frame's result; *_vs_cgal: ratio to cgal_arap's. */
 #include "bench.h"
 
 #define DFM_IMPLEMENTATION
@@ -134,161 +147,187 @@ static void distortion(const Problem &p, const double *out, double *edge, double
     *angle = na ? sqrt(sa / (double)na) : 0.0;
 }
 
-/* ---- ours ---- */
-struct Ours {
+/* ---- the sides: ours and CGAL's, each a setup (init) and a frame ---- */
+struct Side {
+    const char *name;
     const Problem *p;
+    int cgal = 0;
     dfm_deform_options o;
     dfm_deform *d = nullptr;
-    const Pose *pose = nullptr;
-    std::vector<double> out;
-};
-
-static int ours_setup(void *u)
-{
-    Ours *s = (Ours *)u;
-    return dfm_deform_setup(s->p->pos.data(), s->p->nv, s->p->idx.data(), s->p->nt, s->p->roi.data(),
-                            s->p->handle.data(), &s->o, &s->d) != DFM_OK;
-}
-static void ours_setup_after(void *u)
-{
-    Ours *s = (Ours *)u;
-    dfm_deform_free(s->d);
-    s->d = nullptr;
-}
-static int ours_frame(void *u)
-{
-    Ours *s = (Ours *)u;
-    return dfm_deform_solve(s->d, s->pose->targets.data(), s->pose->rot.data(), s->out.data()) != DFM_OK;
-}
-
-static void run_ours(const Problem &p, const char *name, int method, const Pose *poses, const char **cases, int ncases)
-{
-    Ours s;
-    s.p = &p;
-    s.o = dfm_deform_default_options();
-    s.o.method = method;
-    s.o.orthonormalize = DFM_ORTHO_POLAR;
-    s.out.resize(3 * p.nv);
-    fprintf(stderr, "bench_deform: %s setup\n", name);
-    bench_reset_peak_rss();
-    long rss0 = bench_current_rss_kb();
-    double init = bench_median(ours_setup, ours_setup_after, &s);
-    dfm_result err = dfm_deform_setup(p.pos.data(), p.nv, p.idx.data(), p.nt, p.roi.data(), p.handle.data(), &s.o, &s.d);
-    if (init < 0 || err != DFM_OK) {
-        printf("RESULT deform method=%s error=%s\n", name, dfm_result_string(err));
-        return;
-    }
-    for (int c = 0; c < ncases; c++) {
-        double ed, ad;
-        s.pose = &poses[c];
-        fprintf(stderr, "bench_deform: %s %s\n", name, cases[c]);
-        ours_frame(&s);
-        distortion(p, s.out.data(), &ed, &ad);
-        double frame = bench_median(ours_frame, nullptr, &s);
-        double peak = (bench_peak_rss_kb() - rss0) / 1024.0;
-        printf("RESULT deform method=%s case=%s n=%zu n_free=%zu init_ms=%.1f frame_ms=%.2f peak_mb=%.1f "
-               "edge_distortion=%.4f angle_distortion=%.4f\n",
-               name, cases[c], p.nv, p.nfree, 1e3 * init, 1e3 * frame, peak, ed, ad);
-        fflush(stdout);
-    }
-    dfm_deform_free(s.d);
-}
-
-/* ---- CGAL ---- */
-struct Cgal {
-    const Problem *p;
     SMesh mesh;
     Deformation *dm = nullptr;
     const Pose *pose = nullptr;
+    std::vector<double> out;
+    double rss_object_mb = 0; /* the live object's RSS during the frames */
+    double frame_peak_mb = 0; /* the most a frame's warm-up added */
 };
 
-static int cgal_setup(void *u)
+static int side_setup(void *u)
 {
-    Cgal *s = (Cgal *)u;
+    Side *s = (Side *)u;
+    const Problem &p = *s->p;
+    if (!s->cgal)
+        return dfm_deform_setup(p.pos.data(), p.nv, p.idx.data(), p.nt, p.roi.data(), p.handle.data(), &s->o, &s->d) !=
+               DFM_OK;
     s->dm = new Deformation(s->mesh);
-    for (size_t v = 0; v < s->p->nv; v++)
-        if (s->p->roi[v]) s->dm->insert_roi_vertex(SMesh::Vertex_index((uint32_t)v));
-    for (size_t v = 0; v < s->p->nv; v++)
-        if (s->p->handle[v]) s->dm->insert_control_vertex(SMesh::Vertex_index((uint32_t)v));
+    for (size_t v = 0; v < p.nv; v++)
+        if (p.roi[v]) s->dm->insert_roi_vertex(SMesh::Vertex_index((uint32_t)v));
+    for (size_t v = 0; v < p.nv; v++)
+        if (p.handle[v]) s->dm->insert_control_vertex(SMesh::Vertex_index((uint32_t)v));
     return !s->dm->preprocess();
 }
-static void cgal_setup_after(void *u)
+static void side_free(void *u)
 {
-    Cgal *s = (Cgal *)u;
+    Side *s = (Side *)u;
+    dfm_deform_free(s->d);
+    s->d = nullptr;
     delete s->dm;
     s->dm = nullptr;
 }
-static int cgal_frame(void *u)
+/* one frame from the rest pose (CGAL: reset() in side_frame_after, outside the timer) */
+static int side_frame(void *u)
 {
-    Cgal *s = (Cgal *)u;
+    Side *s = (Side *)u;
     const double *t = s->pose->targets.data();
+    if (!s->cgal) return dfm_deform_solve(s->d, t, s->pose->rot.data(), s->out.data()) != DFM_OK;
     for (size_t v = 0; v < s->p->nv; v++)
         if (s->p->handle[v])
             s->dm->set_target_position(SMesh::Vertex_index((uint32_t)v), Kernel::Point_3(t[3 * v], t[3 * v + 1], t[3 * v + 2]));
     s->dm->deform(5, 0.0);
     return 0;
 }
-
-static void run_cgal(const Problem &p, const Pose *poses, const char **cases, int ncases)
+static void side_frame_after(void *u)
 {
-    Cgal s;
+    Side *s = (Side *)u;
+    if (s->cgal) s->dm->reset();
+}
+/* the first frame's result, for the distortions */
+static void side_result(Side *s)
+{
+    side_frame(s);
+    if (s->cgal)
+        for (size_t v = 0; v < s->p->nv; v++) {
+            const Kernel::Point_3 &q = s->mesh.point(SMesh::Vertex_index((uint32_t)v));
+            s->out[3 * v] = q.x();
+            s->out[3 * v + 1] = q.y();
+            s->out[3 * v + 2] = q.z();
+        }
+    side_frame_after(s);
+}
+
+static void make_side(Side &s, const Problem &p, const char *name, int method, int lri_steps, int lri_cotan)
+{
+    s.name = name;
     s.p = &p;
-    for (size_t v = 0; v < p.nv; v++) s.mesh.add_vertex(Kernel::Point_3(p.pos[3 * v], p.pos[3 * v + 1], p.pos[3 * v + 2]));
-    for (size_t t = 0; t < p.nt; t++)
-        s.mesh.add_face(SMesh::Vertex_index(p.idx[3 * t]), SMesh::Vertex_index(p.idx[3 * t + 1]),
-                        SMesh::Vertex_index(p.idx[3 * t + 2]));
-    fprintf(stderr, "bench_deform: cgal_arap setup\n");
-    bench_reset_peak_rss();
-    long rss0 = bench_current_rss_kb();
-    double init = bench_median(cgal_setup, cgal_setup_after, &s);
-    if (init < 0 || cgal_setup(&s)) {
-        printf("RESULT deform method=cgal_arap error=preprocess\n");
+    s.out.resize(3 * p.nv);
+    s.o = dfm_deform_default_options();
+    s.cgal = method < 0;
+    if (s.cgal) {
+        for (size_t v = 0; v < p.nv; v++) s.mesh.add_vertex(Kernel::Point_3(p.pos[3 * v], p.pos[3 * v + 1], p.pos[3 * v + 2]));
+        for (size_t t = 0; t < p.nt; t++)
+            s.mesh.add_face(SMesh::Vertex_index(p.idx[3 * t]), SMesh::Vertex_index(p.idx[3 * t + 1]),
+                            SMesh::Vertex_index(p.idx[3 * t + 2]));
         return;
     }
-    std::vector<double> out(3 * p.nv);
-    for (int c = 0; c < ncases; c++) {
-        double ed, ad;
-        s.pose = &poses[c];
-        fprintf(stderr, "bench_deform: cgal_arap %s\n", cases[c]);
-        s.dm->reset();
-        cgal_frame(&s);
-        for (size_t v = 0; v < p.nv; v++) {
-            const Kernel::Point_3 &q = s.mesh.point(SMesh::Vertex_index((uint32_t)v));
-            out[3 * v] = q.x();
-            out[3 * v + 1] = q.y();
-            out[3 * v + 2] = q.z();
-        }
-        distortion(p, out.data(), &ed, &ad);
-        double frame = bench_median(cgal_frame, nullptr, &s);
-        double peak = (bench_peak_rss_kb() - rss0) / 1024.0;
-        printf("RESULT deform method=cgal_arap case=%s n=%zu n_free=%zu init_ms=%.1f frame_ms=%.2f peak_mb=%.1f "
-               "edge_distortion=%.4f angle_distortion=%.4f\n",
-               cases[c], p.nv, p.nfree, 1e3 * init, 1e3 * frame, peak, ed, ad);
-        fflush(stdout);
+    s.o.method = method;
+    s.o.orthonormalize = DFM_ORTHO_POLAR;
+    s.o.rigid_steps = lri_steps;
+    if (lri_cotan) s.o.weights = DFM_WEIGHTS_COTAN;
+}
+
+static void run_all(const Problem &p, std::vector<Side> &sides, const Pose *poses, const char **cases, int ncases,
+                    int slow_runs)
+{
+    int n = (int)sides.size(), cg = -1;
+    std::vector<bench_side> bs(n);
+    for (int k = 0; k < n; k++) {
+        bs[k] = bench_make_side(sides[k].name, side_setup, side_free, &sides[k]);
+        if (sides[k].o.method == DFM_METHOD_FITTING && !sides[k].cgal) bs[k].max_runs = slow_runs;
+        if (sides[k].cgal) cg = k;
     }
-    delete s.dm;
+    fprintf(stderr, "bench_deform: setups, interleaved\n");
+    if (bench_interleave(bs.data(), n, 0) != 0) {
+        printf("RESULT deform error=setup_failed\n");
+        return;
+    }
+    std::vector<bench_side> init = bs;
+    for (int k = 0; k < n; k++) { /* the live objects, each measured */
+        bench_reset_peak_rss();
+        long rss0 = bench_current_rss_kb();
+        side_setup(&sides[k]);
+        sides[k].rss_object_mb = (bench_current_rss_kb() - rss0) / 1024.0;
+    }
+    for (int c = 0; c < ncases; c++) {
+        std::vector<double> ed(n), ad(n);
+        for (int k = 0; k < n; k++) {
+            sides[k].pose = &poses[c];
+            side_result(&sides[k]);
+            distortion(p, sides[k].out.data(), &ed[k], &ad[k]);
+            bs[k] = bench_make_side(sides[k].name, side_frame, side_frame_after, &sides[k]);
+            if (sides[k].o.method == DFM_METHOD_FITTING && !sides[k].cgal) bs[k].max_runs = slow_runs;
+        }
+        fprintf(stderr, "bench_deform: %s frames, interleaved\n", cases[c]);
+        if (bench_interleave(bs.data(), n, 0) != 0) {
+            printf("RESULT deform error=frame_failed case=%s\n", cases[c]);
+            return;
+        }
+        for (int k = 0; k < n; k++) {
+            Side &s = sides[k];
+            double frame_mb = bs[k].peak_kb > 0 ? bs[k].peak_kb / 1024.0 : 0.0;
+            double peak = fmax(init[k].peak_kb / 1024.0, s.rss_object_mb + frame_mb);
+            printf("RESULT deform method=%s case=%s n=%zu n_free=%zu", s.name, cases[c], p.nv, p.nfree);
+            if (!s.cgal && s.o.method == DFM_METHOD_LRI)
+                printf(" rigid_steps=%d weights=%s", s.o.rigid_steps, s.o.weights ? "cotan" : "uniform");
+            bench_print_ms("init", &init[k]);
+            bench_print_ms("frame", &bs[k]);
+            if (init[k].runs < BENCH_INTERLEAVED_RUNS) printf(" runs=%d", init[k].runs);
+            if (cg >= 0 && k != cg) bench_print_ratio_named("frame_vs_cgal", &bs[k], &bs[cg]);
+            printf(" peak_mb=%.1f edge_distortion=%.4f angle_distortion=%.4f", peak, ed[k], ad[k]);
+            if (cg >= 0 && k != cg) printf(" edge_vs_cgal=%.3f angle_vs_cgal=%.3f", ed[k] / ed[cg], ad[k] / ad[cg]);
+            printf("\n");
+            fflush(stdout);
+        }
+    }
+    for (int k = 0; k < n; k++) side_free(&sides[k]);
+}
+
+static int has_item(const char *list, const char *name)
+{
+    size_t n = strlen(name);
+    for (const char *q = list; (q = strstr(q, name)) != nullptr; q += n)
+        if ((q == list || q[-1] == ',') && (q[n] == ',' || q[n] == 0)) return 1;
+    return 0;
 }
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: bench_deform [MESH] [--refine K] [--free F] [--methods LIST] [--no-cgal]\n");
+    fprintf(stderr, "usage: bench_deform [MESH] [--refine K] [--free F] [--methods LIST] [--no-cgal]\n"
+                    "                    [--lri-steps K] [--lri-weights uniform|cotan] [--slow-runs N]\n");
     return 2;
 }
 
 int main(int argc, char **argv)
 {
-    const char *path = "/usr/share/glmark2/models/bunny.obj", *methods = "laplacian,fitting,lri,cgal_arap";
-    int refine = 0, cgal = 1;
+    const char *path = "/usr/share/glmark2/models/bunny.obj", *methods = "laplacian,fitting,lri,lri_rigid,cgal_arap";
+    int refine = 0, cgal = 1, lri_steps = 5, lri_cotan = 1, slow_runs = 3;
     Problem p;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--refine") && i + 1 < argc) refine = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--free") && i + 1 < argc) p.free_share = atof(argv[++i]);
         else if (!strcmp(argv[i], "--no-cgal")) cgal = 0;
         else if (!strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
+        else if (!strcmp(argv[i], "--lri-steps") && i + 1 < argc) lri_steps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--slow-runs") && i + 1 < argc) slow_runs = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--lri-weights") && i + 1 < argc) {
+            const char *w = argv[++i];
+            if (strcmp(w, "uniform") && strcmp(w, "cotan")) return usage();
+            lri_cotan = !strcmp(w, "cotan");
+        }
         else if (argv[i][0] == '-') return usage();
         else path = argv[i];
     }
     if (refine < 0 || refine > 4 || !(p.free_share > 0.05 && p.free_share <= 1.0)) return usage();
+    if (lri_steps < 1 || lri_steps > 100 || slow_runs < 1 || slow_runs > BENCH_INTERLEAVED_RUNS) return usage();
     BENCH_PRINT_FLAGS("deform");
     mio_mesh mesh;
     mio_error merr;
@@ -343,10 +382,17 @@ int main(int argc, char **argv)
     fprintf(stderr, "bench_deform: %s, %zu vertices, %zu free\n", path, nv, p.nfree);
     const char *cases[3] = {"bend", "twist", "drag"};
     Pose poses[3] = {make_pose(p, cases[0]), make_pose(p, cases[1]), make_pose(p, cases[2])};
-    if (strstr(methods, "laplacian")) run_ours(p, "laplacian", DFM_METHOD_LAPLACIAN, poses, cases, 3);
-    if (strstr(methods, "fitting")) run_ours(p, "fitting", DFM_METHOD_FITTING, poses, cases, 3);
-    if (strstr(methods, "lri")) run_ours(p, "lri", DFM_METHOD_LRI, poses, cases, 3);
-    if (cgal && strstr(methods, "cgal")) run_cgal(p, poses, cases, 3);
+    /* the sides, in this order (a name is in LIST when it is one of its comma-separated items) */
+    std::vector<Side> sides(5);
+    int ns = 0;
+    if (has_item(methods, "laplacian")) make_side(sides[ns++], p, "laplacian", DFM_METHOD_LAPLACIAN, 0, 0);
+    if (has_item(methods, "fitting")) make_side(sides[ns++], p, "fitting", DFM_METHOD_FITTING, 0, 0);
+    if (has_item(methods, "lri")) make_side(sides[ns++], p, "lri", DFM_METHOD_LRI, 0, 0);
+    if (has_item(methods, "lri_rigid")) make_side(sides[ns++], p, "lri_rigid", DFM_METHOD_LRI, lri_steps, lri_cotan);
+    if (cgal && has_item(methods, "cgal_arap")) make_side(sides[ns++], p, "cgal_arap", -1, 0, 0);
+    sides.resize(ns);
+    if (ns == 0) return usage();
+    run_all(p, sides, poses, cases, 3, slow_runs);
     printf("RESULT bench_deform process_peak_rss_mb=%.1f\n", bench_peak_rss_kb() / 1024.0);
     return 0;
 }
