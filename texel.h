@@ -1971,7 +1971,7 @@ static float tvt__axis_weights(float x, int res, int wraps, int R, float inv2s2,
         int v = base + k;
         float d = (float)v + 0.5f - x;
         w[k + R] = expf(-d * d * inv2s2);
-        if (wraps) v = (v % res + res) % res;
+        if (wraps) v &= res - 1; /* res is a power of two: the wrap, negative v too */
         else if (v < 0 || v >= res) w[k + R] = 0.0f;
         idx[k + R] = v;
         sum += w[k + R];
@@ -1990,9 +1990,13 @@ static int tvt__splat_point(tvt__acc *g, const tvt_point *p, int R, float inv2s2
     norm = p->mass / norm;
     for (k = 0; k <= 2 * R; k++) {
         if (wz[k] == 0.0f) continue;
-        for (j = 0; j <= 2 * R; j++)
+        for (j = 0; j <= 2 * R; j++) {
+            float *a = NULL;
             for (i = 0; i <= 2 * R; i++) {
-                float w = wx[i] * wy[j] * wz[k] * norm, *a = tvt__acc_voxel(g, ix[i], iy[j], iz[k]);
+                float w = wx[i] * wy[j] * wz[k] * norm;
+                /* the next voxel along x in the same brick is the next accumulator */
+                if (a && ix[i] == ix[i - 1] + 1 && (ix[i] & 3) != 0) a += TVT__ACC;
+                else a = tvt__acc_voxel(g, ix[i], iy[j], iz[k]);
                 if (!a) return 0;
                 a[0] += w;
                 for (c = 0; c < 3; c++) {
@@ -2002,6 +2006,7 @@ static int tvt__splat_point(tvt__acc *g, const tvt_point *p, int R, float inv2s2
                 }
                 a[10] += w * p->specular;
             }
+        }
     }
     return 1;
 }
