@@ -1,8 +1,8 @@
 /* grass - paper 002's withering grass (time-varying texels, texel.h) over a subdiv4.h terrain,
-   rendered with texel.h's sampler and shader and written with render.h's PNG writer.
+   drawn by render.h's shell marcher (sr_draw_shell) with texel.h's sampler, written with its PNG writer.
 
    usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]
-                [--wd A,B,C] [--frames F] [--seed S] [--quiet]
+                [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--frames F] [--seed S] [--quiet]
      --scene   mountain (default): the paper's Fig 13, N x N tiles (80: 6400 tiles of 400 blades,
                  2.56M blades) on a four-point terrain, one panel per wd (default 0,0.30,0.917);
                wither: one 400-blade patch seen close, at wd 0 .. 1 in six panels;
@@ -12,6 +12,9 @@
      --res     texel resolution, a power of two (default 64)
      --tiles   tiles per side of the mountain (default 80)
      --frames  key frames per TVT (default 6)
+     --wd-map  a grey image over the mountain (row 0 at the far, +y edge): each tile's wd is
+                 wd + G (grey - 0.5) at the tile's centre (plus the jitter), instead of the
+                 slope term; G = --wd-map-gain (1)
    Each panel prints "RESULT grass scene=... wd=... coverage=... render_ms=...". Progress goes to
    stderr. Exit status 0 on success, 2 on bad arguments, 1 on failure.
 
@@ -49,6 +52,9 @@ typedef struct scene {
     const tvt_shadow *shadow[VARIANTS];
     int variant_count;
     float wd, wd_sun, wd_jitter; /* per tile: wd + wd_sun * sun-facing slope + jitter */
+    const float *wd_map;       /* or, if not NULL: wd + wd_map_gain * (map - 0.5) + jitter, the */
+    int map_w, map_h;          /*   map_w x map_h grey map stretched over the terrain, row 0 at */
+    float wd_map_gain;         /*   the far (+y) edge, sampled at each tile's centre */
     float sun[3];
     float eye[3], target[3], fovy;
     int res;
@@ -127,12 +133,20 @@ static uint32_t tile_hash(int i, int j)
 
 static float tile_wd(const scene *s, const sr_shell_desc *shell, int i, int j)
 {
-    float g[2], n[3], l, facing, wd;
+    float g[2], n[3], l, facing, wd, jitter = s->wd_jitter * ((float)(tile_hash(i, j) & 1023) / 1023.0f - 0.5f);
+    if (s->wd_map) { /* the map's pixel under the tile's centre */
+        int x = (int)(((float)i + 0.5f) / (float)s->tiles * (float)s->map_w);
+        int y = (int)((1.0f - ((float)j + 0.5f) / (float)s->tiles) * (float)s->map_h);
+        x = x < 0 ? 0 : x >= s->map_w ? s->map_w - 1 : x;
+        y = y < 0 ? 0 : y >= s->map_h ? s->map_h - 1 : y;
+        wd = s->wd + s->wd_map_gain * (s->wd_map[(size_t)y * (size_t)s->map_w + (size_t)x] - 0.5f) + jitter;
+        return wd < 0 ? 0 : wd > 1 ? 1 : wd;
+    }
     sr_shell_height(shell, ((float)i + 0.5f) * s->tile, ((float)j + 0.5f) * s->tile, g);
     n[0] = -g[0]; n[1] = -g[1]; n[2] = 1.0f;
     l = sqrtf(n[0] * n[0] + n[1] * n[1] + 1.0f);
     facing = (n[0] * s->sun[0] + n[1] * s->sun[1] + n[2] * s->sun[2]) / l - s->sun[2]; /* 0 on flat ground */
-    wd = s->wd + s->wd_sun * facing + s->wd_jitter * ((float)(tile_hash(i, j) & 1023) / 1023.0f - 0.5f);
+    wd = s->wd + s->wd_sun * facing + jitter;
     return wd < 0 ? 0 : wd > 1 ? 1 : wd;
 }
 
@@ -386,8 +400,29 @@ static int write_sheet(const sr_image8 *panels, const char *const *captions, int
     return 1;
 }
 
+/* a grey map for the tiles' wd: channel 0 in [0, 1], m->v (free with free) */
+typedef struct wd_map { float *v; int w, h; float gain; } wd_map;
+
+static int read_wd_map(const char *path, wd_map *m)
+{
+    sr_picture pic;
+    sr_result r = sr_read_image(path, NULL, &pic);
+    if (r != SR_OK) { fprintf(stderr, "grass: reading %s: %s\n", path, sr_result_string(r)); return 0; }
+    m->w = pic.width; m->h = pic.height;
+    m->v = (float *)malloc(sizeof(float) * (size_t)pic.width * (size_t)pic.height);
+    if (!m->v || sr_picture_channel(&pic, 0, m->v) != SR_OK) {
+        fprintf(stderr, "grass: %s: out of memory\n", path);
+        free(m->v);
+        m->v = NULL;
+        sr_picture_free(&pic);
+        return 0;
+    }
+    sr_picture_free(&pic);
+    return 1;
+}
+
 static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t seed, const float *wds, int nwd,
-                          const char *path)
+                          const wd_map *map, const char *path)
 {
     grass_set g;
     scene s;
@@ -396,6 +431,7 @@ static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t
     const char *caps[8];
     int k, ok, done = 0;
     ok = mountain_setup(&s, &g, res, tiles, frames, seed);
+    if (map->v) { s.wd_map = map->v; s.map_w = map->w; s.map_h = map->h; s.wd_map_gain = map->gain; }
     for (k = 0; ok && k < nwd; k++) {
         double t0 = now_ms(), cov;
         char what[64];
@@ -501,7 +537,7 @@ static int scene_mingle(int w, int h, int res, int frames, uint64_t seed, const 
 static void usage(FILE *to)
 {
     fprintf(to, "usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
-                "             [--wd A,B,C] [--frames F] [--seed S] [--quiet]\n");
+                "             [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--frames F] [--seed S] [--quiet]\n");
     if (to != stdout) return;
     fprintf(to, "  --scene   mountain: the paper's Fig 13 (N x N tiles of 400 blades), one panel per wd;\n"
                 "            wither: one patch at wd 0..1; mingle: the paper's Fig 11 (default mountain)\n"
@@ -510,6 +546,9 @@ static void usage(FILE *to)
                 "  --res     texel resolution, a power of two in 16..256 (64)\n"
                 "  --tiles   mountain tiles per side (80: 6400 tiles, 2.56M blades)\n"
                 "  --wd      mountain's weathering degrees, in [0, 1] (0,0.30,0.917)\n"
+                "  --wd-map  a grey image (PNG, PGM, PPM, PFM) over the mountain: a tile's wd is wd +\n"
+                "            G * (grey - 0.5) at its centre, instead of drier on sunny slopes\n"
+                "  --wd-map-gain  G, in [0, 2] (1)\n"
                 "  --frames  key frames per TVT, 2..64 (6)\n"
                 "  --seed    terrain and blades (2010)\n"
                 "  --quiet   no progress on stderr\n");
@@ -521,6 +560,8 @@ int main(int argc, char **argv)
     int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, i, ok;
     float wds[8] = {0.0f, 0.30f, 0.917f};
     uint64_t seed = 2010;
+    const char *map_path = NULL;
+    wd_map map = {NULL, 0, 0, 1.0f};
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); return 0; }
@@ -533,6 +574,12 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--tiles")) { tiles = atoi(v); if (tiles < 1 || tiles > 1000) { fprintf(stderr, "grass: bad --tiles %s\n", v); return 2; } }
         else if (!strcmp(a, "--frames")) { frames = atoi(v); if (frames < 2 || frames > 64) { fprintf(stderr, "grass: --frames must be 2..64\n"); return 2; } }
         else if (!strcmp(a, "--seed")) seed = (uint64_t)strtoull(v, NULL, 10);
+        else if (!strcmp(a, "--wd-map")) map_path = v;
+        else if (!strcmp(a, "--wd-map-gain")) {
+            char *end;
+            map.gain = strtof(v, &end);
+            if (end == v || *end || !(map.gain >= 0.0f && map.gain <= 2.0f)) { fprintf(stderr, "grass: --wd-map-gain must be in [0, 2]\n"); return 2; }
+        }
         else if (!strcmp(a, "--wd")) {
             char *end;
             const char *p = v;
@@ -548,9 +595,12 @@ int main(int argc, char **argv)
         i++;
     }
     if (!out) { fprintf(stderr, "grass: -o OUT.png is required\n"); usage(stderr); return 2; }
+    if (map_path && strcmp(scene_name, "mountain")) { fprintf(stderr, "grass: --wd-map is for the mountain\n"); return 2; }
     if (!strcmp(scene_name, "mountain")) {
         if (!w) { w = 800; h = 600; }
-        ok = scene_mountain(w, h, res, tiles, frames, seed, wds, nwd, out);
+        if (map_path && !read_wd_map(map_path, &map)) return 1;
+        ok = scene_mountain(w, h, res, tiles, frames, seed, wds, nwd, &map, out);
+        free(map.v);
     } else if (!strcmp(scene_name, "wither")) {
         if (!w) { w = 320; h = 240; }
         ok = scene_wither(w, h, res, frames, seed, out);
