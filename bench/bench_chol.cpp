@@ -307,6 +307,7 @@ static int run_system(const char *name, const char *setting, const dfm_csc &a, c
     cholmod_common cc;
     cholmod_setup(s, cc, a);
     double cholmod_lnz = cc.lnz, cholmod_stored = (double)s.cf->xsize;
+    size_t cholmod_supernodes = s.cf->is_super ? (size_t)s.cf->nsuper : 0;
     int ordering = cc.method[cc.selected].ordering;
     double cholmod_res = cholmod_check(s, a);
     if (!(cholmod_res <= RESIDUAL_OK)) {
@@ -365,8 +366,9 @@ static int run_system(const char *name, const char *setting, const dfm_csc &a, c
     bench_print_ms("ours_solve3", &so[0]);
     bench_print_ms("cholmod_solve3", &so[1]);
     bench_print_ratio_named("solve_ratio", &so[0], &so[1]);
-    printf(" residual=%.2e cholmod_residual=%.2e ours_supernodes=%zu ours_stored=%zu cholmod_stored=%.0f\n", ours_res,
-           cholmod_res, info.supernodes, info.stored_entries, cholmod_stored);
+    printf(" residual=%.2e cholmod_residual=%.2e ours_supernodes=%zu cholmod_supernodes=%zu ours_stored=%zu "
+           "cholmod_stored=%.0f\n",
+           ours_res, cholmod_res, info.supernodes, cholmod_supernodes, info.stored_entries, cholmod_stored);
     fflush(stdout);
 
     cholmod_free_dense(&s.cb, &cc);
