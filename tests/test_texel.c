@@ -190,6 +190,66 @@ static void test_round_trip(int sanitize)
     }
 }
 
+/* The rest state reproduces the sample: at wd = 0 nothing shrinks or bends, so tvt_age puts
+   every point back where tvt_sample put it, for blade points (root + ell axis + radial) and for
+   the paper's tangent-line rest state of a texel without blade indices (a splatted one). The
+   rest directions are stored as int16 (v * 32767 rounded): decoded, the axis and bend are unit
+   within sqrt(3) / 2 / 32767 < 3e-5 and perpendicular within 1e-4. The positions agree within
+   2e-4 voxel: float rounding of coordinates below 64 (ulp 8e-6) over a few operations; had the
+   rest state been taken along the unrounded axis, points 60 voxels up would be off by up to
+   60 * 2.6e-5 = 1.6e-3. */
+static void test_rest_state(void)
+{
+    tvt_grass_desc d = tvt_grass_default_desc();
+    tvt_model_options o = tvt_model_default_options();
+    tvt_texel t, back;
+    tvt_points p, q;
+    double worst_pos = 0, worst_unit = 0, worst_perp = 0, worst_tangent_rest = 0;
+    size_t i;
+    int pass;
+    d.res = 64; d.seed = 9;
+    o.no_merge = 1;
+    T_CHECK(tvt_build_grass(&d, &t) == TVT_OK);
+    T_CHECK(tvt_sample(&t, NULL, &p) == TVT_OK);
+    T_CHECK(tvt_splat(&p, NULL, &back) == TVT_OK); /* no blade indices: the tangent-line rest state */
+    for (pass = 0; pass < 2; pass++) {
+        const tvt_texel *src = pass ? &back : &t;
+        T_CHECK(tvt_sample(src, NULL, &q) == TVT_OK);
+        {
+            float *start = (float *)malloc(q.count * 3 * sizeof(float));
+            for (i = 0; i < q.count; i++) memcpy(start + 3 * i, q.p[i].pos, 3 * sizeof(float));
+            T_CHECK(tvt_age(&q, 0.0f, &o) == TVT_OK);
+            for (i = 0; i < q.count; i++) {
+                float axis[3], bend[3], dp[3];
+                double e, u, perp;
+                int c;
+                tvt_point_rest_dirs(q.p + i, axis, bend, NULL);
+                for (c = 0; c < 3; c++) dp[c] = q.p[i].pos[c] - start[3 * i + c];
+                for (c = 0; c < 2; c++) dp[c] -= (float)d.res * floorf(dp[c] / (float)d.res + 0.5f);
+                e = sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]);
+                u = fabs(sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]) - 1.0);
+                if (fabs(sqrt(bend[0] * bend[0] + bend[1] * bend[1] + bend[2] * bend[2]) - 1.0) > u)
+                    u = fabs(sqrt(bend[0] * bend[0] + bend[1] * bend[1] + bend[2] * bend[2]) - 1.0);
+                perp = fabs(axis[0] * bend[0] + axis[1] * bend[1] + axis[2] * bend[2]);
+                if (pass == 0 && e > worst_pos) worst_pos = e;
+                if (pass == 1 && e > worst_tangent_rest) worst_tangent_rest = e;
+                if (u > worst_unit) worst_unit = u;
+                if (perp > worst_perp) worst_perp = perp;
+            }
+            free(start);
+        }
+        tvt_points_free(&q);
+    }
+    T_NEAR(worst_pos, 0.0, 2e-4);
+    T_NEAR(worst_tangent_rest, 0.0, 2e-4);
+    T_NEAR(worst_unit, 0.0, 3e-5);
+    T_NEAR(worst_perp, 0.0, 1e-4);
+    T_CHECK(sizeof(tvt_point) == 112); /* the documented size (the doc block's MEMORY) */
+    tvt_points_free(&p);
+    tvt_texel_free(&back);
+    tvt_texel_free(&t);
+}
+
 /* A smooth field (a slab of density 0.5, tangent (0.6, 0, 0.8)) comes back as itself: the mean
    density of each interior layer within 5% (one layer averages 32^2 voxels of per-voxel noise
    about 30%: the layer mean's noise is under 1%), the tangent to the 8-bit step. */
@@ -624,6 +684,7 @@ int main(int argc, char **argv)
     test_static_texel();
     test_tiling();
     test_round_trip(sanitize);
+    test_rest_state();
     test_smooth_field();
     test_model_curves();
     test_droop();
