@@ -13,7 +13,7 @@
        dm_param_options po = {0};  po.width = po.height = 1024;        // 4. charts in one map
        dm_parameterize(B, bnv, BT, bnt, &po, &param);
        dm_bake(param, B, bnv, BT, bnt, P, nv, T, nt, NULL, &map);      // 5. displacement, normals
-       dm_reconstruct(map, param, NULL, &dense);                       // 6. base + map as a mesh
+       dm_reconstruct(map, param, B, bnv, BT, bnt, NULL, &dense);      // 6. base + map as a mesh
        dm_trimesh_free(dense); dm_dispmap_free(map); dm_param_free(param); dm_pm_free(pm);
        dm_shell_free(shell);
      Every call returns a dm_result (DM_OK = 0; dm_result_string() names it). Check each one.
@@ -100,20 +100,25 @@
      OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error
      (no collapse above it, mesh units; 0 none; neither: until no collapse passes the checks);
      flags (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes);
-     max_collapses (0 none; the first k collapses are the same whatever the limit); constraint,
-     constraint_user, on_collapse (called just before each collapse is applied, for a constraint
-     that follows the mesh), relax (called when no candidate is left above the target and some
-     were vetoed: nonzero = the constraint is less strict now, every vetoed edge is queued
-     again); allocator; progress (the fraction of the triangles to remove that are gone).
+     max_collapses (0 none; the first k collapses are the same whatever the limit);
+     min_quality (0 none; else no collapse makes a triangle's 2 area / longest edge^2 drop
+     below it, until nothing else is left above the target: no slivers, which a tessellated
+     reconstruction turns into folds; off by default, as beside an enclosing constraint it
+     gives bases farther from the original); constraint, constraint_user,
+     on_collapse (called just before each collapse is applied, for a constraint that follows
+     the mesh), relax (called when no candidate is left above the target and some were vetoed:
+     nonzero = the constraint is less strict now, every vetoed edge is queued again);
+     allocator; progress (the fraction of the triangles to remove that are gone).
      dm_weld merges vertices at the same position (bit for bit, -0 = +0) in first-use order.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
      the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
-     ERRORS. As in COMMON; a negative or NaN target_error is DM_ERR_INVALID_ARGUMENT; a triangle
-     soup (no vertex in two triangles) with repeated positions is DM_ERR_NOT_WELDED. Vetoes or
-     checks that stop above the target still give DM_OK (report.reached_target = 0). Triangles
-     with a repeated index are dropped (counted); duplicate vertices are different vertices (a
-     seam between them is two boundaries); isolated vertices are in no level.
+     ERRORS. As in COMMON; a negative or NaN target_error, a NaN min_quality or one above 0.5
+     is DM_ERR_INVALID_ARGUMENT; a triangle soup (no vertex in two triangles) with repeated
+     positions is DM_ERR_NOT_WELDED. Vetoes or checks that stop above the target still give
+     DM_OK (report.reached_target = 0). Triangles with a repeated index are dropped (counted);
+     duplicate vertices are different vertices (a seam between them is two boundaries);
+     isolated vertices are in no level.
      THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads;
      dm_pm_set_level and dm_pm_get_mesh must run alone on it.
      LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles, and 3 triangles + 2 vertices
@@ -190,8 +195,11 @@
      units, positive inward) and the original's interpolated vertex normal at the hit. inward
      takes the paper's rule (the first hit along -n, for a base that encloses the original);
      otherwise, and on both_ways triangles, the nearest crossing either way. A texel with no
-     crossing is DM_TEXEL_MISS (valid = 0); gutter texels are DM_TEXEL_EMPTY; both get push-pull
-     filled values (Gortler et al. 1996) for filtering only.
+     crossing is DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart (a square
+     of half-side 2 around the centre meets one of its triangles) are DM_TEXEL_BORDER: baked the
+     same way from the nearest such triangle's plane extended, so that bilinear filtering (and
+     the first mip level) anywhere inside a chart reads real samples. MISS and the other, EMPTY,
+     texels get push-pull filled values (Gortler et al. 1996) for filtering only.
      SURFACE SAMPLE GRID. dm_dispmap holds, per texel: pos, nrm, disp, area (the base area the
      texel stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y
      (the dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the
@@ -202,25 +210,31 @@
      -(d turned r). Links are chosen so that the walk back lands where it started; where one
      texel cannot serve two charts that step into it (chart corners), nbr is the texel itself
      with a half turn (a mirror, as a clamped filter sees it).
-     RECONSTRUCTION. One vertex per valid texel at pos - disp nrm, in row-major texel order
-     (vertex k is the k-th valid texel, so map edits map to vertices without a table); two
-     triangles per 2x2 block of valid texels of one chart, one for three; none across a depth
-     break (an edge longer than 8 texel spacings, or than 2 in a triangle more than 60 degrees
-     from the original's normal). Seams are zipped where the neighbouring border texels of two
-     charts meet; cracks remain where they do not (chart corners, very different texel sizes).
+     RECONSTRUCTION. Each base triangle is tessellated at the map's resolution, as a GPU
+     tessellator does: a barycentric grid of level sqrt(2 x its uv area in texels) inside, as
+     many points along each base edge as its longer uv side has texels (shared by every
+     triangle on the edge), strips between. A vertex is its base point moved along the base
+     normal by the map's bilinear depth, averaged over the triangles sharing it, with the
+     map's normal. A closed manifold base gives a closed manifold result with no T-junction;
+     nothing is dropped at depth breaks (a steep fin, as a GPU draws the same map). Vertex v <
+     base_vertex_count is base vertex v; face_base gives each triangle's base triangle.
      dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
      dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 2),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
      stretch_iterations (0 = 6, negative none). dm_bake_options: max_distance, inward, both_ways.
+     dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
      dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
      samples_per_side (0 = 200000). Each with allocator and progress.
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle; dm_dispmap: 46 bytes per
-     texel (about 22 more while dm_bake runs) plus a BVH of the original.
+     texel (about 38 more while dm_bake runs) plus a BVH of the original; dm_trimesh: 24 bytes
+     per vertex and 16 per triangle (about 2 triangles per covered texel), 52 more per vertex
+     while dm_reconstruct runs.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
      their gutters do not fit the map at any scale.
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
-     LIMITS. Maps up to 16384 x 16384.
+     LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE),
+     at most 1024 segments along one base edge.
 
    REFERENCES
      S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
@@ -383,7 +397,7 @@ DMDEF int dm_bvh_closest_point(const dm_bvh *bvh, const float point[3], float ma
 /* ---- Part 3: parameterization, displacement bake, surface sample grid, reconstruction ------- */
 
 /* Texel status in a dm_dispmap. */
-enum { DM_TEXEL_EMPTY = 0, DM_TEXEL_HIT = 1, DM_TEXEL_MISS = 2 };
+enum { DM_TEXEL_EMPTY = 0, DM_TEXEL_HIT = 1, DM_TEXEL_MISS = 2, DM_TEXEL_BORDER = 3 };
 
 typedef struct dm_param_options {
     int width, height;            /* map size in texels; 0 = 1024 each; at most 16384 */
@@ -453,10 +467,11 @@ typedef struct dm_dispmap {
     float *normal;             /* 3 per texel: original's normal at the hit, object space, unit */
     float *area;               /* surface area of the base the texel stands for (0 for EMPTY) */
     uint8_t *valid;            /* 1 = HIT */
-    uint8_t *status;           /* DM_TEXEL_EMPTY / HIT / MISS */
+    uint8_t *status;           /* DM_TEXEL_EMPTY / HIT / MISS / BORDER (gutter, baked for filtering) */
     const uint32_t *nbr;       /* the dm_param's neighbours (not a copy: keep the dm_param alive) */
     const uint8_t *nbr_rot;
     size_t hit_count, miss_count;
+    size_t border_count;       /* BORDER texels: gutter texels near a chart, baked (valid = 0) */
     float max_distance;        /* the search distance used */
 } dm_dispmap;
 
@@ -464,8 +479,10 @@ typedef struct dm_dispmap {
 typedef struct dm_trimesh {
     dm_allocator allocator;
     float *positions;
+    float *normals;            /* 3 per vertex, unit: the map's normals */
     size_t vertex_count;
     uint32_t *indices;
+    uint32_t *face_base;       /* per triangle: the base triangle it tessellates */
     size_t triangle_count;
 } dm_trimesh;
 
@@ -500,11 +517,22 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
                         const dm_bake_options *options, dm_dispmap **out);
 DMDEF void dm_dispmap_free(dm_dispmap *map);
 
-/* The dense mesh base + map: one vertex per HIT texel at pos - disp * nrm (in row-major texel
-   order: vertex k is the k-th valid texel), two triangles per
-   2x2 block of HIT texels of one chart (one when three are). allocator NULL = default. */
-DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param,
-                               const dm_allocator *allocator, dm_trimesh **out);
+typedef struct dm_reconstruct_options {
+    float density;             /* micro-edges per texel along each base edge; 0 = 1, at most 16 */
+    const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_trimesh */
+    int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
+    void *progress_user;
+} dm_reconstruct_options;      /* zero = defaults */
+DMDEF dm_reconstruct_options dm_reconstruct_default_options(void);
+
+/* The dense mesh base + map: every base triangle tessellated at the map's resolution (a
+   barycentric grid inside, its edges' points shared with the triangles across them), each
+   vertex at its base point moved along the base normal by the map's bilinear depth (averaged
+   over the triangles that share it), with the map's normal. Vertex v < base_vertex_count is
+   base vertex v. The base mesh is the one given to dm_parameterize and dm_bake. */
+DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param, const float *base_positions,
+                               size_t base_vertex_count, const uint32_t *base_indices, size_t base_triangle_count,
+                               const dm_reconstruct_options *options, dm_trimesh **out);
 DMDEF void dm_trimesh_free(dm_trimesh *mesh);
 
 /* Symmetric distance: samples_per_side area-uniform (deterministic) points on each mesh, each
@@ -583,6 +611,11 @@ typedef struct dm_simplify_options {
     unsigned flags;                   /* DM_SIMPLIFY_LOCK_BOUNDARY */
     const uint8_t *locked;            /* NULL, or one byte per vertex: nonzero = never moved or removed */
     size_t max_collapses;             /* 0 = no limit; stop after this many collapses */
+    float min_quality;                /* 0 (or less) = no guard; else a collapse may not make a
+                                         triangle's 2 area / longest edge^2 fall below this and below
+                                         what it was (equilateral 0.87; 0.1 allows no angle above
+                                         about 157 degrees), until nothing else is left above the
+                                         target; at most 0.5 */
     dm_collapse_constraint constraint; /* NULL, or called for each candidate that passed every check */
     void *constraint_user;
     void (*on_collapse)(void *user, const dm_collapse *done); /* NULL, or called with constraint_user
@@ -2758,6 +2791,7 @@ typedef struct dm__qem_simp {
     size_t nops, capops;
     double center[3], scale, inv_scale;
     double max_error;
+    double min_quality;            /* new triangles' 2 area / longest edge^2 (0 = no guard) */
     size_t rejected, vetoed, requeued;
 } dm__qem_simp;
 
@@ -3382,7 +3416,8 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     size_t m = 0;
     double pa[3];
     int pass, k, bad = 0;
-    const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS;
+    const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS,
+                 min_q2 = s->min_quality * s->min_quality;
     for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
     for (pass = 0; pass < 2; pass++) {
         uint32_t v = pass ? rem : keep, other = pass ? keep : rem, nc = s->vx[v].count, j0;
@@ -3432,6 +3467,12 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
                 l0 = n0x * n0x + n0y * n0y + n0z * n0z;
                 dot = n0x * n1x + n0y * n1y + n0z * n1z;
                 thin = !(l1 > min_sin2 * e2 * e2);
+                if (min_q2 > 0.0 && !(l1 >= min_q2 * e2 * e2)) { /* a sliver: refused unless it was one already */
+                    double o2 = u0x * u0x + u0y * u0y + u0z * u0z, ov = v0x * v0x + v0y * v0y + v0z * v0z;
+                    o2 = ov > o2 ? ov : o2;
+                    o2 = lw > o2 ? lw : o2;
+                    thin |= l1 * o2 * o2 < l0 * e2 * e2;
+                }
                 turned = (l0 > 0.0) & ((dot <= 0.0) | !(dot * dot > min_cos2 * l0 * l1));
                 bad |= thin | turned;
                 s->ring[3 * m + slot] = keep;
@@ -4343,7 +4384,11 @@ static dm_result dm__qem_collapse_loop(dm__qem_simp *s, dm_simplify_report *rep,
         if (got < 0) return DM_ERR_OUT_OF_MEMORY;
         if (got == 0) {
             int again = 0;
-            if (opt->relax && s->target && s->live > s->target && s->vetoed > 0 && opt->relax(opt->constraint_user)) {
+            if (s->min_quality > 0.0 && s->target && s->live > s->target && s->rejected > 0) {
+                s->min_quality = 0.0; /* the sliver guard gives way before the target does */
+                if (!dm__qem_requeue_parked(s, &again)) return DM_ERR_OUT_OF_MEMORY;
+            }
+            if (!again && opt->relax && s->target && s->live > s->target && s->vetoed > 0 && opt->relax(opt->constraint_user)) {
                 rep->relaxed++;
                 if (!dm__qem_requeue_parked(s, &again)) return DM_ERR_OUT_OF_MEMORY;
             }
@@ -4411,6 +4456,8 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     if (!out) return DM_ERR_INVALID_ARGUMENT;
     *out = NULL;
     if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
+    if (!(opt.min_quality <= 0.5f)) return DM_ERR_INVALID_ARGUMENT; /* NaN or too strict */
+    s.min_quality = opt.min_quality > 0.0f ? opt.min_quality : 0.0;
     r = dm__qem_prepare(&s, positions, vertex_count, indices, triangle_count, &dropped, &frozen);
     if (r == DM_OK) r = dm__qem_seed_edges(&s, vertex_count); /* every edge a candidate */
     if (r == DM_OK) {
@@ -5914,27 +5961,31 @@ static dm_result dm__bk_prepare(dm__bk_run *r)
     return dm_bvh_build(r->opos, r->onv, r->oidx, r->ont, &bo, &r->bvh);
 }
 
-/* texel id on base triangle tt: its base point, unit interpolated normal and the surface area
-   it stands for (3D area over the UV area in texels); returns the normal's length before
-   normalizing (0: no direction to search) */
-static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt)
+/* texel id at barycentrics (bu, bv) of base triangle tt: its base point, unit interpolated
+   normal and, when area is set, the surface area it stands for (3D area over the UV area in
+   texels; 0 otherwise). A border texel's (bu, bv) lie outside the triangle: the point is the
+   triangle's plane extended, the normal the one at the nearest point of the triangle. Returns
+   the normal's length before normalizing (0: no direction to search). */
+static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv, int area)
 {
     const dm_param *param = r->param;
     dm_dispmap *m = r->m;
     const uint32_t *bi = r->bidx + 3 * (size_t)tt;
-    double p[3][3], nv[3], bu, bv, b0, len, fnv[3], e1[3], e2[3], uva;
+    double p[3][3], nv[3], b0, len, fnv[3], e1[3], e2[3], uva, nu = bu, nw = bv, nb;
     const float *uv;
     int k, c;
-    bu = param->texel_bary[2 * id];
-    bv = param->texel_bary[2 * id + 1];
     b0 = 1.0 - bu - bv;
+    if (nu < 0.0) nu = 0.0;
+    if (nw < 0.0) nw = 0.0;
+    if (nu + nw > 1.0) { double sm = nu + nw; nu /= sm; nw /= sm; }
+    nb = 1.0 - nu - nw;
     for (c = 0; c < 3; c++) dm__load3(r->bpos, bi[c], p[c]);
     for (k = 0; k < 3; k++) {
         const float *n0 = r->bnrm + 3 * (size_t)bi[0];
         const float *n1 = r->bnrm + 3 * (size_t)bi[1];
         const float *n2 = r->bnrm + 3 * (size_t)bi[2];
         m->pos[3 * id + (size_t)k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
-        nv[k] = b0 * n0[k] + bu * n1[k] + bv * n2[k];
+        nv[k] = nb * n0[k] + nu * n1[k] + nw * n2[k];
     }
     dm__sub3(p[1], p[0], e1);
     dm__sub3(p[2], p[0], e2);
@@ -5945,13 +5996,14 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt)
     uv = param->uv + 6 * (size_t)tt;
     uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
           (double)param->width * (double)param->height;
-    m->area[id] = uva > 0.0 ? (float)(0.5 * dm__len3(fnv) / uva) : 0.0f;
+    m->area[id] = area && uva > 0.0 ? (float)(0.5 * dm__len3(fnv) / uva) : 0.0f;
     return len;
 }
 
 /* the ray from texel id's base point along -normal (inward first where asked, else the whole
-   line): the depth and the original's normal at the hit, or a miss */
-static void dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len)
+   line): the depth and the original's normal at the hit, or a miss (a border texel that
+   misses stays EMPTY); returns the original's triangle hit, or DM_NO_HIT */
+static uint32_t dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len, int border)
 {
     dm_dispmap *m = r->m;
     float maxd = r->maxd;
@@ -5985,13 +6037,21 @@ static void dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len)
         }
         m->disp[id] = hit.t;
         for (k = 0; k < 3; k++) m->normal[3 * id + (size_t)k] = hl > 0.0 ? (float)(hn[k] / hl) : 0.0f;
+        if (border) {
+            m->status[id] = DM_TEXEL_BORDER;
+            m->border_count++;
+            return hit.triangle;
+        }
         m->status[id] = DM_TEXEL_HIT;
         m->valid[id] = 1;
         m->hit_count++;
-    } else {
+        return hit.triangle;
+    }
+    if (!border) {
         m->status[id] = DM_TEXEL_MISS;
         m->miss_count++;
     }
+    return DM_NO_HIT;
 }
 
 /* every texel: EMPTY off the charts, else its base point and its ray */
@@ -6011,7 +6071,7 @@ static dm_result dm__bk_cast(dm__bk_run *r)
                 m->area[id] = 0.0f;
                 continue;
             }
-            dm__bk_shoot(r, id, tt, dm__bk_base_point(r, id, tt));
+            (void)dm__bk_shoot(r, id, tt, dm__bk_base_point(r, id, tt, param->texel_bary[2 * id], param->texel_bary[2 * id + 1], 1), 0);
         }
         if ((y & 15) == 15 && r->o.progress && r->o.progress(r->o.progress_user, 0.95f * (float)(y + 1) / (float)H))
             return DM_CANCELLED;
@@ -6019,22 +6079,177 @@ static dm_result dm__bk_cast(dm__bk_run *r)
     return DM_OK;
 }
 
-/* push-pull fill of everything that is not a hit, for filtering only */
+/* 1 when the square of half-side h around point c meets the counter-clockwise triangle P
+   (separating axes: x, y and the three edge normals) */
+static int dm__bk_square_meets(const double P[3][2], const double c[2], double h)
+{
+    int e, k;
+    for (k = 0; k < 2; k++) {
+        double lo = fmin(P[0][k], fmin(P[1][k], P[2][k])), hi = fmax(P[0][k], fmax(P[1][k], P[2][k]));
+        if (hi < c[k] - h || lo > c[k] + h) return 0;
+    }
+    for (e = 0; e < 3; e++) {
+        const double *a = P[e], *b = P[(e + 1) % 3];
+        double nx = -(b[1] - a[1]), ny = b[0] - a[0];
+        if (nx * c[0] + ny * c[1] + h * (fabs(nx) + fabs(ny)) < nx * a[0] + ny * a[1]) return 0;
+    }
+    return 1;
+}
+
+/* distance from point c to the segment a b */
+static double dm__bk_segment_distance(const double a[2], const double b[2], const double c[2])
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy, s = 0.0, ex, ey;
+    if (l2 > 0.0) s = ((c[0] - a[0]) * dx + (c[1] - a[1]) * dy) / l2;
+    s = s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s;
+    ex = a[0] + s * dx - c[0];
+    ey = a[1] + s * dy - c[1];
+    return sqrt(ex * ex + ey * ey);
+}
+
+/* the empty texels near base triangle t in the map: each takes t (and its barycentrics, outside
+   the triangle) when t is the nearest triangle whose uv triangle its square of half-side
+   DM__BORDER texels meets; ties go to the lower triangle */
+#define DM__BORDER 2
+static void dm__bk_border_triangle(const dm_param *pm, size_t t, float *best, uint32_t *tri, float *bary)
+{
+    int W = pm->width, H = pm->height, c;
+    double P[3][2], d, mnx, mxx, mny, mxy;
+    long x0, x1, y0, y1, xx, yy;
+    for (c = 0; c < 3; c++) {
+        P[c][0] = (double)pm->uv[6 * t + 2 * (size_t)c] * W;
+        P[c][1] = (double)pm->uv[6 * t + 2 * (size_t)c + 1] * H;
+    }
+    d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
+    if (!(d > 0.0)) return;
+    mnx = fmin(P[0][0], fmin(P[1][0], P[2][0])); mxx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
+    mny = fmin(P[0][1], fmin(P[1][1], P[2][1])); mxy = fmax(P[0][1], fmax(P[1][1], P[2][1]));
+    x0 = (long)floor(mnx - 0.5 - DM__BORDER); x1 = (long)ceil(mxx - 0.5 + DM__BORDER);
+    y0 = (long)floor(mny - 0.5 - DM__BORDER); y1 = (long)ceil(mxy - 0.5 + DM__BORDER);
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > W - 1) x1 = W - 1;
+    if (y1 > H - 1) y1 = H - 1;
+    for (yy = y0; yy <= y1; yy++)
+        for (xx = x0; xx <= x1; xx++) {
+            size_t id = (size_t)yy * (size_t)W + (size_t)xx;
+            double cc[2], dist, cx, cy;
+            if (pm->texel_triangle[id] != DM_NO_HIT) continue;
+            cc[0] = xx + 0.5;
+            cc[1] = yy + 0.5;
+            if (!dm__bk_square_meets((const double(*)[2])P, cc, DM__BORDER)) continue;
+            dist = fmin(dm__bk_segment_distance(P[0], P[1], cc),
+                        fmin(dm__bk_segment_distance(P[1], P[2], cc), dm__bk_segment_distance(P[2], P[0], cc)));
+            if (!(dist < best[id])) continue;
+            cx = cc[0] - P[0][0];
+            cy = cc[1] - P[0][1];
+            best[id] = (float)dist;
+            tri[id] = (uint32_t)t;
+            bary[2 * id] = (float)((cx * (P[2][1] - P[0][1]) - cy * (P[2][0] - P[0][0])) / d);
+            bary[2 * id + 1] = (float)(((P[1][0] - P[0][0]) * cy - (P[1][1] - P[0][1]) * cx) / d);
+        }
+}
+
+/* the linear extension of chart's field at texel id: a least-squares plane through the chart's
+   hits within DM__BORDER + 1 texels (weighted toward the nearest) evaluated at the texel, for the
+   depth and the normal; 0 when those hits do not span a plane */
+static int dm__bk_chart_extension(const dm__bk_run *r, size_t id, uint32_t chart, double val[4])
+{
+    const dm_param *param = r->param;
+    const dm_dispmap *m = r->m;
+    int W = param->width, H = param->height, x = (int)(id % (size_t)W), y = (int)(id / (size_t)W), R = DM__BORDER + 1, dx, dy, k;
+    double A[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, b[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, det;
+    for (dy = -R; dy <= R; dy++)
+        for (dx = -R; dx <= R; dx++) {
+            size_t j;
+            double w, f[3], v[4];
+            int a, c;
+            if (x + dx < 0 || y + dy < 0 || x + dx >= W || y + dy >= H) continue;
+            j = (size_t)(y + dy) * (size_t)W + (size_t)(x + dx);
+            if (!m->valid[j] || param->chart[param->texel_triangle[j]] != chart) continue;
+            w = 1.0 / (0.5 + dx * dx + dy * dy);
+            f[0] = 1.0; f[1] = dx; f[2] = dy;
+            v[0] = m->disp[j]; v[1] = m->normal[3 * j]; v[2] = m->normal[3 * j + 1]; v[3] = m->normal[3 * j + 2];
+            for (a = 0; a < 3; a++) {
+                for (c = 0; c < 3; c++) A[a][c] += w * f[a] * f[c];
+                for (k = 0; k < 4; k++) b[k][a] += w * f[a] * v[k];
+            }
+        }
+    det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+          A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    if (!(A[0][0] > 0.0) || !(det > 1e-3 * A[0][0] * A[0][0] * A[0][0])) return 0;
+    for (k = 0; k < 4; k++) /* the plane's constant term, by Cramer's rule */
+        val[k] = (b[k][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (b[k][1] * A[2][2] - A[1][2] * b[k][2]) +
+                  A[0][2] * (b[k][1] * A[2][1] - A[1][1] * b[k][2])) / det;
+    return 1;
+}
+
+/* border texel id of base triangle tt at (bu, bv): the ray from the triangle's plane extended,
+   unless it misses or lands on a face of the original more than 60 degrees from the base
+   triangle: the original has a crease along the chart's edge (the ray reached the face beyond
+   it), and the chart's own field extended linearly is what a filter at the edge must read */
+#define DM__BORDER_CREASE_COS 0.5
+static void dm__bk_border_texel(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv)
+{
+    dm_dispmap *m = r->m;
+    double ext[4], l, fo[3], fb[3];
+    uint32_t hit = dm__bk_shoot(r, id, tt, dm__bk_base_point(r, id, tt, bu, bv, 0), 1);
+    int k;
+    if (hit != DM_NO_HIT) {
+        dm__face_normal(r->opos, r->oidx, hit, fo);
+        dm__face_normal(r->bpos, r->bidx, tt, fb);
+        if (dm__dot3(fo, fb) >= DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fb)) return;
+    }
+    if (!dm__bk_chart_extension(r, id, r->param->chart[tt], ext)) return;
+    l = sqrt(ext[1] * ext[1] + ext[2] * ext[2] + ext[3] * ext[3]);
+    if (!(l > 1e-12)) return;
+    if (m->status[id] != DM_TEXEL_BORDER) m->border_count++;
+    m->status[id] = DM_TEXEL_BORDER;
+    m->disp[id] = (float)ext[0];
+    for (k = 0; k < 3; k++) m->normal[3 * id + (size_t)k] = (float)(ext[1 + k] / l);
+}
+
+/* the charts' borders: each empty texel within DM__BORDER texels (a square's half-side) of a
+   chart is baked from the nearest base triangle's plane extended, so that bilinear filtering
+   at any point of a chart, and at the next mip level, reads real samples */
+static dm_result dm__bk_border(dm__bk_run *r)
+{
+    const dm_param *param = r->param;
+    size_t n = (size_t)param->width * (size_t)param->height, t, i;
+    float *best = (float *)dm__take(&r->sc, n, sizeof(float));
+    uint32_t *tri = (uint32_t *)dm__take(&r->sc, n, sizeof(uint32_t));
+    float *bary = (float *)dm__take(&r->sc, 2 * n, sizeof(float));
+    if (!best || !tri || !bary) return dm__scratch_fail(&r->sc);
+    for (i = 0; i < n; i++) {
+        best[i] = INFINITY;
+        tri[i] = DM_NO_HIT;
+    }
+    for (t = 0; t < r->bnt; t++) dm__bk_border_triangle(param, t, best, tri, bary);
+    for (i = 0; i < n; i++)
+        if (tri[i] != DM_NO_HIT) dm__bk_border_texel(r, i, tri[i], bary[2 * i], bary[2 * i + 1]);
+    if (r->o.progress && r->o.progress(r->o.progress_user, 0.97f)) return DM_CANCELLED;
+    return DM_OK;
+}
+
+/* push-pull fill of everything that is not a hit or a border texel, for filtering only */
 static dm_result dm__bk_fill(dm__bk_run *r)
 {
     dm_dispmap *m = r->m;
     float *fill = r->fill;
     size_t i, n = (size_t)m->width * (size_t)m->height;
+    uint8_t *known = (uint8_t *)dm__take(&r->sc, n, 1);
+    if (!known) return dm__scratch_fail(&r->sc);
     for (i = 0; i < n; i++) {
-        fill[4 * i] = m->valid[i] ? m->disp[i] : 0.0f;
-        fill[4 * i + 1] = m->valid[i] ? m->normal[3 * i] : 0.0f;
-        fill[4 * i + 2] = m->valid[i] ? m->normal[3 * i + 1] : 0.0f;
-        fill[4 * i + 3] = m->valid[i] ? m->normal[3 * i + 2] : 0.0f;
+        known[i] = m->valid[i] || m->status[i] == DM_TEXEL_BORDER;
+        fill[4 * i] = known[i] ? m->disp[i] : 0.0f;
+        fill[4 * i + 1] = known[i] ? m->normal[3 * i] : 0.0f;
+        fill[4 * i + 2] = known[i] ? m->normal[3 * i + 1] : 0.0f;
+        fill[4 * i + 3] = known[i] ? m->normal[3 * i + 2] : 0.0f;
     }
-    if (!dm__pz_push_pull(&r->sc, fill, m->valid, m->width, m->height)) return dm__scratch_fail(&r->sc);
+    if (!dm__pz_push_pull(&r->sc, fill, known, m->width, m->height)) return dm__scratch_fail(&r->sc);
     for (i = 0; i < n; i++) {
         double l;
-        if (m->valid[i]) continue;
+        if (known[i]) continue;
         m->disp[i] = fill[4 * i];
         l = sqrt((double)fill[4 * i + 1] * fill[4 * i + 1] + (double)fill[4 * i + 2] * fill[4 * i + 2] +
                  (double)fill[4 * i + 3] * fill[4 * i + 3]);
@@ -6071,6 +6286,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
     res = dm__bk_alloc(&r);
     if (res == DM_OK) res = dm__bk_prepare(&r);  /* normals, search distance, BVH */
     if (res == DM_OK) res = dm__bk_cast(&r);     /* one ray per texel */
+    if (res == DM_OK) res = dm__bk_border(&r);   /* and per texel of the charts' borders */
     if (res == DM_OK) res = dm__bk_fill(&r);     /* push-pull over the misses */
     dm_bvh_free(r.bvh);
     dm__release(&r.sc);
@@ -6092,224 +6308,373 @@ DMDEF void dm_trimesh_free(dm_trimesh *mesh)
     if (!mesh) return;
     a = mesh->allocator;
     a.free(a.user, mesh->positions);
+    a.free(a.user, mesh->normals);
     a.free(a.user, mesh->indices);
+    a.free(a.user, mesh->face_base);
     a.free(a.user, mesh);
 }
 
-/* 1 when the triangle of texels q0, q1, q2 spans no depth break. A break: an edge longer than
-   DM__PZ_BREAK texel spacings (the base area the texels stand for, square-rooted), or longer than
-   DM__PZ_BREAK_TILTED spacings in a triangle that stands across the original (its normal more
-   than 60 degrees from the original's normal at one of its corners): a fin between two sheets
-   of the original that the rays of neighbouring texels reached, not a surface. */
-#define DM__PZ_BREAK 8.0
-#define DM__PZ_BREAK_TILTED 2.0
-static int dm__pz_no_break(const dm_dispmap *map, const float *pos, const uint32_t *vid, size_t q0, size_t q1, size_t q2)
-{
-    size_t q[3];
-    double p[3][3], e1[3], e2[3], fn[3], len, longest = 0.0, s = 0.0;
-    int e, k;
-    q[0] = q0; q[1] = q1; q[2] = q2;
-    for (e = 0; e < 3; e++) {
-        for (k = 0; k < 3; k++) p[e][k] = pos[3 * (size_t)vid[q[e]] + (size_t)k];
-        if ((double)map->area[q[e]] > s) s = map->area[q[e]];
-    }
-    for (e = 0; e < 3; e++) {
-        double d2 = 0.0;
-        for (k = 0; k < 3; k++) d2 += (p[e][k] - p[(e + 1) % 3][k]) * (p[e][k] - p[(e + 1) % 3][k]);
-        if (d2 > longest) longest = d2;
-    }
-    if (longest > DM__PZ_BREAK * DM__PZ_BREAK * s) return 0;
-    if (longest <= DM__PZ_BREAK_TILTED * DM__PZ_BREAK_TILTED * s) return 1;
-    dm__sub3(p[1], p[0], e1);
-    dm__sub3(p[2], p[0], e2);
-    dm__cross3(e1, e2, fn);
-    len = dm__len3(fn);
-    if (!(len > 0.0)) return 0;
-    for (e = 0; e < 3; e++) {
-        const float *n = map->normal + 3 * q[e];
-        if ((fn[0] * n[0] + fn[1] * n[1] + fn[2] * n[2]) < 0.5 * len) return 0;
-    }
-    return 1;
-}
-
-/* dm_reconstruct's working state: the map, its parameterization, a vertex number per texel (a
-   hit) and the mesh being made; pass 0 counts the triangles, pass 1 writes them */
+/* dm_reconstruct's working state: the map and its parameterization, the base mesh, its
+   vertex normals, the base edges (one per vertex pair, shared by every triangle on it) with
+   their levels and first vertices, each triangle's level and first interior vertex, the
+   per-vertex sums of the map's samples, and the mesh being made (all temporaries in sc) */
 typedef struct dm__rc_run {
     const dm_dispmap *map;
     const dm_param *param;
-    int W, H;
-    size_t n;         /* texels */
-    uint32_t *vid;    /* vertex of each texel, DM_NO_HIT for none */
+    const float *bpos;
+    const uint32_t *bidx;
+    size_t bnv, bnt;
+    dm_reconstruct_options o;
+    dm__scratch sc;
+    float *bnrm;          /* base vertex normals */
+    double *acc;          /* 3 per base vertex (the normals' sums), then 5 per vertex: depth, normal, count */
+    dm__edge *edges;      /* the 3 bnt half-edges sorted by vertex pair */
+    uint32_t *he_edge;    /* 3 per triangle: the edge of half-edge 3 t + c */
+    uint32_t *edge_level; /* per edge: segments along it */
+    uint32_t *edge_first; /* per edge: its first inner vertex, numbered from the lower base vertex */
+    uint32_t *tri_level;  /* per triangle: the level of its barycentric grid */
+    uint32_t *tri_first;  /* per triangle: its first interior vertex */
+    float *nb;            /* 3 per vertex: base normal at the vertex's base point */
+    size_t ne, nvtx, ntri;
     dm_trimesh *mesh;
-    size_t nvtx, ntri;
-    size_t pass;
 } dm__rc_run;
 
-/* one triangle: written in pass 1, counted in both */
-static void dm__rc_emit(dm__rc_run *r, uint32_t a, uint32_t b, uint32_t c)
+#define DM__RC_MAX_LEVEL 1024
+
+/* the options and the meshes checked, the parameterization matched to map and base */
+static dm_result dm__rc_check(dm__rc_run *r, const dm_reconstruct_options *options)
 {
-    if (r->pass) {
-        uint32_t *o = r->mesh->indices + 3 * r->ntri;
-        o[0] = a; o[1] = b; o[2] = c;
+    dm_result res;
+    memset(&r->o, 0, sizeof r->o);
+    if (options) r->o = *options;
+    if (!(r->o.density >= 0.0f) || r->o.density > 16.0f) return DM_ERR_INVALID_ARGUMENT;
+    if (r->o.density == 0.0f) r->o.density = 1.0f;
+    if (r->map->width != r->param->width || r->map->height != r->param->height) return DM_ERR_INVALID_ARGUMENT;
+    res = dm__check_mesh(r->bpos, r->bnv, r->bidx, r->bnt);
+    if (res != DM_OK) return res;
+    if (r->param->triangle_count != r->bnt || r->bnv >= DM_NO_HIT) return DM_ERR_INVALID_ARGUMENT;
+    return DM_OK;
+}
+
+/* length in texels of half-edge c of base triangle t in its chart */
+static double dm__rc_uv_length(const dm__rc_run *r, size_t t, int c)
+{
+    const float *uv = r->param->uv + 6 * t;
+    int d = (c + 1) % 3;
+    double dx = ((double)uv[2 * d] - uv[2 * c]) * r->param->width, dy = ((double)uv[2 * d + 1] - uv[2 * c + 1]) * r->param->height;
+    return sqrt(dx * dx + dy * dy);
+}
+
+/* the segments of a run of uv length len texels: density per texel, at least 1 */
+static uint32_t dm__rc_segments(const dm__rc_run *r, double len)
+{
+    double s = ceil(len * (double)r->o.density - 1e-9);
+    if (!(s >= 1.0)) return 1;
+    return s > DM__RC_MAX_LEVEL ? DM__RC_MAX_LEVEL : (uint32_t)s;
+}
+
+/* 1. the base edges: half-edges with the same vertex pair are one edge (two on a manifold
+   edge, one on a boundary, more on a non-manifold edge), its level the largest of its
+   half-edges' uv lengths in texels; each triangle's level sqrt(2 uv area), at least 3 (one
+   interior vertex), so that its grid has about one vertex per texel as the map has */
+static dm_result dm__rc_edges(dm__rc_run *r)
+{
+    size_t i, j, n = 3 * r->bnt, t;
+    dm__edge *e = r->edges;
+    for (i = 0; i < n; i++) {
+        uint32_t a = r->bidx[i], b = r->bidx[i - i % 3 + (i % 3 + 1) % 3];
+        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+        e[i].he = (uint32_t)i;
     }
-    r->ntri++;
-}
-
-/* a vertex per hit texel, at the base point moved by the depth along -normal; 0 when out of
-   memory (ov set when the size overflows) */
-static int dm__rc_vertices(dm__rc_run *r, const dm_allocator *a, int *ov)
-{
-    const dm_dispmap *map = r->map;
-    size_t i;
-    for (i = 0; i < r->n; i++) r->vid[i] = map->valid[i] ? (uint32_t)r->nvtx++ : DM_NO_HIT;
-    r->mesh->positions = (float *)dm__alloc_array(a, 3 * (r->nvtx ? r->nvtx : 1), sizeof(float), ov);
-    if (!r->mesh->positions) return 0;
-    for (i = 0; i < r->n; i++)
-        if (r->vid[i] != DM_NO_HIT) {
-            int k;
-            for (k = 0; k < 3; k++)
-                r->mesh->positions[3 * (size_t)r->vid[i] + (size_t)k] =
-                    map->pos[3 * i + (size_t)k] - map->disp[i] * map->nrm[3 * i + (size_t)k];
+    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    r->ne = 0;
+    for (i = 0; i < n; i = j) {
+        uint32_t level = 1;
+        for (j = i; j < n && e[j].key == e[i].key; j++) {
+            uint32_t s = dm__rc_segments(r, dm__rc_uv_length(r, e[j].he / 3, (int)(e[j].he % 3)));
+            if (s > level) level = s;
+            r->he_edge[e[j].he] = (uint32_t)r->ne;
         }
-    return 1;
+        r->edge_level[r->ne++] = level;
+    }
+    for (t = 0; t < r->bnt; t++) { /* about one vertex per texel of its uv area */
+        const float *uv = r->param->uv + 6 * t;
+        double area = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
+                      (double)r->param->width * (double)r->param->height;
+        uint32_t level = dm__rc_segments(r, sqrt(2.0 * area));
+        if (level < 3) level = 3;
+        r->tri_level[t] = level;
+    }
+    return DM_OK;
 }
 
-/* the 2x2 block of texels at (x, y): two triangles when all four are hits of one chart, one
-   when three are; triangles across depth breaks are left out */
-static void dm__rc_cell(dm__rc_run *r, int x, int y)
+/* 2. the vertex and triangle counts: the base vertices, each edge's inner points, each
+   triangle's interior grid points; per triangle the inner grid's (n-3)^2 triangles and three
+   strips of m_c + n - 3 */
+static dm_result dm__rc_count(dm__rc_run *r)
 {
-    const dm_param *param = r->param;
-    const float *pos = r->mesh->positions;
-    size_t q[4];
-    uint32_t v[4], cc = DM_NO_HIT;
-    int k, nvalid = 0, missing = -1;
-    q[0] = (size_t)y * (size_t)r->W + (size_t)x;
-    q[1] = q[0] + 1;
-    q[2] = q[0] + (size_t)r->W + 1;
-    q[3] = q[0] + (size_t)r->W;
-    for (k = 0; k < 4; k++) {
-        uint32_t tt = param->texel_triangle[q[k]];
-        v[k] = r->vid[q[k]];
-        if (v[k] != DM_NO_HIT && tt != DM_NO_HIT && (cc == DM_NO_HIT || param->chart[tt] == cc)) {
-            cc = param->chart[tt];
-            nvalid++;
+    uint64_t nv = r->bnv, nt = 0;
+    size_t e, t;
+    for (e = 0; e < r->ne; e++) {
+        r->edge_first[e] = (uint32_t)nv;
+        nv += r->edge_level[e] - 1;
+        if (nv >= DM_NO_HIT) return DM_ERR_TOO_LARGE;
+    }
+    for (t = 0; t < r->bnt; t++) {
+        uint64_t n = r->tri_level[t];
+        int c;
+        r->tri_first[t] = (uint32_t)nv;
+        nv += (n - 1) * (n - 2) / 2;
+        nt += (n - 3) * (n - 3);
+        for (c = 0; c < 3; c++) nt += r->edge_level[r->he_edge[3 * t + (size_t)c]] + n - 3;
+        if (nv >= DM_NO_HIT || nt >= ((uint64_t)1 << 40)) return DM_ERR_TOO_LARGE;
+    }
+    r->nvtx = (size_t)nv;
+    r->ntri = (size_t)nt;
+    if ((uint64_t)r->nvtx != nv || (uint64_t)r->ntri != nt) return DM_ERR_TOO_LARGE;
+    return DM_OK;
+}
+
+/* 3. the mesh's arrays and the per-vertex sums */
+static dm_result dm__rc_alloc(dm__rc_run *r)
+{
+    dm__scratch *sc = &r->sc;
+    dm_trimesh *m = r->mesh = (dm_trimesh *)sc->a.alloc(sc->a.user, sizeof(dm_trimesh));
+    if (!m) return DM_ERR_OUT_OF_MEMORY;
+    memset(m, 0, sizeof *m);
+    m->allocator = sc->a;
+    m->positions = (float *)dm__alloc_array(&sc->a, 3 * r->nvtx, sizeof(float), &sc->overflow);
+    m->normals = (float *)dm__alloc_array(&sc->a, 3 * r->nvtx, sizeof(float), &sc->overflow);
+    m->indices = (uint32_t *)dm__alloc_array(&sc->a, 3 * r->ntri, sizeof(uint32_t), &sc->overflow);
+    m->face_base = (uint32_t *)dm__alloc_array(&sc->a, r->ntri, sizeof(uint32_t), &sc->overflow);
+    r->acc = (double *)dm__take(sc, 5 * (r->nvtx > r->bnv ? r->nvtx : r->bnv), sizeof(double));
+    r->nb = (float *)dm__take(sc, 3 * r->nvtx, sizeof(float));
+    if (!m->positions || !m->normals || !m->indices || !m->face_base || !r->acc || !r->nb) return dm__scratch_fail(sc);
+    memset(r->acc, 0, 5 * r->nvtx * sizeof(double));
+    m->vertex_count = r->nvtx;
+    m->triangle_count = r->ntri;
+    return DM_OK;
+}
+
+/* the map bilinearly at uv (0..1): depth and the original's normal (unnormalized), as a GPU's
+   linear filter reads it; the borders' baked texels make this exact up to the map's resolution
+   at every point of a chart */
+static void dm__rc_lookup(const dm_dispmap *map, double u, double v, double *d, double n[3])
+{
+    int W = map->width, H = map->height, k, i;
+    double fx = u * W - 0.5, fy = v * H - 0.5, ix = floor(fx), iy = floor(fy), tx = fx - ix, ty = fy - iy;
+    long x0 = (long)ix, y0 = (long)iy, xs[2], ys[2];
+    double wx[2], wy[2];
+    xs[0] = x0 < 0 ? 0 : x0 >= W ? W - 1 : x0;
+    xs[1] = x0 + 1 < 0 ? 0 : x0 + 1 >= W ? W - 1 : x0 + 1;
+    ys[0] = y0 < 0 ? 0 : y0 >= H ? H - 1 : y0;
+    ys[1] = y0 + 1 < 0 ? 0 : y0 + 1 >= H ? H - 1 : y0 + 1;
+    wx[0] = 1.0 - tx; wx[1] = tx;
+    wy[0] = 1.0 - ty; wy[1] = ty;
+    *d = 0.0;
+    n[0] = n[1] = n[2] = 0.0;
+    for (i = 0; i < 4; i++) {
+        size_t id = (size_t)ys[i / 2] * (size_t)W + (size_t)xs[i % 2];
+        double w = wx[i % 2] * wy[i / 2];
+        *d += w * map->disp[id];
+        for (k = 0; k < 3; k++) n[k] += w * map->normal[3 * id + (size_t)k];
+    }
+}
+
+/* vertex id of point i of m along edge c of base triangle t, from corner c (i = 0) to corner
+   c + 1 (i = m); the edge's inner points are numbered from its lower base vertex */
+static uint32_t dm__rc_edge_vertex(const dm__rc_run *r, size_t t, int c, uint32_t i)
+{
+    size_t e = r->he_edge[3 * t + (size_t)c];
+    uint32_t m = r->edge_level[e], from = r->bidx[3 * t + (size_t)c], to = r->bidx[3 * t + (size_t)(c + 1) % 3];
+    if (i == 0) return from;
+    if (i == m) return to;
+    return r->edge_first[e] + (from <= to ? i - 1 : m - 1 - i);
+}
+
+/* vertex id of base triangle t's interior grid point (a0, a1, a2), a0 + a1 + a2 = n, each >= 1:
+   rows a2 = 1 .. n-2, row a2 holding a1 = 1 .. n-1-a2 */
+static uint32_t dm__rc_inner_vertex(const dm__rc_run *r, size_t t, uint32_t n, const uint32_t a[3])
+{
+    return r->tri_first[t] + (uint32_t)(((size_t)(a[2] - 1) * (2 * (size_t)n - 2 - (size_t)a[2])) / 2) + a[1] - 1;
+}
+
+/* one sample of base triangle t at barycentrics w (a grid point): the base point and base
+   normal into vertex id (the same point from every triangle that shares it), and the map's depth
+   and normal there added to the vertex's sums */
+static void dm__rc_sample(dm__rc_run *r, size_t t, uint32_t id, const double w[3])
+{
+    const uint32_t *bi = r->bidx + 3 * t;
+    const float *uv = r->param->uv + 6 * t;
+    double p[3], nb[3], d, nn[3], len, u = 0.0, v = 0.0, *acc = r->acc + 5 * (size_t)id;
+    int c, k;
+    for (k = 0; k < 3; k++) p[k] = nb[k] = 0.0;
+    for (c = 0; c < 3; c++) {
+        for (k = 0; k < 3; k++) {
+            p[k] += w[c] * r->bpos[3 * (size_t)bi[c] + (size_t)k];
+            nb[k] += w[c] * r->bnrm[3 * (size_t)bi[c] + (size_t)k];
+        }
+        u += w[c] * uv[2 * c];
+        v += w[c] * uv[2 * c + 1];
+    }
+    len = dm__len3(nb);
+    if (!(len > 1e-12)) { dm__face_normal(r->bpos, r->bidx, t, nb); len = dm__len3(nb); }
+    for (k = 0; k < 3; k++) {
+        r->mesh->positions[3 * (size_t)id + (size_t)k] = (float)p[k];
+        r->nb[3 * (size_t)id + (size_t)k] = len > 0.0 ? (float)(nb[k] / len) : 0.0f;
+    }
+    dm__rc_lookup(r->map, u, v, &d, nn);
+    acc[0] += d;
+    for (k = 0; k < 3; k++) acc[1 + k] += nn[k];
+    acc[4] += 1.0;
+}
+
+/* the strip between edge c of triangle t (m segments, corner c to c+1) and the interior grid's
+   row next to it (n - 3 segments, Q_j = (n-2-j, 1+j, 1) in the order c, c+1, c+2), triangulated
+   by walking both in step; written at *tri */
+static void dm__rc_strip(dm__rc_run *r, size_t t, uint32_t n, int c, size_t *tri)
+{
+    int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    uint32_t m = r->edge_level[r->he_edge[3 * t + (size_t)c]], rr = n - 3, i = 0, j = 0, q[3];
+    while (i < m || j < rr) {
+        uint32_t *o = r->mesh->indices + 3 * *tri;
+        int outer = j == rr || (i < m && (uint64_t)(2 * i + 1) * rr < (uint64_t)(2 * j + 1) * m);
+        q[c] = n - 2 - j; q[c1] = 1 + j; q[c2] = 1;
+        o[0] = dm__rc_edge_vertex(r, t, c, i);
+        if (outer) {
+            o[1] = dm__rc_edge_vertex(r, t, c, i + 1);
+            o[2] = dm__rc_inner_vertex(r, t, n, q);
+            i++;
         } else {
-            v[k] = DM_NO_HIT;
-            missing = k;
+            o[2] = dm__rc_inner_vertex(r, t, n, q);
+            q[c] = n - 3 - j; q[c1] = 2 + j;
+            o[1] = dm__rc_inner_vertex(r, t, n, q);
+            j++;
+        }
+        r->mesh->face_base[(*tri)++] = (uint32_t)t;
+    }
+}
+
+/* 4. base triangle t: its samples (corners, edge points, interior grid), then its triangles
+   (the interior grid and the three strips) */
+static void dm__rc_triangle(dm__rc_run *r, size_t t, size_t *tri)
+{
+    uint32_t n = r->tri_level[t], a[3], b1, b2, q[4][3];
+    double w[3];
+    int c, k;
+    for (c = 0; c < 3; c++) {
+        uint32_t m = r->edge_level[r->he_edge[3 * t + (size_t)c]], i;
+        for (i = 0; i < m; i++) { /* corner c (i = 0), then edge c's inner points */
+            w[c] = (double)(m - i) / (double)m;
+            w[(c + 1) % 3] = (double)i / (double)m;
+            w[(c + 2) % 3] = 0.0;
+            dm__rc_sample(r, t, dm__rc_edge_vertex(r, t, c, i), w);
         }
     }
-    if (nvalid == 4) {
-        int t0 = dm__pz_no_break(r->map, pos, r->vid, q[0], q[1], q[2]);
-        int t1 = dm__pz_no_break(r->map, pos, r->vid, q[0], q[2], q[3]);
-        if (t0) dm__rc_emit(r, v[0], v[1], v[2]);
-        if (t1) dm__rc_emit(r, v[0], v[2], v[3]);
-    } else if (nvalid == 3) {
-        size_t c0 = q[(missing + 1) % 4], c1 = q[(missing + 2) % 4], c2 = q[(missing + 3) % 4];
-        if (!dm__pz_no_break(r->map, pos, r->vid, c0, c1, c2)) return;
-        dm__rc_emit(r, v[(missing + 1) % 4], v[(missing + 2) % 4], v[(missing + 3) % 4]);
-    }
+    for (a[2] = 1; a[2] + 2 <= n; a[2]++)
+        for (a[1] = 1; a[1] + a[2] + 1 <= n; a[1]++) {
+            a[0] = n - a[1] - a[2];
+            for (k = 0; k < 3; k++) w[k] = (double)a[k] / (double)n;
+            dm__rc_sample(r, t, dm__rc_inner_vertex(r, t, n, a), w);
+        }
+    for (b2 = 0; b2 + 3 <= n; b2++) /* the interior grid: level n - 3 over the points a >= 1 */
+        for (b1 = 0; b1 + b2 + 3 <= n; b1++) {
+            uint32_t *o;
+            q[0][1] = b1 + 1; q[0][2] = b2 + 1;
+            q[1][1] = b1 + 2; q[1][2] = b2 + 1;
+            q[2][1] = b1 + 1; q[2][2] = b2 + 2;
+            q[3][1] = b1 + 2; q[3][2] = b2 + 2;
+            for (k = 0; k < 4; k++) q[k][0] = n - q[k][1] - q[k][2];
+            if (b1 + b2 + 4 <= n) { /* the upward triangle */
+                o = r->mesh->indices + 3 * *tri;
+                o[0] = dm__rc_inner_vertex(r, t, n, q[0]);
+                o[1] = dm__rc_inner_vertex(r, t, n, q[1]);
+                o[2] = dm__rc_inner_vertex(r, t, n, q[2]);
+                r->mesh->face_base[(*tri)++] = (uint32_t)t;
+            }
+            if (b1 + b2 + 5 <= n) { /* and the downward one */
+                o = r->mesh->indices + 3 * *tri;
+                o[0] = dm__rc_inner_vertex(r, t, n, q[1]);
+                o[1] = dm__rc_inner_vertex(r, t, n, q[3]);
+                o[2] = dm__rc_inner_vertex(r, t, n, q[2]);
+                r->mesh->face_base[(*tri)++] = (uint32_t)t;
+            }
+        }
+    for (c = 0; c < 3; c++) dm__rc_strip(r, t, n, c, tri);
 }
 
-/* the seam strip from border texel i across direction dc: with its neighbour i2 along the
-   border (+y for a step across in x, +x for one in y), zipped to the texels j, j2 their steps
-   across land on when those are the same or neighbouring texels of one other chart; from the
-   chart with the lower index only (the other side would lay the same strip again) */
-static void dm__rc_zip(dm__rc_run *r, size_t i, int dc)
+/* 5. every vertex: its base point moved by the mean of its samples' depths along the base
+   normal, and the mean of their normals, unit */
+static void dm__rc_finish(dm__rc_run *r)
 {
-    const dm_param *param = r->param;
-    const uint32_t *vid = r->vid;
-    size_t W = (size_t)r->W, i2, j, j2, tri[2][3];
-    uint32_t ti = param->texel_triangle[i], tj, tj2, ti2;
-    long jx, jy, j2x, j2y;
-    int nt2 = 0, m;
-    j = param->nbr[4 * i + (size_t)dc];
-    if (j == UINT32_MAX || j == i || vid[j] == DM_NO_HIT) return;
-    tj = param->texel_triangle[j];
-    if (tj == DM_NO_HIT || param->chart[tj] <= param->chart[ti]) return;
-    if (dc < 2) {
-        if ((size_t)(i / W) + 1 >= (size_t)r->H) return;
-        i2 = i + W;
-    } else {
-        if ((size_t)(i % W) + 1 >= W) return;
-        i2 = i + 1;
-    }
-    ti2 = param->texel_triangle[i2];
-    if (vid[i2] == DM_NO_HIT || ti2 == DM_NO_HIT || param->chart[ti2] != param->chart[ti]) return;
-    j2 = param->nbr[4 * i2 + (size_t)dc];
-    if (j2 == UINT32_MAX || j2 == i2 || vid[j2] == DM_NO_HIT) return;
-    tj2 = param->texel_triangle[j2];
-    if (tj2 == DM_NO_HIT || param->chart[tj2] != param->chart[tj]) return;
-    jx = (long)(j % W); jy = (long)(j / W);
-    j2x = (long)(j2 % W); j2y = (long)(j2 / W);
-    if (j2 == j) {
-        tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j;
-        nt2 = 1;
-    } else if (labs(jx - j2x) <= 1 && labs(jy - j2y) <= 1) {
-        tri[0][0] = i; tri[0][1] = i2; tri[0][2] = j2;
-        tri[1][0] = i; tri[1][1] = j2; tri[1][2] = j;
-        nt2 = 2;
-    }
-    for (m = 0; m < nt2; m++) {
-        int flip = dc == 0 || dc == 3; /* the edge (i, i2) the other way round from the chart's own blocks */
-        if (!dm__pz_no_break(r->map, r->mesh->positions, vid, tri[m][0], tri[m][1], tri[m][2])) continue;
-        dm__rc_emit(r, vid[tri[m][0]], vid[tri[m][flip ? 2 : 1]], vid[tri[m][flip ? 1 : 2]]);
+    size_t v;
+    int k;
+    for (v = 0; v < r->nvtx; v++) {
+        const double *acc = r->acc + 5 * v;
+        double cnt = acc[4] > 0.0 ? acc[4] : 1.0, d = acc[0] / cnt, len = dm__len3(acc + 1);
+        float *p = r->mesh->positions + 3 * v, *nrm = r->mesh->normals + 3 * v;
+        if (!(acc[4] > 0.0)) { /* a base vertex no triangle uses */
+            for (k = 0; k < 3; k++) { p[k] = r->bpos[3 * v + (size_t)k]; nrm[k] = r->bnrm[3 * v + (size_t)k]; }
+            continue;
+        }
+        for (k = 0; k < 3; k++) {
+            p[k] = (float)((double)p[k] - d * (double)r->nb[3 * v + (size_t)k]);
+            nrm[k] = len > 0.0 ? (float)(acc[1 + k] / len) : r->nb[3 * v + (size_t)k];
+        }
     }
 }
 
-/* one pass over the map: the blocks of every chart, then the strips across the seams */
-static void dm__rc_triangles(dm__rc_run *r)
+DMDEF dm_reconstruct_options dm_reconstruct_default_options(void)
 {
-    size_t i;
-    int x, y, dc;
-    r->ntri = 0;
-    for (y = 0; y + 1 < r->H; y++)
-        for (x = 0; x + 1 < r->W; x++) dm__rc_cell(r, x, y);
-    for (i = 0; i < r->n; i++) {
-        if (r->vid[i] == DM_NO_HIT || r->param->texel_triangle[i] == DM_NO_HIT) continue;
-        for (dc = 0; dc < 4; dc++) dm__rc_zip(r, i, dc);
-    }
+    dm_reconstruct_options o;
+    memset(&o, 0, sizeof o);
+    o.density = 1.0f;
+    return o;
 }
 
-DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param, const dm_allocator *allocator,
-                               dm_trimesh **out)
+DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param, const float *base_positions,
+                               size_t base_vertex_count, const uint32_t *base_indices, size_t base_triangle_count,
+                               const dm_reconstruct_options *options, dm_trimesh **out)
 {
     dm__rc_run r;
-    dm_allocator a;
-    int ov = 0, ok;
+    dm_result res;
+    size_t t, tri = 0;
     if (out) *out = NULL;
-    if (!out || !map || !param || map->width != param->width || map->height != param->height)
-        return DM_ERR_INVALID_ARGUMENT;
+    if (!out || !map || !param) return DM_ERR_INVALID_ARGUMENT;
     memset(&r, 0, sizeof r);
-    a = dm__resolve_allocator(allocator);
-    r.map = map;
-    r.param = param;
-    r.W = map->width;
-    r.H = map->height;
-    r.n = (size_t)r.W * (size_t)r.H;
-    r.vid = (uint32_t *)dm__alloc_array(&a, r.n, sizeof(uint32_t), &ov);
-    r.mesh = (dm_trimesh *)a.alloc(a.user, sizeof(dm_trimesh));
-    if (!r.vid || !r.mesh) {
-        a.free(a.user, r.vid);
-        a.free(a.user, r.mesh);
-        return ov ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+    r.map = map; r.param = param;
+    r.bpos = base_positions; r.bnv = base_vertex_count; r.bidx = base_indices; r.bnt = base_triangle_count;
+    res = dm__rc_check(&r, options);
+    if (res != DM_OK) return res;
+    r.sc.a = dm__resolve_allocator(r.o.allocator);
+    r.bnrm = (float *)dm__take(&r.sc, 3 * r.bnv, sizeof(float));
+    r.edges = (dm__edge *)dm__take(&r.sc, 3 * r.bnt, sizeof(dm__edge));
+    r.he_edge = (uint32_t *)dm__take(&r.sc, 3 * r.bnt, sizeof(uint32_t));
+    r.edge_level = (uint32_t *)dm__take(&r.sc, 3 * r.bnt, sizeof(uint32_t));
+    r.edge_first = (uint32_t *)dm__take(&r.sc, 3 * r.bnt, sizeof(uint32_t));
+    r.tri_level = (uint32_t *)dm__take(&r.sc, r.bnt, sizeof(uint32_t));
+    r.tri_first = (uint32_t *)dm__take(&r.sc, r.bnt, sizeof(uint32_t));
+    r.acc = (double *)dm__take(&r.sc, 3 * r.bnv, sizeof(double));
+    if (!r.bnrm || !r.edges || !r.he_edge || !r.edge_level || !r.edge_first || !r.tri_level || !r.tri_first || !r.acc)
+        res = dm__scratch_fail(&r.sc);
+    if (res == DM_OK) {
+        dm__vertex_normals(r.bpos, r.bnv, r.bidx, r.bnt, r.acc, r.bnrm); /* as dm_bake's */
+        res = dm__rc_edges(&r);                                        /* 1. shared edges, levels */
     }
-    memset(r.mesh, 0, sizeof *r.mesh);
-    r.mesh->allocator = a;
-    ok = dm__rc_vertices(&r, &a, &ov);                   /* a vertex per hit texel */
-    for (r.pass = 0; ok && r.pass < 2; r.pass++) {
-        dm__rc_triangles(&r);                            /* count, then write */
-        if (!r.pass) {
-            r.mesh->indices = (uint32_t *)dm__alloc_array(&a, 3 * (r.ntri ? r.ntri : 1), sizeof(uint32_t), &ov);
-            ok = r.mesh->indices != NULL;
-        }
+    if (res == DM_OK) res = dm__rc_count(&r);                          /* 2. sizes */
+    if (res == DM_OK) res = dm__rc_alloc(&r);                          /* 3. arrays */
+    for (t = 0; res == DM_OK && t < r.bnt; t++) {                      /* 4. samples, triangles */
+        dm__rc_triangle(&r, t, &tri);
+        if ((t & 63) == 63 && r.o.progress && r.o.progress(r.o.progress_user, 0.95f * (float)(t + 1) / (float)r.bnt))
+            res = DM_CANCELLED;
     }
-    a.free(a.user, r.vid);
-    if (!ok) {
+    if (res == DM_OK) dm__rc_finish(&r);                               /* 5. positions, normals */
+    if (res == DM_OK && r.o.progress && r.o.progress(r.o.progress_user, 1.0f)) res = DM_CANCELLED;
+    dm__release(&r.sc);
+    if (res != DM_OK) {
         dm_trimesh_free(r.mesh);
-        return ov ? DM_ERR_TOO_LARGE : DM_ERR_OUT_OF_MEMORY;
+        return res;
     }
-    r.mesh->vertex_count = r.nvtx;
-    r.mesh->triangle_count = r.ntri;
     *out = r.mesh;
     return DM_OK;
 }

@@ -69,7 +69,7 @@ static void free_bake(void *u) { state *s = (state *)u; dm_dispmap_free(s->map);
 static int run_recon(void *u)
 {
     state *s = (state *)u;
-    return dm_reconstruct(s->map, s->pm, NULL, &s->rec) != DM_OK;
+    return dm_reconstruct(s->map, s->pm, s->pos, s->nv, s->base.data(), s->base.size() / 3, NULL, &s->rec) != DM_OK;
 }
 static void free_recon(void *u) { state *s = (state *)u; dm_trimesh_free(s->rec); s->rec = nullptr; }
 

@@ -1,6 +1,7 @@
 /* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
 
    usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]
+                  [--min-quality Q]
      IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
      --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
                  Fig 5.1.1), 496 triangles, closed and oriented outward; --faces 12 gives its box
@@ -16,6 +17,8 @@
                  base), relax it there (dm_shell_relax): the base may cross the original, and its
                  triangles there are baked both ways; RESULT's fallback= is the share of the
                  original's area over them (by the coverage weights)
+     --min-quality Q  the simplifier's sliver guard (dm_simplify_options.min_quality, 2 area /
+                 longest edge^2, e.g. 0.1; default 0 = none)
    The pipeline (dispmesh.h): dm_weld when the triangles do not share their vertices (an STL file),
    dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
@@ -633,6 +636,7 @@ static int result_usable(const run *R, long res, size_t inside, size_t missed)
 static void usage(FILE *to)
 {
     fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]\n"
+                "                [--min-quality Q]\n"
                 "  writes PREFIX_base.obj PREFIX_disp.pfm PREFIX_normal.png PREFIX_recon.obj PREFIX_views.png\n"
                 "  and prints one RESULT line (defaults: --faces 500 --res 512 -o out/dispmesh --size 400)\n");
 }
@@ -641,6 +645,7 @@ int main(int argc, char **argv)
 {
     const char *in = NULL, *prefix = "out/dispmesh";
     long faces = 500, res = 512, size = 400;
+    double min_quality = 0.0; /* the library default: no sliver guard */
     int brick = 0, views = 1, inward = 1, fallback = 0, i, status = 2;
     run R;
     stage st;
@@ -663,7 +668,14 @@ int main(int argc, char **argv)
         else if (strcmp(a, "--both-ways") == 0) inward = 0;
         else if (strcmp(a, "--fallback") == 0) fallback = 1;
         else if (strcmp(a, "--faces") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 1, 1000000000L, &faces)) return 1; }
-        else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
+        else if (strcmp(a, "--min-quality") == 0 && i + 1 < argc) {
+            char *end;
+            min_quality = strtod(argv[++i], &end);
+            if (*end || !(min_quality >= -1.0 && min_quality <= 0.5)) {
+                fprintf(stderr, "dispmesh: --min-quality wants a number in [-1, 0.5], not '%s'\n", argv[i]);
+                return 1;
+            }
+        } else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
         else if (strcmp(a, "--size") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 16, 4096, &size)) return 1; }
         else if (strcmp(a, "-o") == 0 && i + 1 < argc) {
             prefix = argv[++i];
@@ -724,6 +736,7 @@ int main(int argc, char **argv)
     /* 3. the base: constrained simplification */
     memset(&so, 0, sizeof so);
     so.target_triangles = (size_t)faces;
+    so.min_quality = (float)min_quality;
     so.constraint = dm_shell_constraint;
     so.on_collapse = dm_shell_collapsed;
     so.relax = fallback ? dm_shell_relax : NULL;
@@ -805,7 +818,7 @@ int main(int argc, char **argv)
     bake_ms = now_ms() - bake_ms;
     if (r != DM_OK) { stage_fail(&st, "dm_bake", r); goto done; }
     for (k = 0; k < (size_t)R.map->width * (size_t)R.map->height; k++) {
-        if (R.map->status[k] == DM_TEXEL_EMPTY) continue;
+        if (R.map->status[k] != DM_TEXEL_HIT && R.map->status[k] != DM_TEXEL_MISS) continue; /* EMPTY, BORDER */
         inside++;
         if (R.map->status[k] == DM_TEXEL_MISS) missed++;
     }
@@ -819,7 +832,7 @@ int main(int argc, char **argv)
 
     /* 6. the reconstruction and the distances */
     stage_begin(&st, "reconstruct");
-    r = dm_reconstruct(R.map, R.param, NULL, &R.dense);
+    r = dm_reconstruct(R.map, R.param, R.base.p, R.base.nv, R.base.t, R.base.nt, NULL, &R.dense);
     if (r != DM_OK) { stage_fail(&st, "dm_reconstruct", r); goto done; }
     {
         char note[96];
@@ -832,6 +845,7 @@ int main(int argc, char **argv)
        equal-bytes mesh */
     memset(&so, 0, sizeof so);
     so.target_triangles = R.base.nt;
+    so.min_quality = (float)min_quality;
     stage_begin(&st, "simplify (unconstrained)");
     so.progress = stage_progress; so.progress_user = &st;
     r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm_free, NULL);

@@ -171,7 +171,7 @@ int main(int argc, char **argv)
         size_t checked = 0, mismatched = 0, under = 0, flagged = 0;
         double tol = 1e-5 * 0.25; /* the bunny's diagonal is about 0.25 */
         for (size_t i = 0; i < n; i++) {
-            if (map->status[i] == DM_TEXEL_EMPTY) continue;
+            if (map->status[i] == DM_TEXEL_EMPTY || map->status[i] == DM_TEXEL_BORDER) continue;
             under++;
             flagged += map->status[i] == DM_TEXEL_MISS;
             if (i % 5) continue;
@@ -190,7 +190,7 @@ int main(int argc, char **argv)
         em_close(em);
 
         dm_trimesh *rec = NULL;
-        T_EQ_INT(dm_reconstruct(map, pm, NULL, &rec), DM_OK);
+        T_EQ_INT(dm_reconstruct(map, pm, pos, nv, base.data(), bt, NULL, &rec), DM_OK);
         if (rec) {
             dm_distance_report rep, brep;
             dm_distance_options dopt = {};

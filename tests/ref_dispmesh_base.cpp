@@ -102,7 +102,7 @@ int main(int argc, char **argv)
     bo.inward = 1;
     if (dm_parameterize(base.pos.data(), base.nv, base.idx.data(), base.nt, &po, &pm) != DM_OK ||
         dm_bake(pm, base.pos.data(), base.nv, base.idx.data(), base.nt, pos, nv, idx, nt, &bo, &map) != DM_OK ||
-        dm_reconstruct(map, pm, NULL, &rec) != DM_OK) {
+        dm_reconstruct(map, pm, base.pos.data(), base.nv, base.idx.data(), base.nt, NULL, &rec) != DM_OK) {
         T_CHECK_MSG(0, "parameterize / bake / reconstruct failed");
     } else {
         /* flagged texels, and the bake rays against Embree */
@@ -112,7 +112,7 @@ int main(int argc, char **argv)
         size_t n = (size_t)res * res, under = 0, flagged = 0, rays = 0, back = 0, differ = 0, folds = 0, strict_folds = 0;
         double lift = 0.25 * sh->thickness, tol = 1e-5 * sh->diagonal;
         for (size_t i = 0; i < n; i++) {
-            if (map->status[i] == DM_TEXEL_EMPTY) continue;
+            if (map->status[i] == DM_TEXEL_EMPTY || map->status[i] == DM_TEXEL_BORDER) continue;
             under++;
             flagged += map->status[i] == DM_TEXEL_MISS;
             if (!map->valid[i]) continue;
