@@ -125,7 +125,7 @@ static inline int bench_reset_peak_rss(void);
    after max_runs timed runs while the others go on (for a peer that takes many seconds a run on
    a large input; the bench prints <key>_runs then). */
 typedef struct bench_side {
-    const char *name;          /* for progress messages on stderr */
+    const char *name;          /* for progress messages on stderr (slow warm-ups) */
     int (*run)(void *user);    /* the timed work; nonzero = failed */
     void (*after)(void *user); /* may be NULL: after every run, outside the timer */
     void *user;
@@ -185,8 +185,10 @@ static inline int bench__warm_up(bench_side *sides, int count)
         bench_side *s = &sides[k];
         int reset = bench_reset_peak_rss() == 0;
         long rss0 = bench_current_rss_kb();
+        double start = bench_now();
         int failed = s->run(s->user);
         s->peak_kb = reset && rss0 >= 0 ? bench_peak_rss_kb() - rss0 : -1;
+        if (bench_now() - start > 2.0) fprintf(stderr, "bench: warm-up of %s done\n", s->name ? s->name : "a side");
         if (s->after) s->after(s->user);
         if (failed) return -1;
     }
