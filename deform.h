@@ -78,9 +78,10 @@
        about 7 terms a vertex; FITTING: 76 bytes a term; LRI: two rows an edge, and one factor
        for both systems with uniform weights, two with cotangent ones), the factors
        (dfm_deform_get_info: bytes, nnz_l; the normal matrices only with refine_steps > 0), and
-       18 doubles a vertex of per-frame workspace. During the setup a normal matrix and its
-       factor are held at once. dfm_deform_solve allocates only inside dfm_chol_solve; its cost
-       follows the ROI and its neighbours, not the mesh (but for one copy of the targets).
+       18 doubles a vertex of per-frame workspace (and 9 an unknown for LRI's rigid steps).
+       During the setup a normal matrix and its factor are held at once. dfm_deform_solve
+       allocates only inside dfm_chol_solve; its cost follows the ROI and its neighbours, not the
+       mesh (but for one copy of the targets).
      ERRORS
        dfm_deform_setup: DFM_ERR_INVALID_ARGUMENT (NULL, an option out of range, no triangles),
        DFM_ERR_BAD_INDEX (an index >= vertex_count), DFM_ERR_BAD_VALUE (NaN/Inf position, negative
@@ -3993,6 +3994,7 @@ struct dfm_deform {
     double *edge_c;        /* LRI: 6 per edge, c_ij = F_i^T (x_j - x_i) and c_ji */
     double *frame;         /* LRI: nv x 9, the original frames (row-major, columns b1 b2 N) */
     double *X, *G, *rowb;  /* per-frame work: displacements, frame changes, position rows' b */
+    double *S;             /* LRI with rigid_steps: 9 per unknown, the local fit's sums */
     int32_t *active;       /* the vertices in some row (unknowns and the known ones read) */
     size_t nactive;
 };
@@ -4023,6 +4025,7 @@ DFMDEF void dfm_deform_free(dfm_deform *d)
     dfm__free(&d->al, d->frame);
     dfm__free(&d->al, d->X);
     dfm__free(&d->al, d->G);
+    dfm__free(&d->al, d->S);
     dfm__free(&d->al, d->rowb);
     dfm__free(&d->al, d->active);
     dfm__free(&user, d);
@@ -4575,6 +4578,8 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
     if (err == DFM_OK) {
         d->X = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
         d->G = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
+        if (o.method == DFM_METHOD_LRI && o.rigid_steps > 0)
+            d->S = (double *)dfm__alloc(&d->al, d->nu, 9 * sizeof(double), &err);
     }
     if (err == DFM_OK && dfm__report(&o, 1.0f)) err = DFM_CANCELLED;
     if (err != DFM_OK) {
@@ -4744,27 +4749,29 @@ static void dfm__lri_position_rhs(dfm_deform *d)
     }
 }
 
-/* R <- the rotation by |w| about w, times R (Rodrigues' formula). */
+/* R <- Q R, Q the Cayley rotation of w: (I - W/2)^-1 (I + W/2), W = [w]x, the turn about w by
+   2 atan(|w| / 2) (|w| to third order), orthogonal without a sine or a cosine:
+   Q = I + f (K + h h^T - |h|^2 I), K = [h]x, h = w / 2, f = 2 / (1 + |h|^2). */
 static void dfm__turn(const double *w, double *R)
 {
-    double t = sqrt(dfm__dot3(w, w)), a[3], K[9], T[9], sn, cs;
-    int k;
-    if (!(t > 0.0)) return;
-    for (k = 0; k < 3; k++) a[k] = w[k] / t;
-    sn = sin(t);
-    cs = 1.0 - cos(t);
-    dfm__skew(a, K);
-    dfm__mul33(K, K, T);
-    for (k = 0; k < 9; k++) T[k] = (k % 4 == 0) + sn * K[k] + cs * T[k];
-    dfm__mul33(T, R, K);
-    memcpy(R, K, sizeof K);
+    double h[3], hh, f, Q[9], T[9];
+    int a, b;
+    for (a = 0; a < 3; a++) h[a] = 0.5 * w[a];
+    hh = dfm__dot3(h, h);
+    f = 2.0 / (1.0 + hh);
+    dfm__skew(h, Q);
+    for (a = 0; a < 3; a++)
+        for (b = 0; b < 3; b++) Q[3 * a + b] = (a == b) + f * (Q[3 * a + b] + h[a] * h[b] - (a == b) * hh);
+    for (a = 0; a < 3; a++)
+        for (b = 0; b < 3; b++) T[3 * a + b] = Q[3 * a] * R[b] + Q[3 * a + 1] * R[3 + b] + Q[3 * a + 2] * R[6 + b];
+    memcpy(R, T, sizeof T);
 }
 
 /* The rotation R maximizing tr(R^T S) (the polar factor of S when det S > 0), from a start R
    close to it: R <- rot(w) R with w = sum_k R_k x S_k / |sum_k R_k . S_k| over the columns k
-   (Mueller, Bender, Chentanez, Macklin 2016), at most 4 steps. Unlike Newton's iteration it
-   needs no inverse (a flat ring's sum is of rank 2), and it commutes with rotations: S -> Q S,
-   R -> Q R gives Q R. */
+   (Mueller, Bender, Chentanez, Macklin 2016), until |w| < 1e-6, at most 4 rounds. Unlike
+   Newton's iteration it needs no inverse (a flat ring's sum is of rank 2), and it commutes with
+   rotations: S -> Q S, R -> Q R gives Q R. */
 static void dfm__fit_rotation(const double *S, double *R)
 {
     int it, c;
@@ -4779,7 +4786,7 @@ static void dfm__fit_rotation(const double *S, double *R)
         }
         dot = fabs(dot) + 1e-300;
         for (c = 0; c < 3; c++) w[c] /= dot;
-        if (!(dfm__dot3(w, w) > 1e-18)) return;
+        if (!(dfm__dot3(w, w) > 1e-12)) return;
         dfm__turn(w, R);
     }
 }
@@ -4787,30 +4794,45 @@ static void dfm__fit_rotation(const double *S, double *R)
 /* LRI's rigid step, local part: each unknown's rotation refitted to the solved positions, R_i =
    argmax tr(R^T S_i), S_i = sum_j w_ij e'_ij e_ij^T, e = x_j - x_i (the as-rigid-as-possible local
    step), started from the rotation it had (its polar factor on the first step, unless the frames
-   were orthonormalized that way). d->G gets R_i F_i - F_i, so that dfm__lri_position_rhs builds
-   the global step's right-hand side. */
+   were orthonormalized that way). The sums run over the edge list (e_ij = F_i c_ij, w_ij the
+   positions row's coefficient squared; an edge adds the same product to both ends), with the
+   displacements gathered three to a vertex first: each vertex is read once an edge, not once a
+   coordinate, which is what this memory-bound loop costs. d->G gets R_i F_i - F_i, so that
+   dfm__lri_position_rhs builds the global step's right-hand side. */
 static void dfm__lri_fit_rotations(dfm_deform *d, int first)
 {
-    size_t u, p, k, c, nv = d->nv;
+    size_t a, e, u, k, c, nv = d->nv;
+    double *D = d->X + 3 * nv; /* free after the frames solve */
+    for (a = 0; a < d->nactive; a++) {
+        size_t v = (size_t)d->active[a];
+        for (k = 0; k < 3; k++) D[3 * v + k] = d->X[k * nv + v];
+    }
+    memset(d->S, 0, d->nu * 9 * sizeof(double));
+    for (e = 0; e < d->ne; e++) {
+        size_t i = (size_t)d->edge[2 * e], j = (size_t)d->edge[2 * e + 1];
+        const double *F = d->frame + 9 * i, *cij = d->edge_c + 6 * e;
+        double x[3], xp[3], w = d->sys.term_c[2 * e] * d->sys.term_c[2 * e], P[9];
+        int32_t ui = d->unk[i], uj = d->unk[j];
+        for (k = 0; k < 3; k++) {
+            x[k] = F[3 * k] * cij[0] + F[3 * k + 1] * cij[1] + F[3 * k + 2] * cij[2];
+            xp[k] = w * (x[k] + D[3 * j + k] - D[3 * i + k]);
+        }
+        for (k = 0; k < 9; k++) P[k] = xp[k / 3] * x[k % 3];
+        if (ui >= 0)
+            for (k = 0; k < 9; k++) d->S[9 * (size_t)ui + k] += P[k];
+        if (uj >= 0)
+            for (k = 0; k < 9; k++) d->S[9 * (size_t)uj + k] += P[k];
+    }
     for (u = 0; u < d->nu; u++) {
         size_t i = (size_t)d->unk_v[u];
         const double *F = d->frame + 9 * i;
-        double *G = d->G + 9 * i, S[9] = {0}, R[9];
-        for (p = d->g.start[i]; p < d->g.start[i + 1]; p++) {
-            size_t j = (size_t)d->g.adj[p];
-            double e[3], ep[3], w = d->g.w[p];
-            for (k = 0; k < 3; k++) {
-                e[k] = d->pos[3 * j + k] - d->pos[3 * i + k];
-                ep[k] = w * (e[k] + d->X[k * nv + j] - d->X[k * nv + i]);
-            }
-            for (k = 0; k < 9; k++) S[k] += ep[k / 3] * e[k % 3];
-        }
+        double *G = d->G + 9 * i, R[9];
         for (c = 0; c < 3; c++) /* R_i = (G_i + F_i) F_i^T */
             for (k = 0; k < 3; k++)
                 R[3 * c + k] = (G[3 * c] + F[3 * c]) * F[3 * k] + (G[3 * c + 1] + F[3 * c + 1]) * F[3 * k + 1] +
                                (G[3 * c + 2] + F[3 * c + 2]) * F[3 * k + 2];
         if (first && d->opt.orthonormalize != DFM_ORTHO_POLAR) dfm__polar(R);
-        dfm__fit_rotation(S, R);
+        dfm__fit_rotation(d->S + 9 * u, R);
         for (c = 0; c < 3; c++)
             for (k = 0; k < 3; k++)
                 G[3 * c + k] = R[3 * c] * F[k] + R[3 * c + 1] * F[3 + k] + R[3 * c + 2] * F[6 + k] - F[3 * c + k];

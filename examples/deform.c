@@ -17,6 +17,7 @@
      --frames F     LRI frames: first (default) or elevation (the thesis's ch. 4)
      --ortho O      LRI orthonormalization: polar (default), none, gs
      --soft W       soft handle constraints of weight W (default: hard)
+     --rigid K      LRI: K as-rigid-as-possible steps after the LRI solve (default 0)
      --steps K      reach the pose in K steps, each a new setup on the previous step's result
                     with the rotation since the previous step (default 1). One step cannot turn
                     the handle by 180 degrees or more: a rotation matrix has no turn count, and
@@ -49,7 +50,7 @@ typedef struct args {
     int gen;           /* 0 file, 1 cylinder, 2 box */
     int kase;          /* 0 bend, 1 twist, 2 drag */
     double angle, shift, roi, handle, soft;
-    int up, region, method, weights, frames, ortho, size, steps;
+    int up, region, method, weights, frames, ortho, size, steps, rigid;
 } args;
 
 typedef struct scene {
@@ -279,7 +280,7 @@ static int usage(FILE *to, int status)
     fprintf(to, "usage: deform MESH|--cylinder|--box [--case bend|twist|drag] [--angle DEG] [--shift F]\n"
                 "       [--up x|y|z] [--region top|ball] [--roi F] [--handle F] [--method laplacian|fitting|lri|all]\n"
                 "       [--weights uniform|cotan] [--frames first|elevation] [--ortho polar|none|gs] [--soft W]\n"
-                "       [--steps K] [--obj PREFIX] [--size S] [-o OUT.png]\n");
+                "       [--rigid K] [--steps K] [--obj PREFIX] [--size S] [-o OUT.png]\n");
     return status;
 }
 
@@ -325,6 +326,7 @@ static int parse(int argc, char **argv, args *A)
         else if (!strcmp(a, "--soft")) A->soft = atof(v);
         else if (!strcmp(a, "--size")) A->size = atoi(v);
         else if (!strcmp(a, "--steps")) A->steps = atoi(v);
+        else if (!strcmp(a, "--rigid")) A->rigid = atoi(v);
         else if (!strcmp(a, "--case")) { slot = &A->kase; k = pick(v, cases, 3); }
         else if (!strcmp(a, "--up")) { slot = &A->up; k = pick(v, ups, 3); }
         else if (!strcmp(a, "--region")) { slot = &A->region; k = pick(v, regions, 2); }
@@ -341,7 +343,8 @@ static int parse(int argc, char **argv, args *A)
     if (A->roi < 0) A->roi = A->region ? 0.3 : 0.5;
     if (A->handle < 0) A->handle = A->region ? 0.06 : 0.08;
     if ((A->gen == 0) == (A->mesh == NULL) || !(A->roi > A->handle) || !(A->handle > 0.0) || A->roi > 1.0 ||
-        A->size < 32 || A->size > 4096 || !(A->soft >= 0.0) || A->steps < 1 || A->steps > 1000)
+        A->size < 32 || A->size > 4096 || !(A->soft >= 0.0) || A->steps < 1 || A->steps > 1000 ||
+        A->rigid < 0 || A->rigid > 100)
         return 0;
     return 1;
 }
@@ -414,6 +417,7 @@ static int run_method(const scene *S, const args *A, int up, int method, double 
     o.weights = A->weights;
     o.frames = A->frames;
     o.orthonormalize = A->ortho;
+    o.rigid_steps = A->rigid;
     if (A->soft > 0.0) {
         o.handle_constraint = DFM_HANDLE_SOFT;
         o.handle_weight = A->soft;

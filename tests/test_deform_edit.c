@@ -866,18 +866,19 @@ static void test_alloc_failures(void)
     double *tg = (double *)malloc(3 * m.nv * sizeof(double)), *rot = (double *)malloc(9 * m.nv * sizeof(double));
     double *out = (double *)malloc(3 * m.nv * sizeof(double));
     bend_pose(&m, 0.5 * PI, tg, rot);
-    for (meth = 0; meth < 3; meth++) {
+    for (meth = 0; meth < 4; meth++) { /* 3: LRI with rigid steps (their sums' array) */
         long k;
         int leaks = 0, wrong = 0, ok = 0;
         for (k = 0; k < 100000 && !ok; k++) {
             counting c = {0, 0, 0};
             dfm_allocator al = {counting_alloc, counting_free, NULL};
-            dfm_deform_options o = method_options(meth, DFM_ORTHO_POLAR);
+            dfm_deform_options o = method_options(meth < 3 ? meth : DFM_METHOD_LRI, DFM_ORTHO_POLAR);
             dfm_deform *d = NULL;
             dfm_result err;
             c.fail_at = k;
             al.user = &c;
             o.allocator = &al;
+            o.rigid_steps = meth == 3 ? 2 : 0;
             err = dfm_deform_setup(m.pos, m.nv, m.idx, m.nt, m.roi, m.handle, &o, &d);
             if (err == DFM_OK) err = dfm_deform_solve(d, tg, rot, out);
             if (err == DFM_OK) ok = 1;
