@@ -7,6 +7,7 @@
    Figures (details and timed regions in bench/README.md):
      RESULT texel res=256 blades=100 points=<n> sample_ms=<t> step_ms=<t> splat_ms=<t> keyframe_mb=<m> ...
      RESULT texel_render scene=mountain width=800 height=600 blades=2560000 coverage=<c> render_ms=<t> peak_mb=<m>
+     RESULT texel_render_lod1 ... the same with LOD levels one step coarser (grass --lod-bias 1)
    Each figure: one warm-up run, then the median of 11 with its min and max (bench.h's
    bench_interleave, one side), one thread. sample_cold_ms is the process's first tvt_sample
    (fresh heap pages: the page faults of the points array are in it), before the warm-up. */
@@ -131,6 +132,15 @@ static int bench_render(void)
         printf(" peak_mb=%.1f tvt_mb=%.2f\n", bench_peak_rss_kb() / 1024.0,
            (tvt_tvt_bytes(&c.g.variant[0]) + tvt_tvt_bytes(&c.g.variant[1]) + tvt_tvt_bytes(&c.g.variant[2]) +
             tvt_tvt_bytes(&c.g.variant[3])) / 1048576.0);
+        /* the same with levels one step coarser than the footprint asks (grass --lod-bias 1) */
+        c.s.lod_scale = 2.0f;
+        fprintf(stderr, "bench_texel: rendering 12 times with --lod-bias 1\n");
+        ok = measure(&t, "render", run_render, after_render, &c);
+        if (ok) {
+            printf("RESULT texel_render_lod1 scene=mountain width=800 height=600 blades=2560000 coverage=%.3f", c.coverage);
+            bench_print_ms("render", &t);
+            printf("\n");
+        }
     }
     free(c.s.h);
     free_set(&c.g);

@@ -2,7 +2,8 @@
    drawn by render.h's shell marcher (sr_draw_shell) with texel.h's sampler, written with its PNG writer.
 
    usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]
-                [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--frames F] [--seed S] [--quiet]
+                [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S]
+                [--quiet]
      --scene   mountain (default): the paper's Fig 13, N x N tiles (80: 6400 tiles of 400 blades,
                  2.56M blades) on a four-point terrain, one panel per wd (default 0,0.30,0.917);
                wither: one 400-blade patch seen close, at wd 0 .. 1 in six panels;
@@ -15,6 +16,8 @@
      --wd-map  a grey image over the mountain (row 0 at the far, +y edge): each tile's wd is
                  wd + G (grey - 0.5) at the tile's centre (plus the jitter), instead of the
                  slope term; G = --wd-map-gain (1)
+     --lod-bias  levels 2^B times coarser than the footprint asks (0): B = 1 halves the samples
+                 and about halves the mountain's render time, a little blurrier
    Each panel prints "RESULT grass scene=... wd=... coverage=... render_ms=...". Progress goes to
    stderr. Exit status 0 on success, 2 on bad arguments, 1 on failure.
 
@@ -57,6 +60,7 @@ typedef struct scene {
     float wd_map_gain;         /*   the far (+y) edge, sampled at each tile's centre */
     float sun[3];
     float eye[3], target[3], fovy;
+    float lod_scale;           /* the footprint's multiplier for the level choice: 2^lod_bias (0 = 1) */
     int res;
 } scene;
 
@@ -176,7 +180,7 @@ static void grass_sample(void *user, const sr_shell_query *q, sr_shell_sample *o
     }
     tv = s->variant[g->v];
     p[0] = q->p[0] * res; p[1] = q->p[1] * res; p[2] = q->p[2] * res;
-    level = tvt_lod_level_for(&tv->frames[0], q->footprint * res);
+    level = tvt_lod_level_for(&tv->frames[0], (s->lod_scale > 0 ? s->lod_scale : 1.0f) * q->footprint * res);
     coarse = tv->frames[0].levels - 1;
     if (coarse > level && q->after_empty && tvt_tvt_density(tv, g->wd, coarse, p) <= 0.0f) {
         out->step = 0.5f * (float)(1 << coarse) / res;
@@ -422,7 +426,7 @@ static int read_wd_map(const char *path, wd_map *m)
 }
 
 static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t seed, const float *wds, int nwd,
-                          const wd_map *map, const char *path)
+                          const wd_map *map, int lod_bias, const char *path)
 {
     grass_set g;
     scene s;
@@ -432,6 +436,7 @@ static int scene_mountain(int w, int h, int res, int tiles, int frames, uint64_t
     int k, ok, done = 0;
     ok = mountain_setup(&s, &g, res, tiles, frames, seed);
     if (map->v) { s.wd_map = map->v; s.map_w = map->w; s.map_h = map->h; s.wd_map_gain = map->gain; }
+    s.lod_scale = (float)(1 << lod_bias);
     for (k = 0; ok && k < nwd; k++) {
         double t0 = now_ms(), cov;
         char what[64];
@@ -537,7 +542,8 @@ static int scene_mingle(int w, int h, int res, int frames, uint64_t seed, const 
 static void usage(FILE *to)
 {
     fprintf(to, "usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
-                "             [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--frames F] [--seed S] [--quiet]\n");
+                "             [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F]\n"
+                "             [--seed S] [--quiet]\n");
     if (to != stdout) return;
     fprintf(to, "  --scene   mountain: the paper's Fig 13 (N x N tiles of 400 blades), one panel per wd;\n"
                 "            wither: one patch at wd 0..1; mingle: the paper's Fig 11 (default mountain)\n"
@@ -549,6 +555,7 @@ static void usage(FILE *to)
                 "  --wd-map  a grey image (PNG, PGM, PPM, PFM) over the mountain: a tile's wd is wd +\n"
                 "            G * (grey - 0.5) at its centre, instead of drier on sunny slopes\n"
                 "  --wd-map-gain  G, in [0, 2] (1)\n"
+                "  --lod-bias B  mountain: levels 2^B times coarser than the pixel's footprint asks, 0..3 (0)\n"
                 "  --frames  key frames per TVT, 2..64 (6)\n"
                 "  --seed    terrain and blades (2010)\n"
                 "  --quiet   no progress on stderr\n");
@@ -557,7 +564,7 @@ static void usage(FILE *to)
 int main(int argc, char **argv)
 {
     const char *scene_name = "mountain", *out = NULL;
-    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, i, ok;
+    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, lod_bias = 0, i, ok;
     float wds[8] = {0.0f, 0.30f, 0.917f};
     uint64_t seed = 2010;
     const char *map_path = NULL;
@@ -575,6 +582,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--frames")) { frames = atoi(v); if (frames < 2 || frames > 64) { fprintf(stderr, "grass: --frames must be 2..64\n"); return 2; } }
         else if (!strcmp(a, "--seed")) seed = (uint64_t)strtoull(v, NULL, 10);
         else if (!strcmp(a, "--wd-map")) map_path = v;
+        else if (!strcmp(a, "--lod-bias")) { lod_bias = atoi(v); if (lod_bias < 0 || lod_bias > 3 || !(*v >= '0' && *v <= '3') || v[1]) { fprintf(stderr, "grass: --lod-bias must be 0..3\n"); return 2; } }
         else if (!strcmp(a, "--wd-map-gain")) {
             char *end;
             map.gain = strtof(v, &end);
@@ -599,7 +607,7 @@ int main(int argc, char **argv)
     if (!strcmp(scene_name, "mountain")) {
         if (!w) { w = 800; h = 600; }
         if (map_path && !read_wd_map(map_path, &map)) return 1;
-        ok = scene_mountain(w, h, res, tiles, frames, seed, wds, nwd, &map, out);
+        ok = scene_mountain(w, h, res, tiles, frames, seed, wds, nwd, &map, lod_bias, out);
         free(map.v);
     } else if (!strcmp(scene_name, "wither")) {
         if (!w) { w = 320; h = 240; }
