@@ -185,8 +185,10 @@
      index of a static texel. A voxel's place is the brick's offset plus the number of mask bits
      below its own (one popcount), so thin blades cost what they fill, not whole bricks. 8-bit
      density is stored as the square root of density / density_max (fine steps for the faint
-     voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly. A tvt_points holds 112 bytes per point. Building,
-     splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
+     voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly.
+     A tvt_points holds 112 bytes per point: its rest directions (axis, bend, normal0) are
+     int16, since they need no more precision than the texel's channels and smaller points make
+     sampling, copying and merging cheaper. Building, splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
      each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
      tvt_lod_free / tvt_tvt_free free them; tvt_lod_bytes / tvt_tvt_bytes count them.
 
