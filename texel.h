@@ -188,8 +188,8 @@
      voxels a splat makes; 16-bit is linear); vectors map [-1, 1] and colours [0, 1] linearly.
      A tvt_points holds 112 bytes per point: its rest directions (axis, bend, normal0) are
      int16, since they need no more precision than the texel's channels and smaller points make
-     sampling, copying and merging cheaper. Building, splatting, mingling and the LOD filter use a float scratch grid of 52 bytes per voxel of
-     each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
+     sampling, copying and merging cheaper. Building, splatting, mingling and the LOD filter use
+     a float scratch grid of 52 bytes per voxel of each touched brick. A tvt_lod owns its levels (level 0 a copy), a tvt_tvt its frames;
      tvt_lod_free / tvt_tvt_free free them; tvt_lod_bytes / tvt_tvt_bytes count them.
 
    ERRORS
