@@ -13,7 +13,7 @@
      meshopt   meshopt_simplify(target_index_count, target_error = 1.0 so only the count stops it)
      openmesh  Decimater construction, add modules, initialize, decimate_to_faces, garbage_collection
                (the TriMesh is built from the arrays outside the timer). On meshes above 200k
-               triangles OpenMesh stops after 3 rounds (it takes ~10 s a run there); the line then
+               triangles OpenMesh stops after 3 rounds (it takes ~30 s a run there); the line then
                says openmesh_runs=3.
    Ours' target is known from the peers' warm-up runs, which come before ours'. Ratios are ours
    over each peer, per round. */
