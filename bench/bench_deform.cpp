@@ -41,7 +41,8 @@
        before it) and the live object's RSS plus what a frame's warm-up run adds.
      edge_distortion: RMS of |e'| / |e| - 1 over the edges with an end in the ROI;
      angle_distortion: RMS change, in radians, of the corner angles of the triangles with a
-       vertex in the ROI. Both on the first frame's result; *_vs_cgal: ratio to cgal_arap's. */
+       vertex in the ROI. Both on the first frame's result; *_vs_cgal: ratio to cgal_arap's (left
+       out when cgal_arap's is below 1e-4: a rigid answer, as drag with --free 1). */
 #include "bench.h"
 
 #define DFM_IMPLEMENTATION
@@ -283,7 +284,8 @@ static void run_all(const Problem &p, std::vector<Side> &sides, const Pose *pose
             if (init[k].runs < BENCH_INTERLEAVED_RUNS) printf(" runs=%d", init[k].runs);
             if (cg >= 0 && k != cg) bench_print_ratio_named("frame_vs_cgal", &bs[k], &bs[cg]);
             printf(" peak_mb=%.1f edge_distortion=%.4f angle_distortion=%.4f", peak, ed[k], ad[k]);
-            if (cg >= 0 && k != cg) printf(" edge_vs_cgal=%.3f angle_vs_cgal=%.3f", ed[k] / ed[cg], ad[k] / ad[cg]);
+            if (cg >= 0 && k != cg && ed[cg] > 1e-4 && ad[cg] > 1e-4) /* not against a rigid answer */
+                printf(" edge_vs_cgal=%.3f angle_vs_cgal=%.3f", ed[k] / ed[cg], ad[k] / ad[cg]);
             printf("\n");
             fflush(stdout);
         }
