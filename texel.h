@@ -207,7 +207,7 @@
        TVT_ERR_OUT_OF_MEMORY     the allocator returned NULL;
        TVT_CANCELLED             the progress callback returned nonzero.
      On failure the output object is zeroed and nothing is leaked; tvt_age leaves the points as
-     they were unless it fails inside merging (then they are valid, at the new wd, unmerged).
+     they were unless cancelled after ageing (then they are valid, at the new wd, unmerged).
 
    THREAD SAFETY
      No global state; every function is re-entrant. The same input and options give the same
@@ -1729,6 +1729,9 @@ typedef struct tvt__merge_grid {
     uint32_t *rank;   /* point index -> sorted position */
     float *pos;       /* 4 floats per sorted position: x, y, z, unused */
     uint32_t *key;    /* voxel key per sorted position */
+    uint32_t *tmp_key, *tmp_idx; /* voxel key and index per point index (written while ageing) */
+    float *ipos;      /* 4 floats per point index: x, y, z, unused (written while ageing) */
+    uint8_t *dead;    /* per sorted position */
     size_t n;
     int res;
     uint32_t cache_key[8], cache_start[8]; /* the last run found per neighbour slot (points of one
@@ -1799,17 +1802,49 @@ static size_t tvt__lower_bound_from(const uint32_t *key, size_t n, size_t from, 
     return hi;
 }
 
-static void tvt__merge_grid_fill(tvt__merge_grid *g, const tvt_points *pts, uint32_t *tmp_key, uint32_t *tmp_idx)
+/* the merge's arrays, allocated before ageing (which fills tmp_key, tmp_idx and ipos, so the
+   points are read once less); 0 when out of memory (everything freed) */
+static void tvt__merge_grid_free(tvt__merge_grid *g, const tvt_allocator *a)
 {
-    size_t n = pts->count, i;
-    for (i = 0; i < n; i++) { tmp_key[i] = tvt__voxel_key(pts->p[i].pos, g->res); tmp_idx[i] = (uint32_t)i; }
-    tvt__radix_sort(tmp_key, tmp_idx, g->key, g->order, n);
+    tvt__free(a, g->order); tvt__free(a, g->rank); tvt__free(a, g->key); tvt__free(a, g->pos);
+    tvt__free(a, g->tmp_key); tvt__free(a, g->tmp_idx); tvt__free(a, g->ipos); tvt__free(a, g->dead);
+    memset(g, 0, sizeof(*g));
+}
+
+static int tvt__merge_grid_alloc(tvt__merge_grid *g, const tvt_allocator *a, size_t n, int res)
+{
+    memset(g, 0, sizeof(*g));
+    g->res = res;
+    g->order = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g->rank = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g->key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g->pos = (float *)tvt__alloc(a, n, 4 * sizeof(float));
+    g->tmp_key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g->tmp_idx = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
+    g->ipos = (float *)tvt__alloc(a, n, 4 * sizeof(float));
+    g->dead = (uint8_t *)tvt__alloc(a, n, 1);
+    if (g->order && g->rank && g->key && g->pos && g->tmp_key && g->tmp_idx && g->ipos && g->dead) return 1;
+    tvt__merge_grid_free(g, a);
+    return 0;
+}
+
+/* point i (aged) enters the merge: its voxel key and position */
+static void tvt__merge_grid_put(tvt__merge_grid *g, size_t i, const float *pos)
+{
+    g->tmp_key[i] = tvt__voxel_key(pos, g->res);
+    g->tmp_idx[i] = (uint32_t)i;
+    g->ipos[4 * i] = pos[0]; g->ipos[4 * i + 1] = pos[1]; g->ipos[4 * i + 2] = pos[2]; g->ipos[4 * i + 3] = 0.0f;
+}
+
+static void tvt__merge_grid_fill(tvt__merge_grid *g, size_t n)
+{
+    size_t i;
+    tvt__radix_sort(g->tmp_key, g->tmp_idx, g->key, g->order, n);
     g->n = n;
     memset(g->cache_key, 0xFF, sizeof(g->cache_key)); /* no voxel has key 2^32 - 1 (res <= 1024) */
     for (i = 0; i < n; i++) {
-        const float *p = pts->p[g->order[i]].pos;
         g->rank[g->order[i]] = (uint32_t)i;
-        g->pos[4 * i] = p[0]; g->pos[4 * i + 1] = p[1]; g->pos[4 * i + 2] = p[2]; g->pos[4 * i + 3] = 0.0f;
+        memcpy(g->pos + 4 * i, g->ipos + 4 * (size_t)g->order[i], 4 * sizeof(float));
     }
 }
 
@@ -1893,69 +1928,62 @@ static void tvt__merge_into(tvt_point *a, const tvt_point *b, int res)
     tvt__dir_encode(da[2], a->normal0);
 }
 
-static tvt_result tvt__merge(tvt_points *pts, float thr)
+/* Algorithm 1's merging over the grid g (filled by tvt__merge_grid_put for every point) */
+static void tvt__merge(tvt_points *pts, float thr, tvt__merge_grid *g)
 {
-    const tvt_allocator *a = &pts->allocator;
-    tvt__merge_grid g;
-    uint32_t *tmp_key, *tmp_idx;
-    uint8_t *dead;
     size_t n = pts->count, i, kept = 0;
-    int ok;
-    memset(&g, 0, sizeof(g));
-    g.res = pts->res;
-    g.order = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
-    g.rank = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
-    g.key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
-    g.pos = (float *)tvt__alloc(a, n, 4 * sizeof(float));
-    tmp_key = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
-    tmp_idx = (uint32_t *)tvt__alloc(a, n, sizeof(uint32_t));
-    dead = (uint8_t *)tvt__alloc(a, n, 1);
-    ok = g.order && g.rank && g.key && g.pos && tmp_key && tmp_idx && dead;
-    if (ok) {
-        tvt__merge_grid_fill(&g, pts, tmp_key, tmp_idx);
-        memset(dead, 0, n); /* by sorted position */
-        for (i = 0; i < n; i++) {
-            size_t j;
-            if (dead[i]) continue;
-            j = tvt__merge_partner(&g, dead, n, i, thr);
-            if (j == (size_t)-1) continue;
-            tvt__merge_into(pts->p + g.order[i], pts->p + g.order[j], pts->res);
-            memcpy(g.pos + 4 * i, pts->p[g.order[i]].pos, 3 * sizeof(float));
-            dead[j] = 1;
-        }
-        for (i = 0; i < n; i++) /* the survivors in their index order */
-            if (!dead[g.rank[i]]) {
-                if (kept != i) pts->p[kept] = pts->p[i];
-                kept++;
-            }
-        pts->count = kept;
+    uint8_t *dead = g->dead; /* by sorted position */
+    tvt__merge_grid_fill(g, n);
+    memset(dead, 0, n);
+    for (i = 0; i < n; i++) {
+        size_t j;
+        if (dead[i]) continue;
+        j = tvt__merge_partner(g, dead, n, i, thr);
+        if (j == (size_t)-1) continue;
+        tvt__merge_into(pts->p + g->order[i], pts->p + g->order[j], pts->res);
+        memcpy(g->pos + 4 * i, pts->p[g->order[i]].pos, 3 * sizeof(float));
+        dead[j] = 1;
     }
-    tvt__free(a, g.order); tvt__free(a, g.rank); tvt__free(a, g.key); tvt__free(a, g.pos);
-    tvt__free(a, tmp_key); tvt__free(a, tmp_idx);
-    tvt__free(a, dead);
-    return ok ? TVT_OK : TVT_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) /* the survivors in their index order */
+        if (!dead[g->rank[i]]) {
+            if (kept != i) pts->p[kept] = pts->p[i];
+            kept++;
+        }
+    pts->count = kept;
 }
 
 TVTDEF tvt_result tvt_age(tvt_points *pts, float wd, const tvt_model_options *options)
 {
     tvt_model_options o;
     tvt__ageing *A;
+    tvt__merge_grid g;
     size_t i;
     tvt_result r = TVT_OK;
+    int merge;
     if (!pts || (!pts->p && pts->count)) return TVT_ERR_INVALID_ARGUMENT;
     if (!(wd >= 0.0f && wd <= 1.0f)) return TVT_ERR_BAD_WD;
     if (!tvt__model_resolve(options, &o)) return TVT_ERR_BAD_PARAMETER;
     if (pts->count == 0) { pts->wd = wd; return TVT_OK; }
+    merge = !o.no_merge;
     A = (tvt__ageing *)tvt__alloc(&pts->allocator, 1, sizeof(tvt__ageing));
     if (!A) return TVT_ERR_OUT_OF_MEMORY;
+    if (merge && !tvt__merge_grid_alloc(&g, &pts->allocator, pts->count, pts->res)) {
+        tvt__free(&pts->allocator, A);
+        return TVT_ERR_OUT_OF_MEMORY;
+    }
     tvt__ageing_init(&o, wd, A);
     if (tvt__report(o.progress, o.progress_user, 0.0f)) r = TVT_CANCELLED;
-    for (i = 0; r == TVT_OK && i < pts->count; i++) tvt__age_point(A, wd, pts->res, pts->p + i);
+    for (i = 0; r == TVT_OK && i < pts->count; i++) { /* age, and enter the merge's grid */
+        tvt__age_point(A, wd, pts->res, pts->p + i);
+        if (merge) tvt__merge_grid_put(&g, i, pts->p[i].pos);
+    }
     tvt__free(&pts->allocator, A);
-    if (r != TVT_OK) return r;
-    pts->wd = wd;
-    if (tvt__report(o.progress, o.progress_user, 0.5f)) return TVT_CANCELLED;
-    if (!o.no_merge) r = tvt__merge(pts, o.merge_threshold);
+    if (r == TVT_OK) {
+        pts->wd = wd;
+        if (tvt__report(o.progress, o.progress_user, 0.5f)) r = TVT_CANCELLED;
+        else if (merge) tvt__merge(pts, o.merge_threshold, &g);
+    }
+    if (merge) tvt__merge_grid_free(&g, &pts->allocator);
     if (r == TVT_OK && tvt__report(o.progress, o.progress_user, 1.0f)) r = TVT_CANCELLED;
     return r;
 }
