@@ -17,6 +17,7 @@
 typedef struct content {
     float sigma, top, step, rgb[3], tangent[3], light, specular;
     long calls, bad_frame;
+    float footprint_min, footprint_max;
     float slope;   /* the ground's dh/dx, to check the frame's z against */
 } content;
 
@@ -24,6 +25,8 @@ static void uniform(void *user, const sr_shell_query *q, sr_shell_sample *out)
 {
     content *c = (content *)user;
     c->calls++;
+    if (c->calls == 1 || q->footprint < c->footprint_min) c->footprint_min = q->footprint;
+    if (c->calls == 1 || q->footprint > c->footprint_max) c->footprint_max = q->footprint;
     if (!(q->p[0] >= 0 && q->p[0] < 1 && q->p[1] >= 0 && q->p[1] < 1 && q->p[2] >= 0 && q->p[2] < 1.0f + 1e-6f))
         c->bad_frame++;
     out->step = c->step;
@@ -105,15 +108,22 @@ static void test_uniform_layer(void)
     T_CHECK(c.bad_frame == 0);
     T_CHECK(st.covered == W * H); /* layer opacity 1 - 1/e > 0.5 everywhere */
     T_CHECK(st.samples == c.calls && c.calls >= (long)W * H * 64);
+    /* orthographic: a pixel's width is 2 * half_height / H = 2.4 / 16 tile units everywhere */
+    T_NEAR(c.footprint_min, 2.4 / H, 1e-6);
+    T_NEAR(c.footprint_max, 2.4 / H, 1e-6);
     /* a thin layer: opacity 1 - exp(-0.5) < 0.5, so no pixel counts as covered */
     c.sigma = 0.5f;
     sr_framebuffer_clear(&fb, NULL, 1.0f);
     T_EQ_INT(sr_draw_shell(&fb, &cam, &d, &st), SR_OK);
     T_CHECK(st.covered == 0);
-    /* the ground alone (empty content) and the depth written there: its plane z = 0 */
+    /* the ground alone (empty content) and the depth written there: its plane z = 0. Empty
+       samples advance by their step: 64 of 1/64 cross the layer (t is exact in float here:
+       the eye at z = 10, steps of 2^-6 after the first 2^-12), then the ground */
     c.sigma = 0.0f;
+    c.calls = 0;
     sr_framebuffer_clear(&fb, NULL, 1.0f);
     T_EQ_INT(sr_draw_shell(&fb, &cam, &d, &st), SR_OK);
+    T_CHECK(c.calls == 64L * W * H);
     for (k = 0; k < 3; k++) expect[k] = d.ground_rgb[k] * 1.25f;
     T_NEAR(max_abs_diff(&fb, expect), 0.0, 1e-6);
     {
