@@ -470,7 +470,7 @@ static int render_all(const scene *S, const args *A, int up, double **res, const
     static const char *names[] = {"LAPLACIAN", "FITTING", "LRI"};
     sr_image8 img[4], sheet;
     const char *caps[4];
-    char cap0[96];
+    char cap0[96], cap_lri[64];
     double *all[4];
     float *col = (float *)malloc(3 * S->nv * sizeof(float) + 1);
     sr_camera cam;
@@ -489,7 +489,8 @@ static int render_all(const scene *S, const args *A, int up, double **res, const
     for (i = 0; ok && i <= nm; i++) ok = render_view(S, all[i], &cam, A->size, col, &img[i]);
     snprintf(cap0, sizeof cap0, "ORIGINAL %zu VERTICES", S->nv);
     caps[0] = cap0;
-    for (i = 0; i < nm; i++) caps[i + 1] = names[methods[i]];
+    snprintf(cap_lri, sizeof cap_lri, "LRI + %d RIGID STEPS", A->rigid);
+    for (i = 0; i < nm; i++) caps[i + 1] = methods[i] == 2 && A->rigid > 0 ? cap_lri : names[methods[i]];
     if (ok) ok = sr_contact_sheet(img, caps, nm + 1, nm + 1, NULL, &sheet) == SR_OK;
     if (ok) ok = sr_write_png(A->out, sheet.pixels, sheet.width, sheet.height, 3, 0) == SR_OK;
     if (!ok) fprintf(stderr, "deform: cannot render or write %s\n", A->out);

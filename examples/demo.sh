@@ -42,7 +42,10 @@ done
 rendered=$((rendered + 3))
 if [ -f "$bunny" ]; then
   "$B/deform" "$bunny" --up y --region ball --case drag --shift 0.15 -o "$OUT/deform_fig2-3_bunny_ear.png"
-  rendered=$((rendered + 1))
+  # the same drag with LRI followed by 5 as-rigid-as-possible steps (cotangent weights for every method)
+  "$B/deform" "$bunny" --up y --region ball --case drag --shift 0.15 --weights cotan --rigid 5 \
+    -o "$OUT/deform_fig2-3_bunny_ear_rigid5.png"
+  rendered=$((rendered + 2))
 else
   echo "demo: $bunny not found (apt-get install glmark2-data): deform bunny ear skipped"
 fi
