@@ -89,7 +89,8 @@
      could begin (the height field's slope bound: 1.5 x the largest sample difference per
      spacing); inside it calls sample() with the point and the ray in the tile frame and the
      pixel's footprint (distance x pixel angle, or the orthographic pixel size, in tile units),
-     and steps by the sample's own step (its level of detail) or skips the empty span it reports.
+     and steps by the sample's own step (its level of detail) or skips the empty span it reports,
+     cut at the tile's border (1/4096 of a tile past it), since the next tile's content may differ.
      A step of extinction sigma has opacity 1 - exp(-sigma step) and is composited front to back;
      the ray ends on the ground (Lambert with the ground's normal), on the depth already in the
      framebuffer, or when the opacity reaches termination. Shading: the sample's tangent and
@@ -2384,8 +2385,16 @@ static void sr__shell_trace(sr__shell *S, const float o[3], const float dir[3], 
         d->sample(d->user, &q, &s);
         S->samples++;
         step = s.step > 0.0f ? s.step : 1.0f / 256.0f;
+        if (!(s.sigma > 0.0f)) { /* an empty span ends at the tile's border: the next tile's content may differ */
+            for (k = 0; k < 2; k++) {
+                float to_border = q.dir[k] > 0.0f ? (1.0f - q.p[k]) / q.dir[k] : q.dir[k] < 0.0f ? -q.p[k] / q.dir[k] : 1e30f;
+                if (to_border + 1.0f / 4096.0f < step) step = to_border + 1.0f / 4096.0f;
+            }
+            t += fmaxf(step / per_world, min_step);
+            after_empty = 1;
+            continue;
+        }
         t += fmaxf(step / per_world, min_step);
-        if (!(s.sigma > 0.0f)) { after_empty = 1; continue; }
         after_empty = 0;
         alpha = 1.0f - expf(-s.sigma * step);
         sr__shell_light(S, &s, p, V, gx, gy, c);

@@ -211,6 +211,45 @@ static void test_kajiya_kay(void)
     sr_framebuffer_free(&fb);
 }
 
+/* tile x = 0 reports a long empty span (10 tiles), the others are dense: horizontal rays that
+   start in tile 0 must still meet tile 1 (an empty skip ends at the tile's border), so every
+   pixel sees the dense content, opaque (exp(-12 * 0.5) leaves 0.25% over a half tile, and the
+   rays cross 3 tiles) and lit isotropically. */
+static void tiled(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    content *c = (content *)user;
+    c->calls++;
+    if (q->tile_x == 0) { out->step = 10.0f; return; }
+    out->step = c->step;
+    out->sigma = c->sigma;
+    memcpy(out->rgb, c->rgb, sizeof(out->rgb));
+    out->light = 1.0f;
+}
+
+static void test_skip_stops_at_tile_border(void)
+{
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_shell_desc d;
+    sr_light l;
+    content c;
+    float eye[3] = {-1.0f, 2.0f, 0.5f}, at[3] = {3.0f, 2.0f, 0.5f}, up[3] = {0, 0, 1}, expect[3];
+    int k;
+    memset(&c, 0, sizeof(c));
+    c.sigma = 12.0f; c.step = 1.0f / 64.0f;
+    c.rgb[0] = 0.8f; c.rgb[1] = 0.1f; c.rgb[2] = 0.1f;
+    sun_above(&l, 0.25f);
+    sr_camera_ortho(&cam, eye, at, up, 0.2f, (float)W / (float)H, 0.1f, 100.0f);
+    base_desc(&d, &c, &l);
+    d.sample = tiled;
+    T_CHECK(sr_framebuffer_create(&fb, W, H, NULL) == SR_OK);
+    sr_framebuffer_clear(&fb, NULL, 1.0f);
+    T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_OK);
+    for (k = 0; k < 3; k++) expect[k] = c.rgb[k] * 1.25f;
+    T_NEAR(max_abs_diff(&fb, expect), 0.0, 1e-3);
+    sr_framebuffer_free(&fb);
+}
+
 static int cancel_at_once(void *user, float done) { (void)user; (void)done; return 1; }
 
 /* Geometry already in the framebuffer nearer than the layer hides it (the colour stays and
@@ -367,6 +406,7 @@ int main(int argc, char **argv)
     test_sheared_frame();
     test_kajiya_kay();
     test_depth_bad_input_cancel();
+    test_skip_stops_at_tile_border();
     test_grass_through_driver();
     return T_END();
 }
