@@ -4674,6 +4674,15 @@ static dfm_result dfm__lri_rotation_field(dfm_deform *d, const double *rot)
     return dfm__lsq_solve(&d->fsys, NULL, d->X, d->opt.refine_steps);
 }
 
+/* R = the turn about the unit axis u whose cosine and sine are c and s. */
+static void dfm__rotation_cs(const double *u, double c, double s, double *R)
+{
+    double x = u[0], y = u[1], z = u[2], t = 1.0 - c;
+    R[0] = t * x * x + c;     R[1] = t * x * y - s * z; R[2] = t * x * z + s * y;
+    R[3] = t * x * y + s * z; R[4] = t * y * y + c;     R[5] = t * y * z - s * x;
+    R[6] = t * x * z - s * y; R[7] = t * y * z + s * x; R[8] = t * z * z + c;
+}
+
 /* The unit axis and angle of a rotation, when the angle is clear of 0 and pi. */
 static int dfm__axis_angle(const double *R, double *axis, double *angle)
 {
@@ -4700,11 +4709,12 @@ static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
 {
     size_t a, v, c, k, m, nv = d->nv;
     int identity, analytic = 0;
-    double axis[3], t = 0.0;
+    double axis[3], t = 0.0, ct = 1.0, st = 0.0;
     const double *R = dfm__single_rotation(d, rot, &identity);
     dfm_result err = identity ? DFM_OK : R ? dfm__lri_phi(d, rot, R) : dfm__lri_rotation_field(d, rot);
     if (err != DFM_OK) return err;
     if (R && d->opt.orthonormalize == DFM_ORTHO_POLAR) analytic = dfm__axis_angle(R, axis, &t);
+    if (analytic) ct = cos(t), st = sin(t);
     for (a = 0; a < d->nactive; a++) {
         double M[9], Fp[9], phi;
         const double *F;
@@ -4713,7 +4723,8 @@ static dfm_result dfm__lri_solve_frames(dfm_deform *d, const double *rot)
         F = d->frame + 9 * v;
         phi = R ? d->X[v] : 0.0;
         if (analytic && d->unk[v] >= 0) {
-            dfm_rotation(axis, atan2(phi * sin(t), 1.0 - phi + phi * cos(t)), M);
+            double y = phi * st, x = 1.0 - phi + phi * ct, r = sqrt(x * x + y * y); /* the turn's cos, sin */
+            dfm__rotation_cs(axis, r > 0.0 ? x / r : 1.0, r > 0.0 ? y / r : 0.0, M);
             turned = 1;
         } else {
             for (k = 0; k < 9; k++)
@@ -5017,13 +5028,11 @@ DFMDEF dfm_result dfm_weld(const double *positions, size_t vertex_count, const u
 
 DFMDEF void dfm_rotation(const double axis[3], double angle, double R[9])
 {
-    double l = sqrt(dfm__dot3(axis, axis)), x, y, z, c = cos(angle), s = sin(angle), t = 1.0 - c;
-    x = axis[0] / l;
-    y = axis[1] / l;
-    z = axis[2] / l;
-    R[0] = t * x * x + c;     R[1] = t * x * y - s * z; R[2] = t * x * z + s * y;
-    R[3] = t * x * y + s * z; R[4] = t * y * y + c;     R[5] = t * y * z - s * x;
-    R[6] = t * x * z - s * y; R[7] = t * y * z + s * x; R[8] = t * z * z + c;
+    double l = sqrt(dfm__dot3(axis, axis)), u[3];
+    u[0] = axis[0] / l;
+    u[1] = axis[1] / l;
+    u[2] = axis[2] / l;
+    dfm__rotation_cs(u, cos(angle), sin(angle), R);
 }
 
 DFMDEF void dfm_pose_identity(const double *positions, size_t vertex_count, double *targets, double *rotations)
