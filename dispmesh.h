@@ -184,7 +184,9 @@
      original's area over each base triangle, so texels go where the original's surface is). A
      round is kept only when the stretch drops and nothing flips; a chart with no flip-free
      layout becomes lone triangles. Charts are turned to their smallest box (12 angles) and packed
-     in shelves with `gutter` texels between boxes at the largest scale that fits. dm_param
+     at the largest scale that fits: in shelves of boxes, then, larger where it fits, by their
+     footprints (each row's extent grown by half the gutter) in a bitmap, largest first, each in
+     the quarter turn whose lowest free place keeps its top lowest (holes are filled). dm_param
      reports utilization, L2 and max stretch (Sander et al. 2001), and the share of triangles
      whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many small charts with seams
      instead of its one global chart (its text omits the cut), so every neighbour lookup goes
@@ -220,13 +222,14 @@
      base_vertex_count is base vertex v; face_base gives each triangle's base triangle.
      dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
      dm_bvh_closest_point; its max also covers every vertex.
-     OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 2),
+     OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
      stretch_iterations (0 = 6, negative none). dm_bake_options: max_distance, inward, both_ways.
      dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
      dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
      samples_per_side (0 = 200000). Each with allocator and progress.
-     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle; dm_dispmap: 46 bytes per
+     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (packing: a bit per texel
+     more while it runs); dm_dispmap: 46 bytes per
      texel (about 38 more while dm_bake runs) plus a BVH of the original; dm_trimesh: 24 bytes
      per vertex and 16 per triangle (about 2 triangles per covered texel), 52 more per vertex
      while dm_reconstruct runs.
@@ -401,7 +404,8 @@ enum { DM_TEXEL_EMPTY = 0, DM_TEXEL_HIT = 1, DM_TEXEL_MISS = 2, DM_TEXEL_BORDER 
 
 typedef struct dm_param_options {
     int width, height;            /* map size in texels; 0 = 1024 each; at most 16384 */
-    int gutter;                   /* empty texels between charts; 0 = 2 */
+    int gutter;                   /* empty texels between charts (at least); 0 = 4: bilinear
+                                     filtering and one mip level read no other chart */
     const float *triangle_weight; /* NULL = each base triangle's own area; else one weight >= 0
                                      per base triangle: its map area is proportional to it */
     int max_chart_triangles;      /* 0 = 96; clamped to [1, 256] */
@@ -872,7 +876,7 @@ static void *dm__alloc_array(const dm_allocator *a, size_t count, size_t size, i
 }
 
 /* Temporaries of one call, all freed together on every exit path. */
-#define DM__SLOTS 40
+#define DM__SLOTS 64
 typedef struct dm__scratch {
     dm_allocator a;
     void *p[DM__SLOTS];
@@ -4937,9 +4941,144 @@ static double dm__pz_cuv_area(const double *c)
     return 0.5 * ((c[2] - c[0]) * (c[5] - c[1]) - (c[4] - c[0]) * (c[3] - c[1]));
 }
 
+/* 1 when the square of half-side h around point c meets the counter-clockwise triangle P
+   (separating axes: x, y and the three edge normals) */
+static int dm__square_meets(const double P[3][2], const double c[2], double h)
+{
+    int e, k;
+    for (k = 0; k < 2; k++) {
+        double lo = fmin(P[0][k], fmin(P[1][k], P[2][k])), hi = fmax(P[0][k], fmax(P[1][k], P[2][k]));
+        if (hi < c[k] - h || lo > c[k] + h) return 0;
+    }
+    for (e = 0; e < 3; e++) {
+        const double *a = P[e], *b = P[(e + 1) % 3];
+        double nx = -(b[1] - a[1]), ny = b[0] - a[0];
+        if (nx * c[0] + ny * c[1] + h * (fabs(nx) + fabs(ny)) < nx * a[0] + ny * a[1]) return 0;
+    }
+    return 1;
+}
+
+/* Bitmap packing (the approach of xatlas and of Levy et al. 2002's "Tetris" packer, our own
+   code): each chart's footprint at scale s is the set of texels within half a gutter of it; per
+   row of texels only its first and last count (a silhouette). Charts go largest first, each in
+   the quarter turn whose lowest free place (rows from the bottom, then columns) puts its top
+   lowest; a place is free when no row of the footprint meets a taken texel. */
+typedef struct dm__pz_shape {
+    int w, h;           /* footprint size in texels */
+    int *lo, *hi;       /* per row: first and last texel (lo > hi: none) */
+} dm__pz_shape;
+
+typedef struct dm__pz_bitpack {
+    int W, H, words;    /* map size; 64-bit words per row */
+    uint64_t *taken;    /* H rows of taken texels */
+    int *grid_col;      /* a chart's columns' extents (2 * rows_cap) */
+    int *lo[4], *hi[4]; /* its rows in each quarter turn */
+    int *first_free;    /* per map row: its first free texel (W: none) */
+    int *longest_free;  /* per map row: its longest run of free texels */
+    int rows_cap;       /* entries in each lo / hi */
+} dm__pz_bitpack;
+
+/* the index of the highest set bit of m (nonzero) */
+static int dm__highest_bit(uint64_t m)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return 63 - __builtin_clzll(m);
+#else
+    int b = 0;
+    if (m >> 32) { m >>= 32; b += 32; }
+    if (m >> 16) { m >>= 16; b += 16; }
+    if (m >> 8) { m >>= 8; b += 8; }
+    if (m >> 4) { m >>= 4; b += 4; }
+    if (m >> 2) { m >>= 2; b += 2; }
+    return b + (int)(m >> 1);
+#endif
+}
+
+/* the last taken texel in row y between x0 and x1 (inclusive), or -1 */
+static long dm__pz_last_taken(const dm__pz_bitpack *b, int y, long x0, long x1)
+{
+    const uint64_t *row = b->taken + (size_t)y * (size_t)b->words;
+    long w;
+    for (w = x1 >> 6; w >= (x0 >> 6); w--) {
+        uint64_t m = row[w];
+        if (w == (x1 >> 6) && (x1 & 63) != 63) m &= ((uint64_t)1 << ((x1 & 63) + 1)) - 1;
+        if (w == (x0 >> 6)) m &= ~(((uint64_t)1 << (x0 & 63)) - 1);
+        if (m) return w * 64 + dm__highest_bit(m);
+    }
+    return -1;
+}
+
+/* the lowest free place for the shape with its bottom row at most y_max: 1 and (*px, *py), or
+   0. Rows whose longest free run is too short for the shape's row there are skipped whole. */
+static int dm__pz_find_place(const dm__pz_bitpack *b, const dm__pz_shape *sh, int y_max, int *px, int *py)
+{
+    int y, r, hint = 0;
+    if (y_max > b->H - sh->h) y_max = b->H - sh->h;
+    for (y = 0; y <= y_max; y++) {
+        long x = 0;
+        int fits = 1;
+        for (r = 0; r < sh->h && fits; r++) { /* a start at each row's first free texel at the least */
+            long need = (long)sh->hi[r] - sh->lo[r] + 1, x0;
+            if (sh->lo[r] > sh->hi[r]) continue;
+            if (b->longest_free[y + r] < need) fits = 0;
+            x0 = (long)b->first_free[y + r] - sh->lo[r];
+            if (x0 > x) x = x0;
+        }
+        if (!fits) continue;
+        while (x + sh->w <= b->W) {
+            long jump = -1;
+            int k;
+            for (k = 0; k < sh->h && jump < 0; k++) { /* the row that refused last, first */
+                long t;
+                r = (k + hint) % sh->h;
+                if (sh->lo[r] > sh->hi[r]) continue;
+                t = dm__pz_last_taken(b, y + r, x + sh->lo[r], x + sh->hi[r]);
+                if (t >= 0) {
+                    jump = t + 1 - sh->lo[r];
+                    hint = r;
+                }
+            }
+            if (jump < 0) { *px = (int)x; *py = y; return 1; }
+            x = jump > x ? jump : x + 1;
+        }
+    }
+    return 0;
+}
+
+/* row y's first free texel and longest free run, again */
+static void dm__pz_row_runs(dm__pz_bitpack *b, int y)
+{
+    const uint64_t *row = b->taken + (size_t)y * (size_t)b->words;
+    int x, run = 0, best = 0, first = b->W;
+    for (x = 0; x < b->W; x++) {
+        if (!(x & 63) && row[x >> 6] == ~(uint64_t)0 && x + 64 <= b->W) { run = 0; x += 63; continue; }
+        if (row[x >> 6] >> (x & 63) & 1) run = 0;
+        else {
+            if (first == b->W) first = x;
+            if (++run > best) best = run;
+        }
+    }
+    b->first_free[y] = first;
+    b->longest_free[y] = best;
+}
+
+static void dm__pz_take_place(dm__pz_bitpack *b, const dm__pz_shape *sh, int px, int py)
+{
+    int r;
+    for (r = 0; r < sh->h; r++) {
+        long x;
+        uint64_t *row = b->taken + (size_t)(py + r) * (size_t)b->words;
+        if (sh->lo[r] > sh->hi[r]) continue;
+        for (x = px + sh->lo[r]; x <= px + sh->hi[r]; x++) row[x >> 6] |= (uint64_t)1 << (x & 63);
+        dm__pz_row_runs(b, py + r);
+    }
+}
+
 typedef struct dm__pz_pack {
     double bw, bh;  /* chart box in world-scale units */
     int ox, oy;     /* packed box corner, texels */
+    int turn;       /* bitmap packing: quarter turns, and the unturned footprint's size */
+    int fw, fh;
 } dm__pz_pack;
 
 static int dm__pz_try_pack(dm__pz_pack *pk, const uint32_t *order, size_t nc, double s, int g, int W, int H)
@@ -4963,10 +5102,10 @@ static int dm__pz_try_pack(dm__pz_pack *pk, const uint32_t *order, size_t nc, do
     return 1;
 }
 
-/* insertion order by descending box height, ties by chart id (stable, deterministic) */
-static void dm__pz_order(const dm__pz_pack *pk, size_t nc, uint32_t *order, uint32_t *tmp)
+/* insertion order by descending box height (or area), ties by chart id (stable, deterministic) */
+static void dm__pz_order(const dm__pz_pack *pk, size_t nc, int by_area, uint32_t *order, uint32_t *tmp)
 {
-    /* merge sort on (height desc, id asc) */
+    /* merge sort on (height desc, or box area desc, id asc) */
     size_t width, i;
     for (i = 0; i < nc; i++) order[i] = (uint32_t)i;
     for (width = 1; width < nc; width *= 2) {
@@ -4977,7 +5116,8 @@ static void dm__pz_order(const dm__pz_pack *pk, size_t nc, uint32_t *order, uint
                 if (a >= am) take_a = 0;
                 else if (b >= bm) take_a = 1;
                 else {
-                    double ha = pk[order[a]].bh, hb = pk[order[b]].bh;
+                    double ha = pk[order[a]].bh * (by_area ? pk[order[a]].bw : 1.0),
+                           hb = pk[order[b]].bh * (by_area ? pk[order[b]].bw : 1.0);
                     take_a = ha > hb || (ha == hb && order[a] < order[b]);
                 }
                 tmp[o++] = take_a ? order[a++] : order[b++];
@@ -5246,7 +5386,7 @@ static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *opti
     r->o = o;
     W = o.width ? o.width : 1024;
     H = o.height ? o.height : 1024;
-    g = o.gutter ? o.gutter : 2;
+    g = o.gutter ? o.gutter : 4;
     max_tris = o.max_chart_triangles ? o.max_chart_triangles : 96;
     max_tris = max_tris < 1 ? 1 : max_tris > 256 ? 256 : max_tris;
     r->W = W; r->H = H; r->g = g; r->max_tris = max_tris;
@@ -5555,13 +5695,208 @@ static dm_result dm__pz_box_charts(dm__pz_run *r)
     return DM_OK;
 }
 
-/* 5b. shelf-pack the boxes, the largest scale that fits found by bisection; the uv follow */
+/* the x extent of triangle P within the band y0 <= y <= y1: its corners there and its edges'
+   crossings of the band's two lines; 0 when the triangle misses the band */
+static int dm__pz_band_extent(const double P[3][2], double y0, double y1, double *xmin, double *xmax)
+{
+    int c, k, any = 0;
+    *xmin = HUGE_VAL;
+    *xmax = -HUGE_VAL;
+    for (c = 0; c < 3; c++) {
+        const double *a = P[c], *b = P[(c + 1) % 3];
+        if (a[1] >= y0 && a[1] <= y1) {
+            *xmin = fmin(*xmin, a[0]);
+            *xmax = fmax(*xmax, a[0]);
+            any = 1;
+        }
+        for (k = 0; k < 2; k++) {
+            double yl = k ? y1 : y0, t;
+            if ((a[1] - yl) * (b[1] - yl) >= 0.0 || a[1] == b[1]) continue;
+            t = (yl - a[1]) / (b[1] - a[1]);
+            *xmin = fmin(*xmin, a[0] + t * (b[0] - a[0]));
+            *xmax = fmax(*xmax, a[0] + t * (b[0] - a[0]));
+            any = 1;
+        }
+    }
+    return any;
+}
+
+/* chart i's footprint at scale s with margin o (texels): the texels whose square grown by o
+   meets one of its triangles, as each row's first and last texel in each of the four quarter
+   turns (from the rows' and the columns' extents); 0 when it does not fit the map */
+static int dm__pz_footprint(dm__pz_run *r, dm__pz_bitpack *b, size_t i, double s, double o, int *w, int *h)
+{
+    const uint32_t *ctris = r->ctris, *bstart = r->bstart;
+    double fw = ceil(s * r->pk[i].bw + 2.0 * o - 1e-9), fh = ceil(s * r->pk[i].bh + 2.0 * o - 1e-9);
+    int *rlo = b->lo[0], *rhi = b->hi[0], *clo = b->lo[3], *chi = b->hi[3], x, y, c, q;
+    size_t k;
+    if (!(fw <= (double)b->W && fh <= (double)b->H)) return 0;
+    *w = fw < 1.0 ? 1 : (int)fw;
+    *h = fh < 1.0 ? 1 : (int)fh;
+    for (y = 0; y < *h; y++) { rlo[y] = INT32_MAX; rhi[y] = -1; }
+    for (x = 0; x < *w; x++) { clo[x] = INT32_MAX; chi[x] = -1; }
+    for (k = bstart[i]; k < bstart[i + 1]; k++) {
+        double P[3][2], Q[3][2], mn = HUGE_VAL, mx = -HUGE_VAL, e0, e1;
+        for (c = 0; c < 3; c++) {
+            P[c][0] = o + s * r->cuv[6 * (size_t)ctris[k] + 2 * (size_t)c];
+            P[c][1] = o + s * r->cuv[6 * (size_t)ctris[k] + 2 * (size_t)c + 1];
+            Q[c][0] = P[c][1]; /* the same triangle with x and y swapped, for the columns */
+            Q[c][1] = P[c][0];
+            mn = fmin(mn, P[c][1]);
+            mx = fmax(mx, P[c][1]);
+        }
+        for (y = (int)floor(mn - o); y <= (int)floor(mx + o); y++) {
+            long x0, x1;
+            if (y < 0 || y >= *h || !dm__pz_band_extent((const double(*)[2])P, y - o, y + 1 + o, &e0, &e1)) continue;
+            x0 = (long)ceil(e0 - 1.0 - o);
+            x1 = (long)floor(e1 + o);
+            if (x0 < 0) x0 = 0;
+            if (x1 > *w - 1) x1 = *w - 1;
+            if (x0 < rlo[y]) rlo[y] = (int)x0;
+            if (x1 > rhi[y]) rhi[y] = (int)x1;
+        }
+        mn = fmin(P[0][0], fmin(P[1][0], P[2][0]));
+        mx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
+        for (x = (int)floor(mn - o); x <= (int)floor(mx + o); x++) {
+            long y0, y1;
+            if (x < 0 || x >= *w || !dm__pz_band_extent((const double(*)[2])Q, x - o, x + 1 + o, &e0, &e1)) continue;
+            y0 = (long)ceil(e0 - 1.0 - o);
+            y1 = (long)floor(e1 + o);
+            if (y0 < 0) y0 = 0;
+            if (y1 > *h - 1) y1 = *h - 1;
+            if (y0 < clo[x]) clo[x] = (int)y0;
+            if (y1 > chi[x]) chi[x] = (int)y1;
+        }
+    }
+    /* turn 2: the rows reversed; turn 1: row x is column x, from the top; turn 3: column x from the bottom */
+    for (y = 0; y < *h; y++) {
+        b->lo[2][*h - 1 - y] = rhi[y] < 0 ? INT32_MAX : *w - 1 - rhi[y];
+        b->hi[2][*h - 1 - y] = rhi[y] < 0 ? -1 : *w - 1 - rlo[y];
+    }
+    for (x = 0; x < *w; x++) {
+        b->lo[1][x] = chi[x] < 0 ? INT32_MAX : *h - 1 - chi[x];
+        b->hi[1][x] = chi[x] < 0 ? -1 : *h - 1 - clo[x];
+    }
+    for (x = 0; x < *w; x++) { /* turn 3 in place of the columns: row w-1-x holds column x */
+        b->grid_col[x] = clo[x];
+        b->grid_col[*w + x] = chi[x];
+    }
+    for (x = 0; x < *w; x++) {
+        q = *w - 1 - x;
+        b->lo[3][q] = b->grid_col[*w + x] < 0 ? INT32_MAX : b->grid_col[x];
+        b->hi[3][q] = b->grid_col[*w + x] < 0 ? -1 : b->grid_col[*w + x];
+    }
+    return 1;
+}
+
+/* every chart at scale s: its quarter turn and place into pk[i].turn, ox, oy, and the highest
+   row used into *top; 0 when one does not fit */
+static int dm__pz_bitmap_pack(dm__pz_run *r, dm__pz_bitpack *b, double s, double o, int *top)
+{
+    size_t n, nc = r->pm->chart_count;
+    int y;
+    *top = 0;
+    memset(b->taken, 0, (size_t)b->H * (size_t)b->words * sizeof(uint64_t));
+    for (y = 0; y < b->H; y++) {
+        b->first_free[y] = 0;
+        b->longest_free[y] = b->W;
+    }
+    for (n = 0; n < nc; n++) {
+        size_t i = r->order[n];
+        int w, h, q, best_q = -1, bx = 0, by = 0;
+        if (!dm__pz_footprint(r, b, i, s, o, &w, &h)) return 0;
+        for (q = 0; q < 4; q++) {
+            dm__pz_shape sh;
+            int px, py;
+            sh.w = q & 1 ? h : w;
+            sh.h = q & 1 ? w : h;
+            sh.lo = b->lo[q];
+            sh.hi = b->hi[q];
+            if (!dm__pz_find_place(b, &sh, best_q < 0 ? b->H : by + (best_q & 1 ? w : h) - sh.h, &px, &py)) continue;
+            if (best_q < 0 || py + sh.h < by + (best_q & 1 ? w : h) || (py + sh.h == by + (best_q & 1 ? w : h) && px < bx)) {
+                best_q = q;
+                bx = px;
+                by = py;
+            }
+        }
+        if (best_q < 0) return 0;
+        {
+            dm__pz_shape sh;
+            sh.w = best_q & 1 ? h : w;
+            sh.h = best_q & 1 ? w : h;
+            sh.lo = b->lo[best_q];
+            sh.hi = b->hi[best_q];
+            dm__pz_take_place(b, &sh, bx, by);
+        }
+        r->pk[i].turn = best_q;
+        r->pk[i].ox = bx;
+        r->pk[i].oy = by;
+        r->pk[i].fw = w;
+        r->pk[i].fh = h;
+        if (by + (best_q & 1 ? w : h) > *top) *top = by + (best_q & 1 ? w : h);
+    }
+    return 1;
+}
+
+/* the largest scale at which the charts fit as bitmap footprints, by bisection from s_lo (the
+   shelves' scale) up; 0 when they fit at no scale tried. The places of the best are in pk. */
+static double dm__pz_bitmap_scale(dm__pz_run *r, double s_lo, double o)
+{
+    dm__pz_bitpack b;
+    size_t nc = r->pm->chart_count;
+    double s_hi = 1.6 * s_lo, s_best = 0.0;
+    int q, it, top = 0;
+    memset(&b, 0, sizeof b);
+    b.W = r->W;
+    b.H = r->H;
+    b.words = (r->W + 63) / 64;
+    b.rows_cap = r->W > r->H ? r->W : r->H;
+    b.taken = (uint64_t *)dm__take(&r->sc, (size_t)b.H * (size_t)b.words, sizeof(uint64_t));
+    b.grid_col = (int *)dm__take(&r->sc, 2 * (size_t)b.rows_cap, sizeof(int));
+    for (q = 0; q < 4; q++) {
+        b.lo[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap, sizeof(int));
+        b.hi[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap, sizeof(int));
+        if (!b.lo[q] || !b.hi[q]) return -1.0;
+    }
+    b.first_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
+    b.longest_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
+    if (!b.taken || !b.grid_col || !b.first_free || !b.longest_free) return -1.0;
+    dm__pz_order(r->pk, nc, 1, r->order, r->otmp);
+    if (!dm__pz_bitmap_pack(r, &b, s_lo, o, &top)) return 0.0;
+    s_best = s_lo;
+    for (it = 0; it < 6; it++) { /* the scale that fills the rows the last fit left, else halfway */
+        double s = s_best * sqrt((double)b.H / (double)(top > 0 ? top : 1)) * 0.998;
+        int t2;
+        if (!(s < s_hi)) s = 0.5 * (s_best + s_hi);
+        if (!(s > s_best * 1.002)) break;
+        if (dm__pz_bitmap_pack(r, &b, s, o, &t2)) { s_best = s; top = t2; }
+        else s_hi = s;
+    }
+    if (!dm__pz_bitmap_pack(r, &b, s_best, o, &top)) return 0.0;
+    return s_best;
+}
+
+/* chart point (u, v) of chart p (chart units) at scale s and margin o, turned and placed: texels */
+static void dm__pz_bitmap_uv(const dm__pz_pack *p, double s, double o, double u, double v, double out[2])
+{
+    double x = o + s * u, y = o + s * v, tx, ty;
+    if (p->turn == 0) { tx = x; ty = y; }
+    else if (p->turn == 1) { tx = p->fh - y; ty = x; }
+    else if (p->turn == 2) { tx = p->fw - x; ty = p->fh - y; }
+    else { tx = y; ty = p->fw - x; }
+    out[0] = p->ox + tx;
+    out[1] = p->oy + ty;
+}
+
+/* 5b. the charts packed into the map at the largest scale that fits: as boxes in shelves
+   (found by bisection), then, larger where it fits, as bitmap footprints with quarter turns;
+   the uv follow */
 static dm_result dm__pz_pack_charts(dm__pz_run *r)
 {
     size_t i, t, nc = r->pm->chart_count;
     int W = r->W, H = r->H, g = r->g, c;
-    double s_lo = 0.0, s_hi, s_best;
-    dm__pz_order(r->pk, nc, r->order, r->otmp);
+    double s_lo = 0.0, s_hi, s_best, s_bits, o = 0.5 * g;
+    dm__pz_order(r->pk, nc, 0, r->order, r->otmp);
     s_hi = sqrt((double)W * (double)H / r->total_area);
     if (!dm__pz_try_pack(r->pk, r->order, nc, 0.0, g, W, H)) return DM_ERR_MAP_TOO_SMALL;
     s_best = 0.0;
@@ -5570,14 +5905,24 @@ static dm_result dm__pz_pack_charts(dm__pz_run *r)
         if (dm__pz_try_pack(r->pk, r->order, nc, s, g, W, H)) { s_best = s; s_lo = s; } else s_hi = s;
     }
     if (!(s_best > 0.0)) return DM_ERR_MAP_TOO_SMALL;
-    dm__pz_try_pack(r->pk, r->order, nc, s_best, g, W, H);
+    s_bits = dm__pz_bitmap_scale(r, s_best, o);
+    if (s_bits < 0.0) return dm__scratch_fail(&r->sc);
+    if (!(s_bits > s_best)) {
+        dm__pz_order(r->pk, nc, 0, r->order, r->otmp);
+        dm__pz_try_pack(r->pk, r->order, nc, s_best, g, W, H);
+    }
     for (t = 0; t < r->nt; t++) {
         const dm__pz_pack *p = r->pk + r->pm->chart[t];
         for (c = 0; c < 3; c++) {
-            double px = p->ox + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c];
-            double py = p->oy + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c + 1];
-            r->pm->uv[6 * t + 2 * (size_t)c] = (float)(px / W);
-            r->pm->uv[6 * t + 2 * (size_t)c + 1] = (float)(py / H);
+            double q[2];
+            if (s_bits > s_best) {
+                dm__pz_bitmap_uv(p, s_bits, o, r->cuv[6 * t + 2 * (size_t)c], r->cuv[6 * t + 2 * (size_t)c + 1], q);
+            } else {
+                q[0] = p->ox + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c];
+                q[1] = p->oy + 0.5 * g + s_best * r->cuv[6 * t + 2 * (size_t)c + 1];
+            }
+            r->pm->uv[6 * t + 2 * (size_t)c] = (float)(q[0] / W);
+            r->pm->uv[6 * t + 2 * (size_t)c + 1] = (float)(q[1] / H);
         }
     }
     return dm__pz_step_report(r, 0.6f);
@@ -6079,23 +6424,6 @@ static dm_result dm__bk_cast(dm__bk_run *r)
     return DM_OK;
 }
 
-/* 1 when the square of half-side h around point c meets the counter-clockwise triangle P
-   (separating axes: x, y and the three edge normals) */
-static int dm__bk_square_meets(const double P[3][2], const double c[2], double h)
-{
-    int e, k;
-    for (k = 0; k < 2; k++) {
-        double lo = fmin(P[0][k], fmin(P[1][k], P[2][k])), hi = fmax(P[0][k], fmax(P[1][k], P[2][k]));
-        if (hi < c[k] - h || lo > c[k] + h) return 0;
-    }
-    for (e = 0; e < 3; e++) {
-        const double *a = P[e], *b = P[(e + 1) % 3];
-        double nx = -(b[1] - a[1]), ny = b[0] - a[0];
-        if (nx * c[0] + ny * c[1] + h * (fabs(nx) + fabs(ny)) < nx * a[0] + ny * a[1]) return 0;
-    }
-    return 1;
-}
-
 /* distance from point c to the segment a b */
 static double dm__bk_segment_distance(const double a[2], const double b[2], const double c[2])
 {
@@ -6137,7 +6465,7 @@ static void dm__bk_border_triangle(const dm_param *pm, size_t t, float *best, ui
             if (pm->texel_triangle[id] != DM_NO_HIT) continue;
             cc[0] = xx + 0.5;
             cc[1] = yy + 0.5;
-            if (!dm__bk_square_meets((const double(*)[2])P, cc, DM__BORDER)) continue;
+            if (!dm__square_meets((const double(*)[2])P, cc, DM__BORDER)) continue;
             dist = fmin(dm__bk_segment_distance(P[0], P[1], cc),
                         fmin(dm__bk_segment_distance(P[1], P[2], cc), dm__bk_segment_distance(P[2], P[0], cc)));
             if (!(dist < best[id])) continue;
@@ -6529,16 +6857,36 @@ static void dm__rc_sample(dm__rc_run *r, size_t t, uint32_t id, const double w[3
     acc[4] += 1.0;
 }
 
-/* the strip between edge c of triangle t (m segments, corner c to c+1) and the interior grid's
-   row next to it (n - 3 segments, Q_j = (n-2-j, 1+j, 1) in the order c, c+1, c+2), triangulated
-   by walking both in step; written at *tri */
+/* point (w_c, w_c1, w_c2) of base triangle t in uv (texels) */
+static void dm__rc_uv_point(const dm__rc_run *r, size_t t, int c, double wc, double wc1, double wc2, double out[2])
+{
+    const float *uv = r->param->uv + 6 * t;
+    int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    out[0] = (wc * uv[2 * c] + wc1 * uv[2 * c1] + wc2 * uv[2 * c2]) * r->param->width;
+    out[1] = (wc * uv[2 * c + 1] + wc1 * uv[2 * c1 + 1] + wc2 * uv[2 * c2 + 1]) * r->param->height;
+}
+
+/* the strip between edge c of triangle t (m segments P_i, corner c to c+1) and the interior
+   grid's row next to it (n - 3 segments, Q_j = (n-2-j, 1+j, 1) in the order c, c+1, c+2),
+   triangulated by walking both in step, each step taking the shorter new diagonal in uv (no
+   slivers where the two rows' spacings differ); written at *tri */
 static void dm__rc_strip(dm__rc_run *r, size_t t, uint32_t n, int c, size_t *tri)
 {
     int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
     uint32_t m = r->edge_level[r->he_edge[3 * t + (size_t)c]], rr = n - 3, i = 0, j = 0, q[3];
     while (i < m || j < rr) {
         uint32_t *o = r->mesh->indices + 3 * *tri;
-        int outer = j == rr || (i < m && (uint64_t)(2 * i + 1) * rr < (uint64_t)(2 * j + 1) * m);
+        int outer = j == rr;
+        if (!outer && i < m) { /* diagonals P_{i+1} Q_j and P_i Q_{j+1} */
+            double p0[2], p1[2], q0[2], q1[2], da, db;
+            dm__rc_uv_point(r, t, c, (double)(m - i) / m, (double)i / m, 0.0, p0);
+            dm__rc_uv_point(r, t, c, (double)(m - i - 1) / m, (double)(i + 1) / m, 0.0, p1);
+            dm__rc_uv_point(r, t, c, (double)(n - 2 - j) / n, (double)(1 + j) / n, 1.0 / n, q0);
+            dm__rc_uv_point(r, t, c, (double)(n - 3 - j) / n, (double)(2 + j) / n, 1.0 / n, q1);
+            da = (p1[0] - q0[0]) * (p1[0] - q0[0]) + (p1[1] - q0[1]) * (p1[1] - q0[1]);
+            db = (p0[0] - q1[0]) * (p0[0] - q1[0]) + (p0[1] - q1[1]) * (p0[1] - q1[1]);
+            outer = da <= db;
+        }
         q[c] = n - 2 - j; q[c1] = 1 + j; q[c2] = 1;
         o[0] = dm__rc_edge_vertex(r, t, c, i);
         if (outer) {

@@ -12,7 +12,8 @@
    the original itself, a triangle folded back onto its neighbours, is counted apart as
    strict_folds). Reported, not required (see dispmesh.h,
    BOUNDING SHELL): base-only rms over our unconstrained simplification's at the same face count.
-   The inner-side check of every original vertex is in test_dispmesh_shell. Skips without
+   Packing: the same base at 1024^2 (utilization >= 0.6, stretch_l2 <= 1.05, area ratios ok >=
+   0.95, gutters >= 4 texels). The inner-side check of every original vertex is in test_dispmesh_shell. Skips without
    glmark2-data, and under the sanitizers (the constrained simplification of 70k triangles). */
 #include <embree3/rtcore.h>
 
@@ -190,6 +191,37 @@ int main(int argc, char **argv)
                     "unconstrained_rms=%.3e base_over_unconstrained=%.2f flagged=%.5f rays=%zu back=%zu folds=%zu strict_folds=%zu\n",
                     base.nt, res, dr.rms, dr.max, db.rms, db.max, du.rms, db.rms / du.rms,
                     under ? (double)flagged / (double)under : 0.0, rays, back, folds, strict_folds);
+    }
+    {
+        /* packing (issue 16): the same base at 1024^2 with the default gutter and area weights:
+           utilization >= 0.6, stretch_l2 <= 1.05, area ratios ok >= 0.95, and at least 4 empty
+           texels between texels of different charts */
+        dm_param *p4 = NULL;
+        po.width = po.height = 1024;
+        po.triangle_weight = NULL;
+        if (T_CHECK(dm_parameterize(base.pos.data(), base.nv, base.idx.data(), base.nt, &po, &p4) == DM_OK)) {
+            const int W = 1024;
+            int gap = 99;
+            for (int y = 0; y < W; y++)
+                for (int x = 0; x < W; x++) {
+                    uint32_t t = p4->texel_triangle[(size_t)y * W + x];
+                    if (t == DM_NO_HIT) continue;
+                    for (int dy = -5; dy <= 5; dy++)
+                        for (int dx = -5; dx <= 5; dx++) {
+                            int X = x + dx, Y = y + dy, d = std::abs(dx) > std::abs(dy) ? std::abs(dx) : std::abs(dy);
+                            if (X < 0 || Y < 0 || X >= W || Y >= W || d - 1 >= gap) continue;
+                            uint32_t t2 = p4->texel_triangle[(size_t)Y * W + X];
+                            if (t2 != DM_NO_HIT && p4->chart[t2] != p4->chart[t]) gap = d - 1;
+                        }
+                }
+            std::printf("  note: 1024^2 packing: %zu charts, utilization %.3f, stretch_l2 %.4f, area ok %.3f, gutter %d\n",
+                        p4->chart_count, p4->utilization, p4->stretch_l2, p4->area_ratio_ok, gap);
+            T_CHECK_MSG(p4->utilization >= 0.6f, "utilization %.3f", p4->utilization);
+            T_CHECK_MSG(p4->stretch_l2 <= 1.05f && p4->area_ratio_ok >= 0.95f, "stretch %.4f area ok %.3f", p4->stretch_l2,
+                        p4->area_ratio_ok);
+            T_CHECK_MSG(gap >= 4, "gutter %d texels", gap);
+            dm_param_free(p4);
+        }
     }
     dm_trimesh_free(rec);
     dm_dispmap_free(map);
