@@ -3883,6 +3883,30 @@ static dfm_result dfm__lsq_share(dfm__lsq *s, const dfm__lsq *from, const dfm_al
 /* One solve. X holds bs values per vertex and right-hand side, X[(q nv + v) bs + c]: read at the
    known vertices (their displacement) and at soft unknowns (their target), written at the
    unknowns. rowb: NULL (every b_r = 0) or bs x nrhs values per row, [(r nrhs + q) bs + c]. */
+/* dfm__lsq_solve's right-hand side for bs = 1: each row's terms read once for all its columns
+   (the same sums in the same order as the general loop, so the same bits). */
+static void dfm__lsq_rhs1(dfm__lsq *s, const double *rowb, const double *X)
+{
+    size_t nr = s->nrhs, n = s->nu, nv = s->nv, r, t, q;
+    double e[9];
+    for (r = 0; r < s->nrows; r++) {
+        if (!rowb && !s->row_known[r]) continue;
+        for (q = 0; q < nr; q++) e[q] = rowb ? rowb[r * nr + q] : 0.0;
+        for (t = s->row_start[r]; t < s->row_start[r + 1]; t++) {
+            size_t v = (size_t)s->term_v[t];
+            double c = s->term_c[t];
+            if (s->unk[v] >= 0) continue;
+            for (q = 0; q < nr; q++) e[q] -= c * X[q * nv + v];
+        }
+        for (t = s->row_start[r]; t < s->row_start[r + 1]; t++) {
+            int32_t a = s->unk[s->term_v[t]];
+            double c = s->term_c[t];
+            if (a < 0) continue;
+            for (q = 0; q < nr; q++) s->rhs[q * n + (size_t)a] += c * e[q];
+        }
+    }
+}
+
 static dfm_result dfm__lsq_solve(dfm__lsq *s, const double *rowb, double *X, int refine)
 {
     size_t bs = s->bs, bb = bs * bs, nr = s->nrhs, n = bs * s->nu, nv = s->nv, r, t, q, i, k, u;
@@ -3894,7 +3918,8 @@ static dfm_result dfm__lsq_solve(dfm__lsq *s, const double *rowb, double *X, int
             for (q = 0; q < nr; q++)
                 for (k = 0; k < bs; k++)
                     s->rhs[q * n + u * bs + k] += s->soft_w2 * X[(q * nv + (size_t)s->unk_v[u]) * bs + k];
-    for (r = 0; r < s->nrows; r++) {
+    if (bs == 1) dfm__lsq_rhs1(s, rowb, X);
+    for (r = 0; r < s->nrows && bs > 1; r++) {
         if (!rowb && !s->row_known[r]) continue;
         for (q = 0; q < nr; q++) {
             for (k = 0; k < bs; k++) e[k] = rowb ? rowb[(r * nr + q) * bs + k] : 0.0;
