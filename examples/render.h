@@ -101,8 +101,8 @@
      it can know); ambient is not. The ground casts no shadow on the layer. Colour composites
      over the framebuffer; depth is written where the opacity reaches depth_threshold.
      Memory: none allocated. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, tile
-     <= 0, no tiles, a negative thickness, fewer than 2 x 2 heights, a spacing <= 0, a NaN or
-     infinite height; SR_CANCELLED when progress returns nonzero (the rows drawn so far stay).
+     <= 0, no tiles, a layer wider than 1e30, a negative or NaN thickness, a NaN or infinite
+     origin, fewer than 2 x 2 heights, a spacing <= 0, a NaN or infinite height; SR_CANCELLED when progress returns nonzero (the rows drawn so far stay).
      Thread safety: sample() is called from the calling thread only, in pixel order, so its
      user data may cache per tile. Limits: the tiles and heights need not cover the same area
      (heights clamp at their border).
@@ -2242,7 +2242,8 @@ static int sr__shell_init(sr__shell *S, const sr_shell_desc *d, const sr_camera 
     memset(S, 0, sizeof *S);
     S->d = d;
     if (!d->sample || !(d->tile > 0.0f) || d->tiles_x < 1 || d->tiles_y < 1 || !(d->thickness >= 0.0f) ||
-        !sr__finite3(d->origin) || !(d->tile * (float)d->tiles_x < 1e30f && d->tile * (float)d->tiles_y < 1e30f))
+        !(d->origin[0] - d->origin[0] == 0.0f && d->origin[1] - d->origin[1] == 0.0f) ||
+        !(d->tile * (float)d->tiles_x < 1e30f && d->tile * (float)d->tiles_y < 1e30f))
         return 0;
     S->thickness = d->thickness > 0.0f ? d->thickness : d->tile;
     S->lo[0] = d->origin[0]; S->lo[1] = d->origin[1];

@@ -290,6 +290,13 @@ static void test_depth_bad_input_cancel(void)
     T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
     d.tiles_x = 4; d.thickness = -1.0f;
     T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.thickness = (float)NAN;
+    T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.thickness = 0.0f; d.origin[1] = (float)INFINITY;
+    T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.origin[1] = 0.0f; d.tile = 1e30f;
+    T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.tile = 1.0f;
     d.thickness = 0.0f; d.heights = heights; d.nx = 1; d.ny = 4; d.spacing = 1.0f;
     T_EQ_INT(sr_draw_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
     d.nx = 2; d.ny = 2; heights[3] = (float)NAN;
