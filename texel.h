@@ -1702,7 +1702,7 @@ static void tvt__age_point(const tvt__ageing *A, float wd, int res, tvt_point *p
     }
     if (p->pos[2] < 0) p->pos[2] = 0;
     if (p->pos[2] >= (float)res) p->pos[2] = (float)res - 1e-3f;
-    for (i = 0; i < 2; i++) p->pos[i] -= (float)res * floorf(p->pos[i] / (float)res);
+    for (i = 0; i < 2; i++) p->pos[i] -= (float)res * floorf(p->pos[i] * (1.0f / (float)res)); /* exact: res is 2^k */
     for (i = 0; i < 2; i++) if (p->pos[i] >= (float)res) p->pos[i] = 0.0f;
     tvt__turn(normal0, axis, bend, c, s, p->normal);
     w = wd + A->jitter * p->wd_delay;
@@ -1759,26 +1759,29 @@ static uint32_t tvt__voxel_key(const float *p, int res)
     return tvt__cell_key(x, y, z, res);
 }
 
-/* stable LSD radix sort of (key, index) by key, 11 bits a pass (res <= 1024: 30-bit keys) */
-static void tvt__radix_sort(uint32_t *key, uint32_t *idx, uint32_t *key2, uint32_t *idx2, size_t n)
+/* Stable LSD radix sort of (key, index) by keys of key_bits bits (3 log2 res <= 30): two
+   passes up to 24 bits (res <= 256), three above, at most 12 bits a pass. Returns 1 if the
+   sorted data is in key2 / idx2 (an odd number of passes), 0 if back in key / idx. */
+static int tvt__radix_sort(uint32_t *key, uint32_t *idx, uint32_t *key2, uint32_t *idx2, size_t n, int key_bits)
 {
-    int pass;
-    for (pass = 0; pass < 3; pass++) {
-        size_t count[2048], i, sum = 0;
-        int shift = 11 * pass;
+    int passes = key_bits <= 24 ? 2 : 3, bits = (key_bits + passes - 1) / passes, pass;
+    size_t buckets = (size_t)1 << bits, mask = buckets - 1;
+    for (pass = 0; pass < passes; pass++) {
+        size_t count[4096], i, sum = 0;
+        int shift = bits * pass;
         uint32_t *t;
-        memset(count, 0, sizeof(count));
-        for (i = 0; i < n; i++) count[(key[i] >> shift) & 2047]++;
-        for (i = 0; i < 2048; i++) { size_t c = count[i]; count[i] = sum; sum += c; }
+        memset(count, 0, buckets * sizeof(size_t));
+        for (i = 0; i < n; i++) count[(key[i] >> shift) & mask]++;
+        for (i = 0; i < buckets; i++) { size_t c = count[i]; count[i] = sum; sum += c; }
         for (i = 0; i < n; i++) {
-            size_t d = count[(key[i] >> shift) & 2047]++;
+            size_t d = count[(key[i] >> shift) & mask]++;
             key2[d] = key[i];
             idx2[d] = idx[i];
         }
         t = key; key = key2; key2 = t;
         t = idx; idx = idx2; idx2 = t;
     }
-    /* three passes (an odd number): the sorted data is in the caller's key2 / idx2 */
+    return passes & 1;
 }
 
 /* first sorted position with key >= k, galloping from position `from` */
@@ -1839,7 +1842,12 @@ static void tvt__merge_grid_put(tvt__merge_grid *g, size_t i, const float *pos)
 static void tvt__merge_grid_fill(tvt__merge_grid *g, size_t n)
 {
     size_t i;
-    tvt__radix_sort(g->tmp_key, g->tmp_idx, g->key, g->order, n);
+    int bits = 0;
+    while ((1 << bits) < g->res) bits++;
+    if (!tvt__radix_sort(g->tmp_key, g->tmp_idx, g->key, g->order, n, 3 * bits)) { /* sorted in place: swap roles */
+        uint32_t *t = g->key; g->key = g->tmp_key; g->tmp_key = t;
+        t = g->order; g->order = g->tmp_idx; g->tmp_idx = t;
+    }
     g->n = n;
     memset(g->cache_key, 0xFF, sizeof(g->cache_key)); /* no voxel has key 2^32 - 1 (res <= 1024) */
     for (i = 0; i < n; i++) {
@@ -1856,7 +1864,7 @@ static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t
     long c[3], o[3];
     float best_d2 = thr * thr, res = (float)g->res, half = 0.5f * res;
     size_t best = (size_t)-1;
-    int k, m;
+    int k, m, need, visited = 0;
     for (k = 0; k < 3; k++) {
         float f;
         c[k] = (long)p[k];
@@ -1865,11 +1873,13 @@ static size_t tvt__merge_partner(tvt__merge_grid *g, const uint8_t *dead, size_t
         f = p[k] - (float)c[k];
         o[k] = f < thr ? -1 : (f > 1.0f - thr ? 1 : 0);
     }
-    for (m = 0; m < 8; m++) {
+    need = (o[0] ? 1 : 0) | (o[1] ? 2 : 0) | (o[2] ? 4 : 0);
+    for (m = 0;; m = (m - need) & need) { /* the subsets of the needed offsets, in increasing order */
         long x = c[0], y = c[1], z = c[2];
         uint32_t start, k2;
         size_t j;
-        if (((m & 1) && !o[0]) || ((m & 2) && !o[1]) || ((m & 4) && !o[2])) continue;
+        if (m == 0 && visited) break;
+        visited = 1;
         if (m & 1) x += o[0];
         if (m & 2) y += o[1];
         if (m & 4) z += o[2];
