@@ -33,19 +33,20 @@
      Meshes are float xyz positions (3 per vertex) and uint32 indices (3 per triangle,
      counter-clockwise front faces). Compile-time options: DM_STATIC (all functions static),
      DM_MALLOC/DM_FREE (the default allocator; define both or neither), DM_USE_SSE2 (x86) and
-     DM_USE_AVX2 (needs -mavx2; implies SSE2): opt-in SIMD box and triangle tests, bit-identical
-     to the portable path and recommended where available. Run-time options are structs whose
-     zero value (or NULL) means the defaults; every allocating call takes a dm_allocator (NULL =
-     DM_MALLOC/DM_FREE) and objects that outlive the call keep it for their free; every long
-     call takes a progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing
-     leaked). Bad input gets a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no
-     triangles (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN,
-     infinite or huge (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes
-     that overflow (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure
-     *out is NULL and nothing is left allocated. No global state; every call is re-entrant and
-     deterministic (the same input gives the same bits; ties go to the lower index). Do not build
-     with -ffast-math or FMA contraction (-ffp-contract=fast): the watertight ray test relies on
-     the two triangles of an edge computing the same products.
+     DM_USE_AVX2 (needs -mavx2; implies SSE2): opt-in SIMD box and triangle tests,
+     bit-identical to the portable path and recommended where available. Run-time options are
+     structs whose zero value (or NULL) means the defaults (dm_<call>_default_options() spells
+     them out); every allocating call takes a dm_allocator (NULL = DM_MALLOC/DM_FREE) and
+     objects that outlive the call keep it for their free; every long call takes a progress
+     callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input gets
+     a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no triangles
+     (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN, infinite or
+     huge (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes that
+     overflow (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out
+     is NULL and nothing is left allocated. No global state; every call is re-entrant and
+     deterministic (the same input gives the same bits; ties go to the lower index). Do not
+     build with -ffast-math or FMA contraction (-ffp-contract=fast): the watertight ray test
+     relies on the two triangles of an edge computing the same products.
 
    PART 1: BVH RAY CASTER
      WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
@@ -101,14 +102,13 @@
      (no collapse above it, mesh units; 0 none; neither: until no collapse passes the checks);
      flags (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes);
      max_collapses (0 none; the first k collapses are the same whatever the limit);
-     min_quality (0 none; else no collapse makes a triangle's 2 area / longest edge^2 drop
-     below it, until nothing else is left above the target: no slivers, which a tessellated
-     reconstruction turns into folds; off by default, as beside an enclosing constraint it
-     gives bases farther from the original); constraint, constraint_user,
-     on_collapse (called just before each collapse is applied, for a constraint that follows
-     the mesh), relax (called when no candidate is left above the target and some were vetoed:
-     nonzero = the constraint is less strict now, every vetoed edge is queued again);
-     allocator; progress (the fraction of the triangles to remove that are gone).
+     min_quality (a sliver guard: no collapse makes a triangle's 2 area / longest edge^2 drop
+     below it while others are left; off by default, as beside the shell constraint it gives
+     bases farther from the original); constraint, constraint_user, on_collapse (called just
+     before each collapse is applied, for a constraint that follows the mesh), relax (called
+     when no candidate is left above the target and some were vetoed: nonzero = the constraint
+     is less strict now, every vetoed edge is queued again); allocator; progress (the fraction
+     of the triangles to remove that are gone).
      dm_weld merges vertices at the same position (bit for bit, -0 = +0) in first-use order.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
@@ -416,6 +416,7 @@ typedef struct dm_param_options {
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
 } dm_param_options;                /* zero = defaults */
+DMDEF dm_param_options dm_param_default_options(void);
 
 /* A base mesh laid out in one map. Texel (x, y) has its centre at UV ((x+0.5)/width,
    (y+0.5)/height); uv[6 t + 2 c] is corner c of base triangle t (0..1). */
@@ -457,6 +458,7 @@ typedef struct dm_bake_options {
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
 } dm_bake_options;             /* zero = defaults */
+DMDEF dm_bake_options dm_bake_default_options(void);
 
 /* The baked map and the surface sample grid of DESIGN.md, structure of arrays over n = width *
    height texels. pos, nrm, area, nbr, nbr_rot are the grid; disp and normal the paper's
@@ -550,6 +552,7 @@ typedef struct dm_distance_options {
     int (*progress)(void *user, float done);
     void *progress_user;
 } dm_distance_options;
+DMDEF dm_distance_options dm_distance_default_options(void);
 DMDEF dm_result dm_surface_distance(const float *a_positions, size_t a_vertex_count,
                                     const uint32_t *a_indices, size_t a_triangle_count,
                                     const float *b_positions, size_t b_vertex_count,
@@ -569,6 +572,7 @@ typedef struct dm_coverage_options {
     void *progress_user;
     float floor;                      /* the least weight, a fraction of the mean: 0 = 0.05 */
 } dm_coverage_options;
+DMDEF dm_coverage_options dm_coverage_default_options(void);
 DMDEF dm_result dm_coverage_weights(const float *base_positions, size_t base_vertex_count,
                                     const uint32_t *base_indices, size_t base_triangle_count,
                                     const float *orig_positions, size_t orig_vertex_count,
@@ -633,6 +637,7 @@ typedef struct dm_simplify_options {
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
 } dm_simplify_options;                /* zero = simplify as far as the checks allow */
+DMDEF dm_simplify_options dm_simplify_default_options(void);
 
 typedef struct dm_simplify_report {
     size_t input_triangles;       /* triangles taken from the input (repeated-index ones dropped) */
@@ -729,6 +734,7 @@ typedef struct dm_shell_options {
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
 } dm_shell_options;            /* zero = defaults */
+DMDEF dm_shell_options dm_shell_default_options(void);
 
 /* An offset surface grown outward from the original: same connectivity, vertex v at
    orig[v] + offset[v] * normal[v]. It also holds a BVH of the original and the counters of
@@ -4440,6 +4446,13 @@ static dm_result dm__qem_collapse_loop(dm__qem_simp *s, dm_simplify_report *rep,
     return DM_OK;
 }
 
+DMDEF dm_simplify_options dm_simplify_default_options(void)
+{
+    dm_simplify_options o; /* no target, no bound, no guard, no constraint */
+    memset(&o, 0, sizeof o);
+    return o;
+}
+
 DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const uint32_t *indices,
                             size_t triangle_count, const dm_simplify_options *options, dm_pm **out,
                             dm_simplify_report *report)
@@ -6106,6 +6119,18 @@ static dm_result dm__pz_statistics(dm__pz_run *r)
     return dm__pz_step_report(r, 1.0f);
 }
 
+DMDEF dm_param_options dm_param_default_options(void)
+{
+    dm_param_options o;
+    memset(&o, 0, sizeof o);
+    o.width = o.height = 1024;
+    o.gutter = 4;
+    o.max_chart_triangles = 96;
+    o.max_chart_angle = 30.0f;
+    o.stretch_iterations = 6;
+    return o;
+}
+
 DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, const dm_param_options *options, dm_param **out)
 {
@@ -6593,6 +6618,13 @@ static dm_result dm__bk_fill(dm__bk_run *r)
     }
     if (r->o.progress && r->o.progress(r->o.progress_user, 1.0f)) return DM_CANCELLED;
     return DM_OK;
+}
+
+DMDEF dm_bake_options dm_bake_default_options(void)
+{
+    dm_bake_options o; /* max_distance 0: 5% of the original's diagonal, which only the call knows */
+    memset(&o, 0, sizeof o);
+    return o;
 }
 
 DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size_t base_vertex_count,
@@ -7096,6 +7128,14 @@ static int dm__pz_sample_side(const float *pos, size_t nv, const uint32_t *idx, 
     return 0;
 }
 
+DMDEF dm_distance_options dm_distance_default_options(void)
+{
+    dm_distance_options o;
+    memset(&o, 0, sizeof o);
+    o.samples_per_side = 200000;
+    return o;
+}
+
 DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t *ai, size_t ant, const float *bp,
                                     size_t bnv, const uint32_t *bi, size_t bnt, const dm_distance_options *options,
                                     dm_distance_report *out)
@@ -7173,6 +7213,14 @@ done:
     return res;
 }
 
+DMDEF dm_coverage_options dm_coverage_default_options(void)
+{
+    dm_coverage_options o;
+    memset(&o, 0, sizeof o);
+    o.floor = 0.05f;
+    return o;
+}
+
 DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t *bi, size_t bnt, const float *op,
                                     size_t onv, const uint32_t *oi, size_t ont, const dm_coverage_options *options,
                                     float *weights)
@@ -7224,7 +7272,7 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
         }
     }
     for (t = 0; t < bnt; t++) total += sum[t];
-    floor_w = (opt.floor > 0.0f ? (double)opt.floor : 0.05) * total / (double)bnt;
+    floor_w = (double)(opt.floor > 0.0f ? opt.floor : 0.05f) * total / (double)bnt; /* 0 and the default agree bit for bit */
     for (t = 0; t < bnt; t++) weights[t] = (float)(sum[t] > floor_w ? sum[t] : floor_w);
     dm_bvh_free(bvh);
     a.free(a.user, sum);
@@ -7473,6 +7521,15 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
     for (v = 0; v < nv; v++)
         for (k = 0; k < 3; k++) sh->positions[3 * v + (size_t)k] = pos[3 * v + (size_t)k] + sh->offset[v] * sh->normals[3 * v + (size_t)k];
     return DM_OK;
+}
+
+DMDEF dm_shell_options dm_shell_default_options(void)
+{
+    dm_shell_options o; /* thickness 0: 2% of the original's diagonal, which only the call knows */
+    memset(&o, 0, sizeof o);
+    o.steps = 8;
+    o.overlap_samples = 4;
+    return o;
 }
 
 DMDEF dm_result dm_shell_grow(const float *pos, size_t nv, const uint32_t *idx, size_t nt,

@@ -64,11 +64,10 @@ static void check_digest(const char *name, digest d)
 static int simplify(const mesh *m, dm_shell *sh, size_t target, float **bp, size_t *bnv, uint32_t **bi,
                     size_t *bnt, digest *d)
 {
-    dm_simplify_options o;
+    dm_simplify_options o = dm_simplify_default_options(); /* the explicit defaults give the zero ones' bits */
     dm_simplify_report rep;
     dm_pm *pm = NULL;
     size_t splits;
-    memset(&o, 0, sizeof o);
     o.target_triangles = target;
     if (sh) {
         o.constraint = dm_shell_constraint;
@@ -108,10 +107,13 @@ static void pipeline(const char *what, const mesh *m, size_t target, int res, in
 #define RECORD(stage, label) do { snprintf(name, sizeof name, "%s " label, what); out[stage] = d.h; \
                                   if (check) check_digest(name, d); } while (0)
     if (simplify(m, NULL, target, &up, &unv, &ui, &unt, &d)) RECORD(0, "simplify");
-    if (!T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, NULL, &sh) == DM_OK)) goto done;
+    {
+        dm_shell_options so = dm_shell_default_options();
+        if (!T_CHECK(dm_shell_grow(m->p, m->nv, m->t, m->nt, &so, &sh) == DM_OK)) goto done;
+    }
     if (!simplify(m, sh, target, &bp, &bnv, &bi, &bnt, &d)) goto done;
     RECORD(1, "simplify shell");
-    memset(&po, 0, sizeof po);
+    po = dm_param_default_options();
     po.width = po.height = res;
     if (!T_CHECK(dm_parameterize(bp, bnv, bi, bnt, &po, &param) == DM_OK)) goto done;
     n = (size_t)res * (size_t)res;
@@ -124,7 +126,7 @@ static void pipeline(const char *what, const mesh *m, size_t target, int res, in
     fnv(&d, param->nbr, 4 * n * sizeof(uint32_t));
     fnv(&d, param->nbr_rot, 4 * n);
     RECORD(2, "parameterize");
-    memset(&bo, 0, sizeof bo);
+    bo = dm_bake_default_options();
     bo.inward = 1;
     if (!T_CHECK(dm_bake(param, bp, bnv, bi, bnt, m->p, m->nv, m->t, m->nt, &bo, &map) == DM_OK)) goto done;
     d = fnv_start();

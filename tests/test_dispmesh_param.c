@@ -216,6 +216,17 @@ static void test_coverage_weights(void)
     for (t = 0; t < orig.nt; t++) total += tri_area(&orig, t);
     for (t = 0; t < base.nt; t++) sum += w[t];
     T_CHECK_MSG(fabs(sum - total) <= 1e-4 * total, "weights add to %.6f, the original's area is %.6f", sum, total);
+    { /* the explicit defaults give the zero ones' bits */
+        dm_coverage_options co = dm_coverage_default_options();
+        float *w2 = (float *)malloc(base.nt * sizeof(float));
+        T_CHECK(co.floor == 0.05f && co.allocator == NULL && co.progress == NULL);
+        if (w2) {
+            T_EQ_INT(dm_coverage_weights(base.p, base.nv, base.t, base.nt, orig.p, orig.nv, orig.t, orig.nt, &co, w2), DM_OK);
+            T_CHECK(memcmp(w, w2, base.nt * sizeof(float)) == 0);
+            free(w2);
+        }
+        T_CHECK(dm_distance_default_options().samples_per_side == 200000);
+    }
     /* the map made with them meets the area targets */
     memset(&po, 0, sizeof po);
     po.width = po.height = 256;
