@@ -5859,6 +5859,7 @@ static double dm__pz_bitmap_scale(dm__pz_run *r, double s_lo, double o)
     size_t nc = r->pm->chart_count;
     double s_hi = 1.6 * s_lo, s_best = 0.0;
     int q, it, top = 0;
+    dm__pz_pack *saved;
     memset(&b, 0, sizeof b);
     b.W = r->W;
     b.H = r->H;
@@ -5874,18 +5875,25 @@ static double dm__pz_bitmap_scale(dm__pz_run *r, double s_lo, double o)
     b.first_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
     b.longest_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
     if (!b.taken || !b.grid_col || !b.first_free || !b.longest_free) return -1.0;
+    saved = (dm__pz_pack *)dm__take(&r->sc, nc, sizeof(dm__pz_pack));
+    if (!saved) return -1.0;
     dm__pz_order(r->pk, nc, 1, r->order, r->otmp);
-    if (!dm__pz_bitmap_pack(r, &b, s_lo, o, &top)) return 0.0;
-    s_best = s_lo;
-    for (it = 0; it < 6; it++) { /* the scale that fills the rows the last fit left, else halfway */
-        double s = s_best * sqrt((double)b.H / (double)(top > 0 ? top : 1)) * 0.998;
+    for (it = 0; it < 8; it++) { /* from 1.15 x the shelves' scale: the scale that fills the rows
+                                    the last fit left unused, else halfway to the least that failed */
+        double s = it == 0 ? 1.15 * s_lo : s_best > 0.0 ? s_best * sqrt((double)b.H / (double)(top > 0 ? top : 1)) * 0.998 : s_lo;
         int t2;
-        if (!(s < s_hi)) s = 0.5 * (s_best + s_hi);
-        if (!(s > s_best * 1.002)) break;
-        if (dm__pz_bitmap_pack(r, &b, s, o, &t2)) { s_best = s; top = t2; }
-        else s_hi = s;
+        if (s_best > 0.0 && !(s < s_hi)) s = 0.5 * (s_best + s_hi);
+        if (s_best > 0.0 && !(s > s_best * 1.002)) break;
+        if (dm__pz_bitmap_pack(r, &b, s, o, &t2)) {
+            s_best = s;
+            top = t2;
+            memcpy(saved, r->pk, nc * sizeof(dm__pz_pack));
+        } else {
+            s_hi = s;
+            if (s <= s_lo) return 0.0; /* not even at the shelves' scale */
+        }
     }
-    if (!dm__pz_bitmap_pack(r, &b, s_best, o, &top)) return 0.0;
+    if (s_best > 0.0) memcpy(r->pk, saved, nc * sizeof(dm__pz_pack));
     return s_best;
 }
 

@@ -5,8 +5,9 @@
      RESULT dispmesh_param res=<r> base_tris=<n> charts=<n> ms=<t> utilization=<u> stretch_l2=<s> area_ok=<f>
      RESULT dispmesh_bake res=<r> orig_tris=<n> ms=<t> mtexels=<texels per s / 1e6> hits=<n> misses=<n>
      RESULT dispmesh_recon res=<r> ms=<t> rms=<e> max=<e> base_only_rms=<e> base_only_max=<e>
-   Timed (median of 5 after a warm-up, one thread): dm_parameterize alone; dm_bake alone (its BVH
-   build over the original included); dm_reconstruct alone. Both with bench.h's huge-page
+   Timed (bench_interleave: a warm-up, then the median and min-max of 11 runs, one thread):
+   dm_parameterize alone; dm_bake alone (its BVH build over the original included), interleaved
+   with the same bake on plain malloc; dm_reconstruct alone. With bench.h's huge-page
    allocator (as dispmesh.h recommends on Linux; a bake touches ~70 MB of fresh memory at 1024^2);
      RESULT dispmesh_bake_malloc res=<r> ms=<t>   the bake with plain malloc (NULL allocator).
      RESULT dispmesh_base target=<n> faces=<n> shell_ms=<t> constrained_ms=<t> unconstrained_ms=<t> ...
@@ -116,41 +117,58 @@ static double base_rms(const base_state *b, dm_pm *pm)
     return r.rms;
 }
 
+/* rounds for a side whose one run took t seconds: 11 below 5 s, 3 below 30 s, else 1 */
+static int rounds_for(double t) { return t < 5.0 ? 0 : t < 30.0 ? 3 : 1; }
+
 /*   RESULT dispmesh_base target=<n> faces=<reached> shell_ms= constrained_ms= unconstrained_ms=
             ratio=<constrained / unconstrained time> base_ms=<shell + constrained> peak_mb=
             base_only_rms= unconstrained_rms= rms_ratio= vetoed=
-   Medians of 5 after a warm-up (bench_median): the shell; the constrained simplification (with a
-   shell grown once outside the timer); the unconstrained one to the same face count. peak_mb: the
-   peak resident memory of one shell + constrained run above what was resident before. The
-   distances (200k samples a side, of the diagonal) once, outside the timers. */
+   Each time with its min and max (bench_print_ms): the shell alone; the constrained
+   simplification (with a shell grown once outside the timer) interleaved with the unconstrained
+   one to the face count the constrained one reached (bench_interleave; fewer rounds when a run
+   takes many seconds: *_runs). ratio is the median of the rounds' ratios. peak_mb: the peak
+   resident memory of one shell + constrained run above what was resident before. The distances
+   (200k samples a side, of the diagonal) once, outside the timers. */
 static void bench_base(const float *pos, size_t nv, const uint32_t *idx, size_t nt, size_t target)
 {
-    base_state b;
+    base_state b, u;
     b.pos = pos; b.nv = nv; b.idx = idx; b.nt = nt; b.target = target;
-    double t_shell = bench_median(run_shell, free_shell, &b);
-    if (t_shell < 0) { fprintf(stderr, "dm_shell_grow failed\n"); return; }
     long before = bench_reset_peak_rss() == 0 ? bench_current_rss_kb() : -1;
+    double t0 = bench_now();
     if (run_shell(&b)) { fprintf(stderr, "dm_shell_grow failed\n"); return; }
-    double t_con = bench_median(run_simplify, free_simplify, &b);
+    double t_shell1 = bench_now() - t0;
+    t0 = bench_now();
+    if (run_simplify(&b)) { fprintf(stderr, "dm_simplify (constrained) failed\n"); free_shell(&b); return; }
+    double t_con1 = bench_now() - t0;
     long peak = before >= 0 ? bench_peak_rss_kb() - before : -1;
-    if (t_con < 0 || run_simplify(&b)) { fprintf(stderr, "dm_simplify (constrained) failed\n"); free_shell(&b); return; }
     dm_pm *con = b.pm;
     dm_simplify_report rep_c = b.rep;
     double rms_c = base_rms(&b, con);
     b.pm = nullptr;
-    b.constrained = 0;
-    b.target = rep_c.triangle_count;
-    double t_unc = bench_median(run_simplify, free_simplify, &b);
+    dm_shell *shell = b.shell;
+    b.shell = nullptr;
+    bench_side sh = bench_make_side("shell", run_shell, free_shell, &b);
+    if (bench_interleave(&sh, 1, rounds_for(t_shell1)) != 0) { fprintf(stderr, "dm_shell_grow failed\n"); return; }
+    b.shell = shell;
+    u.pos = pos; u.nv = nv; u.idx = idx; u.nt = nt; u.target = rep_c.triangle_count; u.constrained = 0;
+    bench_side sides[2];
+    sides[0] = bench_make_side("constrained simplification", run_simplify, free_simplify, &b);
+    sides[1] = bench_make_side("unconstrained simplification", run_simplify, free_simplify, &u);
+    if (bench_interleave(sides, 2, rounds_for(t_con1)) != 0) { fprintf(stderr, "dm_simplify failed\n"); return; }
     double rms_u = -1.0;
-    if (t_unc >= 0 && !run_simplify(&b)) {
-        rms_u = base_rms(&b, b.pm);
-        free_simplify(&b);
+    if (!run_simplify(&u)) {
+        rms_u = base_rms(&u, u.pm);
+        free_simplify(&u);
     }
-    printf("RESULT dispmesh_base target=%zu faces=%zu shell_ms=%.1f constrained_ms=%.1f unconstrained_ms=%.2f ratio=%.1f "
-           "base_ms=%.1f peak_mb=%.1f base_only_rms=%.3g unconstrained_rms=%.3g rms_ratio=%.2f vetoed=%zu\n",
-           target, rep_c.triangle_count, 1e3 * t_shell, 1e3 * t_con, 1e3 * t_unc, t_unc > 0 ? t_con / t_unc : 0.0,
-           1e3 * (t_shell + t_con), peak >= 0 ? peak / 1024.0 : -1.0, rms_c, rms_u, rms_u > 0 ? rms_c / rms_u : 0.0,
-           rep_c.vetoed);
+    printf("RESULT dispmesh_base target=%zu faces=%zu", target, rep_c.triangle_count);
+    bench_print_ms("shell", &sh);
+    bench_print_ms("constrained", &sides[0]);
+    bench_print_ms("unconstrained", &sides[1]);
+    bench_print_ratio(&sides[0], &sides[1]);
+    if (sides[0].runs < BENCH_INTERLEAVED_RUNS) printf(" runs=%d", sides[0].runs);
+    printf(" base_ms=%.1f peak_mb=%.1f base_only_rms=%.3g unconstrained_rms=%.3g rms_ratio=%.2f vetoed=%zu\n",
+           1e3 * (sh.median + sides[0].median), peak >= 0 ? peak / 1024.0 : -1.0, rms_c, rms_u,
+           rms_u > 0 ? rms_c / rms_u : 0.0, rep_c.vetoed);
     fflush(stdout);
     dm_pm_free(con);
     free_shell(&b);
@@ -209,33 +227,38 @@ int main(int argc, char **argv)
 
     static const dm_allocator hugepages = {bench_hugepage_alloc, bench_hugepage_free, nullptr};
     s.alloc = &hugepages;
-    double t_param = bench_median(run_param, free_param, &s);
-    if (t_param < 0 || run_param(&s)) { fprintf(stderr, "dm_parameterize failed\n"); return 1; }
-    printf("RESULT dispmesh_param res=%d base_tris=%zu charts=%zu ms=%.3f utilization=%.3f stretch_l2=%.3f area_ok=%.3f\n",
-           res, n / 3, s.pm->chart_count, 1e3 * t_param, s.pm->utilization, s.pm->stretch_l2, s.pm->area_ratio_ok);
+    bench_side one = bench_make_side("dm_parameterize", run_param, free_param, &s);
+    if (bench_interleave(&one, 1, 0) != 0 || run_param(&s)) { fprintf(stderr, "dm_parameterize failed\n"); return 1; }
+    printf("RESULT dispmesh_param res=%d base_tris=%zu charts=%zu", res, n / 3, s.pm->chart_count);
+    bench_print_ms("", &one);
+    printf(" utilization=%.3f stretch_l2=%.3f area_ok=%.3f\n", s.pm->utilization, s.pm->stretch_l2, s.pm->area_ratio_ok);
 
-    double t_bake = bench_median(run_bake, free_bake, &s);
-    if (t_bake < 0 || run_bake(&s)) { fprintf(stderr, "dm_bake failed\n"); return 1; }
-    printf("RESULT dispmesh_bake res=%d orig_tris=%zu ms=%.3f mtexels=%.3f hits=%zu misses=%zu\n", res, s.nt,
-           1e3 * t_bake, (double)res * res / t_bake * 1e-6, s.map->hit_count, s.map->miss_count);
-
-    {
-        dm_dispmap *keep = s.map;
-        s.map = nullptr;
-        s.alloc = nullptr;
-        double t_malloc = bench_median(run_bake, free_bake, &s);
-        printf("RESULT dispmesh_bake_malloc res=%d ms=%.3f\n", res, 1e3 * t_malloc);
-        s.alloc = &hugepages;
-        s.map = keep;
-    }
-    double t_rec = bench_median(run_recon, free_recon, &s);
-    if (t_rec < 0 || run_recon(&s)) { fprintf(stderr, "dm_reconstruct failed\n"); return 1; }
+    state m = s; /* the same bake with plain malloc (its own map; the parameterization shared) */
+    m.alloc = nullptr;
+    m.map = nullptr;
+    m.rec = nullptr;
+    bench_side bakes[2];
+    bakes[0] = bench_make_side("dm_bake", run_bake, free_bake, &s);
+    bakes[1] = bench_make_side("dm_bake (malloc)", run_bake, free_bake, &m);
+    if (bench_interleave(bakes, 2, 0) != 0 || run_bake(&s)) { fprintf(stderr, "dm_bake failed\n"); return 1; }
+    printf("RESULT dispmesh_bake res=%d orig_tris=%zu", res, s.nt);
+    bench_print_ms("", &bakes[0]);
+    printf(" mtexels=%.3f hits=%zu misses=%zu\n", (double)res * res / bakes[0].median * 1e-6, s.map->hit_count,
+           s.map->miss_count);
+    printf("RESULT dispmesh_bake_malloc res=%d", res);
+    bench_print_ms("", &bakes[1]);
+    bench_print_ratio_named("hugepage_ratio", &bakes[0], &bakes[1]);
+    printf("\n");
+    bench_side rec = bench_make_side("dm_reconstruct", run_recon, free_recon, &s);
+    if (bench_interleave(&rec, 1, 0) != 0 || run_recon(&s)) { fprintf(stderr, "dm_reconstruct failed\n"); return 1; }
     dm_distance_report rep, base_rep;
     dm_surface_distance(s.pos, s.nv, s.idx, s.nt, s.rec->positions, s.rec->vertex_count, s.rec->indices,
                         s.rec->triangle_count, nullptr, &rep);
     dm_surface_distance(s.pos, s.nv, s.idx, s.nt, s.pos, s.nv, s.base.data(), n / 3, nullptr, &base_rep);
-    printf("RESULT dispmesh_recon res=%d ms=%.3f rms=%.3g max=%.3g base_only_rms=%.3g base_only_max=%.3g\n", res,
-           1e3 * t_rec, rep.rms, rep.max, base_rep.rms, base_rep.max);
+    printf("RESULT dispmesh_recon res=%d", res);
+    bench_print_ms("", &rec);
+    printf(" triangles=%zu rms=%.3g max=%.3g base_only_rms=%.3g base_only_max=%.3g\n", s.rec->triangle_count, rep.rms,
+           rep.max, base_rep.rms, base_rep.max);
     free_recon(&s);
     free_bake(&s);
     free_param(&s);
