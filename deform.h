@@ -40,8 +40,10 @@
        The handle's rotations (9 doubles a vertex) are read by LRI only: a translation-only drag
        leaves LRI's frames unturned (the known weakness of linear methods, the thesis's Fig 3-4).
        Helpers: dfm_weld (the pre-pass for triangle soups), dfm_roi_rings (k rings around a
-       mask), dfm_roi_geodesic (edge-path distance from seeds), dfm_rotation, and the poses dfm_pose_identity / _rigid (translate, rotate) /
-       _twist / _bend, which fill targets and rotations for a mask.
+       mask), dfm_roi_geodesic (edge-path distance from seeds), dfm_rotation, and the poses
+       dfm_pose_identity / _rigid (translate, rotate) / _twist / _bend, which fill targets and
+       rotations for a mask. LRI's rotations can be followed by as-rigid-as-possible steps
+       (rigid_steps) that fit them to the solved positions.
      OPTIONS (dfm_deform_options; zeroed or NULL = defaults, dfm_deform_default_options())
        method             DFM_METHOD_LAPLACIAN (0), DFM_METHOD_FITTING, DFM_METHOD_LRI.
        weights            DFM_WEIGHTS_UNIFORM (0: w_ij = 1, the thesis) or DFM_WEIGHTS_COTAN
@@ -64,7 +66,8 @@
                           thesis; at most 100). Each step fits every unknown's rotation to the
                           solved positions (R_i maximizing tr(R^T sum_j w_ij e'_ij e_ij^T), started
                           from its LRI rotation) and solves the positions system again with the
-                          same factor: one 3-column solve a step, no memory. See DECISIONS.
+                          same factor: one 3-column solve a step, 9 doubles an unknown. See
+                          DECISIONS.
        allocator, progress, progress_user: as in part 2; progress runs during the setup only.
      WHEN THE FRAME CHOICE CHANGES THE RESULT
        Only with DFM_ORTHO_GRAM_SCHMIDT. Choosing another b1 replaces F_i by F_i Q_i (Q_i a turn
@@ -130,17 +133,17 @@
          When every known rotation is I or one R (a rigid handle), M = I + phi (R - I) with one
          scalar solve for phi, exactly (the problem is linear); other poses take 9 solves.
        - LRI's rotations come from the frames solve alone (M harmonic between the fixed
-         frames and the handle's), whatever the handle's positions ask for: when a pose's
-         positions and rotations disagree along the way (a thick part bent about a line off its
-         centre, a handle far off the region's axis) the positions solve absorbs the mismatch
-         as stretch. With polar frames the positions system is exactly the global step of
-         as-rigid-as-possible editing (Sorkine and Alexa 2007): F'_i c_ij = R_i (x_j - x_i), so
-         the row is x'_j - x'_i = (R_i + R_j) (x_j - x_i) / 2. rigid_steps therefore adds that
-         method's local-global steps, started from LRI's rotations instead of identities; each
-         lowers the ARAP energy, keeps rigid motions exact and the frame choice irrelevant.
-         The local fit is the iteration R <- rot(w) R, w = sum_k R_k x S_k / |sum_k R_k . S_k|
-         over the columns (Mueller et al. 2016), at most 4 rounds from the previous rotation: no
-         inverse (a flat 1-ring's S has rank 2, where Newton's polar iteration fails) and no SVD.
+         frames and the handle's), whatever the handle's positions ask for: when the harmonic
+         spread of the turn along the region is not the one the handle's offset implies, the
+         positions solve absorbs the mismatch as stretch. With polar frames the positions
+         system is exactly the global step of as-rigid-as-possible editing (Sorkine and Alexa
+         2007): F'_i c_ij = R_i (x_j - x_i), so the row is x'_j - x'_i = (R_i + R_j) (x_j - x_i)
+         / 2. rigid_steps therefore adds that method's local-global steps, started from LRI's
+         rotations instead of identities: block descent on the ARAP energy, which keeps rigid
+         motions exact and the frame choice irrelevant. The local fit is the iteration
+         R <- rot(w) R, w = sum_k R_k x S_k / |sum_k R_k . S_k| over the columns (Mueller et al.
+         2016), at most 4 rounds from the previous rotation: no inverse (a flat 1-ring's S has
+         rank 2, where Newton's polar iteration fails) and no SVD.
        - The ROI's outside neighbours enter as known values (the thesis leaves this open), and
          only rows that touch an unknown are assembled, so the cost follows the ROI, not the mesh.
 
