@@ -2236,7 +2236,18 @@ TVTDEF void tvt_lod_voxel(const tvt_lod *l, int level, const float p[3], tvt_vox
     memset(out, 0, sizeof(*out));
     if (!t->brick_index) return;
     tvt__corner_slots(t, b, slots, oks);
-    for (n = 0; n < 8; n++) {
+    for (n = 0; t->bits == 8 && n < 8; n++) { /* 8 bits: the codes read in place (the same sums) */
+        float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), d, wd;
+        const uint8_t *v;
+        if (!(w > 0) || !oks[n]) continue;
+        v = (const uint8_t *)t->data + slots[n] * TVT_CHANNELS;
+        d = (float)v[0] * (1.0f / 255.0f);
+        d = t->density_max * (d * d);
+        wd = w * d;
+        for (c = 1; c < TVT_CHANNELS; c++) code[c] += wd * (float)v[c];
+        wsum += wd;
+    }
+    for (n = 0; t->bits != 8 && n < 8; n++) {
         float w = ((n & 1) ? f[0] : 1 - f[0]) * ((n & 2) ? f[1] : 1 - f[1]) * ((n & 4) ? f[2] : 1 - f[2]), d, wd;
         unsigned qc[TVT_CHANNELS];
         size_t slot = slots[n];
