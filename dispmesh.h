@@ -197,7 +197,9 @@
      units, positive inward) and the original's interpolated vertex normal at the hit. inward
      takes the paper's rule (the first hit along -n, for a base that encloses the original);
      otherwise, and on both_ways triangles, the nearest crossing either way. A texel with no
-     crossing is DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart (a square
+     crossing, or whose depth lies more than 8 texel sizes off the median of its neighbours in
+     the chart (a ray that slipped past a thin part to another sheet), is DM_TEXEL_MISS (valid =
+     0). Gutter texels within 2 texels of a chart (a square
      of half-side 2 around the centre meets one of its triangles) are DM_TEXEL_BORDER: baked the
      same way from the nearest such triangle's plane extended, so that bilinear filtering (and
      the first mip level) anywhere inside a chart reads real samples. MISS and the other, EMPTY,
@@ -445,7 +447,10 @@ typedef struct dm_param {
 
 typedef struct dm_bake_options {
     float max_distance;        /* search both ways along the line up to this far; 0 = 5% of the
-                                  original's bounding-box diagonal */
+                                  original's bounding-box diagonal. For a base made under
+                                  dm_shell_constraint, 1.5 x the shell's thickness: the base lies
+                                  within the shell, so a deeper hit is a ray that slipped past a
+                                  thin part of the original to another sheet */
     int inward;                /* nonzero: the paper's rule, the first hit along -n (t from
                                   -max_distance / 10, where a base triangle grazes the original,
                                   up to max_distance), then, if none, the nearest either way; for
@@ -6511,6 +6516,54 @@ static void dm__bk_border_triangle(const dm_param *pm, size_t t, float *best, ui
         }
 }
 
+/* Hits that do not belong to their neighbourhood: a hit texel whose depth lies more than
+   DM__BK_OUTLIER texel sizes from the median of its hit neighbours in the chart (8 around, at
+   least 3 of them) had its ray slip past a thin part of the original to another sheet; it becomes
+   a MISS (filled from its neighbours). Decided on the depths as cast, so the order does not
+   matter. */
+#define DM__BK_OUTLIER 8.0
+static dm_result dm__bk_outliers(dm__bk_run *r)
+{
+    const dm_param *param = r->param;
+    dm_dispmap *m = r->m;
+    int W = param->width, H = param->height, x, y;
+    size_t n = (size_t)W * (size_t)H;
+    uint8_t *odd = (uint8_t *)dm__take(&r->sc, n, 1);
+    if (!odd) return dm__scratch_fail(&r->sc);
+    memset(odd, 0, n);
+    for (y = 0; y < H; y++)
+        for (x = 0; x < W; x++) {
+            size_t id = (size_t)y * (size_t)W + (size_t)x;
+            double v[8], med;
+            int dx, dy, k = 0, a, b;
+            uint32_t chart;
+            if (!m->valid[id]) continue;
+            chart = param->chart[param->texel_triangle[id]];
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++) {
+                    size_t j;
+                    if ((dx == 0 && dy == 0) || x + dx < 0 || y + dy < 0 || x + dx >= W || y + dy >= H) continue;
+                    j = (size_t)(y + dy) * (size_t)W + (size_t)(x + dx);
+                    if (m->valid[j] && param->chart[param->texel_triangle[j]] == chart) v[k++] = m->disp[j];
+                }
+            if (k < 3) continue;
+            for (a = 1; a < k; a++) /* insertion sort of at most 8 */
+                for (b = a; b > 0 && v[b - 1] > v[b]; b--) { double t = v[b]; v[b] = v[b - 1]; v[b - 1] = t; }
+            med = k % 2 ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
+            odd[id] = fabs((double)m->disp[id] - med) > DM__BK_OUTLIER * sqrt((double)m->area[id]);
+        }
+    for (y = 0; y < H; y++)
+        for (x = 0; x < W; x++) {
+            size_t id = (size_t)y * (size_t)W + (size_t)x;
+            if (!odd[id]) continue;
+            m->valid[id] = 0;
+            m->status[id] = DM_TEXEL_MISS;
+            m->hit_count--;
+            m->miss_count++;
+        }
+    return DM_OK;
+}
+
 /* the linear extension of chart's field at texel id: a least-squares plane through the chart's
    hits within DM__BORDER + 1 texels (weighted toward the nearest) evaluated at the texel, for the
    depth and the normal; 0 when those hits do not span a plane */
@@ -6654,6 +6707,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
     res = dm__bk_alloc(&r);
     if (res == DM_OK) res = dm__bk_prepare(&r);  /* normals, search distance, BVH */
     if (res == DM_OK) res = dm__bk_cast(&r);     /* one ray per texel */
+    if (res == DM_OK) res = dm__bk_outliers(&r); /* rays that slipped to another sheet */
     if (res == DM_OK) res = dm__bk_border(&r);   /* and per texel of the charts' borders */
     if (res == DM_OK) res = dm__bk_fill(&r);     /* push-pull over the misses */
     dm_bvh_free(r.bvh);

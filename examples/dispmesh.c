@@ -811,6 +811,9 @@ int main(int argc, char **argv)
     memset(&bo, 0, sizeof bo);
     bo.inward = inward;
     bo.both_ways = R.both_ways;
+    /* the base lies within the shell: a deeper hit is a ray that slipped past a thin part of the
+       original to another sheet, better filled from its neighbours than kept */
+    bo.max_distance = 1.5f * R.shell->thickness;
     stage_begin(&st, inward ? "bake (inward)" : "bake (both ways)");
     bo.progress = stage_progress; bo.progress_user = &st;
     bake_ms = now_ms();
