@@ -5954,26 +5954,38 @@ static dm_result dm__pz_pack_charts(dm__pz_run *r)
     return dm__pz_step_report(r, 0.6f);
 }
 
-/* the texels whose centres lie in triangle t (of positive uv area) and are not taken yet */
-static void dm__pz_raster_triangle(dm_param *pm, size_t t)
+/* base triangle t's corners in texel units into P, twice its signed uv area in texels into *d,
+   and the texels (clamped to the map) whose centres lie within `grow` texels of its box into
+   box = {x0, y0, x1, y1}; 0 when its uv area is not positive */
+static int dm__uv_texel_box(const dm_param *pm, size_t t, double grow, double P[3][2], double *d, long box[4])
 {
     int W = pm->width, H = pm->height, c;
-    double P[3][2], d, mnx, mxx, mny, mxy;
-    long x0, x1, y0, y1, xx, yy;
+    double mnx, mxx, mny, mxy;
     for (c = 0; c < 3; c++) {
         P[c][0] = (double)pm->uv[6 * t + 2 * (size_t)c] * W;
         P[c][1] = (double)pm->uv[6 * t + 2 * (size_t)c + 1] * H;
     }
-    d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
-    if (!(d > 0.0)) return;
+    *d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
+    if (!(*d > 0.0)) return 0;
     mnx = fmin(P[0][0], fmin(P[1][0], P[2][0])); mxx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
     mny = fmin(P[0][1], fmin(P[1][1], P[2][1])); mxy = fmax(P[0][1], fmax(P[1][1], P[2][1]));
-    x0 = (long)floor(mnx - 0.5); x1 = (long)ceil(mxx - 0.5);
-    y0 = (long)floor(mny - 0.5); y1 = (long)ceil(mxy - 0.5);
-    if (x0 < 0) x0 = 0;
-    if (y0 < 0) y0 = 0;
-    if (x1 > W - 1) x1 = W - 1;
-    if (y1 > H - 1) y1 = H - 1;
+    box[0] = (long)floor(mnx - 0.5 - grow); box[2] = (long)ceil(mxx - 0.5 + grow);
+    box[1] = (long)floor(mny - 0.5 - grow); box[3] = (long)ceil(mxy - 0.5 + grow);
+    if (box[0] < 0) box[0] = 0;
+    if (box[1] < 0) box[1] = 0;
+    if (box[2] > W - 1) box[2] = W - 1;
+    if (box[3] > H - 1) box[3] = H - 1;
+    return 1;
+}
+
+/* the texels whose centres lie in triangle t (of positive uv area) and are not taken yet */
+static void dm__pz_raster_triangle(dm_param *pm, size_t t)
+{
+    int W = pm->width;
+    double P[3][2], d;
+    long box[4], x0, x1, y0, y1, xx, yy;
+    if (!dm__uv_texel_box(pm, t, 0.0, P, &d, box)) return;
+    x0 = box[0]; y0 = box[1]; x1 = box[2]; y1 = box[3];
     for (yy = y0; yy <= y1; yy++)
         for (xx = x0; xx <= x1; xx++) {
             double cx = xx + 0.5 - P[0][0], cy = yy + 0.5 - P[0][1], u, v;
@@ -6479,23 +6491,11 @@ static double dm__bk_segment_distance(const double a[2], const double b[2], cons
 #define DM__BORDER 2
 static void dm__bk_border_triangle(const dm_param *pm, size_t t, float *best, uint32_t *tri, float *bary)
 {
-    int W = pm->width, H = pm->height, c;
-    double P[3][2], d, mnx, mxx, mny, mxy;
-    long x0, x1, y0, y1, xx, yy;
-    for (c = 0; c < 3; c++) {
-        P[c][0] = (double)pm->uv[6 * t + 2 * (size_t)c] * W;
-        P[c][1] = (double)pm->uv[6 * t + 2 * (size_t)c + 1] * H;
-    }
-    d = (P[1][0] - P[0][0]) * (P[2][1] - P[0][1]) - (P[2][0] - P[0][0]) * (P[1][1] - P[0][1]);
-    if (!(d > 0.0)) return;
-    mnx = fmin(P[0][0], fmin(P[1][0], P[2][0])); mxx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
-    mny = fmin(P[0][1], fmin(P[1][1], P[2][1])); mxy = fmax(P[0][1], fmax(P[1][1], P[2][1]));
-    x0 = (long)floor(mnx - 0.5 - DM__BORDER); x1 = (long)ceil(mxx - 0.5 + DM__BORDER);
-    y0 = (long)floor(mny - 0.5 - DM__BORDER); y1 = (long)ceil(mxy - 0.5 + DM__BORDER);
-    if (x0 < 0) x0 = 0;
-    if (y0 < 0) y0 = 0;
-    if (x1 > W - 1) x1 = W - 1;
-    if (y1 > H - 1) y1 = H - 1;
+    int W = pm->width;
+    double P[3][2], d;
+    long box[4], x0, x1, y0, y1, xx, yy;
+    if (!dm__uv_texel_box(pm, t, DM__BORDER, P, &d, box)) return;
+    x0 = box[0]; y0 = box[1]; x1 = box[2]; y1 = box[3];
     for (yy = y0; yy <= y1; yy++)
         for (xx = x0; xx <= x1; xx++) {
             size_t id = (size_t)yy * (size_t)W + (size_t)xx;
