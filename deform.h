@@ -156,7 +156,8 @@
        (x, y, z coupled) systems; a sparse Cholesky factorization A = P^T L L^T P with
          - approximate minimum degree ordering (Amestoy, Davis, Duff 1996), written from the paper,
            and, when per-row coordinates are given (vertex positions), nested dissection by
-           geometric separators, kept when it gives less fill (it does on large meshes),
+           geometric separators, tried when AMD's fill is high and kept when it gives less fill
+           (it does on large meshes),
          - symbolic analysis (elimination tree, postorder, column counts, relaxed supernodes) kept
            apart from the numeric factorization, so a matrix with the same pattern and new values
            (new constraint weights, new cotangent weights) is refactored without a new analysis,
@@ -189,8 +190,9 @@
                         (dfm_block_expand); the ordering is computed on the vertex graph (b x smaller)
                         and expanded, which keeps each vertex's unknowns together.
          coords         NULL, or 3 doubles per row (per vertex with block_size b: the positions):
-                        nested dissection is computed too and the ordering with the smaller nnz(L)
-                        is kept. Costs about 2-3x the analysis time of AMD alone.
+                        when AMD's fill is high, nested dissection is computed too and the
+                        ordering with the smaller nnz(L) is kept (see DECISIONS). Checked for
+                        NaN/Inf whenever given.
          allocator      NULL = DFM_MALLOC/DFM_FREE; a copy is kept in the factor object.
          progress       NULL, or called with done in [0, 1] during analysis and factorization; a
                         nonzero return cancels (DFM_CANCELLED, nothing leaked). progress_user is passed.
@@ -215,7 +217,7 @@
        median bisection along the axis whose cut crosses the fewest edges, the smaller side's
        boundary as vertex separator, down to parts of 128 nodes, then minimum degree constrained to
        eliminate the parts first and the separators deepest-first, like CHOLMOD's NESDIS with
-       CAMD; the fill of both orderings is counted and the smaller kept), elimination tree (Liu
+       CAMD; tried only when AMD's fill is high, and the smaller fill kept), elimination tree (Liu
        1990) of the permuted matrix, postorder, column counts by row-subtree traversal
        (O(nnz(L))), fundamental supernodes, then relaxed amalgamation (a child merged into its
        parent when the merged block stays small or adds few explicit zeros, as CHOLMOD does), the
@@ -281,6 +283,12 @@
          external degree bound d_i = min(n - k, d_i + |Lp \ i|, |Ai \ i| + |Lp \ i| + sum |Le \ Lp|), element
          absorption (also aggressive absorption of elements with |Le \ Lp| = 0), supervariables by
          hashing, mass elimination. Dense rows are removed first and ordered last.
+       - Nested dissection is tried only when AMD's fill is high, by CHOLMOD's test for trying
+         METIS (nnz(L) >= 5 nnz(A) and sum of squared column counts >= 500 nnz(L)): on small and
+         medium meshes AMD wins anyway and dissection would more than double the analysis. The
+         fills compared are the ones AMD and its constrained form count while eliminating
+         (exact when no dense row is set aside; otherwise both orderings are counted
+         symbolically), so no extra symbolic pass is made.
        - Column counts by row subtrees rather than Gilbert-Ng-Peyton: O(nnz(L)) instead of almost
          O(nnz(A)), simpler; it is a small part of the analysis time for mesh systems.
        - Relaxed amalgamation uses CHOLMOD's published thresholds (merge when the result has at most
@@ -411,7 +419,8 @@ typedef struct dfm_chol_options {
     const int32_t *perm;          /* DFM_ORDER_GIVEN: a permutation of 0..n-1 */
     size_t block_size;            /* 0/1, or b: order the graph of b x b vertex blocks */
     const double *coords;         /* NULL, or 3 per row (per vertex with block_size b): nested
-                                     dissection is tried too and the smaller fill kept */
+                                     dissection is tried too when AMD's fill is high, and the
+                                     smaller fill kept */
     const dfm_allocator *allocator;
     int (*progress)(void *user, float done);
     void *progress_user;
@@ -1621,19 +1630,39 @@ static dfm_result dfm__amd_permutation(const dfm__amd *s, int32_t npivots, const
     return k == s->n ? DFM_OK : DFM_ERR_INVALID_ARGUMENT; /* cannot happen: every node once */
 }
 
+/* The fill of an ordering as AMD sees it: nnz(L) with the diagonal, and sum of the squared
+   column counts (CHOLMOD's flop measure). Exact when no dense row was set aside: the element
+   formed at a pivot is exactly the pivot's column structure below the pivot's supervariable. */
+typedef struct dfm__fill {
+    double lnz, flops;
+    int exact;
+} dfm__fill;
+
+/* f columns eliminated together above r rows: counts r + f, r + f - 1, ..., r + 1 */
+static void dfm__fill_add(dfm__fill *fl, int64_t f, int64_t r)
+{
+    int64_t c;
+    for (c = r + 1; c <= r + f; c++) {
+        fl->lnz += (double)c;
+        fl->flops += (double)c * (double)c;
+    }
+}
+
 /* AMD on the pattern of a symmetric graph given by full adjacency (both directions, no
    diagonal): adj_start[n+1], adj. perm[k] = node eliminated k-th. With cset (constrained
    minimum degree, as in CAMD), pivots come from the lowest constraint set that has variables
-   left; supervariables never mix sets. */
+   left; supervariables never mix sets. fill (or NULL) receives the ordering's fill. */
 static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const int32_t *cset,
-                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
+                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm,
+                                 dfm__fill *fill)
 {
     dfm__amd S, *s = &S;
     int32_t npivots = 0;
+    dfm__fill fl = {0.0, 0.0, 0};
     dfm_result err = dfm__amd_alloc(s, n, adj_start[n], al);
     if (err == DFM_OK) dfm__amd_init(s, adj_start, adj, cset);
     while (err == DFM_OK && s->nel < n - s->dense_count) {
-        int32_t p, nvp, lp_nv;
+        int32_t p, nvp, lp_nv, nel0 = s->nel;
         int64_t pme1, pme2;
         /* 1. the variable of minimum approximate degree */
         while (s->mindeg < n && s->head[s->mindeg] < 0) s->mindeg++;
@@ -1656,6 +1685,7 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         dfm__amd_prune(s, p, pme1, pme2, &lp_nv);                 /* 4 */
         dfm__amd_supervariables(s, pme1, pme2);                   /* 5 */
         dfm__amd_degrees(s, p, pme1, pme2, lp_nv);                /* 6 */
+        dfm__fill_add(&fl, s->nel - nel0, (int64_t)lp_nv + s->dense_count);
         s->nv[p] = nvp;
         if (s->len[p] == 0) { /* an element with nothing left: a root */
             s->status[p] = DFM__DEAD;
@@ -1664,6 +1694,9 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         s->wflg += n + 1;
     }
     if (err == DFM_OK) err = dfm__amd_permutation(s, npivots, adj_start, perm);
+    dfm__fill_add(&fl, s->dense_count, 0);
+    fl.exact = s->dense_count == 0;
+    if (fill) *fill = fl;
     dfm__amd_free(s);
     return err;
 }
@@ -1800,7 +1833,8 @@ static void dfm__nd_layout(int32_t *part, size_t m, const int32_t *side, int32_t
 }
 
 static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const double *coords,
-                                const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm)
+                                const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm,
+                                dfm__fill *fill)
 {
     dfm_result err = DFM_OK;
     int32_t *nodes = NULL, *tag = NULL, *side = NULL, *local = NULL, *cset = NULL, stamp = 0;
@@ -1860,7 +1894,7 @@ static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_
             stack[top++].hi = tk.lo + a;
         }
     }
-    err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm);
+    err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm, fill);
 done:
     dfm__free(al, nodes);
     dfm__free(al, tag);
@@ -2249,24 +2283,33 @@ static dfm_result dfm__given_order(size_t n, const int32_t *perm, int32_t *mark,
     return DFM_OK;
 }
 
-/* Step 1b: AMD on the (block) graph, and nested dissection when coordinates are given, the one
-   with the smaller fill kept; the block ordering is expanded to the b unknowns of each block. */
+/* CHOLMOD's test for trying METIS after AMD, on the (block) graph's AMD fill scaled to the
+   b x b blocks: nnz(L) >= 5 nnz(A) and flops >= 500 nnz(L). */
+static int dfm__try_dissection(const dfm__fill *f, size_t nnz_a, size_t b)
+{
+    return f->lnz * (double)b * (double)b >= 5.0 * (double)nnz_a && f->flops * (double)b >= 500.0 * f->lnz;
+}
+
+/* Step 1b: AMD on the (block) graph; with coordinates and a high AMD fill also nested
+   dissection, the one with the smaller fill kept (AMD's own counts when exact, else two symbolic
+   counts); the block ordering is expanded to the b unknowns of each block. */
 static dfm_result dfm__graph_order(const dfm_csc *a, const dfm_chol_options *opt, const dfm_allocator *al,
                                    dfm__symbolic *s)
 {
     size_t b = opt->block_size > 1 ? opt->block_size : 1, nb = a->n_cols / b, k, r;
     size_t *adj_start = NULL;
     int32_t *adj = NULL, *amd = s->post, *nd = s->w3;
-    dfm_result err = dfm__adjacency(a, b, al, &adj_start, &adj);
-    if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, al, opt->progress, opt->progress_user, amd);
-    if (err == DFM_OK && opt->coords && nb > DFM__ND_LEAF) {
-        double fill_amd, fill_nd;
-        for (k = 0; k < 3 * nb && err == DFM_OK; k++)
-            if (!dfm__finite(opt->coords[k])) err = DFM_ERR_BAD_VALUE;
-        if (err == DFM_OK) err = dfm__nd_order((int32_t)nb, adj_start, adj, opt->coords, al, opt->progress, opt->progress_user, nd);
-        if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, amd, al, &fill_amd);
-        if (err == DFM_OK) err = dfm__graph_fill(nb, adj_start, adj, nd, al, &fill_nd);
-        if (err == DFM_OK && fill_nd < fill_amd) memcpy(amd, nd, nb * sizeof(int32_t));
+    dfm__fill fa, fn;
+    dfm_result err = DFM_OK;
+    for (k = 0; opt->coords && k < 3 * nb && err == DFM_OK; k++)
+        if (!dfm__finite(opt->coords[k])) err = DFM_ERR_BAD_VALUE;
+    if (err == DFM_OK) err = dfm__adjacency(a, b, al, &adj_start, &adj);
+    if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, al, opt->progress, opt->progress_user, amd, &fa);
+    if (err == DFM_OK && opt->coords && nb > DFM__ND_LEAF && dfm__try_dissection(&fa, a->col_start[a->n_cols], b)) {
+        err = dfm__nd_order((int32_t)nb, adj_start, adj, opt->coords, al, opt->progress, opt->progress_user, nd, &fn);
+        if (err == DFM_OK && !(fa.exact && fn.exact)) err = dfm__graph_fill(nb, adj_start, adj, amd, al, &fa.lnz);
+        if (err == DFM_OK && !(fa.exact && fn.exact)) err = dfm__graph_fill(nb, adj_start, adj, nd, al, &fn.lnz);
+        if (err == DFM_OK && fn.lnz < fa.lnz) memcpy(amd, nd, nb * sizeof(int32_t));
     }
     if (err == DFM_OK)
         for (k = 0; k < nb; k++)
