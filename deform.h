@@ -2778,31 +2778,101 @@ static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda,
     dfm__gemm_nt(m, k, p, A, lda, B, ldb, C, ldc, assign);
 }
 
+/* The rows below a factored jb x jb diagonal block D: X (m x jb) <- X D^-T, in tiles of rows.
+   Each entry gets the column loop's operations in its order (x -= X[r,t] D[c,t] for t = 0 .. c-1,
+   one rounding each, then x *= 1 / D[c,c]), so a tile size or vector width gives the same bits
+   as one row at a time; a tile's rows stay in registers while D's rows stream from L1. */
+#ifdef DFM__AVX
+__attribute__((target("avx"))) static size_t dfm__trsm_rows_avx(size_t m, size_t jb, const double *D, double *X,
+                                                                 size_t ld)
+{
+    size_t i, c, t;
+    for (i = 0; i + 16 <= m; i += 16)
+        for (c = 0; c < jb; c++) {
+            double *xc = X + i + c * ld;
+            dfm__v4 v0, v1, v2, v3, inv;
+            double s = 1.0 / D[c + c * ld];
+            memcpy(&v0, xc, sizeof v0);
+            memcpy(&v1, xc + 4, sizeof v1);
+            memcpy(&v2, xc + 8, sizeof v2);
+            memcpy(&v3, xc + 12, sizeof v3);
+            for (t = 0; t < c; t++) {
+                const double *xt = X + i + t * ld;
+                double f = D[c + t * ld];
+                dfm__v4 b = {f, f, f, f}, a0, a1, a2, a3;
+                memcpy(&a0, xt, sizeof a0);
+                memcpy(&a1, xt + 4, sizeof a1);
+                memcpy(&a2, xt + 8, sizeof a2);
+                memcpy(&a3, xt + 12, sizeof a3);
+                v0 -= a0 * b; v1 -= a1 * b; v2 -= a2 * b; v3 -= a3 * b;
+            }
+            inv = (dfm__v4){s, s, s, s};
+            v0 *= inv; v1 *= inv; v2 *= inv; v3 *= inv;
+            memcpy(xc, &v0, sizeof v0);
+            memcpy(xc + 4, &v1, sizeof v1);
+            memcpy(xc + 8, &v2, sizeof v2);
+            memcpy(xc + 12, &v3, sizeof v3);
+        }
+    return i;
+}
+#endif
+
+static void dfm__trsm_rows(size_t m, size_t jb, const double *D, double *X, size_t ld)
+{
+    size_t i = 0, c, t;
+#ifdef DFM__AVX
+    if (m >= 16 && __builtin_cpu_supports("avx")) i = dfm__trsm_rows_avx(m, jb, D, X, ld);
+#endif
+#ifdef DFM__V2
+    for (; i + 8 <= m; i += 8)
+        for (c = 0; c < jb; c++) {
+            double *xc = X + i + c * ld, s = 1.0 / D[c + c * ld];
+            dfm__v2 v0 = dfm__ld2(xc), v1 = dfm__ld2(xc + 2), v2 = dfm__ld2(xc + 4), v3 = dfm__ld2(xc + 6), inv = {s, s};
+            for (t = 0; t < c; t++) {
+                const double *xt = X + i + t * ld;
+                dfm__v2 b = {D[c + t * ld], D[c + t * ld]};
+                v0 -= dfm__ld2(xt) * b; v1 -= dfm__ld2(xt + 2) * b;
+                v2 -= dfm__ld2(xt + 4) * b; v3 -= dfm__ld2(xt + 6) * b;
+            }
+            dfm__st2(xc, v0 * inv); dfm__st2(xc + 2, v1 * inv);
+            dfm__st2(xc + 4, v2 * inv); dfm__st2(xc + 6, v3 * inv);
+        }
+#endif
+    for (; i < m; i++)
+        for (c = 0; c < jb; c++) {
+            double x = X[i + c * ld];
+            for (t = 0; t < c; t++) x -= X[i + t * ld] * D[c + t * ld];
+            X[i + c * ld] = x * (1.0 / D[c + c * ld]);
+        }
+}
+
 /* Cholesky of the nc leading columns of an nr x nc panel (ld >= nr): the top nc x nc block
    becomes L11 (lower), the rows below become L21 = A21 L11^-T. Returns -1 on success or the
    failing column. Blocked left-looking: each block of columns is updated by the ones before it
-   with the gemm kernel, then factored column by column. */
+   with the gemm kernel, its diagonal block factored column by column, then the rows below it
+   solved in row tiles (dfm__trsm_rows: the same operations per entry as the column loop). */
 static long dfm__panel_chol(size_t nr, size_t nc, double *L, size_t ld)
 {
     const size_t NB = 48;
     size_t j0, c, t, r;
     for (j0 = 0; j0 < nc; j0 += NB) {
-        size_t jb = nc - j0 < NB ? nc - j0 : NB;
+        size_t jb = nc - j0 < NB ? nc - j0 : NB, end = j0 + jb;
         if (j0 > 0) dfm__gemm(nr - j0, jb, j0, L + j0, ld, L + j0, ld, L + j0 + j0 * ld, ld, 0);
-        for (c = j0; c < j0 + jb; c++) {
+        for (c = j0; c < end; c++) {
             double *lc = L + c * ld, d, inv;
             for (t = j0; t < c; t++) {
                 const double *lt = L + t * ld;
                 double f = lt[c];
-                for (r = c; r < nr; r++) lc[r] -= lt[r] * f;
+                for (r = c; r < end; r++) lc[r] -= lt[r] * f;
             }
             d = lc[c];
             if (!(d > 0.0) || !dfm__finite(d)) return (long)c;
             d = sqrt(d);
             lc[c] = d;
             inv = 1.0 / d;
-            for (r = c + 1; r < nr; r++) lc[r] *= inv;
+            for (r = c + 1; r < end; r++) lc[r] *= inv;
         }
+        if (nr > end) dfm__trsm_rows(nr - end, jb, L + j0 + j0 * ld, L + end + j0 * ld, ld);
     }
     return -1;
 }
