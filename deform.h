@@ -2790,8 +2790,8 @@ __attribute__((target("avx"))) static size_t dfm__trsm_rows_avx(size_t m, size_t
     for (i = 0; i + 16 <= m; i += 16)
         for (c = 0; c < jb; c++) {
             double *xc = X + i + c * ld;
-            dfm__v4 v0, v1, v2, v3, inv;
             double s = 1.0 / D[c + c * ld];
+            dfm__v4 v0, v1, v2, v3, inv = {s, s, s, s};
             memcpy(&v0, xc, sizeof v0);
             memcpy(&v1, xc + 4, sizeof v1);
             memcpy(&v2, xc + 8, sizeof v2);
@@ -2806,7 +2806,6 @@ __attribute__((target("avx"))) static size_t dfm__trsm_rows_avx(size_t m, size_t
                 memcpy(&a3, xt + 12, sizeof a3);
                 v0 -= a0 * b; v1 -= a1 * b; v2 -= a2 * b; v3 -= a3 * b;
             }
-            inv = (dfm__v4){s, s, s, s};
             v0 *= inv; v1 *= inv; v2 *= inv; v3 *= inv;
             memcpy(xc, &v0, sizeof v0);
             memcpy(xc + 4, &v1, sizeof v1);
