@@ -17,6 +17,8 @@
        ageing function, and an LOD pyramid per frame whose coarse levels keep the mean opacity.
      - Rendering: density, tangent, colour and transmittance at a point for a level, Kajiya-Kay
        shading with self-shadow volumes, and a ray march through a tile, for any renderer.
+     - Tiling over a mesh shell: the prisms a mesh sweeps along its normals, mapped to texel
+       space continuously across shared faces, and per-tile wd from a map over tile coordinates.
 
    HOW TO USE (in ten lines)
        // in exactly one C or C++ file, #define TVT_IMPLEMENTATION before #include "texel.h"
@@ -155,6 +157,41 @@
      of it per step, and, after an empty step, a skip of half a coarsest-level voxel wherever
      that level is empty.
 
+   MESH SHELL (tiling over a triangle mesh: Neyret 1998, Lengyel 2001, Porumbescu et al. 2005)
+     A mesh with per-vertex tile coordinates (u, v in tile units; tiles repeat, the texel wraps)
+     and offset directions (normals, normalised here) sweeps a prism per triangle between the
+     mesh (w = 0) and the mesh moved `height` along the normals (w = 1). tvt_build_shell splits
+     each prism into three tetrahedra (tvt_shell_prism_tets) and gives each the affine map that
+     takes its four corners to their (u, v, w); texel coordinates are then (frac(u) res,
+     frac(v) res, w res) in tile (floor u, floor v), so the shell is one texel high.
+       Why tetrahedra (Porumbescu's choice) and not the bilinear prism of shell maps solved per
+     point by Newton: the map is exact and closed-form both ways (tvt_shell_map, tvt_shell_unmap),
+     a ray is a straight line in texel space inside each tetrahedron, and continuity holds by
+     construction: the side face over edge (i, j), i < j in vertex order, is always cut along
+     the diagonal from i to the offset copy of j, so both prisms that share it cut it the same
+     way and their maps agree on it (a point of the face is the same combination of the same
+     corners from either side). The price: a prism's side faces are two triangles, not the
+     bilinear patch, so "the prism" means the union of its tetrahedra.
+       Folding: a tetrahedron is folded when its map turns orientation against the prism's
+     (sign of det(d uvw / d x) against the triangle's winding about its normals times its uv
+     winding) or its volume is under 1e-6 of its edges' product: high curvature with a thick
+     shell makes the offset surface cross itself. tvt_build_shell reports TVT_ERR_FOLDED, or with
+     allow_folded keeps it (the maps stay affine and invertible where not flat; overlapping
+     content then doubles) and counts the prisms in shell.folded. Thinner shells or finer meshes
+     cure it; the example's bunny is built with allow_folded and prints the count.
+       Per-tile wd: tvt_wd_map is a grid of wd values over tile coordinates (one value per tile,
+     wrapped or clamped), read by tvt_tile_wd (i, j) = (floor u, floor v); how a renderer fills it
+     (drier where the mesh faces the sun, from a painted map) is its choice.
+       Memory: 3 tetrahedra of 42 floats (168 bytes) per triangle. Errors: TVT_ERR_INVALID_ARGUMENT
+     (a NULL array), TVT_ERR_EMPTY (no vertex or triangle), TVT_ERR_TOO_LARGE (more than 2^31 - 1
+     vertices, a size that overflows), TVT_ERR_BAD_PARAMETER (a NaN or infinite position, normal
+     or uv, a zero normal, height <= 0 or not finite), TVT_ERR_BAD_INDEX (an index >= vertex_count),
+     TVT_ERR_DEGENERATE (a repeated index, a triangle whose sine of angle is under 1e-7 in the world
+     or in uv), TVT_ERR_FOLDED, TVT_ERR_OUT_OF_MEMORY; the shell is zeroed on failure. Thread
+     safety: a built shell is read-only; queries from many threads are fine. Limits: points are
+     located in a given prism (a renderer knows its prism by walking, as render.h's
+     sr_draw_mesh_shell does); there is no search over all prisms.
+
    OPTIONS
      Compile time: TVT_STATIC (all functions static), TVT_MALLOC(sz)/TVT_FREE(p) (both or none).
      Run time: tvt_grass_desc, tvt_sample_options, tvt_model_options, tvt_splat_options,
@@ -205,7 +242,8 @@
                                  tvt_build_texel with no blades gives an empty texel);
        TVT_ERR_TOO_LARGE         a size that overflows size_t or 32-bit counts;
        TVT_ERR_OUT_OF_MEMORY     the allocator returned NULL;
-       TVT_CANCELLED             the progress callback returned nonzero.
+       TVT_CANCELLED             the progress callback returned nonzero;
+       TVT_ERR_BAD_INDEX, TVT_ERR_DEGENERATE, TVT_ERR_FOLDED  a mesh shell's (see MESH SHELL).
      On failure the output object is zeroed and nothing is leaked; tvt_age leaves the points as
      they were unless cancelled after ageing (then they are valid, at the new wd, unmerged).
 
@@ -217,7 +255,8 @@
      res 8..1024 (power of two); at most 65534 blades; at most 2^32 - 1 points; 64 key frames;
      8 LOD levels, the coarsest at least 8^3.
      Tiling over a terrain is the renderer's: it maps a world point to its tile and to texel
-     coordinates (see RENDERING) and calls the functions below with each tile's own wd.
+     coordinates (see RENDERING, or MESH SHELL over a mesh) and calls the functions below with
+     each tile's own wd.
 
    REFERENCES
      Jiao Shao-Hui, Yang Gang, Heng Pheng-Ann, Wu En-Hua, "Realistic grass withering simulation
@@ -225,6 +264,9 @@
      J. T. Kajiya, T. L. Kay, "Rendering fur with three dimensional textures", SIGGRAPH 1989.
      F. Neyret, "Modeling, animating, and rendering complex scenes using volumetric textures",
        IEEE TVCG 4(1), 1998.
+     J. Lengyel, E. Praun, A. Finkelstein, H. Hoppe, "Real-time fur over arbitrary surfaces",
+       I3D 2001.
+     S. Porumbescu, B. Budge, L. Feng, K. Joy, "Shell maps", SIGGRAPH 2005.
      C. Wyman, P.-P. Sloan, P. Shirley, "Simple analytic approximations to the CIE XYZ color
        matching functions", JCGT 2(2), 2013. */
 #ifndef TVT_TEXEL_H
@@ -256,7 +298,10 @@ typedef enum tvt_result {
     TVT_ERR_EMPTY,            /* zero blades, or a texel with no density */
     TVT_ERR_TOO_LARGE,        /* a size overflows */
     TVT_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
-    TVT_CANCELLED             /* the progress callback returned nonzero */
+    TVT_CANCELLED,            /* the progress callback returned nonzero */
+    TVT_ERR_BAD_INDEX,        /* a mesh index out of range */
+    TVT_ERR_DEGENERATE,       /* a triangle of zero area (in the world or in tile coordinates) */
+    TVT_ERR_FOLDED            /* a shell prism folds (too thick for the curvature) */
 } tvt_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -600,6 +645,57 @@ TVTDEF void tvt_pigment_color(float chlorophyll, float browning, float rgb[3]);
 
 /* wd(t) = clamp(t / duration, 0, 1); duration <= 0 or NaN input gives 0. */
 TVTDEF float tvt_wd_from_time(float t, float duration);
+
+/* ---- Tiling over a mesh shell (see MESH SHELL) -------------------------------------------------- */
+/* A triangle mesh swept along its vertex normals: each triangle becomes a prism between the mesh
+   (w = 0) and the mesh offset by `height` along the unit normals (w = 1). */
+typedef struct tvt_shell_desc {
+    const float *positions;  /* 3 per vertex (world) */
+    const float *normals;    /* 3 per vertex: offset directions (normalised here), not zero */
+    const float *uvs;        /* 2 per vertex: tile coordinates (tiles repeat; tile (floor u, floor v)) */
+    size_t vertex_count;     /* 3..2^31 - 1 */
+    const uint32_t *indices; /* 3 per triangle, each < vertex_count */
+    size_t triangle_count;   /* >= 1 */
+    float height;            /* shell height along the normals (world), > 0 */
+    int allow_folded;        /* 0: a folded prism is TVT_ERR_FOLDED; nonzero: kept and counted */
+    const tvt_allocator *allocator; /* NULL = TVT_MALLOC/TVT_FREE */
+} tvt_shell_desc;
+
+/* The prisms' tetrahedra with their affine maps, ready for point queries. */
+typedef struct tvt_shell {
+    size_t prism_count;      /* the triangles */
+    float *tets;             /* 3 per prism, TVT_SHELL_TET_FLOATS floats each (private layout) */
+    size_t folded;           /* prisms with a folded (inverted or flat) tetrahedron */
+    float height;
+    tvt_allocator allocator;
+} tvt_shell;
+enum { TVT_SHELL_TET_FLOATS = 42 };
+
+/* Validates the mesh and builds the prisms (see MESH SHELL for the mapping and the errors). */
+TVTDEF tvt_result tvt_build_shell(const tvt_shell_desc *desc, tvt_shell *out);
+TVTDEF void tvt_shell_free(tvt_shell *s);
+/* The three tetrahedra of the prism over triangle tri (vertex ids v for the mesh vertex, v +
+   vertex_count for its offset copy), by the rule of MESH SHELL: shared side faces are split the
+   same way from both sides. */
+TVTDEF void tvt_shell_prism_tets(const uint32_t tri[3], uint32_t vertex_count, uint32_t tets[3][4]);
+/* World point p -> texel space uvw (u, v in tile units, w in [0, 1] from the mesh to the outer
+   surface) in prism `prism`. Returns 1 if p lies in the prism (1e-5 of barycentric slack), 0 if
+   not (uvw is then extrapolated from its nearest tetrahedron), -1 for a bad prism index. */
+TVTDEF int tvt_shell_map(const tvt_shell *s, size_t prism, const float p[3], float uvw[3]);
+/* The inverse: texel space uvw -> world point p in prism `prism`; same return values. */
+TVTDEF int tvt_shell_unmap(const tvt_shell *s, size_t prism, const float uvw[3], float p[3]);
+
+/* A per-tile wd map over the mesh's tile coordinates: tile (i, j) reads pixel (i - origin[0],
+   j - origin[1]) of a width x height grid of wd values (row j, x fastest), wrapped (wrap
+   nonzero) or clamped at the border. */
+typedef struct tvt_wd_map {
+    const float *wd;
+    int width, height;
+    int origin[2];
+    int wrap;
+} tvt_wd_map;
+/* The tile's wd, clamped to [0, 1]; a NaN value, a NULL map or an empty one gives 0. */
+TVTDEF float tvt_tile_wd(const tvt_wd_map *m, long i, long j);
 
 /* "TVT_OK", "TVT_ERR_EMPTY", ... (the enum name); "TVT_ERR_?" outside the enum. */
 TVTDEF const char *tvt_result_string(tvt_result r);
@@ -3013,6 +3109,217 @@ TVTDEF tvt_splat_options tvt_splat_default_options(void)
     return o;
 }
 
+/* ---------------------------------------------------------------------------------------------
+   Tiling over a mesh shell: prisms split into tetrahedra, an affine map in each
+   --------------------------------------------------------------------------------------------- */
+TVTDEF void tvt_shell_prism_tets(const uint32_t tri[3], uint32_t vertex_count, uint32_t tets[3][4])
+{
+    uint32_t a = tri[0], b = tri[1], c = tri[2], t, n = vertex_count;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    /* side face (i, j), i < j, is cut along i -> j': the same from both prisms that share it */
+    tets[0][0] = a; tets[0][1] = b;     tets[0][2] = c;     tets[0][3] = c + n;
+    tets[1][0] = a; tets[1][1] = b;     tets[1][2] = b + n; tets[1][3] = c + n;
+    tets[2][0] = a; tets[2][1] = a + n; tets[2][2] = b + n; tets[2][3] = c + n;
+}
+
+static double tvt__det3(const double m[9])
+{
+    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
+/* inverse of the row-major 3x3 m (det != 0) */
+static void tvt__inv3(const double m[9], double det, double r[9])
+{
+    double id = 1.0 / det;
+    r[0] = (m[4] * m[8] - m[5] * m[7]) * id; r[1] = (m[2] * m[7] - m[1] * m[8]) * id; r[2] = (m[1] * m[5] - m[2] * m[4]) * id;
+    r[3] = (m[5] * m[6] - m[3] * m[8]) * id; r[4] = (m[0] * m[8] - m[2] * m[6]) * id; r[5] = (m[2] * m[3] - m[0] * m[5]) * id;
+    r[6] = (m[3] * m[7] - m[4] * m[6]) * id; r[7] = (m[1] * m[6] - m[0] * m[7]) * id; r[8] = (m[0] * m[4] - m[1] * m[3]) * id;
+}
+
+/* checks every vertex and index: 0 or an error */
+static tvt_result tvt__shell_check(const tvt_shell_desc *d)
+{
+    size_t i;
+    if (!d->positions || !d->normals || !d->uvs || !d->indices) return TVT_ERR_INVALID_ARGUMENT;
+    if (d->vertex_count == 0 || d->triangle_count == 0) return TVT_ERR_EMPTY;
+    if (d->vertex_count > 0x7FFFFFFFu || d->triangle_count > ((size_t)-1) / (3 * TVT_SHELL_TET_FLOATS * sizeof(float)))
+        return TVT_ERR_TOO_LARGE;
+    if (!tvt__finite(d->height) || !(d->height > 0.0f)) return TVT_ERR_BAD_PARAMETER;
+    for (i = 0; i < d->vertex_count; i++) {
+        const float *p = d->positions + 3 * i, *n = d->normals + 3 * i, *uv = d->uvs + 2 * i;
+        if (!tvt__finite(p[0]) || !tvt__finite(p[1]) || !tvt__finite(p[2]) || !tvt__finite(n[0]) || !tvt__finite(n[1]) ||
+            !tvt__finite(n[2]) || !tvt__finite(uv[0]) || !tvt__finite(uv[1]) || !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 0.0f))
+            return TVT_ERR_BAD_PARAMETER;
+    }
+    for (i = 0; i < 3 * d->triangle_count; i++)
+        if (d->indices[i] >= d->vertex_count) return TVT_ERR_BAD_INDEX;
+    return TVT_OK;
+}
+
+/* a shell vertex (v < n: the mesh, else offset by height along the unit normal) and its uvw */
+static void tvt__shell_vertex(const tvt_shell_desc *d, uint32_t v, double x[3], double u[3])
+{
+    uint32_t n = (uint32_t)d->vertex_count, m = v < n ? v : v - n;
+    const float *p = d->positions + 3 * (size_t)m, *nr = d->normals + 3 * (size_t)m;
+    double l = sqrt((double)nr[0] * nr[0] + (double)nr[1] * nr[1] + (double)nr[2] * nr[2]), h = v < n ? 0.0 : d->height / l;
+    int k;
+    for (k = 0; k < 3; k++) x[k] = (double)p[k] + h * nr[k];
+    u[0] = d->uvs[2 * (size_t)m]; u[1] = d->uvs[2 * (size_t)m + 1]; u[2] = v < n ? 0.0 : 1.0;
+}
+
+/* the triangle's orientation: sign of its area against the normals (world) and in uv; 0 = degenerate */
+static int tvt__shell_orientation(const tvt_shell_desc *d, const uint32_t *tri, int *o_uv)
+{
+    double x[3][3], u[3][3], e1[3], e2[3], c[3], ns = 0, l1, l2, cu, d1, d2;
+    int k, j;
+    for (k = 0; k < 3; k++) tvt__shell_vertex(d, tri[k], x[k], u[k]);
+    for (j = 0; j < 3; j++) { e1[j] = x[1][j] - x[0][j]; e2[j] = x[2][j] - x[0][j]; }
+    c[0] = e1[1] * e2[2] - e1[2] * e2[1]; c[1] = e1[2] * e2[0] - e1[0] * e2[2]; c[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]); l2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+    if (!(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-7 * l1 * l2)) return 0;
+    cu = (u[1][0] - u[0][0]) * (u[2][1] - u[0][1]) - (u[1][1] - u[0][1]) * (u[2][0] - u[0][0]);
+    d1 = hypot(u[1][0] - u[0][0], u[1][1] - u[0][1]); d2 = hypot(u[2][0] - u[0][0], u[2][1] - u[0][1]);
+    if (!(fabs(cu) > 1e-7 * d1 * d2)) return 0;
+    *o_uv = cu > 0 ? 1 : -1;
+    for (k = 0; k < 3; k++) {
+        const float *n = d->normals + 3 * (size_t)tri[k];
+        ns += c[0] * n[0] + c[1] * n[1] + c[2] * n[2];
+    }
+    return ns > 0 ? 1 : ns < 0 ? -1 : 2; /* 2: normals in the triangle's plane (a flat prism) */
+}
+
+/* one tetrahedron's maps into out (TVT_SHELL_TET_FLOATS); 0 if it is folded (inverted or flat) */
+static int tvt__shell_tet(const tvt_shell_desc *d, const uint32_t ids[4], int orient, float *out)
+{
+    double x[4][3], u[4][3], A[9], B[9], Ai[9], Bi[9], J[9], da, db, l[3];
+    int k, r, c;
+    for (k = 0; k < 4; k++) tvt__shell_vertex(d, ids[k], x[k], u[k]);
+    for (r = 0; r < 3; r++)
+        for (c = 0; c < 3; c++) { A[r * 3 + c] = x[c + 1][r] - x[0][r]; B[r * 3 + c] = u[c + 1][r] - u[0][r]; }
+    for (c = 0; c < 3; c++) l[c] = sqrt(A[c] * A[c] + A[3 + c] * A[3 + c] + A[6 + c] * A[6 + c]);
+    da = tvt__det3(A); db = tvt__det3(B);
+    memset(out, 0, TVT_SHELL_TET_FLOATS * sizeof(float));
+    if (!(fabs(da) > 1e-6 * l[0] * l[1] * l[2]) || db == 0.0) return 0;
+    tvt__inv3(A, da, Ai); tvt__inv3(B, db, Bi);
+    for (r = 0; r < 3; r++)
+        for (c = 0; c < 3; c++) J[r * 3 + c] = B[r * 3] * Ai[c] + B[r * 3 + 1] * Ai[3 + c] + B[r * 3 + 2] * Ai[6 + c];
+    for (k = 0; k < 3; k++) { out[k] = (float)x[0][k]; out[12 + k] = (float)u[0][k]; }
+    for (k = 0; k < 9; k++) {
+        out[3 + k] = (float)Ai[k]; out[15 + k] = (float)J[k]; out[24 + k] = (float)Bi[k];
+        out[33 + k] = (float)A[(k % 3) * 3 + k / 3]; /* edge k / 3, component k % 3 */
+    }
+    return (da > 0) == (db > 0) ? orient > 0 : orient < 0; /* det J's sign must be the prism's */
+}
+
+TVTDEF tvt_result tvt_build_shell(const tvt_shell_desc *desc, tvt_shell *out)
+{
+    tvt_allocator a;
+    tvt_result r;
+    size_t t;
+    if (out) memset(out, 0, sizeof(*out));
+    if (!desc || !out) return TVT_ERR_INVALID_ARGUMENT;
+    if ((r = tvt__shell_check(desc)) != TVT_OK) return r;
+    a = tvt__resolve_allocator(desc->allocator);
+    out->tets = (float *)tvt__alloc(&a, 3 * TVT_SHELL_TET_FLOATS * desc->triangle_count, sizeof(float));
+    if (!out->tets) return TVT_ERR_OUT_OF_MEMORY;
+    out->allocator = a;
+    out->prism_count = desc->triangle_count;
+    out->height = desc->height;
+    for (t = 0; t < desc->triangle_count; t++) {
+        const uint32_t *tri = desc->indices + 3 * t;
+        uint32_t ids[3][4];
+        int o_uv = 0, o_w, k, ok = 1;
+        if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || !(o_w = tvt__shell_orientation(desc, tri, &o_uv))) {
+            tvt_shell_free(out);
+            return TVT_ERR_DEGENERATE;
+        }
+        tvt_shell_prism_tets(tri, (uint32_t)desc->vertex_count, ids);
+        for (k = 0; k < 3; k++)
+            ok &= tvt__shell_tet(desc, ids[k], o_w == 2 ? 0 : o_w * o_uv, out->tets + (3 * t + (size_t)k) * TVT_SHELL_TET_FLOATS);
+        if (!ok) {
+            out->folded++;
+            if (!desc->allow_folded) { tvt_shell_free(out); return TVT_ERR_FOLDED; }
+        }
+    }
+    return TVT_OK;
+}
+
+TVTDEF void tvt_shell_free(tvt_shell *s)
+{
+    if (!s) return;
+    if (s->tets) tvt__free(&s->allocator, s->tets);
+    memset(s, 0, sizeof(*s));
+}
+
+/* y = a + M (x - o) for a row-major 3x3 M */
+static void tvt__affine3(const float *o, const float *M, const float *a, const float x[3], float y[3])
+{
+    float d0 = x[0] - o[0], d1 = x[1] - o[1], d2 = x[2] - o[2];
+    int r;
+    for (r = 0; r < 3; r++) y[r] = (a ? a[r] : 0.0f) + M[3 * r] * d0 + M[3 * r + 1] * d1 + M[3 * r + 2] * d2;
+}
+
+/* the prism's tetrahedron that holds x best (largest smallest barycentric coordinate); its
+   coordinates lambda_1..3 into lam, the smallest one returned */
+static float tvt__shell_pick(const tvt_shell *s, size_t prism, const float x[3], int uvw_side, const float **tet, float lam[3])
+{
+    float best = -1e30f;
+    int k;
+    for (k = 0; k < 3; k++) {
+        const float *T = s->tets + (3 * prism + (size_t)k) * TVT_SHELL_TET_FLOATS;
+        float l[3], m;
+        if (uvw_side) tvt__affine3(T + 12, T + 24, NULL, x, l);
+        else tvt__affine3(T, T + 3, NULL, x, l);
+        m = 1.0f - l[0] - l[1] - l[2];
+        if (l[0] < m) m = l[0];
+        if (l[1] < m) m = l[1];
+        if (l[2] < m) m = l[2];
+        if (m > best) { best = m; *tet = T; memcpy(lam, l, sizeof(l)); }
+    }
+    return best;
+}
+
+TVTDEF int tvt_shell_map(const tvt_shell *s, size_t prism, const float p[3], float uvw[3])
+{
+    const float *T = NULL;
+    float lam[3], m;
+    if (!s || !s->tets || prism >= s->prism_count || !p || !uvw) return -1;
+    m = tvt__shell_pick(s, prism, p, 0, &T, lam);
+    tvt__affine3(T, T + 15, T + 12, p, uvw);
+    return m >= -1e-5f;
+}
+
+TVTDEF int tvt_shell_unmap(const tvt_shell *s, size_t prism, const float uvw[3], float p[3])
+{
+    const float *T = NULL;
+    float lam[3], m;
+    int k;
+    if (!s || !s->tets || prism >= s->prism_count || !uvw || !p) return -1;
+    m = tvt__shell_pick(s, prism, uvw, 1, &T, lam);
+    for (k = 0; k < 3; k++) p[k] = T[k] + T[33 + k] * lam[0] + T[36 + k] * lam[1] + T[39 + k] * lam[2];
+    return m >= -1e-5f;
+}
+
+TVTDEF float tvt_tile_wd(const tvt_wd_map *m, long i, long j)
+{
+    long x, y;
+    float v;
+    if (!m || !m->wd || m->width < 1 || m->height < 1) return 0.0f;
+    x = i - m->origin[0]; y = j - m->origin[1];
+    if (m->wrap) {
+        x %= m->width; y %= m->height;
+        if (x < 0) x += m->width;
+        if (y < 0) y += m->height;
+    } else {
+        x = x < 0 ? 0 : x >= m->width ? m->width - 1 : x;
+        y = y < 0 ? 0 : y >= m->height ? m->height - 1 : y;
+    }
+    v = m->wd[(size_t)y * (size_t)m->width + (size_t)x];
+    return v >= 0.0f ? (v <= 1.0f ? v : 1.0f) : 0.0f;
+}
+
 TVTDEF const char *tvt_result_string(tvt_result r)
 {
     switch (r) {
@@ -3025,6 +3332,9 @@ TVTDEF const char *tvt_result_string(tvt_result r)
     case TVT_ERR_TOO_LARGE: return "TVT_ERR_TOO_LARGE";
     case TVT_ERR_OUT_OF_MEMORY: return "TVT_ERR_OUT_OF_MEMORY";
     case TVT_CANCELLED: return "TVT_CANCELLED";
+    case TVT_ERR_BAD_INDEX: return "TVT_ERR_BAD_INDEX";
+    case TVT_ERR_DEGENERATE: return "TVT_ERR_DEGENERATE";
+    case TVT_ERR_FOLDED: return "TVT_ERR_FOLDED";
     }
     return "TVT_ERR_?";
 }

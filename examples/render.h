@@ -24,7 +24,7 @@
        with rasterized geometry in either order (opaque ones; draw volumes last).
      - Shell marching (sr_draw_shell): a volumetric layer (grass, fur, canopy) over a height
        field, tiled, whose content comes from one callback in each tile's own sheared frame; see
-       SHELL below.
+       SHELL below. sr_draw_mesh_shell: the same over a triangle mesh's prisms (MESH SHELL).
      - PNG (real deflate: fixed Huffman codes + LZ77; 8- and 16-bit), PPM, PFM writers; contact
        sheets with a built-in 3x5 bitmap font for captions.
      - Strict readers: PNG (every colour type and bit depth, palettes with tRNS, Adam7
@@ -51,7 +51,8 @@
 
    OPTIONS
      Compile time: SR_STATIC (all functions static), SR_MALLOC(sz)/SR_FREE(p) (both or neither).
-     Run time: sr_draw_desc, sr_relief_desc, sr_terrain_desc, sr_volume_desc, sr_shell_desc. Call the matching
+     Run time: sr_draw_desc, sr_relief_desc, sr_terrain_desc, sr_volume_desc, sr_shell_desc,
+     sr_mesh_shell_desc. Call the matching
      *_default() first; zero fields then mean "default" where the field comment says so.
 
    MEMORY
@@ -107,6 +108,34 @@
      user data may cache per tile. Limits: the tiles and heights need not cover the same area
      (heights clamp at their border).
 
+   MESH SHELL (sr_draw_mesh_shell: the same layer over a triangle mesh; it knows no texel either)
+     Each triangle swept `height` along its unit vertex normals is a prism, split into three
+     tetrahedra by the rule texel.h's tvt_shell_prism_tets documents (the side face over edge
+     (i, j), i < j, cut from i to j's offset copy), so that shared faces match and the map is
+     continuous; in each tetrahedron the frame (u, v, w depth) is the affine map of its corners'
+     (u, v from the vertices, w 0 on the mesh and 1 on the outer surface). A ray finds where it
+     enters the shell (the nearest boundary face it crosses inward: outer surface, inner surface
+     when see_through, or an open border or chart seam) with a BVH over the boundary faces,
+     then walks tetrahedron to tetrahedron through their shared faces, calling sample() at the
+     content's own steps exactly as sr_draw_shell does (tile = (floor u, floor v), p = (frac u,
+     frac v, w depth), dir the ray's image, unit; footprint = the pixel's width times the
+     prism's frame units per world unit, sqrt(uv area / area); empty spans cut at the tile's
+     border). Leaving through the outer surface or a border it looks for the next entry; the
+     mesh itself is opaque ground (Lambert with the interpolated normals, two-sided) unless
+     see_through. Tangents return to the world by the inverse map, normals by its transpose;
+     shading, compositing and depth are sr_draw_shell's. Memory: 3 tetrahedra per triangle (168
+     bytes each), the boundary faces (68 bytes each) and their BVH (32 bytes per node, 2 per
+     face), through `allocator`, freed before returning; building them sorts 16 bytes per
+     tetrahedron face. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, fewer than 3
+     vertices or no triangle, more than 2^30 vertices or 2^31 / 12 triangles, a NaN or infinite
+     position, normal or uv, a zero normal, an index out of range or repeated, a triangle of zero
+     area in the world or in uv, a singular tetrahedron, height <= 0 or depth < 0 or not finite;
+     SR_ERR_OUT_OF_MEMORY; SR_CANCELLED (rows drawn so far stay). Folded prisms (texel.h reports
+     them) are drawn as they come: their content overlaps. Thread safety: as sr_draw_shell.
+     Limits: the camera must be outside the shell (a ray starts at its first entry); a ray walks
+     at most 65536 tetrahedra; faces shared by more than two tetrahedra are walls the walk
+     leaves by, like borders.
+
    THREAD SAFETY
      No global state. Different framebuffers may be drawn from different threads at once.
 
@@ -142,6 +171,7 @@
      Blinn & Newell, "Clipping using homogeneous coordinates", SIGGRAPH 1978.
      Policarpo, Oliveira & Comba, "Real-time relief mapping on arbitrary polygonal surfaces", I3D 2005.
      Kajiya & Kay, "Rendering fur with three dimensional textures", SIGGRAPH 1989.
+     Porumbescu, Budge, Feng & Joy, "Shell maps", SIGGRAPH 2005 (prisms split into tetrahedra).
      Levoy, "Display of surfaces from volume data", IEEE CG&A 1988 (front-to-back compositing).
      RFC 1950 / 1951 (zlib, deflate), PNG specification (ISO/IEC 15948).
 */
@@ -475,6 +505,38 @@ SRDEF sr_result sr_draw_shell(sr_framebuffer *fb, const sr_camera *cam, const sr
 /* The ground's height at (x, y) (bilinear, clamped at the borders) and, if grad is not NULL,
    its gradient (dh/dx, dh/dy), as sr_draw_shell sees it. */
 SRDEF float sr_shell_height(const sr_shell_desc *d, float x, float y, float grad[2]);
+
+/* A volumetric layer over a triangle mesh (sr_draw_mesh_shell): each triangle swept `height`
+   along its unit vertex normals is a prism; the content comes from `sample` in texel space (u, v
+   tile coordinates interpolated from the vertices, tiles repeating; w from the mesh to the
+   outer surface), with the same query and sample structs as sr_draw_shell: tile_x, tile_y =
+   floor(u), floor(v), p = (frac u, frac v, w * depth). See MESH SHELL. */
+typedef struct sr_mesh_shell_desc {
+    const float *positions;   /* 3 per vertex (world) */
+    const float *normals;     /* 3 per vertex: offset directions, not zero (normalised here) */
+    const float *uvs;         /* 2 per vertex: tile coordinates */
+    size_t vertex_count;
+    const uint32_t *indices;  /* 3 per triangle */
+    size_t triangle_count;
+    float height;             /* shell height along the normals (world), > 0 */
+    float depth;              /* the shell's height in the content's frame (tile units), 0 = 1 */
+    void (*sample)(void *user, const sr_shell_query *q, sr_shell_sample *out); /* the content */
+    void *user;
+    float ground_rgb[3];      /* the mesh surface's diffuse colour (Lambert, two-sided) */
+    int see_through;          /* 0: the mesh is opaque ground; nonzero: rays cross it (no ground) */
+    const sr_light *lights; int light_count; /* NULL / 0: one head light; light 0 gets sample->light */
+    sr_material material;     /* specular colour and shininess (Kajiya-Kay), emission */
+    float termination;        /* opacity at which a ray stops, 0 = 0.99 */
+    float depth_threshold;    /* opacity at which depth is written, 0 = 0.5 */
+    const sr_allocator *allocator; /* the prisms' tetrahedra and the boundary's BVH; NULL = malloc */
+    int (*progress)(void *user, float done); /* per row; nonzero cancels (SR_CANCELLED) */
+    void *progress_user;
+} sr_mesh_shell_desc;
+
+SRDEF void sr_mesh_shell_desc_default(sr_mesh_shell_desc *d);
+/* The mesh shell marcher: see sr_mesh_shell_desc and the doc block (MESH SHELL). stats may be NULL. */
+SRDEF sr_result sr_draw_mesh_shell(sr_framebuffer *fb, const sr_camera *cam, const sr_mesh_shell_desc *d,
+                                   sr_shell_stats *stats);
 
 /* ---- images ------------------------------------------------------------------------------- */
 
@@ -2274,38 +2336,40 @@ static int sr__shell_init(sr__shell *S, const sr_shell_desc *d, const sr_camera 
     return 1;
 }
 
+/* Lambert for a ground of colour g with normal N (normalised here) */
+static void sr__ground_lambert(const sr_light *lights, int nl, const float g[3], float N[3], const float p[3], float rgb[3])
+{
+    int l, k;
+    sr__normalize(N);
+    memset(rgb, 0, 3 * sizeof(float));
+    for (l = 0; l < nl; l++) {
+        float L[3], ndl;
+        sr__light_dir(&lights[l], p, L);
+        ndl = sr__dot(N, L);
+        if (ndl < 0.0f) ndl = 0.0f;
+        for (k = 0; k < 3; k++) rgb[k] += g[k] * (lights[l].ambient[k] + lights[l].diffuse[k] * ndl);
+    }
+}
+
 /* Lambert for the ground with normal (-gx, -gy, 1) */
 static void sr__shell_ground(const sr__shell *S, const float p[3], float gx, float gy, float rgb[3])
 {
     float N[3] = {-gx, -gy, 1.0f};
-    int l, k;
-    sr__normalize(N);
-    memset(rgb, 0, 3 * sizeof(float));
-    for (l = 0; l < S->nl; l++) {
-        float L[3], ndl;
-        sr__light_dir(&S->lights[l], p, L);
-        ndl = sr__dot(N, L);
-        if (ndl < 0.0f) ndl = 0.0f;
-        for (k = 0; k < 3; k++) rgb[k] += S->d->ground_rgb[k] * (S->lights[l].ambient[k] + S->lights[l].diffuse[k] * ndl);
-    }
+    sr__ground_lambert(S->lights, S->nl, S->d->ground_rgb, N, p, rgb);
 }
 
-/* one sample's colour: its frame turned back to the world (the shear's inverse), then
-   Kajiya-Kay with the tangent, two-sided Lambert with the normal, or isotropic */
-static void sr__shell_light(const sr__shell *S, const sr_shell_sample *s, const float p[3], const float V[3], float gx,
-                            float gy, float rgb[3])
+/* a layer sample's colour from its world tangent T and normal N: Kajiya-Kay with the tangent,
+   two-sided Lambert with the normal, or isotropic; light 0 scaled by the sample's light */
+static void sr__layer_light(const sr_material *m, const sr_light *lights, int nl, const sr_shell_sample *s, float T[3],
+                            float N[3], const float p[3], const float V[3], float rgb[3])
 {
-    const sr_material *m = &S->d->material;
-    float T[3], N[3];
     int l, k, mode = 0;
-    T[0] = s->tangent[0]; T[1] = s->tangent[1]; T[2] = s->tangent[2] + gx * s->tangent[0] + gy * s->tangent[1];
-    N[0] = s->normal[0] + gx * s->normal[2]; N[1] = s->normal[1] + gy * s->normal[2]; N[2] = s->normal[2];
     if (sr__dot(T, T) > 1e-12f) mode = 2;
     else if (sr__dot(N, N) > 1e-12f) { mode = 1; sr__normalize(N); if (sr__dot(N, V) < 0.0f) { N[0] = -N[0]; N[1] = -N[1]; N[2] = -N[2]; } }
     memcpy(rgb, m->emission, 3 * sizeof(float));
-    for (l = 0; l < S->nl; l++) {
+    for (l = 0; l < nl; l++) {
         float L[3], diff = 1.0f, spec = 0.0f, vis = l == 0 ? sr__clampf(s->light, 0.0f, 1.0f) : 1.0f;
-        sr__light_dir(&S->lights[l], p, L);
+        sr__light_dir(&lights[l], p, L);
         if (mode == 2) sr__kajiya_kay(T, L, V, m->shininess, &diff, &spec);
         else if (mode == 1) {
             float H[3], nh;
@@ -2316,9 +2380,19 @@ static void sr__shell_light(const sr__shell *S, const sr_shell_sample *s, const 
             spec = (diff > 0.0f && nh > 0.0f) ? powf(nh, m->shininess) : 0.0f;
         }
         for (k = 0; k < 3; k++)
-            rgb[k] += S->lights[l].ambient[k] * s->rgb[k] +
-                      vis * (S->lights[l].diffuse[k] * s->rgb[k] * diff + S->lights[l].specular[k] * m->specular[k] * s->specular * spec);
+            rgb[k] += lights[l].ambient[k] * s->rgb[k] +
+                      vis * (lights[l].diffuse[k] * s->rgb[k] * diff + lights[l].specular[k] * m->specular[k] * s->specular * spec);
     }
+}
+
+/* one sample's colour: its frame turned back to the world (the shear's inverse), then lit */
+static void sr__shell_light(const sr__shell *S, const sr_shell_sample *s, const float p[3], const float V[3], float gx,
+                            float gy, float rgb[3])
+{
+    float T[3], N[3];
+    T[0] = s->tangent[0]; T[1] = s->tangent[1]; T[2] = s->tangent[2] + gx * s->tangent[0] + gy * s->tangent[1];
+    N[0] = s->normal[0] + gx * s->normal[2]; N[1] = s->normal[1] + gy * s->normal[2]; N[2] = s->normal[2];
+    sr__layer_light(&S->d->material, S->lights, S->nl, s, T, N, p, V, rgb);
 }
 
 /* the tile of world point p and the point in its frame; dir's image in the frame (unit) and
@@ -2437,6 +2511,545 @@ SRDEF sr_result sr_draw_shell(sr_framebuffer *fb, const sr_camera *cam, const sr
         }
         if (d->progress && d->progress(d->progress_user, (float)(y + 1) / (float)fb->height)) return SR_CANCELLED;
     }
+    if (stats) { stats->covered = covered; stats->samples = S.samples; }
+    return SR_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: mesh shell marcher (prisms over a triangle mesh, split into tetrahedra, walked)
+   --------------------------------------------------------------------------------------------- */
+
+SRDEF void sr_mesh_shell_desc_default(sr_mesh_shell_desc *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    sr_material_default(&d->material);
+    d->ground_rgb[0] = 0.30f; d->ground_rgb[1] = 0.22f; d->ground_rgb[2] = 0.14f;
+}
+
+typedef struct sr__mtet {
+    float o[3], M[9];   /* world -> barycentric coordinates 1..3 (about vertex 0) */
+    float u0[3], J[9];  /* world -> the content's frame (u, v, w depth) */
+    float Ji[9];        /* frame -> world (tangents) */
+    float scale;        /* frame units per world unit across the surface (footprints) */
+    int32_t nb[4];      /* across face k (opposite vertex k): 4 tet + its face; -1 inner, -2 outer, -3 side */
+    uint32_t v[4];      /* shell vertex ids: a mesh vertex, or vertex_count + it for its offset copy */
+} sr__mtet;
+
+typedef struct sr__mface { float a[3], e1[3], e2[3], g[3]; uint32_t v[3]; int32_t id; int inner; } sr__mface;
+typedef struct sr__mnode { float lo[3], hi[3]; int32_t first, count; } sr__mnode; /* count 0: children node + 1, first */
+typedef struct sr__mkey { uint32_t v[3]; int32_t id; } sr__mkey;
+typedef struct sr__mpair { float key; int32_t i; } sr__mpair;
+
+typedef struct sr__mshell {
+    const sr_mesh_shell_desc *d;
+    sr_allocator a;
+    sr__mtet *tets;
+    size_t ntets, nfaces, nnodes;
+    sr__mface *faces;
+    sr__mnode *nodes;
+    const sr_light *lights;
+    int nl;
+    float depth, tol, min_step, pixel_angle, pixel_size;
+    long samples;
+} sr__mshell;
+
+static int sr__mkey_cmp(const void *pa, const void *pb)
+{
+    const sr__mkey *a = (const sr__mkey *)pa, *b = (const sr__mkey *)pb;
+    int k;
+    for (k = 0; k < 3; k++) if (a->v[k] != b->v[k]) return a->v[k] < b->v[k] ? -1 : 1;
+    return a->id < b->id ? -1 : a->id > b->id;
+}
+
+static int sr__mpair_cmp(const void *pa, const void *pb)
+{
+    const sr__mpair *a = (const sr__mpair *)pa, *b = (const sr__mpair *)pb;
+    if (a->key != b->key) return a->key < b->key ? -1 : 1;
+    return a->i < b->i ? -1 : a->i > b->i;
+}
+
+static double sr__det3d(const double m[9])
+{
+    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
+/* r = m^-1 (row-major); 0 if m is singular */
+static int sr__inv3d(const double m[9], double r[9])
+{
+    double det = sr__det3d(m), id;
+    int k;
+    if (!(det != 0.0)) return 0;
+    id = 1.0 / det;
+    r[0] = (m[4] * m[8] - m[5] * m[7]) * id; r[1] = (m[2] * m[7] - m[1] * m[8]) * id; r[2] = (m[1] * m[5] - m[2] * m[4]) * id;
+    r[3] = (m[5] * m[6] - m[3] * m[8]) * id; r[4] = (m[0] * m[8] - m[2] * m[6]) * id; r[5] = (m[2] * m[3] - m[0] * m[5]) * id;
+    r[6] = (m[3] * m[7] - m[4] * m[6]) * id; r[7] = (m[1] * m[6] - m[0] * m[7]) * id; r[8] = (m[0] * m[4] - m[1] * m[3]) * id;
+    for (k = 0; k < 9; k++) if (!(r[k] - r[k] == 0.0) || fabs(r[k]) > 1e30) return 0;
+    return 1;
+}
+
+static void sr__mul3d(const double a[9], const double b[9], float r[9])
+{
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) r[i * 3 + j] = (float)(a[i * 3] * b[j] + a[i * 3 + 1] * b[3 + j] + a[i * 3 + 2] * b[6 + j]);
+}
+
+/* shell vertex v (v < n: the mesh; else offset by height along the unit normal), world and frame */
+static void sr__mshell_vertex(const sr__mshell *S, uint32_t v, double x[3], double u[3])
+{
+    const sr_mesh_shell_desc *d = S->d;
+    uint32_t n = (uint32_t)d->vertex_count, m = v < n ? v : v - n;
+    const float *p = d->positions + 3 * (size_t)m, *nr = d->normals + 3 * (size_t)m;
+    double l = sqrt((double)nr[0] * nr[0] + (double)nr[1] * nr[1] + (double)nr[2] * nr[2]), h = v < n ? 0.0 : d->height / l;
+    int k;
+    for (k = 0; k < 3; k++) x[k] = (double)p[k] + h * nr[k];
+    u[0] = d->uvs[2 * (size_t)m]; u[1] = d->uvs[2 * (size_t)m + 1]; u[2] = v < n ? 0.0 : S->depth;
+}
+
+/* one tetrahedron's maps; 0 if it is singular in the world or in the frame */
+static int sr__mshell_tet(const sr__mshell *S, const uint32_t ids[4], float scale, sr__mtet *T)
+{
+    double x[4][3], u[4][3], A[9], B[9], Ai[9], Bi[9];
+    int k, r;
+    for (k = 0; k < 4; k++) sr__mshell_vertex(S, ids[k], x[k], u[k]);
+    for (r = 0; r < 3; r++)
+        for (k = 0; k < 3; k++) { A[r * 3 + k] = x[k + 1][r] - x[0][r]; B[r * 3 + k] = u[k + 1][r] - u[0][r]; }
+    if (!sr__inv3d(A, Ai) || !sr__inv3d(B, Bi)) return 0;
+    for (k = 0; k < 3; k++) { T->o[k] = (float)x[0][k]; T->u0[k] = (float)u[0][k]; }
+    for (k = 0; k < 9; k++) T->M[k] = (float)Ai[k];
+    sr__mul3d(B, Ai, T->J);
+    sr__mul3d(A, Bi, T->Ji);
+    T->scale = scale;
+    memcpy(T->v, ids, sizeof T->v);
+    return 1;
+}
+
+/* checks the mesh, builds 3 tetrahedra per prism (the side faces split by the vertex order, as
+   texel.h's tvt_shell_prism_tets does) and finds the mean edge length; 0 if invalid */
+static int sr__mshell_tets(sr__mshell *S, double *mean_edge)
+{
+    const sr_mesh_shell_desc *d = S->d;
+    uint32_t n = (uint32_t)d->vertex_count;
+    size_t t, i;
+    double edges = 0.0;
+    for (i = 0; i < d->vertex_count; i++) {
+        const float *p = d->positions + 3 * i, *nr = d->normals + 3 * i;
+        if (!sr__finite3(p) || !sr__finite3(nr) || !(d->uvs[2 * i] - d->uvs[2 * i] == 0.0f) ||
+            !(d->uvs[2 * i + 1] - d->uvs[2 * i + 1] == 0.0f) || !(sr__dot(nr, nr) > 0.0f)) return 0;
+    }
+    for (t = 0; t < d->triangle_count; t++) {
+        const uint32_t *tri = d->indices + 3 * t;
+        uint32_t a = tri[0], b = tri[1], c = tri[2], s, ids[3][4];
+        double x[3][3], u[3][3], e1[3], e2[3], cr[3], aw, au;
+        int k;
+        if (a >= n || b >= n || c >= n || a == b || b == c || a == c) return 0;
+        for (k = 0; k < 3; k++) sr__mshell_vertex(S, tri[k], x[k], u[k]);
+        for (k = 0; k < 3; k++) { e1[k] = x[1][k] - x[0][k]; e2[k] = x[2][k] - x[0][k]; }
+        cr[0] = e1[1] * e2[2] - e1[2] * e2[1]; cr[1] = e1[2] * e2[0] - e1[0] * e2[2]; cr[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        aw = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+        au = fabs((u[1][0] - u[0][0]) * (u[2][1] - u[0][1]) - (u[1][1] - u[0][1]) * (u[2][0] - u[0][0]));
+        edges += sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]) + sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+        if (!(aw > 0.0) || !(au > 0.0)) return 0;
+        if (a > b) { s = a; a = b; b = s; }
+        if (b > c) { s = b; b = c; c = s; }
+        if (a > b) { s = a; a = b; b = s; }
+        ids[0][0] = a; ids[0][1] = b;     ids[0][2] = c;     ids[0][3] = c + n;
+        ids[1][0] = a; ids[1][1] = b;     ids[1][2] = b + n; ids[1][3] = c + n;
+        ids[2][0] = a; ids[2][1] = a + n; ids[2][2] = b + n; ids[2][3] = c + n;
+        for (k = 0; k < 3; k++)
+            if (!sr__mshell_tet(S, ids[k], (float)sqrt(au / aw), &S->tets[3 * t + (size_t)k])) return 0;
+    }
+    *mean_edge = edges / (2.0 * (double)d->triangle_count);
+    return 1;
+}
+
+/* neighbours across the faces (faces keyed by their sorted vertex ids); the boundary faces
+   into S->faces; 0 if out of memory */
+static int sr__mshell_links(sr__mshell *S)
+{
+    size_t nk = 4 * S->ntets, i, j;
+    uint32_t n = (uint32_t)S->d->vertex_count;
+    sr__mkey *keys = (sr__mkey *)sr__alloc(&S->a, nk * sizeof(sr__mkey));
+    if (!keys) return 0;
+    for (i = 0; i < nk; i++) {
+        const uint32_t *v = S->tets[i / 4].v;
+        uint32_t f[3], s;
+        int k, m = 0;
+        for (k = 0; k < 4; k++) if (k != (int)(i % 4)) f[m++] = v[k];
+        if (f[0] > f[1]) { s = f[0]; f[0] = f[1]; f[1] = s; }
+        if (f[1] > f[2]) { s = f[1]; f[1] = f[2]; f[2] = s; }
+        if (f[0] > f[1]) { s = f[0]; f[0] = f[1]; f[1] = s; }
+        memcpy(keys[i].v, f, sizeof f);
+        keys[i].id = (int32_t)i;
+    }
+    qsort(keys, nk, sizeof(sr__mkey), sr__mkey_cmp);
+    S->nfaces = 0;
+    for (i = 0; i < nk; i = j) {
+        int32_t a = keys[i].id;
+        j = i + 1;
+        if (j < nk && !memcmp(keys[j].v, keys[i].v, sizeof keys[i].v)) {
+            int32_t b = keys[j].id;
+            S->tets[a / 4].nb[a % 4] = b;
+            S->tets[b / 4].nb[b % 4] = a;
+            j++;
+            for (; j < nk && !memcmp(keys[j].v, keys[i].v, sizeof keys[i].v); j++) /* a non-manifold rest: a wall */
+                S->tets[keys[j].id / 4].nb[keys[j].id % 4] = -3;
+        } else {
+            int inner = keys[i].v[2] < n, outer = keys[i].v[0] >= n;
+            S->tets[a / 4].nb[a % 4] = inner ? -1 : outer ? -2 : -3;
+            keys[S->nfaces++] = keys[i];
+        }
+    }
+    S->faces = (sr__mface *)sr__alloc(&S->a, S->nfaces * sizeof(sr__mface));
+    if (!S->faces) { S->a.free(S->a.user, keys); return 0; }
+    for (i = 0; i < S->nfaces; i++) {
+        sr__mface *F = &S->faces[i];
+        const sr__mtet *T = &S->tets[keys[i].id / 4];
+        int k = keys[i].id % 4, c;
+        double x[3][3], u[3];
+        for (c = 0; c < 3; c++) sr__mshell_vertex(S, keys[i].v[c], x[c], u);
+        for (c = 0; c < 3; c++) {
+            F->a[c] = (float)x[0][c]; F->e1[c] = (float)(x[1][c] - x[0][c]); F->e2[c] = (float)(x[2][c] - x[0][c]);
+            F->g[c] = k > 0 ? T->M[3 * (k - 1) + c] : -(T->M[c] + T->M[3 + c] + T->M[6 + c]); /* grad lambda_k: inward */
+        }
+        memcpy(F->v, keys[i].v, sizeof F->v);
+        F->id = keys[i].id;
+        F->inner = keys[i].v[2] < n;
+    }
+    S->a.free(S->a.user, keys);
+    return 1;
+}
+
+/* a BVH node over faces perm[first, first + count), median split on the longest centroid axis */
+static int32_t sr__mshell_bvh(sr__mshell *S, int32_t *perm, sr__mpair *tmp, size_t first, size_t count)
+{
+    int32_t node = (int32_t)S->nnodes++;
+    float clo[3] = {1e30f, 1e30f, 1e30f}, chi[3] = {-1e30f, -1e30f, -1e30f};
+    sr__mnode *N = &S->nodes[node];
+    size_t i;
+    int k, axis = 0;
+    for (k = 0; k < 3; k++) { N->lo[k] = 1e30f; N->hi[k] = -1e30f; }
+    for (i = first; i < first + count; i++) {
+        const sr__mface *F = &S->faces[perm[i]];
+        for (k = 0; k < 3; k++) {
+            float a = F->a[k], b = a + F->e1[k], c = a + F->e2[k], cen = (a + b + c) / 3.0f;
+            N->lo[k] = fminf(N->lo[k], fminf(a, fminf(b, c))); N->hi[k] = fmaxf(N->hi[k], fmaxf(a, fmaxf(b, c)));
+            clo[k] = fminf(clo[k], cen); chi[k] = fmaxf(chi[k], cen);
+        }
+    }
+    if (count <= 4) { N->first = (int32_t)first; N->count = (int32_t)count; return node; }
+    for (k = 1; k < 3; k++) if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+    for (i = 0; i < count; i++) {
+        const sr__mface *F = &S->faces[perm[first + i]];
+        tmp[i].key = 3.0f * F->a[axis] + F->e1[axis] + F->e2[axis];
+        tmp[i].i = perm[first + i];
+    }
+    qsort(tmp, count, sizeof(sr__mpair), sr__mpair_cmp);
+    for (i = 0; i < count; i++) perm[first + i] = tmp[i].i;
+    N->count = 0;
+    sr__mshell_bvh(S, perm, tmp, first, count / 2);
+    N = &S->nodes[node];
+    N->first = sr__mshell_bvh(S, perm, tmp, first + count / 2, count - count / 2);
+    return node;
+}
+
+/* the tetrahedra, their links, the boundary faces' BVH: 1, or 0 with *r set (all freed) */
+static int sr__mshell_init(sr__mshell *S, const sr_mesh_shell_desc *d, const sr_camera *cam, int height, sr_result *r)
+{
+    double mean_edge = 0.0;
+    int32_t *perm = NULL;
+    sr__mpair *tmp = NULL;
+    sr__mface *sorted = NULL;
+    size_t i;
+    memset(S, 0, sizeof *S);
+    S->d = d;
+    S->a = sr__resolve_allocator(d->allocator);
+    *r = SR_ERR_INVALID_ARGUMENT;
+    if (!d->positions || !d->normals || !d->uvs || !d->indices || !d->sample || d->vertex_count < 3 ||
+        d->triangle_count < 1 || d->vertex_count > 0x3FFFFFFFu || d->triangle_count > 0x7FFFFFFFu / 12u ||
+        !(d->height > 0.0f && d->height < 1e30f) || !(d->depth >= 0.0f && d->depth < 1e30f)) return 0;
+    S->depth = d->depth > 0.0f ? d->depth : 1.0f;
+    S->ntets = 3 * d->triangle_count;
+    *r = SR_ERR_OUT_OF_MEMORY;
+    S->tets = (sr__mtet *)sr__alloc(&S->a, S->ntets * sizeof(sr__mtet));
+    if (!S->tets) return 0;
+    *r = SR_ERR_INVALID_ARGUMENT;
+    if (!sr__mshell_tets(S, &mean_edge)) goto fail;
+    *r = SR_ERR_OUT_OF_MEMORY;
+    if (!sr__mshell_links(S)) goto fail;
+    S->nodes = (sr__mnode *)sr__alloc(&S->a, 2 * S->nfaces * sizeof(sr__mnode));
+    perm = (int32_t *)sr__alloc(&S->a, S->nfaces * sizeof(int32_t));
+    tmp = (sr__mpair *)sr__alloc(&S->a, S->nfaces * sizeof(sr__mpair));
+    sorted = (sr__mface *)sr__alloc(&S->a, S->nfaces * sizeof(sr__mface));
+    if (!S->nodes || !perm || !tmp || !sorted) goto fail;
+    for (i = 0; i < S->nfaces; i++) perm[i] = (int32_t)i;
+    sr__mshell_bvh(S, perm, tmp, 0, S->nfaces);
+    for (i = 0; i < S->nfaces; i++) sorted[i] = S->faces[perm[i]];
+    S->a.free(S->a.user, S->faces);
+    S->faces = sorted;
+    S->a.free(S->a.user, perm);
+    S->a.free(S->a.user, tmp);
+    S->tol = (float)(1e-5 * mean_edge);
+    S->min_step = (float)(mean_edge / 4096.0);
+    S->pixel_angle = cam->orthographic ? 0.0f : 2.0f * cam->tan_half_fovy / (float)height;
+    S->pixel_size = cam->orthographic ? 2.0f * cam->half_height / (float)height : 0.0f;
+    return 1;
+fail:
+    if (perm) S->a.free(S->a.user, perm);
+    if (tmp) S->a.free(S->a.user, tmp);
+    if (sorted) S->a.free(S->a.user, sorted);
+    if (S->nodes) S->a.free(S->a.user, S->nodes);
+    if (S->faces) S->a.free(S->a.user, S->faces);
+    S->a.free(S->a.user, S->tets);
+    return 0;
+}
+
+static void sr__mshell_free(sr__mshell *S)
+{
+    S->a.free(S->a.user, S->nodes);
+    S->a.free(S->a.user, S->faces);
+    S->a.free(S->a.user, S->tets);
+}
+
+/* the nearest boundary face in [tmin, tmax] the ray enters the shell by (or opaque ground); 0 if none */
+static int sr__mshell_hit(const sr__mshell *S, const float o[3], const float dir[3], float tmin, float tmax,
+                          float *th, const sr__mface **hit, float bary[2])
+{
+    int32_t stack[64];
+    int sp = 0, k, found = 0;
+    float inv[3], best = tmax;
+    for (k = 0; k < 3; k++) inv[k] = dir[k] != 0.0f ? 1.0f / dir[k] : 1e30f;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const sr__mnode *N = &S->nodes[stack[--sp]];
+        float t0 = tmin, t1 = best;
+        int32_t i;
+        for (k = 0; k < 3; k++) {
+            float a = (N->lo[k] - o[k]) * inv[k], b = (N->hi[k] - o[k]) * inv[k];
+            if (a > b) { float s = a; a = b; b = s; }
+            t0 = a > t0 ? a : t0; t1 = b < t1 ? b : t1;
+        }
+        if (t0 > t1 * 1.000001f + S->tol) continue;
+        if (N->count == 0) {
+            if (sp + 2 > 64) continue;
+            stack[sp++] = N->first;
+            stack[sp++] = (int32_t)(N - S->nodes) + 1;
+            continue;
+        }
+        for (i = N->first; i < N->first + N->count; i++) {
+            const sr__mface *F = &S->faces[i];
+            float pv[3], tv[3], qv[3], det, id, u, v, t;
+            sr__cross(dir, F->e2, pv);
+            det = sr__dot(F->e1, pv);
+            if (det == 0.0f) continue;
+            id = 1.0f / det;
+            sr__sub(o, F->a, tv);
+            u = sr__dot(tv, pv) * id;
+            if (u < -1e-6f || u > 1.000001f) continue;
+            sr__cross(tv, F->e1, qv);
+            v = sr__dot(dir, qv) * id;
+            if (v < -1e-6f || u + v > 1.000001f) continue;
+            t = sr__dot(F->e2, qv) * id;
+            if (t < tmin || t >= best || !((F->inner && !S->d->see_through) || sr__dot(F->g, dir) > 0.0f)) continue;
+            best = t; *hit = F; bary[0] = u; bary[1] = v; found = 1;
+        }
+    }
+    *th = best;
+    return found;
+}
+
+/* where a ray is in its tetrahedron: barycentric coordinates lam + (t' - t) b, and where it leaves */
+typedef struct sr__mwalk { int32_t tet; int k_exit; float t, t_exit, lam[4], b[4]; } sr__mwalk;
+
+static void sr__mwalk_set(const sr__mshell *S, sr__mwalk *w, int32_t tet, int entry, const float o[3], const float dir[3], float t)
+{
+    const sr__mtet *T = &S->tets[tet];
+    float p[3], l[3];
+    int k;
+    for (k = 0; k < 3; k++) p[k] = o[k] + t * dir[k] - T->o[k];
+    for (k = 0; k < 3; k++) {
+        l[k] = T->M[3 * k] * p[0] + T->M[3 * k + 1] * p[1] + T->M[3 * k + 2] * p[2];
+        w->b[k + 1] = T->M[3 * k] * dir[0] + T->M[3 * k + 1] * dir[1] + T->M[3 * k + 2] * dir[2];
+        w->lam[k + 1] = l[k];
+    }
+    w->lam[0] = 1.0f - l[0] - l[1] - l[2];
+    w->b[0] = -(w->b[1] + w->b[2] + w->b[3]);
+    w->tet = tet; w->t = t; w->t_exit = 1e30f; w->k_exit = -1;
+    for (k = 0; k < 4; k++)
+        if (k != entry && w->b[k] < 0.0f) {
+            float te = t + (w->lam[k] > 0.0f ? w->lam[k] : 0.0f) / -w->b[k];
+            if (te < w->t_exit) { w->t_exit = te; w->k_exit = k; }
+        }
+}
+
+/* the ground (the mesh) at p: Lambert with the normals of shell vertices v weighted by l, two-sided */
+static void sr__mshell_ground(const sr__mshell *S, const uint32_t v[3], const float l[3], const float p[3],
+                              const float V[3], sr__shell_ray *r, float t)
+{
+    const float *nr = S->d->normals;
+    float N[3], c[3];
+    int k;
+    for (k = 0; k < 3; k++) N[k] = l[0] * nr[3 * (size_t)v[0] + k] + l[1] * nr[3 * (size_t)v[1] + k] + l[2] * nr[3 * (size_t)v[2] + k];
+    if (sr__dot(N, V) < 0.0f) { N[0] = -N[0]; N[1] = -N[1]; N[2] = -N[2]; }
+    sr__ground_lambert(S->lights, S->nl, S->d->ground_rgb, N, p, c);
+    for (k = 0; k < 3; k++) r->rgb[k] += r->T * c[k];
+    r->T = 0.0f;
+    if (r->depth_t < 0.0f) r->depth_t = t;
+}
+
+/* the ground where the walk leaves its tetrahedron through the inner face */
+static void sr__mshell_ground_exit(const sr__mshell *S, const sr__mwalk *w, const float o[3], const float dir[3],
+                                   const float V[3], sr__shell_ray *r)
+{
+    const sr__mtet *T = &S->tets[w->tet];
+    uint32_t v[3];
+    float l[3], p[3];
+    int k, m = 0;
+    for (k = 0; k < 4; k++)
+        if (k != w->k_exit) { v[m] = T->v[k]; l[m] = w->lam[k] + (w->t_exit - w->t) * w->b[k]; m++; }
+    for (k = 0; k < 3; k++) p[k] = o[k] + w->t_exit * dir[k];
+    sr__mshell_ground(S, v, l, p, V, r, w->t_exit);
+}
+
+/* the boundary face the ray enters by, after tmin: 1 with the walk set there, 0 if none or the
+   ground (then shaded into r) */
+static int sr__mshell_enter(const sr__mshell *S, sr__mwalk *w, const float o[3], const float dir[3], float tmin,
+                            float tmax, const float V[3], sr__shell_ray *r)
+{
+    const sr__mface *F = NULL;
+    float th, bary[2];
+    if (!sr__mshell_hit(S, o, dir, tmin, tmax, &th, &F, bary)) return 0;
+    if (F->inner && !S->d->see_through) {
+        float l[3], p[3];
+        int k;
+        l[0] = 1.0f - bary[0] - bary[1]; l[1] = bary[0]; l[2] = bary[1];
+        for (k = 0; k < 3; k++) p[k] = o[k] + th * dir[k];
+        sr__mshell_ground(S, F->v, l, p, V, r, th);
+        return 0;
+    }
+    sr__mwalk_set(S, w, F->id / 4, F->id % 4, o, dir, th);
+    return 1;
+}
+
+/* one sample in the walk's tetrahedron at t: the content's query, its colour composited into r;
+   returns the world distance to the next sample and whether it was empty */
+static float sr__mshell_sample(sr__mshell *S, const sr__mwalk *w, const float o[3], const float dir[3], float t,
+                               const float V[3], int *after_empty, sr__shell_ray *r)
+{
+    const sr_mesh_shell_desc *d = S->d;
+    const sr__mtet *T = &S->tets[w->tet];
+    float p[3], x[3], f[3], per_world, step, alpha, c[3], Tw[3], Nw[3], fu, fv;
+    sr_shell_query q;
+    sr_shell_sample s;
+    int k;
+    for (k = 0; k < 3; k++) { p[k] = o[k] + t * dir[k]; x[k] = p[k] - T->o[k]; }
+    for (k = 0; k < 3; k++) {
+        f[k] = T->J[3 * k] * x[0] + T->J[3 * k + 1] * x[1] + T->J[3 * k + 2] * x[2] + T->u0[k];
+        q.dir[k] = T->J[3 * k] * dir[0] + T->J[3 * k + 1] * dir[1] + T->J[3 * k + 2] * dir[2];
+    }
+    per_world = sqrtf(sr__dot(q.dir, q.dir));
+    for (k = 0; k < 3; k++) q.dir[k] /= per_world;
+    fu = floorf(sr__clampf(f[0], -2e9f, 2e9f)); fv = floorf(sr__clampf(f[1], -2e9f, 2e9f));
+    q.tile_x = (int)fu; q.tile_y = (int)fv;
+    q.p[0] = sr__clampf(f[0] - fu, 0.0f, 0.99999994f);
+    q.p[1] = sr__clampf(f[1] - fv, 0.0f, 0.99999994f);
+    q.p[2] = sr__clampf(f[2], 0.0f, S->depth * 0.99999994f);
+    q.footprint = (S->pixel_angle * t + S->pixel_size) * T->scale;
+    q.after_empty = *after_empty;
+    memset(&s, 0, sizeof s);
+    s.light = 1.0f;
+    d->sample(d->user, &q, &s);
+    S->samples++;
+    step = s.step > 0.0f ? s.step : 1.0f / 256.0f;
+    *after_empty = !(s.sigma > 0.0f);
+    if (*after_empty) { /* an empty span ends at the tile's border: the next tile's content may differ */
+        for (k = 0; k < 2; k++) {
+            float to_border = q.dir[k] > 0.0f ? (1.0f - q.p[k]) / q.dir[k] : q.dir[k] < 0.0f ? -q.p[k] / q.dir[k] : 1e30f;
+            if (to_border + 1.0f / 4096.0f < step) step = to_border + 1.0f / 4096.0f;
+        }
+        return fmaxf(step / per_world, S->min_step);
+    }
+    alpha = 1.0f - expf(-s.sigma * step);
+    for (k = 0; k < 3; k++) { /* tangents by the inverse map, normals by its transpose */
+        Tw[k] = T->Ji[3 * k] * s.tangent[0] + T->Ji[3 * k + 1] * s.tangent[1] + T->Ji[3 * k + 2] * s.tangent[2];
+        Nw[k] = T->J[k] * s.normal[0] + T->J[3 + k] * s.normal[1] + T->J[6 + k] * s.normal[2];
+    }
+    sr__layer_light(&d->material, S->lights, S->nl, &s, Tw, Nw, p, V, c);
+    for (k = 0; k < 3; k++) r->rgb[k] += r->T * alpha * c[k];
+    r->T *= 1.0f - alpha;
+    r->layer_T *= 1.0f - alpha;
+    if (r->depth_t < 0.0f && 1.0f - r->T >= (d->depth_threshold > 0.0f ? d->depth_threshold : 0.5f)) r->depth_t = t;
+    return fmaxf(step / per_world, S->min_step);
+}
+
+/* Marches one ray: enters the shell by its first boundary face, walks tetrahedron to tetrahedron
+   (leaving through the outer surface or a side border it looks for the next entry), samples at
+   the content's steps, and ends on the ground, at t1, or when opaque. */
+static void sr__mshell_trace(sr__mshell *S, const float o[3], const float dir[3], float t1, sr__shell_ray *r)
+{
+    const sr_mesh_shell_desc *d = S->d;
+    float term = d->termination > 0.0f ? 1.0f - d->termination : 0.01f, V[3], ts;
+    sr__mwalk w;
+    int after_empty = 1;
+    long budget = 1L << 16;
+    V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
+    r->rgb[0] = r->rgb[1] = r->rgb[2] = 0.0f;
+    r->T = r->layer_T = 1.0f;
+    r->depth_t = -1.0f;
+    if (!sr__mshell_enter(S, &w, o, dir, 0.0f, t1, V, r)) return;
+    ts = w.t;
+    while (ts < t1 && r->T > term) {
+        while (ts > w.t_exit) { /* walk to the tetrahedron that holds ts */
+            int32_t nb = S->tets[w.tet].nb[w.k_exit];
+            if (--budget < 0) return;
+            if (nb >= 0) { sr__mwalk_set(S, &w, nb / 4, nb % 4, o, dir, w.t_exit); continue; }
+            if (nb == -1 && !d->see_through) { sr__mshell_ground_exit(S, &w, o, dir, V, r); return; }
+            if (!sr__mshell_enter(S, &w, o, dir, w.t_exit - S->tol, t1, V, r)) return;
+            if (w.t > ts) { ts = w.t; after_empty = 1; }
+        }
+        if (ts >= t1) break;
+        ts += sr__mshell_sample(S, &w, o, dir, ts, V, &after_empty, r);
+    }
+}
+
+SRDEF sr_result sr_draw_mesh_shell(sr_framebuffer *fb, const sr_camera *cam, const sr_mesh_shell_desc *d,
+                                   sr_shell_stats *stats)
+{
+    sr__mshell S;
+    sr_light head;
+    sr_result res;
+    long covered = 0;
+    int x, y;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!fb || !fb->color || !cam || !d) return SR_ERR_INVALID_ARGUMENT;
+    if (!sr__mshell_init(&S, d, cam, fb->height, &res)) return res;
+    S.lights = sr__lights(d->lights, d->light_count, cam, &head, &S.nl);
+    for (y = 0; y < fb->height; y++) {
+        for (x = 0; x < fb->width; x++) {
+            float o[3], dir[3], t1 = 1e30f, z;
+            size_t i = (size_t)y * (size_t)fb->width + (size_t)x;
+            sr__shell_ray r;
+            int k;
+            sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            if (fb->depth[i] < 1.0f) sr__depth_limit(cam->viewproj, o, dir, fb->depth[i], &t1);
+            sr__mshell_trace(&S, o, dir, t1, &r);
+            if (r.T >= 1.0f) continue;
+            if (r.layer_T <= 0.5f) covered++;
+            if (r.depth_t >= 0.0f) {
+                float p[3];
+                for (k = 0; k < 3; k++) p[k] = o[k] + r.depth_t * dir[k];
+                if (sr_camera_depth(cam, p, &z) && z < fb->depth[i]) fb->depth[i] = z;
+            }
+            for (k = 0; k < 3; k++) fb->color[4 * i + (size_t)k] = r.rgb[k] + r.T * fb->color[4 * i + (size_t)k];
+            fb->color[4 * i + 3] = 1.0f - r.T * (1.0f - fb->color[4 * i + 3]);
+        }
+        if (d->progress && d->progress(d->progress_user, (float)(y + 1) / (float)fb->height)) {
+            sr__mshell_free(&S);
+            return SR_CANCELLED;
+        }
+    }
+    sr__mshell_free(&S);
     if (stats) { stats->covered = covered; stats->samples = S.samples; }
     return SR_OK;
 }

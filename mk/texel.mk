@@ -6,3 +6,4 @@ BENCHES += $(B)/bench_texel
 $(B)/bench_texel: bench/bench_texel.c examples/grass.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) -DNDEBUG -DBENCH_FLAGS='"$(CC) $(CFLAGS_ALL) -DNDEBUG"' $< -o $@ -lm
 C_TESTS += $(B)/test_texel_shell
+C_TESTS += $(B)/test_texel_mesh

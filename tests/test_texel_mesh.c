@@ -1,0 +1,578 @@
+/* test_texel_mesh - tiling over a mesh shell (issue 19 point 4): texel.h's prism map (continuity
+   across shared side faces, the round trips, the flat case against the height-field tiling's
+   map, folding, bad input, allocation failure, per-tile wd from a map, determinism), then
+   render.h's mesh shell marcher (sr_draw_mesh_shell): a flat mesh shell against sr_draw_shell
+   with the same content, a closed cube-sphere with no holes at its seams, bad input,
+   allocation failure, cancellation and determinism. TEST_SANITIZE=1 shrinks the pictures. */
+#define SR_IMPLEMENTATION
+#include "render.h"
+#define TVT_IMPLEMENTATION
+#include "texel.h"
+#include "test.h"
+#include <stdlib.h>
+#include <float.h>
+
+/* ---- a counting allocator that can fail the k-th allocation ---------------------------------- */
+typedef struct counting { long live, calls, fail_at; } counting;
+static void *c_alloc(void *u, size_t n)
+{
+    counting *c = (counting *)u;
+    if (++c->calls == c->fail_at) return NULL;
+    c->live++;
+    return malloc(n);
+}
+static void c_free(void *u, void *p)
+{
+    counting *c = (counting *)u;
+    if (p) { c->live--; free(p); }
+}
+
+static uint64_t rng_state = 12345;
+static float frand(void) /* [0, 1) */
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (float)(rng_state >> 40) / 16777216.0f;
+}
+
+/* ---- meshes ------------------------------------------------------------------------------- */
+typedef struct mesh { float *pos, *nrm, *uv; uint32_t *idx; size_t nv, nt; } mesh;
+
+static void mesh_free(mesh *m) { free(m->pos); free(m->nrm); free(m->uv); free(m->idx); memset(m, 0, sizeof(*m)); }
+
+/* an n x n grid over [0, size]^2, z = amp sin sin (amp 0: flat), normals of that surface, uv = xy / tile */
+static mesh grid_mesh(int n, float size, float amp, float tile)
+{
+    mesh m;
+    int i, j;
+    m.nv = (size_t)n * n; m.nt = 2 * (size_t)(n - 1) * (n - 1);
+    m.pos = (float *)malloc(m.nv * 3 * sizeof(float)); m.nrm = (float *)malloc(m.nv * 3 * sizeof(float));
+    m.uv = (float *)malloc(m.nv * 2 * sizeof(float)); m.idx = (uint32_t *)malloc(m.nt * 3 * sizeof(uint32_t));
+    for (j = 0; j < n; j++)
+        for (i = 0; i < n; i++) {
+            size_t v = (size_t)j * n + i;
+            float x = size * i / (n - 1), y = size * j / (n - 1), k = 2.0f * 3.14159265f / size;
+            float z = amp * sinf(k * x) * sinf(k * y), gx = amp * k * cosf(k * x) * sinf(k * y), gy = amp * k * sinf(k * x) * cosf(k * y);
+            float l = sqrtf(gx * gx + gy * gy + 1.0f);
+            m.pos[3 * v] = x; m.pos[3 * v + 1] = y; m.pos[3 * v + 2] = z;
+            m.nrm[3 * v] = -gx / l; m.nrm[3 * v + 1] = -gy / l; m.nrm[3 * v + 2] = 1.0f / l;
+            m.uv[2 * v] = x / tile; m.uv[2 * v + 1] = y / tile;
+        }
+    for (j = 0; j + 1 < n; j++)
+        for (i = 0; i + 1 < n; i++) {
+            uint32_t a = (uint32_t)(j * n + i), b = a + 1, c = a + (uint32_t)n, d = c + 1;
+            uint32_t *t = m.idx + 6 * ((size_t)j * (n - 1) + i);
+            t[0] = a; t[1] = b; t[2] = d; t[3] = a; t[4] = d; t[5] = c;
+        }
+    return m;
+}
+
+/* a cube-sphere of radius r: 6 faces of n x n quads, each face its own chart (vertices repeated
+   at the cube's edges: the charts' seams are not shared faces), uv = tiles per face */
+static mesh sphere_mesh(int n, float r, float tiles)
+{
+    mesh m;
+    int f, i, j;
+    size_t v = 0, t = 0;
+    m.nv = 6 * (size_t)(n + 1) * (n + 1); m.nt = 6 * 2 * (size_t)n * n;
+    m.pos = (float *)malloc(m.nv * 3 * sizeof(float)); m.nrm = (float *)malloc(m.nv * 3 * sizeof(float));
+    m.uv = (float *)malloc(m.nv * 2 * sizeof(float)); m.idx = (uint32_t *)malloc(m.nt * 3 * sizeof(uint32_t));
+    for (f = 0; f < 6; f++) {
+        int ax = f / 2; float sg = f % 2 ? -1.0f : 1.0f;
+        size_t base = v;
+        for (j = 0; j <= n; j++)
+            for (i = 0; i <= n; i++, v++) {
+                float a = 2.0f * i / n - 1.0f, b = 2.0f * j / n - 1.0f, c[3], l;
+                c[ax] = sg; c[(ax + 1) % 3] = sg * a; c[(ax + 2) % 3] = b;
+                l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+                m.nrm[3 * v] = c[0] / l; m.nrm[3 * v + 1] = c[1] / l; m.nrm[3 * v + 2] = c[2] / l;
+                m.pos[3 * v] = r * c[0] / l; m.pos[3 * v + 1] = r * c[1] / l; m.pos[3 * v + 2] = r * c[2] / l;
+                m.uv[2 * v] = tiles * (float)i / n + 7.0f * f; m.uv[2 * v + 1] = tiles * (float)j / n;
+            }
+        for (j = 0; j < n; j++)
+            for (i = 0; i < n; i++) {
+                uint32_t a = (uint32_t)(base + (size_t)j * (n + 1) + i), b = a + 1, c = a + (uint32_t)(n + 1), d = c + 1;
+                m.idx[3 * t] = a; m.idx[3 * t + 1] = b; m.idx[3 * t + 2] = d; t++;
+                m.idx[3 * t] = a; m.idx[3 * t + 1] = d; m.idx[3 * t + 2] = c; t++;
+            }
+    }
+    return m;
+}
+
+static tvt_shell_desc shell_desc(const mesh *m, float height)
+{
+    tvt_shell_desc d;
+    memset(&d, 0, sizeof(d));
+    d.positions = m->pos; d.normals = m->nrm; d.uvs = m->uv; d.vertex_count = m->nv;
+    d.indices = m->idx; d.triangle_count = m->nt; d.height = height;
+    return d;
+}
+
+/* shell vertex v of the mesh (v >= nv: offset by height along the unit normal), in double */
+static void shell_vertex(const mesh *m, float height, uint32_t v, double x[3])
+{
+    uint32_t k = v < m->nv ? v : v - (uint32_t)m->nv;
+    const float *n = m->nrm + 3 * k;
+    double l = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]), h = v < m->nv ? 0.0 : height / l;
+    int c;
+    for (c = 0; c < 3; c++) x[c] = m->pos[3 * k + c] + h * n[c];
+}
+
+/* the map's rounding: float affine maps of coordinates of size s, so a few ulps of s, times the
+   map's gain (frame units per world unit, at most g); 64 ulps covers the matrices' own float
+   rounding (each entry 1/2 ulp, summed over 3 terms) and the query point's (1/2 ulp of s) */
+static double map_tol(double s, double g) { return 64.0 * FLT_EPSILON * (1.0 + s) * (1.0 + g); }
+
+/* ---- texel.h: the map --------------------------------------------------------------------- */
+/* Points on the side face two prisms share map to the same uvw from both. The face of edge
+   (i, j), i < j, is the two triangles (i, j, j') and (i, i', j') (the split rule), so points are
+   drawn on those; their true uvw is the same combination of the corners' uvw. */
+static void test_continuity(void)
+{
+    mesh m = grid_mesh(7, 3.0f, 0.4f, 0.75f);
+    float height = 0.3f;
+    tvt_shell_desc d = shell_desc(&m, height);
+    tvt_shell s;
+    size_t t1, t2;
+    long faces = 0, points = 0, inside = 0, agree = 0;
+    double worst = 0;
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+    T_EQ_SIZE(s.folded, 0);
+    for (t1 = 0; t1 < m.nt; t1++)
+        for (t2 = t1 + 1; t2 < m.nt; t2++) {
+            const uint32_t *A = m.idx + 3 * t1, *B = m.idx + 3 * t2;
+            uint32_t e[2];
+            int a, b, c = 0, k;
+            for (a = 0; a < 3; a++) for (b = 0; b < 3; b++) if (A[a] == B[b] && c < 2) e[c++] = A[a];
+            if (c != 2) continue;
+            if (e[0] > e[1]) { uint32_t x = e[0]; e[0] = e[1]; e[1] = x; }
+            faces++;
+            for (k = 0; k < 8; k++) {
+                uint32_t tri[3];
+                double x[3][3], w[3], p[3] = {0, 0, 0}, u[3] = {0, 0, 0};
+                float pf[3], m1[3], m2[3];
+                int c2, r1, r2;
+                if (k & 1) { tri[0] = e[0]; tri[1] = e[1]; tri[2] = e[1] + (uint32_t)m.nv; }
+                else { tri[0] = e[0]; tri[1] = e[0] + (uint32_t)m.nv; tri[2] = e[1] + (uint32_t)m.nv; }
+                w[0] = frand(); w[1] = frand() * (1 - w[0]); w[2] = 1 - w[0] - w[1];
+                for (c2 = 0; c2 < 3; c2++) shell_vertex(&m, height, tri[c2], x[c2]);
+                for (c2 = 0; c2 < 3; c2++) {
+                    uint32_t v = tri[c2] % (uint32_t)m.nv;
+                    p[0] += w[c2] * x[c2][0]; p[1] += w[c2] * x[c2][1]; p[2] += w[c2] * x[c2][2];
+                    u[0] += w[c2] * m.uv[2 * v]; u[1] += w[c2] * m.uv[2 * v + 1]; u[2] += w[c2] * (tri[c2] >= m.nv ? 1.0 : 0.0);
+                }
+                pf[0] = (float)p[0]; pf[1] = (float)p[1]; pf[2] = (float)p[2];
+                r1 = tvt_shell_map(&s, t1, pf, m1);
+                r2 = tvt_shell_map(&s, t2, pf, m2);
+                points++;
+                inside += r1 == 1 && r2 == 1;
+                {
+                    double d1 = 0, d2 = 0, tol = map_tol(6.0, 8.0);
+                    for (c2 = 0; c2 < 3; c2++) {
+                        d1 = fmax(d1, fabs(m1[c2] - m2[c2]));
+                        d2 = fmax(d2, fabs(m1[c2] - u[c2]));
+                    }
+                    worst = fmax(worst, d1);
+                    agree += d1 <= tol && d2 <= tol;
+                }
+            }
+        }
+    T_CHECK(faces == 3 * 6 * 6 - 2 * 6); /* interior edges of a 6 x 6 quad grid with diagonals: 3 per quad minus the border */
+    T_EQ_INT(inside, points);
+    T_CHECK_MSG(agree == points, "%ld of %ld agree, worst %.3g", agree, points, worst);
+    tvt_shell_free(&s);
+    mesh_free(&m);
+}
+
+/* point -> uvw -> point, and uvw -> point -> uvw, in random prisms; the prism's corners map to
+   their uv and w = 0, 1 */
+static void test_round_trip(void)
+{
+    mesh m = grid_mesh(6, 2.0f, 0.3f, 0.5f);
+    float height = 0.25f;
+    tvt_shell_desc d = shell_desc(&m, height);
+    tvt_shell s;
+    int k, ok_p = 0, ok_u = 0, ok_c = 0, n = 400;
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+    for (k = 0; k < n; k++) {
+        size_t t = (size_t)(frand() * (float)m.nt);
+        const uint32_t *tri = m.idx + 3 * t;
+        double x[6][3], w[4], y[3], p[3] = {0, 0, 0}, err = 0, erru = 0;
+        float pf[3], uvw[3], back[3], uvw2[3];
+        uint32_t tets[3][4];
+        int c, j, r1, r2, r3, r4, which = (int)(frand() * 3.0f) % 3;
+        /* a point of the prism: of one of its three tetrahedra (random barycentric coordinates) */
+        w[0] = frand(); w[1] = frand(); w[2] = frand(); w[3] = frand();
+        y[0] = w[0] + w[1] + w[2] + w[3];
+        tvt_shell_prism_tets(tri, (uint32_t)m.nv, tets);
+        for (j = 0; j < 4; j++) {
+            shell_vertex(&m, height, tets[which][j], y);
+            for (c = 0; c < 3; c++) p[c] += w[j] / (w[0] + w[1] + w[2] + w[3]) * y[c];
+        }
+        for (j = 0; j < 6; j++) shell_vertex(&m, height, tri[j % 3] + (j >= 3 ? (uint32_t)m.nv : 0), x[j]);
+        for (c = 0; c < 3; c++) pf[c] = (float)p[c];
+        r1 = tvt_shell_map(&s, t, pf, uvw);
+        r2 = tvt_shell_unmap(&s, t, uvw, back);
+        for (c = 0; c < 3; c++) err = fmax(err, fabs(back[c] - pf[c]));
+        r3 = tvt_shell_map(&s, t, back, uvw2);
+        for (c = 0; c < 3; c++) erru = fmax(erru, fabs(uvw2[c] - uvw[c]));
+        /* gain: world per frame unit up to tile 0.5 and height 0.25 (condition of the maps < 8) */
+        ok_p += r1 == 1 && r2 == 1 && err <= map_tol(2.5, 8.0);
+        ok_u += r3 == 1 && erru <= map_tol(5.0, 8.0) && uvw[2] >= -1e-5f && uvw[2] <= 1.0f + 1e-5f;
+        /* a corner */
+        j = (int)(frand() * 6.0f) % 6;
+        for (c = 0; c < 3; c++) pf[c] = (float)x[j][c];
+        r4 = tvt_shell_map(&s, t, pf, uvw);
+        ok_c += r4 == 1 && fabs(uvw[0] - m.uv[2 * tri[j % 3]]) <= map_tol(4.0, 8.0) &&
+                fabs(uvw[1] - m.uv[2 * tri[j % 3] + 1]) <= map_tol(4.0, 8.0) && fabs(uvw[2] - (j >= 3 ? 1.0 : 0.0)) <= map_tol(4.0, 8.0);
+    }
+    T_EQ_INT(ok_p, n);
+    T_EQ_INT(ok_u, n);
+    T_EQ_INT(ok_c, n);
+    { /* a point outside the prism says so, a bad prism index is -1 */
+        float far[3] = {100, 100, 100}, uvw[3];
+        T_EQ_INT(tvt_shell_map(&s, 0, far, uvw), 0);
+        T_EQ_INT(tvt_shell_map(&s, m.nt, far, uvw), -1);
+        T_EQ_INT(tvt_shell_unmap(&s, m.nt, far, uvw), -1);
+    }
+    tvt_shell_free(&s);
+    mesh_free(&m);
+}
+
+/* A flat mesh with upward normals and shell height = tile is the height-field tiling of a flat
+   terrain: uvw = (x / tile, y / tile, z / tile) (render.h's sr_draw_shell frame, texel.h RENDERING) */
+static void test_flat_is_height_field(void)
+{
+    float tile = 0.5f;
+    mesh m = grid_mesh(5, 2.0f, 0.0f, tile);
+    tvt_shell_desc d = shell_desc(&m, tile);
+    tvt_shell s;
+    int k, ok = 0, n = 300;
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+    for (k = 0; k < n; k++) {
+        size_t t = (size_t)(frand() * (float)m.nt);
+        const uint32_t *tri = m.idx + 3 * t;
+        float b0 = frand(), b1 = frand() * (1 - b0), p[3], uvw[3];
+        int c;
+        for (c = 0; c < 2; c++)
+            p[c] = b0 * m.pos[3 * tri[0] + c] + b1 * m.pos[3 * tri[1] + c] + (1 - b0 - b1) * m.pos[3 * tri[2] + c];
+        p[2] = frand() * tile;
+        ok += tvt_shell_map(&s, t, p, uvw) == 1 && fabsf(uvw[0] - p[0] / tile) <= map_tol(4.0, 2.0) &&
+              fabsf(uvw[1] - p[1] / tile) <= map_tol(4.0, 2.0) && fabsf(uvw[2] - p[2] / tile) <= map_tol(1.0, 2.0);
+    }
+    T_EQ_INT(ok, n);
+    tvt_shell_free(&s);
+    mesh_free(&m);
+}
+
+/* normals converging over a small triangle: a thin shell is fine, a thick one folds */
+static void test_folded(void)
+{
+    float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, nrm[9], uv[6] = {0, 0, 1, 0, 0, 1};
+    uint32_t idx[3] = {0, 1, 2};
+    mesh m;
+    tvt_shell_desc d;
+    tvt_shell s;
+    int v;
+    for (v = 0; v < 3; v++) { /* toward the centroid, 60 degrees from the vertical */
+        float cx = 1.0f / 3 - pos[3 * v], cy = 1.0f / 3 - pos[3 * v + 1], l = sqrtf(cx * cx + cy * cy);
+        nrm[3 * v] = 0.866f * cx / l; nrm[3 * v + 1] = 0.866f * cy / l; nrm[3 * v + 2] = 0.5f;
+    }
+    m.pos = pos; m.nrm = nrm; m.uv = uv; m.idx = idx; m.nv = 3; m.nt = 1;
+    d = shell_desc(&m, 0.05f);
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+    T_EQ_SIZE(s.folded, 0);
+    tvt_shell_free(&s);
+    d.height = 2.0f; /* the offset triangle passes through its centre and turns over */
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_FOLDED);
+    T_CHECK(s.tets == NULL);
+    d.allow_folded = 1;
+    T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+    T_EQ_SIZE(s.folded, 1);
+    tvt_shell_free(&s);
+}
+
+static void test_bad_input(void)
+{
+    mesh m = grid_mesh(3, 1.0f, 0.1f, 0.5f);
+    tvt_shell_desc d = shell_desc(&m, 0.1f);
+    tvt_shell s;
+    float keep;
+    uint32_t ik;
+    T_EQ_INT(tvt_build_shell(NULL, &s), TVT_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(tvt_build_shell(&d, NULL), TVT_ERR_INVALID_ARGUMENT);
+    d.uvs = NULL; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_INVALID_ARGUMENT); d.uvs = m.uv;
+    keep = m.pos[4]; m.pos[4] = NAN; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER); m.pos[4] = keep;
+    keep = m.nrm[5]; m.nrm[5] = INFINITY; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER); m.nrm[5] = keep;
+    keep = m.uv[3]; m.uv[3] = NAN; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER); m.uv[3] = keep;
+    { float n0[3]; memcpy(n0, m.nrm, sizeof n0); memset(m.nrm, 0, sizeof n0);
+      T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER); memcpy(m.nrm, n0, sizeof n0); }
+    d.height = 0.0f; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER);
+    d.height = -1.0f; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER);
+    d.height = NAN; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_PARAMETER);
+    d.height = 0.1f;
+    ik = m.idx[4]; m.idx[4] = (uint32_t)m.nv; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_BAD_INDEX);
+    m.idx[4] = m.idx[3]; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_DEGENERATE); /* a repeated vertex */
+    m.idx[4] = ik;
+    { /* three collinear vertices: move vertex 1 onto the line of 0 and 2 ... */
+        float p1[3], u1[2];
+        memcpy(p1, m.pos + 3, sizeof p1); memcpy(u1, m.uv + 2, sizeof u1);
+        m.pos[3] = 0.5f * (m.pos[0] + m.pos[3 * 8]); m.pos[4] = 0.5f * (m.pos[1] + m.pos[3 * 8 + 1]);
+        m.pos[5] = 0.5f * (m.pos[2] + m.pos[3 * 8 + 2]);
+        T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_DEGENERATE);
+        memcpy(m.pos + 3, p1, sizeof p1);
+        m.uv[2] = m.uv[0]; m.uv[3] = m.uv[1]; /* ... and a triangle of zero area in tile coordinates */
+        T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_DEGENERATE);
+        memcpy(m.uv + 2, u1, sizeof u1);
+    }
+    d.triangle_count = 0; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_EMPTY);
+    d.triangle_count = ((size_t)-1) / 8; T_EQ_INT(tvt_build_shell(&d, &s), TVT_ERR_TOO_LARGE);
+    d.triangle_count = m.nt;
+    T_CHECK(s.tets == NULL && s.prism_count == 0);
+    T_EQ_STR(tvt_result_string(TVT_ERR_FOLDED), "TVT_ERR_FOLDED");
+    T_EQ_STR(tvt_result_string(TVT_ERR_BAD_INDEX), "TVT_ERR_BAD_INDEX");
+    T_EQ_STR(tvt_result_string(TVT_ERR_DEGENERATE), "TVT_ERR_DEGENERATE");
+    { /* allocation failure at every k: the named error, nothing leaked */
+        counting c;
+        tvt_allocator a;
+        long k;
+        int all = 1;
+        a.alloc = c_alloc; a.free = c_free; a.user = &c;
+        d.allocator = &a;
+        for (k = 1; k < 10; k++) {
+            tvt_result r;
+            memset(&c, 0, sizeof c); c.fail_at = k;
+            r = tvt_build_shell(&d, &s);
+            if (r == TVT_OK) { tvt_shell_free(&s); all &= c.live == 0; break; }
+            all &= r == TVT_ERR_OUT_OF_MEMORY && c.live == 0;
+        }
+        T_CHECK(all && k > 1);
+        d.allocator = NULL;
+    }
+    { /* the same bits on every run */
+        tvt_shell s2;
+        T_EQ_INT(tvt_build_shell(&d, &s), TVT_OK);
+        T_EQ_INT(tvt_build_shell(&d, &s2), TVT_OK);
+        T_CHECK(!memcmp(s.tets, s2.tets, 3 * TVT_SHELL_TET_FLOATS * sizeof(float) * m.nt));
+        tvt_shell_free(&s); tvt_shell_free(&s2);
+    }
+    mesh_free(&m);
+}
+
+/* a tile's wd from the map over tile coordinates: wrapped or clamped, values clamped to [0, 1] */
+static void test_wd_map(void)
+{
+    float wd[6] = {0.1f, 0.2f, 0.3f, 0.4f, 1.5f, NAN}; /* 3 x 2 */
+    tvt_wd_map m;
+    m.wd = wd; m.width = 3; m.height = 2; m.origin[0] = -1; m.origin[1] = 5; m.wrap = 1;
+    T_NEAR(tvt_tile_wd(&m, -1, 5), 0.1f, 0);
+    T_NEAR(tvt_tile_wd(&m, 1, 5), 0.3f, 0);
+    T_NEAR(tvt_tile_wd(&m, -1, 6), 0.4f, 0);
+    T_NEAR(tvt_tile_wd(&m, 2, 7), 0.1f, 0);     /* wraps: (3, 2) -> (0, 0) */
+    T_NEAR(tvt_tile_wd(&m, -2, 4), 0.0f, 0);    /* wraps to (2, 1): NaN gives 0 */
+    T_NEAR(tvt_tile_wd(&m, 0, 6), 1.0f, 0);     /* 1.5 clamps to 1 */
+    m.wrap = 0;
+    T_NEAR(tvt_tile_wd(&m, -50, -50), 0.1f, 0); /* clamps to (0, 0) */
+    T_NEAR(tvt_tile_wd(&m, 50, -50), 0.3f, 0);
+    T_NEAR(tvt_tile_wd(NULL, 0, 0), 0.0f, 0);
+}
+
+/* ---- render.h: the mesh shell marcher ------------------------------------------------------ */
+/* analytic content: fibres of extinction sigma (1 + cos 2 pi x) / 2 below height top, tangent
+   leaning along x (so the frame's tangent turns back to the world), colour varying with y */
+typedef struct content { float sigma, top, step; long calls, bad; int uniform; } content;
+
+static void fibres(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    content *c = (content *)user;
+    c->calls++;
+    if (!(q->p[0] >= 0 && q->p[0] < 1 && q->p[1] >= 0 && q->p[1] < 1 && q->p[2] >= 0 && q->p[2] < 1)) c->bad++;
+    out->step = c->step;
+    if (q->p[2] >= c->top) return;
+    out->sigma = c->uniform ? c->sigma : c->sigma * 0.5f * (1.0f + cosf(6.2831853f * q->p[0]));
+    out->rgb[0] = 0.2f; out->rgb[1] = 0.4f + 0.4f * q->p[1]; out->rgb[2] = 0.1f;
+    out->tangent[0] = 0.3f; out->tangent[1] = 0.0f; out->tangent[2] = 1.0f;
+    out->specular = 0.5f;
+    out->light = 0.8f;
+}
+
+static void set_lights(sr_light *l)
+{
+    float sun[3] = {0.4f, 0.3f, 0.866f};
+    sr_light_default(l, sun);
+}
+
+static int sanitize(void) { const char *e = getenv("TEST_SANITIZE"); return e && *e && *e != '0'; }
+
+static int black_ground = 0;
+static int mesh_desc_draw(sr_framebuffer *fb, const sr_camera *cam, const mesh *m, float height, content *c,
+                          const sr_allocator *a, sr_shell_stats *st, sr_light *sun)
+{
+    sr_mesh_shell_desc d;
+    sr_mesh_shell_desc_default(&d);
+    d.positions = m->pos; d.normals = m->nrm; d.uvs = m->uv; d.vertex_count = m->nv;
+    d.indices = m->idx; d.triangle_count = m->nt; d.height = height;
+    d.sample = fibres; d.user = c; d.lights = sun; d.light_count = 1; d.allocator = a;
+    if (black_ground) memset(d.ground_rgb, 0, sizeof d.ground_rgb);
+    return (int)sr_draw_mesh_shell(fb, cam, &d, st);
+}
+
+/* A flat mesh shell (normals up, height = tile) and sr_draw_shell over flat ground give the same
+   picture: the same frame at every point, so only the samples' phase along each ray differs. */
+static void test_flat_against_height_field(void)
+{
+    int w = sanitize() ? 48 : 96, h = sanitize() ? 36 : 72, x, ok, n = 0;
+    float tile = 0.5f, eye[3] = {1.1f, -1.2f, 1.4f}, at[3] = {1.0f, 1.0f, 0.0f}, up[3] = {0, 0, 1};
+    mesh m = grid_mesh(5, 2.0f, 0.0f, tile);
+    sr_framebuffer a, b;
+    sr_camera cam;
+    sr_shell_desc sd;
+    sr_shell_stats sa, sb;
+    sr_light sun;
+    content ca = {6.0f, 0.8f, 1.0f / 128.0f, 0, 0, 0}, cb = ca;
+    double maxd = 0, mean = 0;
+    set_lights(&sun);
+    sr_camera_look_at(&cam, eye, at, up, 50.0f, (float)w / (float)h, 0.05f, 100.0f);
+    sr_framebuffer_create(&a, w, h, NULL); sr_framebuffer_create(&b, w, h, NULL);
+    sr_framebuffer_clear(&a, NULL, 1.0f); sr_framebuffer_clear(&b, NULL, 1.0f);
+    sr_shell_desc_default(&sd);
+    sd.tile = tile; sd.tiles_x = sd.tiles_y = 4; sd.sample = fibres; sd.user = &ca; sd.lights = &sun; sd.light_count = 1;
+    /* a black ground on a black background: sr_draw_shell misses the ground where a ray's last
+       step jumps past its box's bottom (1/1000 of a tile under the ground, less than a step) */
+    memset(sd.ground_rgb, 0, sizeof sd.ground_rgb);
+    T_EQ_INT(sr_draw_shell(&a, &cam, &sd, &sa), SR_OK);
+    black_ground = 1;
+    ok = mesh_desc_draw(&b, &cam, &m, tile, &cb, NULL, &sb, &sun);
+    black_ground = 0;
+    T_EQ_INT(ok, SR_OK);
+    for (x = 0; x < w * h; x++) {
+        int k;
+        for (k = 0; k < 3; k++) {
+            double dd = fabs(a.color[4 * x + k] - b.color[4 * x + k]);
+            maxd = fmax(maxd, dd); mean += dd; n++;
+        }
+    }
+    mean /= n;
+    /* The two are Riemann sums of one integral along each ray, of step h = 1/128 tile with
+       different phases: they differ by at most about one step's opacity, 1 - exp(-sigma h) =
+       4.6%, times the radiance (< 1.5), where the density changes fastest; on average far less
+       (sigma's cosine averages out over the step's phase). */
+    T_CHECK_MSG(maxd <= 1.5 * (1.0 - exp(-6.0 / 128.0)), "max %.4f", maxd);
+    T_CHECK_MSG(mean <= 0.1 * 1.5 * (1.0 - exp(-6.0 / 128.0)), "mean %.5f", mean);
+    T_CHECK_MSG(labs(sa.covered - sb.covered) <= w * h / 100, "covered %ld %ld", sa.covered, sb.covered);
+    T_CHECK(sb.covered > w * h / 4);
+    T_EQ_INT(cb.bad, 0);
+    sr_framebuffer_free(&a); sr_framebuffer_free(&b);
+    mesh_free(&m);
+}
+
+/* A closed cube-sphere (24 charts' seams are side borders, not shared faces) under a dense
+   layer: every pixel whose ray meets the sphere is covered (no ray falls through a seam, an edge
+   or a vertex), none outside the outer surface's disc is touched, and the pictures repeat bit
+   for bit. */
+static void test_sphere(void)
+{
+    int w = sanitize() ? 40 : 80, h = w, x, y, holes = 0, stray = 0, inner = 0;
+    float r = 1.0f, hs = 0.15f, eye[3] = {0.3f, -4.0f, 1.2f}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    mesh m = sphere_mesh(6, r, 3.0f);
+    sr_framebuffer fb, fb2;
+    sr_camera cam;
+    sr_shell_stats st;
+    sr_light sun;
+    content c = {40.0f, 0.9f, 1.0f / 64.0f, 0, 0, 1}, c2 = c;
+    float dist = sqrtf(eye[0] * eye[0] + eye[1] * eye[1] + eye[2] * eye[2]);
+    set_lights(&sun);
+    sr_camera_look_at(&cam, eye, at, up, 40.0f, 1.0f, 0.05f, 100.0f);
+    sr_framebuffer_create(&fb, w, h, NULL); sr_framebuffer_create(&fb2, w, h, NULL);
+    sr_framebuffer_clear(&fb, NULL, 1.0f); sr_framebuffer_clear(&fb2, NULL, 1.0f);
+    T_EQ_INT(mesh_desc_draw(&fb, &cam, &m, hs, &c, NULL, &st, &sun), SR_OK);
+    T_EQ_INT(mesh_desc_draw(&fb2, &cam, &m, hs, &c2, NULL, NULL, &sun), SR_OK);
+    T_CHECK(!memcmp(fb.color, fb2.color, sizeof(float) * 4 * (size_t)w * h));
+    T_CHECK(!memcmp(fb.depth, fb2.depth, sizeof(float) * (size_t)w * h));
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            float o[3], d[3], oc, b, miss;
+            size_t i = (size_t)y * w + x;
+            sr_camera_ray(&cam, w, h, x + 0.5f, y + 0.5f, o, d);
+            oc = o[0] * d[0] + o[1] * d[1] + o[2] * d[2];
+            b = sqrtf(fmaxf(dist * dist - oc * oc, 0.0f)); /* the ray's distance from the centre */
+            /* rays within 0.97 r of the centre meet the inscribed mesh (its faces are within 2% of r) */
+            miss = fb.color[4 * i + 3] <= 1.0f && fb.depth[i] >= 1.0f;
+            if (b < 0.97f * r) { inner++; holes += miss || fb.color[4 * i + 1] <= fb.color[4 * i + 0]; } /* ground shows */
+            if (b > (r + hs) * 1.01f) stray += !miss;
+        }
+    T_CHECK(inner > w * h / 10);
+    T_EQ_INT(holes, 0);
+    T_EQ_INT(stray, 0);
+    T_EQ_INT(c.bad, 0);
+    T_CHECK(st.covered >= inner);
+    sr_framebuffer_free(&fb); sr_framebuffer_free(&fb2);
+    mesh_free(&m);
+}
+
+static int cancel_at_half(void *user, float done) { (void)user; return done >= 0.5f; }
+
+static void test_render_bad_input(void)
+{
+    mesh m = grid_mesh(4, 1.0f, 0.1f, 0.5f);
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_mesh_shell_desc d;
+    content c = {4.0f, 0.8f, 1.0f / 32.0f, 0, 0, 0};
+    float eye[3] = {0.5f, -1.0f, 1.0f}, at[3] = {0.5f, 0.5f, 0.0f}, keep;
+    uint32_t ik;
+    sr_framebuffer_create(&fb, 16, 12, NULL);
+    sr_camera_look_at(&cam, eye, at, NULL, 50.0f, 16.0f / 12.0f, 0.05f, 10.0f);
+    sr_mesh_shell_desc_default(&d);
+    d.positions = m.pos; d.normals = m.nrm; d.uvs = m.uv; d.vertex_count = m.nv;
+    d.indices = m.idx; d.triangle_count = m.nt; d.height = 0.2f; d.sample = fibres; d.user = &c;
+    T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_OK);
+    T_EQ_INT(sr_draw_mesh_shell(NULL, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.sample = NULL; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); d.sample = fibres;
+    keep = m.pos[7]; m.pos[7] = NAN; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); m.pos[7] = keep;
+    keep = m.uv[7]; m.uv[7] = INFINITY; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); m.uv[7] = keep;
+    ik = m.idx[5]; m.idx[5] = 1000; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    m.idx[5] = m.idx[4]; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); m.idx[5] = ik;
+    d.height = 0.0f; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.height = NAN; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT);
+    d.height = 0.2f;
+    d.depth = -1.0f; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); d.depth = 0.0f;
+    d.triangle_count = 0; T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_ERR_INVALID_ARGUMENT); d.triangle_count = m.nt;
+    { /* allocation failure at every k, and a cancel: the named result, nothing leaked */
+        counting cnt;
+        sr_allocator a;
+        long k;
+        int all = 1;
+        a.alloc = c_alloc; a.free = c_free; a.user = &cnt;
+        d.allocator = &a;
+        for (k = 1; k < 20; k++) {
+            sr_result r;
+            memset(&cnt, 0, sizeof cnt); cnt.fail_at = k;
+            r = sr_draw_mesh_shell(&fb, &cam, &d, NULL);
+            if (r == SR_OK) { all &= cnt.live == 0; break; }
+            all &= r == SR_ERR_OUT_OF_MEMORY && cnt.live == 0;
+        }
+        T_CHECK(all && k > 3);
+        memset(&cnt, 0, sizeof cnt);
+        d.progress = cancel_at_half;
+        T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_CANCELLED);
+        T_EQ_INT(cnt.live, 0);
+        T_CHECK(cnt.calls > 0);
+    }
+    sr_framebuffer_free(&fb);
+    mesh_free(&m);
+}
+
+int main(int argc, char **argv)
+{
+    T_BEGIN(argc, argv);
+    test_continuity();
+    test_round_trip();
+    test_flat_is_height_field();
+    test_folded();
+    test_bad_input();
+    test_wd_map();
+    test_flat_against_height_field();
+    test_sphere();
+    test_render_bad_input();
+    return T_END();
+}
