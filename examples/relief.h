@@ -278,6 +278,7 @@ extern "C" {
 
 #define RL__MAX_SIDE 16384
 #define RL__MAX_TEXELS ((size_t)1 << 26)
+#define RL__KMAX 16 /* fill candidates that get a graph cut, at most */
 
 RLDEF const char *rl_result_string(rl_result r)
 {
@@ -438,12 +439,17 @@ static rl_result rl__distance(const uint8_t *mask, uint8_t value, int w, int h, 
     int *v = (int *)rl__alloc(a, sizeof(int) * (size_t)m);
     if (!col || !v) { rl__free(a, col); rl__free(a, v); return RL_ERR_OUT_OF_MEMORY; }
     for (i = 0; i < n; i++) dist[i] = mask[i] == value ? 0.0f : 1e20f;
+    /* a line of nothing but 1e20 stays so (q^2 + 1e20 rounds to 1e20): skipped */
     for (x = 0; x < w; x++) { /* columns, through a copy */
-        for (y = 0; y < h; y++) col[y] = dist[(size_t)y * w + x];
-        rl__edt_1d(col, h, 1, dist + x, (size_t)w, v, col + 2 * m);
+        int any = 0;
+        for (y = 0; y < h; y++) { col[y] = dist[(size_t)y * w + x]; any |= col[y] < 1e20f; }
+        if (any) rl__edt_1d(col, h, 1, dist + x, (size_t)w, v, col + 2 * m);
     }
     for (y = 0; y < h; y++) {
         float *row = dist + (size_t)y * w;
+        int any = 0;
+        for (x = 0; x < w; x++) any |= row[x] < 1e20f;
+        if (!any) continue;
         memcpy(col, row, sizeof(float) * (size_t)w);
         rl__edt_1d(col, w, 1, row, 1, v, col + 2 * m);
     }
@@ -479,30 +485,63 @@ RLDEF void rl_skeleton_free(rl_skeleton *s, const rl_allocator *allocator)
 }
 
 /* Step 1: a texel is a candidate when, along one of the 4 lines through it, both sides have a
-   texel within L whose height is below it by more than tau (above it, for valleys). */
+   texel within L whose height is below it by more than tau (above it, for valleys). "Some texel
+   within L is below by more than tau" is tested on the side's minimum, c - min > tau: float
+   subtraction is monotone, so that is the same test bit for bit, without branches. */
+static int rl__ppa_side(const float *h, int w, int hh, int x, int y, int dx, int dy, int L, float c, float tau, float sign)
+{
+    int k, mark = 0;
+    for (k = 1; k <= L && !mark; k++) {
+        int px = x + k * dx, py = y + k * dy;
+        if (px < 0 || py < 0 || px >= w || py >= hh) break;
+        mark = c - sign * h[(size_t)py * w + px] > tau;
+    }
+    return mark;
+}
+
+#define RL__PPA_BLOCK 64
 static void rl__ppa_candidates(const float *h, int w, int hh, int L, float tau, float sign, uint8_t *cand)
 {
     static const int lx[4] = {1, 0, 1, 1}, ly[4] = {0, 1, 1, -1};
-    int x, y, l, k, side;
-    for (y = 0; y < hh; y++)
-        for (x = 0; x < w; x++) {
-            float c = sign * h[(size_t)y * w + x];
+    int x, y, l, k;
+    for (y = 0; y < hh; y++) {
+        const float *row = h + (size_t)y * w;
+        uint8_t *out = cand + (size_t)y * w;
+        int inner = y >= L && y + L < hh && w > 2 * L, x0 = inner ? L : w, x1 = inner ? w - L : w;
+        for (x = 0; x < w; x++) {          /* texels whose lines leave the map: one by one */
+            float c;
             int is = 0;
-            for (l = 0; l < 4 && !is; l++) {
-                int both = 1;
-                for (side = -1; side <= 1 && both; side += 2) {
-                    int mark = 0;
-                    for (k = 1; k <= L && !mark; k++) {
-                        int px = x + side * k * lx[l], py = y + side * k * ly[l];
-                        if (px < 0 || py < 0 || px >= w || py >= hh) break;
-                        mark = c - sign * h[(size_t)py * w + px] > tau;
-                    }
-                    both = mark;
-                }
-                is = both;
-            }
-            cand[(size_t)y * w + x] = (uint8_t)is;
+            if (x == x0) x = x1;
+            if (x >= w) break;
+            c = sign * row[x];
+            for (l = 0; l < 4 && !is; l++)
+                is = rl__ppa_side(h, w, hh, x, y, lx[l], ly[l], L, c, tau, sign) && rl__ppa_side(h, w, hh, x, y, -lx[l], -ly[l], L, c, tau, sign);
+            out[x] = (uint8_t)is;
         }
+        for (x = x0; x < x1; x++) out[x] = 0;
+        for (l = 0; l < 4; l++) {          /* the rest: both sides' minima along each line, row-wise */
+            ptrdiff_t off = (ptrdiff_t)ly[l] * w + lx[l];
+            int b0, nb;
+            for (b0 = x0; b0 < x1; b0 += nb) {  /* blocks of RL__PPA_BLOCK in local arrays: no aliasing */
+                float mp[RL__PPA_BLOCK], mm[RL__PPA_BLOCK];
+                const float *r0 = row + b0;
+                nb = x1 - b0 < RL__PPA_BLOCK ? x1 - b0 : RL__PPA_BLOCK;
+                for (x = 0; x < nb; x++) { mp[x] = sign * r0[x + off]; mm[x] = sign * r0[x - off]; }
+                for (k = 2; k <= L; k++) {
+                    const float *ra = r0 + k * off, *rb = r0 - k * off;
+                    for (x = 0; x < nb; x++) {
+                        float a = sign * ra[x], b = sign * rb[x];
+                        mp[x] = a < mp[x] ? a : mp[x];
+                        mm[x] = b < mm[x] ? b : mm[x];
+                    }
+                }
+                for (x = 0; x < nb; x++) {
+                    float c = sign * r0[x];
+                    out[b0 + x] |= (uint8_t)((c - mp[x] > tau) & (c - mm[x] > tau));
+                }
+            }
+        }
+    }
 }
 
 typedef struct rl__edge { float weight; uint32_t a, b; uint8_t dir; } rl__edge;
@@ -665,43 +704,45 @@ RLDEF rl_result rl_skeleton_extract(const rl_map *height, const rl_skeleton_opti
    Section: graph-cut seam (Kwatra et al. 2003, Eqs. 5-2 and 5-3), max-flow by Boykov & Kolmogorov
    --------------------------------------------------------------------------------------------- */
 
-/* Arcs in pairs (arc e's reverse is e ^ 1) between non-terminal nodes; each node's terminal link
-   is one residual tr: > 0 from the source, < 0 to the sink (Boykov & Kolmogorov 2004). */
+/* A grid graph: each non-terminal node has 4 arc slots, e = 4 u + d with d = 0 south, 1 east,
+   2 west, 3 north (to[e] = -1: no arc), the order a node's arcs are visited in; arc e's reverse
+   is 4 to[e] + 3 - d and its tail e / 4. Each node's terminal link is one residual tr: > 0 from
+   the source, < 0 to the sink (Boykov & Kolmogorov 2004). */
 typedef struct rl__flow {
-    int nodes, arcs;
-    int *head, *next, *to, *parent, *queue, *orphans, *stamp, time;
+    int nodes;
+    int *to, *parent, *pn, *queue, *orphans, *stamp, time, qtail; /* pn: the parent arc's head */
     uint8_t *tree, *queued;     /* tree: 0 free, 1 source, 2 sink */
     double *cap, *tr;
 } rl__flow;
 
 #define RL__TERMINAL (-1)
 #define RL__ORPHAN (-2)
+#define RL__REV(f, e) (4 * (f)->to[e] + 3 - ((e) & 3))
 
 static void rl__flow_free(rl__flow *f, const rl_allocator *a)
 {
-    rl__free(a, f->head); rl__free(a, f->next); rl__free(a, f->to); rl__free(a, f->parent);
+    rl__free(a, f->to); rl__free(a, f->parent); rl__free(a, f->pn);
     rl__free(a, f->queue); rl__free(a, f->orphans); rl__free(a, f->tree); rl__free(a, f->queued); rl__free(a, f->stamp);
     rl__free(a, f->cap); rl__free(a, f->tr);
     memset(f, 0, sizeof *f);
 }
 
-static rl_result rl__flow_init(rl__flow *f, int nodes, int max_arcs, const rl_allocator *a)
+static rl_result rl__flow_init(rl__flow *f, int nodes, const rl_allocator *a)
 {
-    size_t nn = (size_t)nodes, na = (size_t)max_arcs;
+    size_t nn = (size_t)nodes;
     memset(f, 0, sizeof *f);
     f->nodes = nodes;
-    f->head = (int *)rl__alloc(a, sizeof(int) * nn);
     f->parent = (int *)rl__alloc(a, sizeof(int) * nn);
+    f->pn = (int *)rl__alloc(a, sizeof(int) * nn);
     f->queue = (int *)rl__alloc(a, sizeof(int) * nn);
     f->orphans = (int *)rl__alloc(a, sizeof(int) * nn);
     f->stamp = (int *)rl__alloc(a, sizeof(int) * nn);
     f->tree = (uint8_t *)rl__alloc(a, nn);
     f->queued = (uint8_t *)rl__alloc(a, nn);
     f->tr = (double *)rl__alloc(a, sizeof(double) * nn);
-    f->next = (int *)rl__alloc(a, sizeof(int) * na);
-    f->to = (int *)rl__alloc(a, sizeof(int) * na);
-    f->cap = (double *)rl__alloc(a, sizeof(double) * na);
-    if (!f->head || !f->parent || !f->queue || !f->orphans || !f->stamp || !f->tree || !f->queued || !f->tr || !f->next || !f->to || !f->cap) {
+    f->to = (int *)rl__alloc(a, sizeof(int) * 4 * nn);
+    f->cap = (double *)rl__alloc(a, sizeof(double) * 4 * nn);
+    if (!f->parent || !f->pn || !f->queue || !f->orphans || !f->stamp || !f->tree || !f->queued || !f->tr || !f->to || !f->cap) {
         rl__flow_free(f, a);
         return RL_ERR_OUT_OF_MEMORY;
     }
@@ -711,23 +752,13 @@ static rl_result rl__flow_init(rl__flow *f, int nodes, int max_arcs, const rl_al
 static void rl__flow_reset(rl__flow *f, int nodes)
 {
     f->nodes = nodes;
-    f->arcs = 0;
-    memset(f->head, 0xFF, sizeof(int) * (size_t)nodes);
+    memset(f->to, 0xFF, sizeof(int) * 4 * (size_t)nodes);
     memset(f->tr, 0, sizeof(double) * (size_t)nodes);
-}
-
-/* an arc pair u->v (capacity c) and v->u (capacity back) */
-static void rl__flow_arc(rl__flow *f, int u, int v, double c, double back)
-{
-    int e = f->arcs;
-    f->to[e] = v; f->cap[e] = c; f->next[e] = f->head[u]; f->head[u] = e;
-    f->to[e + 1] = u; f->cap[e + 1] = back; f->next[e + 1] = f->head[v]; f->head[v] = e + 1;
-    f->arcs += 2;
 }
 
 /* the residual of the arc that carries flow along the tree toward the sink: in the source tree
    from q to its child, in the sink tree from the child to q */
-static double rl__tree_res(const rl__flow *f, int tree, int e) { return tree == 1 ? f->cap[e ^ 1] : f->cap[e]; }
+static double rl__tree_res(const rl__flow *f, int tree, int e) { return tree == 1 ? f->cap[RL__REV(f, e)] : f->cap[e]; }
 
 /* pushes the bottleneck along source root -> u -> v -> sink root (arc e from u to v); the
    saturated tree arcs make orphans */
@@ -735,22 +766,23 @@ static int rl__flow_augment(rl__flow *f, int e, int norph)
 {
     double m = f->cap[e];
     int x, k;
-    for (x = f->to[e ^ 1]; f->parent[x] != RL__TERMINAL; x = f->to[f->parent[x]]) { double r = f->cap[f->parent[x] ^ 1]; m = r < m ? r : m; }
+    for (x = e >> 2; f->parent[x] != RL__TERMINAL; x = f->pn[x]) { double r = f->cap[4 * f->pn[x] + 3 - (f->parent[x] & 3)]; m = r < m ? r : m; }
     m = f->tr[x] < m ? f->tr[x] : m;
-    for (x = f->to[e]; f->parent[x] != RL__TERMINAL; x = f->to[f->parent[x]]) { double r = f->cap[f->parent[x]]; m = r < m ? r : m; }
+    for (x = f->to[e]; f->parent[x] != RL__TERMINAL; x = f->pn[x]) { double r = f->cap[f->parent[x]]; m = r < m ? r : m; }
     m = -f->tr[x] < m ? -f->tr[x] : m;
-    f->cap[e] -= m; f->cap[e ^ 1] += m;
+    f->cap[e] -= m; f->cap[RL__REV(f, e)] += m;
     for (k = 0; k < 2; k++) {
-        for (x = k ? f->to[e] : f->to[e ^ 1];;) {
-            int pe = f->parent[x];
+        for (x = k ? f->to[e] : e >> 2;;) {
+            int pe = f->parent[x], re;
             if (pe == RL__TERMINAL) {
                 f->tr[x] += k ? m : -m;
                 if (f->tr[x] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; }
                 break;
             }
-            if (k) { f->cap[pe] -= m; f->cap[pe ^ 1] += m; if (f->cap[pe] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
-            else { f->cap[pe ^ 1] -= m; f->cap[pe] += m; if (f->cap[pe ^ 1] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
-            x = f->to[pe];
+            re = 4 * f->pn[x] + 3 - (pe & 3);
+            if (k) { f->cap[pe] -= m; f->cap[re] += m; if (f->cap[pe] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
+            else { f->cap[re] -= m; f->cap[pe] += m; if (f->cap[re] == 0.0) { f->parent[x] = RL__ORPHAN; f->orphans[norph++] = x; } }
+            x = f->pn[x];
         }
     }
     return norph;
@@ -762,21 +794,23 @@ static int rl__flow_augment(rl__flow *f, int e, int norph)
 static int rl__rooted(rl__flow *f, int q)
 {
     int x = q, ok;
-    while (f->parent[x] >= 0 && f->stamp[x] != f->time) x = f->to[f->parent[x]];
+    while (f->parent[x] >= 0 && f->stamp[x] != f->time) x = f->pn[x];
     ok = f->stamp[x] == f->time || f->parent[x] == RL__TERMINAL;
     if (ok)
-        for (x = q; f->stamp[x] != f->time; x = f->parent[x] >= 0 ? f->to[f->parent[x]] : x) {
+        for (x = q; f->stamp[x] != f->time; x = f->parent[x] >= 0 ? f->pn[x] : x) {
             f->stamp[x] = f->time;
             if (f->parent[x] < 0) break;
         }
     return ok;
 }
 
+/* the active queue: a ring of nodes slots (a node is in it at most once); *qt counts pushes */
 static void rl__activate(rl__flow *f, int q, int *qt)
 {
     if (f->queued[q]) return;
     f->queued[q] = 1;
-    f->queue[*qt % f->nodes] = q;
+    f->queue[f->qtail] = q;
+    if (++f->qtail == f->nodes) f->qtail = 0;
     (*qt)++;
 }
 
@@ -785,17 +819,17 @@ static void rl__flow_adopt(rl__flow *f, int norph, int *qt)
 {
     f->time++;
     while (norph > 0) {
-        int x = f->orphans[--norph], e, t = f->tree[x];
-        for (e = f->head[x]; e >= 0; e = f->next[e]) {
+        int x = f->orphans[--norph], e, t = f->tree[x], found = -1;
+        for (e = 4 * x; e < 4 * x + 4 && found < 0; e++) {
             int q = f->to[e];
-            if (f->tree[q] == t && rl__tree_res(f, t, e) > 0.0 && f->parent[q] != RL__ORPHAN && rl__rooted(f, q)) break;
+            if (q >= 0 && f->tree[q] == t && rl__tree_res(f, t, e) > 0.0 && f->parent[q] != RL__ORPHAN && rl__rooted(f, q)) found = e;
         }
-        if (e >= 0) { f->parent[x] = e; continue; }
-        for (e = f->head[x]; e >= 0; e = f->next[e]) {
+        if (found >= 0) { f->parent[x] = found; f->pn[x] = f->to[found]; continue; }
+        for (e = 4 * x; e < 4 * x + 4; e++) {
             int q = f->to[e];
-            if (f->tree[q] != t) continue;
+            if (q < 0 || f->tree[q] != t) continue;
             if (rl__tree_res(f, t, e) > 0.0) rl__activate(f, q, qt);
-            if (f->parent[q] >= 0 && f->to[f->parent[q]] == x) { f->parent[q] = RL__ORPHAN; f->orphans[norph++] = q; }
+            if (f->parent[q] >= 0 && f->pn[q] == x) { f->parent[q] = RL__ORPHAN; f->orphans[norph++] = q; }
         }
         f->tree[x] = 0;
     }
@@ -805,8 +839,9 @@ static void rl__flow_adopt(rl__flow *f, int norph, int *qt)
    then tree[v] == 1 exactly for the nodes the source still reaches */
 static void rl__flow_run(rl__flow *f)
 {
-    int qh = 0, qt = 0, v, e;
+    int qh = 0, qt = 0, v, e, head = 0, cur = -1;
     f->time = 0;
+    f->qtail = 0;
     for (v = 0; v < f->nodes; v++) {
         f->stamp[v] = 0;
         f->queued[v] = 0;
@@ -814,20 +849,28 @@ static void rl__flow_run(rl__flow *f)
         f->parent[v] = RL__TERMINAL;
         if (f->tree[v]) rl__activate(f, v, &qt);
     }
-    while (qh < qt) {
-        int p = f->queue[qh % f->nodes], found = -1;
-        qh++;
-        f->queued[p] = 0;
-        if (!f->tree[p]) continue;
-        for (e = f->head[p]; e >= 0 && found < 0; e = f->next[e]) {
-            int q = f->to[e], t = f->tree[p];
-            if ((t == 1 ? f->cap[e] : f->cap[e ^ 1]) <= 0.0) continue;
-            if (!f->tree[q]) { f->tree[q] = (uint8_t)t; f->parent[q] = e ^ 1; rl__activate(f, q, &qt); }
-            else if (f->tree[q] != t) found = t == 1 ? e : e ^ 1;
+    for (;;) {
+        int p, found = -1, t;
+        if (cur >= 0 && f->tree[cur]) p = cur; /* after an augmentation, the same node goes on */
+        else {
+            if (qh >= qt) break;
+            p = f->queue[head];
+            qh++;
+            if (++head == f->nodes) head = 0;
+            f->queued[p] = 0;
+        }
+        cur = -1;
+        t = f->tree[p];
+        if (!t) continue;
+        for (e = 4 * p; e < 4 * p + 4 && found < 0; e++) {
+            int q = f->to[e];
+            if (q < 0 || (t == 1 ? f->cap[e] : f->cap[RL__REV(f, e)]) <= 0.0) continue;
+            if (!f->tree[q]) { f->tree[q] = (uint8_t)t; f->parent[q] = RL__REV(f, e); f->pn[q] = p; rl__activate(f, q, &qt); }
+            else if (f->tree[q] != t) found = t == 1 ? e : RL__REV(f, e);
         }
         if (found >= 0) {
-            rl__activate(f, p, &qt); /* p may have more to give */
             rl__flow_adopt(f, rl__flow_augment(f, found, 0), &qt);
+            cur = p;
         }
     }
 }
@@ -837,19 +880,26 @@ static double rl__pair_cost(const float *a, const float *b, size_t s, size_t t)
     return fabs((double)a[s] - (double)b[s]) + fabs((double)a[t] - (double)b[t]);
 }
 
-/* One side of a grid pair: free-free pairs become arc pairs, a free texel beside a pinned one
-   gets that cost on its link to the pinned side's terminal (the pair is cut exactly when the
-   free texel takes the other label), pinned-pinned pairs cost nothing that a cut can change. */
-static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, size_t p, size_t q, double c)
+/* One grid pair, q east (d = 1) or south (d = 0) of p: free-free pairs become an arc pair, a
+   free texel beside a pinned one gets the cost on its link to the pinned side's terminal (the
+   pair is cut exactly when the free texel takes the other label), pinned-pinned pairs cost
+   nothing that a cut can change. */
+static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, const float *a, const float *b, size_t p, size_t q, int d)
 {
     int np = node[p], nq = node[q];
-    if (np >= 0 && nq >= 0) rl__flow_arc(f, np, nq, c, c);
+    double c;
+    if (np < 0 && nq < 0) return;
+    c = rl__pair_cost(a, b, p, q);
+    if (np >= 0 && nq >= 0) {
+        f->to[4 * np + d] = nq; f->cap[4 * np + d] = c;
+        f->to[4 * nq + 3 - d] = np; f->cap[4 * nq + 3 - d] = c;
+    }
     else if (np >= 0) f->tr[np] += cons[q] == 1 ? c : -c;
-    else if (nq >= 0) f->tr[nq] += cons[p] == 1 ? c : -c;
+    else f->tr[nq] += cons[p] == 1 ? c : -c;
 }
 
-/* the cut on a flow workspace with room for width*height nodes and 6 arcs a texel; node:
-   width*height ints of scratch */
+/* the cut on a flow workspace with room for width*height nodes; node: width*height ints of
+   scratch */
 static void rl__cut_solve(rl__flow *f, const float *a, const float *b, const uint8_t *cons, int width, int height,
                           int *node, uint8_t *labels)
 {
@@ -860,8 +910,8 @@ static void rl__cut_solve(rl__flow *f, const float *a, const float *b, const uin
     for (y = 0; y < height; y++)
         for (x = 0; x < width; x++) {
             size_t p = (size_t)y * width + x;
-            if (x + 1 < width) rl__cut_pair(f, node, cons, p, p + 1, rl__pair_cost(a, b, p, p + 1));
-            if (y + 1 < height) rl__cut_pair(f, node, cons, p, p + (size_t)width, rl__pair_cost(a, b, p, p + (size_t)width));
+            if (x + 1 < width) rl__cut_pair(f, node, cons, a, b, p, p + 1, 1);
+            if (y + 1 < height) rl__cut_pair(f, node, cons, a, b, p, p + (size_t)width, 0);
         }
     /* a texel linked to both terminals passes the smaller link's flow at once (Boykov & Kolmogorov) */
     if (free_count) rl__flow_run(f);
@@ -896,7 +946,7 @@ RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *cons
         if (!(a[i] - a[i] == 0.0f) || !(b[i] - b[i] == 0.0f)) return RL_ERR_NOT_FINITE;
         if (constraint && constraint[i] > 2) return RL_ERR_INVALID_ARGUMENT;
     }
-    if ((r = rl__flow_init(&f, (int)n + 2, (int)(6 * n), &al)) != RL_OK) return r;
+    if ((r = rl__flow_init(&f, (int)n, &al)) != RL_OK) return r;
     node = (int *)rl__alloc(&al, sizeof(int) * n);
     if (!node) { rl__flow_free(&f, &al); return RL_ERR_OUT_OF_MEMORY; }
     rl__cut_solve(&f, a, b, constraint, width, height, node, labels);
@@ -945,9 +995,11 @@ typedef struct rl__synth {
     uint8_t *sk_edges[2];    /* the sketch's ridge (white) and valley (black) skeletons */
     float *cand, *best;      /* P*P candidate patches */
     float *ga, *gb;          /* P*P graph-cut inputs */
-    uint8_t *cons, *lab, *best_lab; /* P*P */
+    uint8_t *cons, *lab;     /* P*P */
+    uint8_t *best_lab;       /* K*P*P: each fill candidate's cut */
     int32_t *band;           /* P*P: Poisson distance, -1 outside */
     int32_t *queue;          /* P*P */
+    int32_t *st_nb; float *st_g; uint8_t *st_cnt; /* 4*P*P, 4*P*P, P*P: the band's stencils */
     int *node;               /* P*P */
     int32_t *fill_off;       /* P*P: the fill search's example offsets */
     float *fill_val;         /* and output values */
@@ -958,7 +1010,8 @@ static float rl__bilinear(const float *m, int w, int h, float x, float y)
 {
     int x0, y0, x1, y1;
     float fx, fy, a, b;
-    x0 = (int)floorf(x); y0 = (int)floorf(y);
+    x0 = (int)x; y0 = (int)y;           /* floor, without a libm call: |x|, |y| < 2^31 here */
+    x0 -= (float)x0 > x; y0 -= (float)y0 > y;
     fx = x - (float)x0; fy = y - (float)y0;
     x1 = x0 + 1; y1 = y0 + 1;
     x0 = x0 < 0 ? 0 : x0 >= w ? w - 1 : x0; x1 = x1 < 0 ? 0 : x1 >= w ? w - 1 : x1;
@@ -969,16 +1022,19 @@ static float rl__bilinear(const float *m, int w, int h, float x, float y)
 }
 
 /* The example patch centred at example texel (cx, cy), rotated by angle, for the output window
-   whose centre is at window texel (P/2, P/2): the only warp (see DECISIONS). */
-static void rl__sample_patch(const rl__synth *S, float cx, float cy, float angle, int step, float *dst)
+   whose centre is at window texel (P/2, P/2): the only warp (see DECISIONS). With a list, only
+   its n window texels (j * P + i) are sampled; else every step-th texel of every step-th row. */
+static void rl__sample_patch(const rl__synth *S, float cx, float cy, float angle, int step, const int32_t *list, int n, float *dst)
 {
     float c = cosf(angle), s = sinf(angle), h = 0.5f * (float)S->P - 0.5f;
-    int i, j;
-    for (j = 0; j < S->P; j += step)
-        for (i = 0; i < S->P; i += step) {
-            float u = (float)i - h, v = (float)j - h;
-            dst[j * S->P + i] = rl__bilinear(S->ex, S->ew, S->eh, cx + 0.5f + c * u - s * v - 0.5f, cy + 0.5f + s * u + c * v - 0.5f);
-        }
+    int i, j, t, count = list ? n : ((S->P + step - 1) / step) * ((S->P + step - 1) / step), per_row = (S->P + step - 1) / step;
+    for (t = 0; t < count; t++) {
+        float u, v;
+        if (list) { i = list[t] % S->P; j = list[t] / S->P; }
+        else { i = (t % per_row) * step; j = (t / per_row) * step; }
+        u = (float)i - h; v = (float)j - h;
+        dst[j * S->P + i] = rl__bilinear(S->ex, S->ew, S->eh, cx + 0.5f + c * u - s * v - 0.5f, cy + 0.5f + s * u + c * v - 0.5f);
+    }
 }
 
 static void rl__copy_patch(const rl__synth *S, int ex, int ey, float *dst)
@@ -1045,12 +1101,54 @@ static rl_result rl__cut(rl__synth *S, int wx, int wy, const float *cand, float 
     return RL_OK;
 }
 
+/* The Gauss-Seidel sweeps over the band's nq texels (S->queue, window-local in the rw-wide
+   rectangle at (x0, y0)): each texel's neighbours and their guidance are gathered once
+   (S->st_nb, S->st_g, 4 a texel; S->st_cnt), then each sweep is v = mean(out[nb] + g) in the
+   queue's order, until no texel moves by more than 1e-5 of the range (at most 64 sweeps). */
+static void rl__blend_solve(rl__synth *S, int x0, int y0, int rw, int nq, const float *cand, int wx, int wy)
+{
+    static const int nx[4] = {1, -1, 0, 0}, ny[4] = {0, 0, 1, -1};
+    int i, k, it, id = S->patch_id;
+    for (i = 0; i < nq; i++) {
+        int q = S->queue[i], x = x0 + q % rw, y = y0 + q / rw, cnt = 0;
+        float b = cand[(y - wy) * S->P + (x - wx)];
+        for (k = 0; k < 4; k++) {
+            int xx = x + nx[k], yy = y + ny[k];
+            size_t pq;
+            if (xx < 0 || yy < 0 || xx >= S->w || yy >= S->h) continue;
+            pq = (size_t)yy * S->w + xx;
+            if (S->owner[pq] < 0) continue;
+            S->st_nb[4 * i + cnt] = (int32_t)pq;   /* sum never is -0, so adding a zero guidance is exact */
+            S->st_g[4 * i + cnt] = (S->owner[pq] == id || (xx >= wx && yy >= wy && xx < wx + S->P && yy < wy + S->P))
+                                       ? b - cand[(yy - wy) * S->P + (xx - wx)] : 0.0f;
+            cnt++;
+        }
+        S->st_cnt[i] = (uint8_t)cnt;
+        S->queue[i] = (int32_t)((size_t)y * S->w + x); /* from here on: the texel's output index */
+    }
+    for (it = 0; it < 64; it++) {
+        float change = 0.0f;
+        for (i = 0; i < nq; i++) {
+            size_t p = (size_t)S->queue[i];
+            const int32_t *nb = S->st_nb + 4 * i;
+            const float *g = S->st_g + 4 * i;
+            float sum = 0.0f, v, d;
+            for (k = 0; k < S->st_cnt[i]; k++) sum += S->out[nb[k]] + g[k];
+            v = sum / (float)S->st_cnt[i];
+            d = fabsf(v - S->out[p]);
+            change = d > change ? d : change;
+            S->out[p] = v;
+        }
+        if (change <= 1e-5f * S->range) break;
+    }
+}
+
 /* Poisson seam removal in a band: the texels this patch just took that lie within blend_band
    (4-neighbour steps) of a texel of another patch are solved for, with the patch's own gradients
    as guidance, zero guidance across the seam, and everything else fixed (Gauss-Seidel). */
 static void rl__blend(rl__synth *S, int x0, int y0, int rw, int rh, const float *cand, int wx, int wy)
 {
-    int band = S->o.blend_band, qh = 0, qt = 0, i, k, it, id = S->patch_id;
+    int band = S->o.blend_band, qh = 0, qt = 0, i, k, id = S->patch_id;
     static const int nx[4] = {1, -1, 0, 0}, ny[4] = {0, 0, 1, -1};
     if (band <= 0) return;
     for (i = 0; i < rw * rh; i++) {
@@ -1077,30 +1175,7 @@ static void rl__blend(rl__synth *S, int x0, int y0, int rw, int rh, const float 
             S->queue[qt++] = r;
         }
     }
-    for (it = 0; it < 64; it++) {
-        float change = 0.0f;
-        for (i = 0; i < qt; i++) {
-            int q = S->queue[i], x = x0 + q % rw, y = y0 + q / rw, cnt = 0;
-            size_t p = (size_t)y * S->w + x;
-            float sum = 0.0f, b = cand[(y - wy) * S->P + (x - wx)], v;
-            for (k = 0; k < 4; k++) {
-                int xx = x + nx[k], yy = y + ny[k];
-                size_t pq;
-                if (xx < 0 || yy < 0 || xx >= S->w || yy >= S->h) continue;
-                pq = (size_t)yy * S->w + xx;
-                if (S->owner[pq] < 0) continue;
-                if (S->owner[pq] == id || (xx >= wx && yy >= wy && xx < wx + S->P && yy < wy + S->P))
-                    sum += S->out[pq] + (b - cand[(yy - wy) * S->P + (xx - wx)]);
-                else
-                    sum += S->out[pq];
-                cnt++;
-            }
-            v = sum / (float)cnt;
-            change = fabsf(v - S->out[p]) > change ? fabsf(v - S->out[p]) : change;
-            S->out[p] = v;
-        }
-        if (change <= 1e-5f * S->range) break;
-    }
+    rl__blend_solve(S, x0, y0, rw, qt, cand, wx, wy);
 }
 
 /* copies the candidate's side of the cut in S->lab into window (wx, wy), blends the seam */
@@ -1265,20 +1340,28 @@ static rl_result rl__place_feature(rl__synth *S, const rl__feat *t, const rl__fe
     int wx = t->x - S->P / 2, wy = t->y - S->P / 2, k, flip, best = -1, best_flip = 0, any_kind = 1;
     double best_cost = 0.0;
     const uint8_t *edges = S->sk_edges[t->valley];
+    int i, j, c0 = (S->P / 2) & ~1, nl = 0;
     for (k = 0; k < nsrc; k++) if (src[k].valley == t->valley && src[k].kind == t->kind) any_kind = 0;
+    for (j = 0; j < S->P; j += 2) /* the texels the two costs read: filled or skeleton ones, and the centre */
+        for (i = 0; i < S->P; i += 2) {
+            int x = wx + i, y = wy + j;
+            size_t p = (size_t)y * S->w + x;
+            if ((i == c0 && j == c0) || (x >= 0 && y >= 0 && x < S->w && y < S->h && (S->owner[p] >= 0 || edges[p])))
+                S->fill_off[nl++] = j * S->P + i;
+        }
     for (k = 0; k < nsrc; k++) {
         if (src[k].valley != t->valley || (!any_kind && src[k].kind != t->kind)) continue;
         for (flip = 0; flip < 2; flip++) {
             float angle = src[k].angle - t->angle + (flip ? 3.14159265f : 0.0f);
             double c;
-            rl__sample_patch(S, (float)src[k].x, (float)src[k].y, angle, 2, S->cand);
+            rl__sample_patch(S, (float)src[k].x, (float)src[k].y, angle, 2, S->fill_off, nl, S->cand);
             c = S->o.alpha_g * rl__overlap_ssd(S, wx, wy, S->cand, 2, NULL) / ((double)S->range * S->range) +
                 S->o.alpha_f * rl__feature_cost(S, edges, wx, wy, S->cand);
             if (best < 0 || c < best_cost) { best = k; best_flip = flip; best_cost = c; }
         }
     }
     if (best < 0) return RL_OK;
-    rl__sample_patch(S, (float)src[best].x, (float)src[best].y, src[best].angle - t->angle + (best_flip ? 3.14159265f : 0.0f), 1, S->best);
+    rl__sample_patch(S, (float)src[best].x, (float)src[best].y, src[best].angle - t->angle + (best_flip ? 3.14159265f : 0.0f), 1, NULL, 0, S->best);
     return rl__place(S, wx, wy, S->best, (float)S->P / 6.0f);
 }
 
@@ -1295,11 +1378,16 @@ static double rl__fill_score(const rl__synth *S, int wx, int wy, int ex, int ey,
     double c = 0.0, stop = limit * n;
     int i = 0;
     if (!n) return (double)(((uint32_t)wx * 73856093u ^ (uint32_t)wy * 19349663u ^ (uint32_t)ex * 83492791u ^ (uint32_t)ey * 2654435761u) % 1000u);
-    while (i < n && c < stop) {
-        float part = 0.0f;
+    while (i < n && c < stop) {        /* chunks of 32 terms, 4 float chains each */
+        float p0 = 0.0f, p1 = 0.0f, p2 = 0.0f, p3 = 0.0f;
         int end = i + 32 < n ? i + 32 : n;
-        for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; part += d * d; }
-        c += (double)part;
+        for (; i + 4 <= end; i += 4) {
+            float d0 = base[S->fill_off[i]] - S->fill_val[i], d1 = base[S->fill_off[i + 1]] - S->fill_val[i + 1];
+            float d2 = base[S->fill_off[i + 2]] - S->fill_val[i + 2], d3 = base[S->fill_off[i + 3]] - S->fill_val[i + 3];
+            p0 += d0 * d0; p1 += d1 * d1; p2 += d2 * d2; p3 += d3 * d3;
+        }
+        for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; p0 += d * d; }
+        c += (double)((p0 + p1) + (p2 + p3));
     }
     return c >= stop ? -1.0 : c / n;
 }
@@ -1314,18 +1402,57 @@ static void rl__keep_best(double *cost, int *px, int *py, int *count, int k, dou
     cost[i] = c; px[i] = x; py[i] = y;
 }
 
+/* Of the nk candidates, the one to place: the least full SSD + alpha_g * cut cost per overlap
+   texel (ties to the lower index), or with tolerance a fixed pick among those within
+   (1 + tolerance) of it. The cut cost is never negative, so a candidate whose SSD alone passes
+   that bound cannot be picked and gets no cut; candidates go by SSD so that happens early.
+   Each cut's labels are kept (best_lab, P*P a candidate) for the one placed. */
+static rl_result rl__pick_fill(rl__synth *S, int wx, int wy, const int *kx, const int *ky, int nk, int *pick)
+{
+    double ssd[RL__KMAX], costs[RL__KMAX], best_cost = 0.0, tol = S->o.tolerance > 0.0f ? S->o.tolerance : 0.0;
+    int order[RL__KMAX], k, t, best = -1;
+    size_t pp = (size_t)S->P * (size_t)S->P;
+    rl_result r;
+    for (k = 0; k < nk; k++) {
+        rl__copy_patch(S, kx[k], ky[k], S->cand);
+        ssd[k] = rl__overlap_ssd(S, wx, wy, S->cand, 1, NULL) / ((double)S->range * S->range);
+        costs[k] = 1e300;
+        for (t = k; t > 0 && ssd[order[t - 1]] > ssd[k]; t--) order[t] = order[t - 1];
+        order[t] = k;
+    }
+    for (t = 0; t < nk; t++) {
+        double cut, c;
+        int nover;
+        k = order[t];
+        if (best >= 0 && ssd[k] > (1.0 + tol) * best_cost) break;
+        rl__copy_patch(S, kx[k], ky[k], S->cand);
+        if ((r = rl__cut(S, wx, wy, S->cand, 0.0f, &cut, &nover)) != RL_OK) return r;
+        c = ssd[k] + S->o.alpha_g * cut / ((nover ? nover : 1) * (double)S->range);
+        memcpy(S->best_lab + (size_t)k * pp, S->lab, pp);
+        if (best < 0 || c < best_cost || (c == best_cost && k < best)) { best = k; best_cost = c; }
+        costs[k] = c;
+    }
+    *pick = best;
+    if (best >= 0 && tol > 0.0) {
+        int ok[RL__KMAX], nok = 0;
+        uint32_t hsh = (uint32_t)(wx * 2654435761u) ^ (uint32_t)(wy * 40503u + 7u);
+        for (k = 0; k < nk; k++) if (costs[k] <= (1.0 + tol) * best_cost) ok[nok++] = k;
+        *pick = ok[(hsh ^ (hsh >> 15)) % (uint32_t)nok];
+    }
+    return RL_OK;
+}
+
 /* The window's best example position. The filled texels it is compared on: every other one.
    Coarse to fine: the 4 best positions on a grid of 2 x stride, then the stride neighbourhoods
-   (3 x 3) of those give the K least SSD; of these the least full SSD + alpha_g * cut cost is
-   placed (or, with tolerance, a fixed pick among the near-best). */
+   (3 x 3) of those give the K least SSD; rl__pick_fill chooses among them by SSD and seam. */
 static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
 {
-    enum { KMAX = 16, COARSE = 4 };
-    double kc[KMAX], costs[KMAX], cc[COARSE], best_cost = 0.0;
-    int kx[KMAX], ky[KMAX], cx[COARSE], cy[COARSE], nk = 0, nc = 0, K = S->o.candidates, stride = S->o.search_stride;
-    int ex, ey, k, n = 0, best = -1, i, j, q;
+    enum { COARSE = 4 };
+    double kc[RL__KMAX], cc[COARSE];
+    int kx[RL__KMAX], ky[RL__KMAX], cx[COARSE], cy[COARSE], nk = 0, nc = 0, K = S->o.candidates, stride = S->o.search_stride;
+    int ex, ey, n = 0, i, j, q, pick;
     rl_result r;
-    K = K > KMAX ? KMAX : K;
+    K = K > RL__KMAX ? RL__KMAX : K;
     for (j = 0; j < S->P; j += 2)
         for (i = 0; i < S->P; i += 2) {
             int x = wx + i, y = wy + j;
@@ -1354,35 +1481,9 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
                 c = rl__fill_score(S, wx, wy, ex, ey, n, nk == K ? kc[K - 1] : 1e300);
                 if (c >= 0.0) rl__keep_best(kc, kx, ky, &nk, K, c, ex, ey);
             }
-    for (k = 0; k < nk; k++) {
-        double cut, c;
-        int nover;
-        rl__copy_patch(S, kx[k], ky[k], S->cand);
-        if ((r = rl__cut(S, wx, wy, S->cand, 0.0f, &cut, &nover)) != RL_OK) return r;
-        c = rl__overlap_ssd(S, wx, wy, S->cand, 1, NULL) / ((double)S->range * S->range) +
-            S->o.alpha_g * cut / ((nover ? nover : 1) * (double)S->range);
-        if (best < 0 || c < best_cost) {
-            best = k; best_cost = c;
-            memcpy(S->best, S->cand, sizeof(float) * (size_t)S->P * (size_t)S->P);
-            memcpy(S->best_lab, S->lab, (size_t)S->P * (size_t)S->P);
-        }
-        costs[k] = c;
-    }
-    if (best < 0) return RL_OK;
-    if (S->o.tolerance > 0.0f) { /* a fixed pick among those within (1 + tolerance) of the best */
-        int ok[KMAX], nok = 0;
-        uint32_t hsh = (uint32_t)(wx * 2654435761u) ^ (uint32_t)(wy * 40503u + 7u);
-        for (k = 0; k < nk; k++) if (costs[k] <= (1.0 + S->o.tolerance) * best_cost) ok[nok++] = k;
-        k = ok[(hsh ^ (hsh >> 15)) % (uint32_t)nok];
-        if (k != best) {
-            int nover;
-            double cut;
-            rl__copy_patch(S, kx[k], ky[k], S->best);
-            if ((r = rl__cut(S, wx, wy, S->best, 0.0f, &cut, &nover)) != RL_OK) return r;
-            return rl__commit(S, wx, wy, S->best);
-        }
-    }
-    memcpy(S->lab, S->best_lab, (size_t)S->P * (size_t)S->P);
+    if ((r = rl__pick_fill(S, wx, wy, kx, ky, nk, &pick)) != RL_OK || pick < 0) return r;
+    rl__copy_patch(S, kx[pick], ky[pick], S->best);
+    memcpy(S->lab, S->best_lab + (size_t)pick * (size_t)S->P * (size_t)S->P, (size_t)S->P * (size_t)S->P);
     return rl__commit(S, wx, wy, S->best);
 }
 
@@ -1420,8 +1521,9 @@ static rl_result rl__fill(rl__synth *S)
 }
 
 /* strokes: 1 where the sketch is above 0.75 (white), 2 below 0.25 (black); also their
-   skeletons, from the distance to the stroke's outside (its medial axis is that map's ridge) */
-static rl_result rl__sketch_features(rl__synth *S, const rl_map *sketch, float *dist)
+   skeletons, from the distance to the stroke's outside (its medial axis is that map's ridge), computed once
+   into all and masked per polarity into dist (both w*h floats of scratch) */
+static rl_result rl__sketch_features(rl__synth *S, const rl_map *sketch, float *all, float *dist)
 {
     size_t n = (size_t)S->w * (size_t)S->h, i;
     int pol, any = 0;
@@ -1434,12 +1536,12 @@ static rl_result rl__sketch_features(rl__synth *S, const rl_map *sketch, float *
     }
     if (!any) return RL_ERR_NO_STROKES;
     so.threshold = 0.5f;
+    if ((r = rl__distance(S->stroke, 0, S->w, S->h, &S->a, all)) != RL_OK) return r;
     for (pol = 0; pol < 2; pol++) {
         rl_map m;
         rl_skeleton sk;
         uint8_t keep = (uint8_t)(pol + 1);
-        if ((r = rl__distance(S->stroke, 0, S->w, S->h, &S->a, dist)) != RL_OK) return r;
-        for (i = 0; i < n; i++) if (S->stroke[i] != keep) dist[i] = 0.0f;
+        for (i = 0; i < n; i++) dist[i] = S->stroke[i] == keep ? all[i] : 0.0f;
         m.width = S->w; m.height = S->h; m.data = dist;
         if ((r = rl_skeleton_extract(&m, &so, &S->a, &sk)) != RL_OK) return r;
         S->sk_edges[pol] = sk.edges;
@@ -1471,8 +1573,9 @@ static void rl__synth_free(rl__synth *S)
     rl__free(&S->a, S->owner); rl__free(&S->a, S->stroke); rl__free(&S->a, S->locked); rl__free(&S->a, S->sk_edges[0]); rl__free(&S->a, S->sk_edges[1]);
     rl__free(&S->a, S->cand); rl__free(&S->a, S->best); rl__free(&S->a, S->ga); rl__free(&S->a, S->gb);
     rl__free(&S->a, S->cons); rl__free(&S->a, S->lab); rl__free(&S->a, S->band); rl__free(&S->a, S->queue);
+    rl__free(&S->a, S->st_nb); rl__free(&S->a, S->st_g); rl__free(&S->a, S->st_cnt);
     rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab); rl__free(&S->a, S->fill_off); rl__free(&S->a, S->fill_val);
-    if (S->flow.head) rl__flow_free(&S->flow, &S->a);
+    if (S->flow.to) rl__flow_free(&S->flow, &S->a);
 }
 
 /* checks both maps and the options, resolves defaults, allocates the state */
@@ -1520,15 +1623,19 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
     S->gb = (float *)rl__alloc(&S->a, sizeof(float) * pp);
     S->cons = (uint8_t *)rl__alloc(&S->a, pp);
     S->lab = (uint8_t *)rl__alloc(&S->a, pp);
-    S->best_lab = (uint8_t *)rl__alloc(&S->a, pp);
+    S->best_lab = (uint8_t *)rl__alloc(&S->a, pp * (size_t)(S->o.candidates < RL__KMAX ? S->o.candidates : RL__KMAX));
     S->band = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
+    S->st_nb = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * 4 * pp);
+    S->st_g = (float *)rl__alloc(&S->a, sizeof(float) * 4 * pp);
+    S->st_cnt = (uint8_t *)rl__alloc(&S->a, pp);
+    if (!S->st_nb || !S->st_g || !S->st_cnt) S->band = (rl__free(&S->a, S->band), (int32_t *)NULL);
     S->queue = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
     S->node = (int *)rl__alloc(&S->a, sizeof(int) * pp);
     S->fill_off = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
     S->fill_val = (float *)rl__alloc(&S->a, sizeof(float) * pp);
     if (!S->fill_off || !S->fill_val) S->node = (rl__free(&S->a, S->node), (int *)NULL);
     if (S->owner && S->stroke && S->cand && S->best && S->ga && S->gb && S->cons && S->lab && S->best_lab && S->band && S->queue && S->node &&
-        rl__flow_init(&S->flow, (int)pp + 2, (int)(6 * pp), &S->a) != RL_OK)
+        rl__flow_init(&S->flow, (int)pp, &S->a) != RL_OK)
         S->node = (rl__free(&S->a, S->node), (int *)NULL);
     if (!S->owner || !S->stroke || !S->cand || !S->best || !S->ga || !S->gb || !S->cons || !S->lab || !S->best_lab || !S->band || !S->queue || !S->node) {
         rl__synth_free(S);
@@ -1589,7 +1696,7 @@ RLDEF rl_result rl_synthesize(const rl_map *example, const rl_map *sketch, const
     sb = (int32_t *)rl__alloc(&S.a, sizeof(int32_t) * n);
     r = (S.out && sa && sb) ? RL_OK : RL_ERR_OUT_OF_MEMORY;
     S.windows_total = ((S.w + S.P - S.O - 1) / (S.P - S.O)) * ((S.h + S.P - S.O - 1) / (S.P - S.O));
-    if (r == RL_OK) r = rl__sketch_features(&S, sketch, (float *)sa);     /* 1. the sketch's skeletons */
+    if (r == RL_OK) r = rl__sketch_features(&S, sketch, (float *)sb, (float *)sa);     /* 1. the sketch's skeletons */
     if (r == RL_OK) r = rl__features(&S, sa, sb);                         /* 2. feature patches, breadth first */
     if (r == RL_OK) r = rl__fill(&S);                                     /* 3. the rest by best matches */
     if (r == RL_OK && S.o.emphasis > 0.0f)                                /* 4. the strokes' extra relief */
