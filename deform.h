@@ -182,7 +182,8 @@
          DFM_MALLOC(sz)        default allocator; define both DFM_MALLOC and DFM_FREE or neither
          DFM_FREE(p)
          DFM_NO_VECTOR_EXTENSIONS  plain C dense kernels instead of GCC/Clang vector types
-         DFM_NO_RUNTIME_DISPATCH   never use the AVX kernel chosen by CPU feature bits on x86
+         DFM_NO_RUNTIME_DISPATCH   never use the AVX / AVX-512 kernels chosen by CPU feature bits
+         DFM_NO_AVX512         the AVX kernels at most (same bits either way)
        Run time, dfm_chol_options (zeroed or NULL = defaults; dfm_chol_default_options() resolves):
          ordering       DFM_ORDER_AMD (default), DFM_ORDER_NATURAL, DFM_ORDER_GIVEN (perm below).
          perm           DFM_ORDER_GIVEN: perm[k] = the input row/column eliminated k-th.
@@ -227,13 +228,15 @@
        every descendant supernode that has rows in it (one dense C = L_d L_d'^T
        product per descendant, scattered by relative row indices), then a blocked dense Cholesky of
        the supernode's diagonal block and triangular solve of the rows below it (one blocked
-       left-looking pass over the panel). The dense kernels are 4 x 4 register tiles, two-lane
-       vectors through the GCC/Clang vector extension (SSE2 / NEON), plain C elsewhere; on x86 CPUs
-       with AVX an 8 x 4 tile compiled for AVX is chosen at run time (about 1.4x faster on the
-       bunny's bi-Laplacian); the 3-right-hand-side solve has an AVX version too. The vector paths
-       do the same operations in the same order without FMA, so they give the same bits (checked:
-       gcc and clang, SSE2 and AVX builds agree; the plain C build has the same factor and a
-       solve that differs in the last bits). Solve:
+       left-looking pass over the panel: each block of 48 columns is updated, its diagonal block
+       factored by columns, and the rows below it solved in tiles of rows held in registers).
+       The dense kernels are 4 x 4 register tiles, two-lane vectors through the GCC/Clang vector
+       extension (SSE2 / NEON), plain C elsewhere; on x86 CPUs with AVX an 8 x 4 tile compiled for
+       AVX, and with AVX-512F a 16 x 4 one, is chosen at run time; the product tiles go over C's
+       columns in chunks whose part of B stays in L2 cache. The 3-right-hand-side solve has an
+       AVX version too. The vector paths do the same operations in the same order without FMA,
+       so they give the same bits (checked: gcc and clang, plain C, SSE2, AVX and AVX-512 builds
+       agree on the factor; the plain C solve differs in the last bits). Solve:
        supernodal forward and backward substitution, right-hand sides interleaved four at a time;
        for three right-hand sides each supernode's rows are gathered into a dense block first.
 
@@ -272,8 +275,8 @@
        At most 2^31 - 1 rows; nnz(L) limited only by size_t and memory. Nested dissection needs
        coordinates (no graph partitioner); its separators are planar cuts, not refined (no
        Fiduccia-Mattheyses), so it reaches METIS's fill only within about 10% on meshes. Single
-       threaded; the dense kernels use no FMA and at most AVX (4 lanes), so on large supernodes the
-       factorization is slower than CHOLMOD with an AVX-512 BLAS.
+       threaded; the dense kernels use no FMA (one rounding for the product, one for the sum, on
+       every path), so their peak is half that of an FMA BLAS of the same width.
 
      DECISIONS
        - The ordering is AMD as in the 1996 paper (ties broken as in the authors' reference code:
@@ -2669,14 +2672,17 @@ static void dfm__gemm_nt(size_t m, size_t k, size_t p, const double *A, size_t l
                 c02 += a0 * b2; c12 += a1 * b2; c22 += a2 * b2; c32 += a3 * b2;
                 c03 += a0 * b3; c13 += a1 * b3; c23 += a2 * b3; c33 += a3 * b3;
             }
-            if (assign) {
-                c0[0] = c0[1] = c0[2] = c0[3] = c1[0] = c1[1] = c1[2] = c1[3] = 0.0;
-                c2[0] = c2[1] = c2[2] = c2[3] = c3[0] = c3[1] = c3[2] = c3[3] = 0.0;
+            if (assign) { /* -sum, as the vector tiles store it (0.0 - sum differs at zero) */
+                c0[0] = -c00; c0[1] = -c10; c0[2] = -c20; c0[3] = -c30;
+                c1[0] = -c01; c1[1] = -c11; c1[2] = -c21; c1[3] = -c31;
+                c2[0] = -c02; c2[1] = -c12; c2[2] = -c22; c2[3] = -c32;
+                c3[0] = -c03; c3[1] = -c13; c3[2] = -c23; c3[3] = -c33;
+            } else {
+                c0[0] -= c00; c0[1] -= c10; c0[2] -= c20; c0[3] -= c30;
+                c1[0] -= c01; c1[1] -= c11; c1[2] -= c21; c1[3] -= c31;
+                c2[0] -= c02; c2[1] -= c12; c2[2] -= c22; c2[3] -= c32;
+                c3[0] -= c03; c3[1] -= c13; c3[2] -= c23; c3[3] -= c33;
             }
-            c0[0] -= c00; c0[1] -= c10; c0[2] -= c20; c0[3] -= c30;
-            c1[0] -= c01; c1[1] -= c11; c1[2] -= c21; c1[3] -= c31;
-            c2[0] -= c02; c2[1] -= c12; c2[2] -= c22; c2[3] -= c32;
-            c3[0] -= c03; c3[1] -= c13; c3[2] -= c23; c3[3] -= c33;
 #endif
         }
         for (; i < m; i++) {
@@ -2721,55 +2727,125 @@ static void dfm__gemm_nt(size_t m, size_t k, size_t p, const double *A, size_t l
     (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 6))
 #define DFM__AVX 1
 typedef double dfm__v4 __attribute__((vector_size(32)));
+#ifndef DFM__GEMM_L2
+#define DFM__GEMM_L2 32768 /* doubles of B kept in L2 by the gemm tile's column chunks (256 KiB) */
+#endif
 
-/* C (m x k) -= A B^T for m a multiple of 8 and k a multiple of 4, in 8 x 4 tiles */
+/* C (m x k) -= A B^T for m a multiple of 8 and k a multiple of 4, in 8 x 4 tiles. The columns
+   of C go in chunks whose rows of B (jc x p) stay in L2, and each strip of 8 rows of A stays in
+   L1 across the chunk's tiles, so A is read from memory once a chunk instead of once per 4
+   columns. Every tile still sums its full inner dimension in order: the bits do not depend on
+   the chunking. */
 __attribute__((target("avx"))) static void dfm__gemm_nt_avx(size_t m, size_t k, size_t p, const double *A, size_t lda,
                                                               const double *B, size_t ldb, double *C, size_t ldc,
                                                               int assign)
 {
-    size_t i, j, t, q;
-    for (j = 0; j < k; j += 4)
-        for (i = 0; i < m; i += 8) {
-            const double *a = A + i, *bb = B + j;
-            dfm__v4 z = {0.0, 0.0, 0.0, 0.0}, acc[8];
-            for (q = 0; q < 8; q++) acc[q] = z;
-            for (t = 0; t < p; t++, a += lda, bb += ldb) {
-                dfm__v4 lo, hi, b0 = {bb[0], bb[0], bb[0], bb[0]}, b1 = {bb[1], bb[1], bb[1], bb[1]};
-                dfm__v4 b2 = {bb[2], bb[2], bb[2], bb[2]}, b3 = {bb[3], bb[3], bb[3], bb[3]};
-                memcpy(&lo, a, sizeof lo);
-                memcpy(&hi, a + 4, sizeof hi);
-                acc[0] += lo * b0; acc[1] += hi * b0;
-                acc[2] += lo * b1; acc[3] += hi * b1;
-                acc[4] += lo * b2; acc[5] += hi * b2;
-                acc[6] += lo * b3; acc[7] += hi * b3;
-            }
-            for (q = 0; q < 4; q++) {
-                double *cq = C + i + (j + q) * ldc;
-                dfm__v4 c0, c1;
-                if (assign) {
-                    c0 = -acc[2 * q];
-                    c1 = -acc[2 * q + 1];
-                } else {
-                    memcpy(&c0, cq, sizeof c0);
-                    memcpy(&c1, cq + 4, sizeof c1);
-                    c0 -= acc[2 * q];
-                    c1 -= acc[2 * q + 1];
+    size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
+    if (jc < 4) jc = 4;
+    for (j0 = 0; j0 < k; j0 += jc) {
+        size_t j1 = k - j0 < jc ? k : j0 + jc;
+        for (i = 0; i < m; i += 8)
+            for (j = j0; j < j1; j += 4) {
+                const double *a = A + i, *bb = B + j;
+                dfm__v4 z = {0.0, 0.0, 0.0, 0.0}, acc[8];
+                for (q = 0; q < 8; q++) acc[q] = z;
+                for (t = 0; t < p; t++, a += lda, bb += ldb) {
+                    dfm__v4 lo, hi, b0 = {bb[0], bb[0], bb[0], bb[0]}, b1 = {bb[1], bb[1], bb[1], bb[1]};
+                    dfm__v4 b2 = {bb[2], bb[2], bb[2], bb[2]}, b3 = {bb[3], bb[3], bb[3], bb[3]};
+                    memcpy(&lo, a, sizeof lo);
+                    memcpy(&hi, a + 4, sizeof hi);
+                    acc[0] += lo * b0; acc[1] += hi * b0;
+                    acc[2] += lo * b1; acc[3] += hi * b1;
+                    acc[4] += lo * b2; acc[5] += hi * b2;
+                    acc[6] += lo * b3; acc[7] += hi * b3;
                 }
-                memcpy(cq, &c0, sizeof c0);
-                memcpy(cq + 4, &c1, sizeof c1);
+                for (q = 0; q < 4; q++) {
+                    double *cq = C + i + (j + q) * ldc;
+                    dfm__v4 c0, c1;
+                    if (assign) {
+                        c0 = -acc[2 * q];
+                        c1 = -acc[2 * q + 1];
+                    } else {
+                        memcpy(&c0, cq, sizeof c0);
+                        memcpy(&c1, cq + 4, sizeof c1);
+                        c0 -= acc[2 * q];
+                        c1 -= acc[2 * q + 1];
+                    }
+                    memcpy(cq, &c0, sizeof c0);
+                    memcpy(cq + 4, &c1, sizeof c1);
+                }
             }
-        }
+    }
+}
+
+/* The same tile on 16 rows with AVX-512F (8 lanes): each entry gets the same operations in the
+   same order as in the 8 x 4 tile (no FMA), so the bits do not change; twice the arithmetic per
+   instruction. */
+#if !defined(DFM_NO_AVX512)
+#define DFM__AVX512 1
+typedef double dfm__v8 __attribute__((vector_size(64)));
+
+__attribute__((target("avx512f"))) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p, const double *A,
+                                                                    size_t lda, const double *B, size_t ldb,
+                                                                    double *C, size_t ldc, int assign)
+{
+#ifdef __clang__
+#pragma STDC FP_CONTRACT OFF /* clang's avx512f implies FMA: no fused multiply-adds here */
+#endif
+    size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
+    if (jc < 4) jc = 4;
+    for (j0 = 0; j0 < k; j0 += jc) {
+        size_t j1 = k - j0 < jc ? k : j0 + jc;
+        for (i = 0; i < m; i += 16)
+            for (j = j0; j < j1; j += 4) {
+                const double *a = A + i, *bb = B + j;
+                dfm__v8 z = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, acc[8];
+                for (q = 0; q < 8; q++) acc[q] = z;
+                for (t = 0; t < p; t++, a += lda, bb += ldb) {
+                    dfm__v8 lo, hi, b0 = z + bb[0], b1 = z + bb[1], b2 = z + bb[2], b3 = z + bb[3];
+                    memcpy(&lo, a, sizeof lo);
+                    memcpy(&hi, a + 8, sizeof hi);
+                    acc[0] += lo * b0; acc[1] += hi * b0;
+                    acc[2] += lo * b1; acc[3] += hi * b1;
+                    acc[4] += lo * b2; acc[5] += hi * b2;
+                    acc[6] += lo * b3; acc[7] += hi * b3;
+                }
+                for (q = 0; q < 4; q++) {
+                    double *cq = C + i + (j + q) * ldc;
+                    dfm__v8 c0, c1;
+                    if (assign) {
+                        c0 = -acc[2 * q];
+                        c1 = -acc[2 * q + 1];
+                    } else {
+                        memcpy(&c0, cq, sizeof c0);
+                        memcpy(&c1, cq + 8, sizeof c1);
+                        c0 -= acc[2 * q];
+                        c1 -= acc[2 * q + 1];
+                    }
+                    memcpy(cq, &c0, sizeof c0);
+                    memcpy(cq + 8, &c1, sizeof c1);
+                }
+            }
+    }
 }
 #endif
+#endif
 
-/* C (m x k) -= A B^T (C = -A B^T with assign), with the AVX tiles where the CPU has them */
+/* C (m x k) -= A B^T (C = -A B^T with assign), with the AVX-512 / AVX tiles where the CPU has
+   them */
 static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda, const double *B, size_t ldb,
                       double *C, size_t ldc, int assign)
 {
 #ifdef DFM__AVX
-    size_t m8 = m & ~(size_t)7, k4 = k & ~(size_t)3;
+    size_t m8 = m & ~(size_t)7, k4 = k & ~(size_t)3, m16 = 0;
     if (m8 > 0 && k4 > 0 && __builtin_cpu_supports("avx")) {
-        dfm__gemm_nt_avx(m8, k4, p, A, lda, B, ldb, C, ldc, assign);
+#ifdef DFM__AVX512
+        if (m >= 16 && __builtin_cpu_supports("avx512f")) {
+            m16 = m & ~(size_t)15;
+            dfm__gemm_nt_avx512(m16, k4, p, A, lda, B, ldb, C, ldc, assign);
+        }
+#endif
+        if (m8 > m16) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign);
         if (m > m8) dfm__gemm_nt(m - m8, k4, p, A + m8, lda, B, ldb, C + m8, ldc, assign);
         if (k > k4) dfm__gemm_nt(m, k - k4, p, A, lda, B + k4, ldb, C + k4 * ldc, ldc, assign);
         return;
