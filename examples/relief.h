@@ -499,15 +499,43 @@ static int rl__ppa_side(const float *h, int w, int hh, int x, int y, int dx, int
     return mark;
 }
 
-#define RL__PPA_BLOCK 64
+/* RL__PPA_BLOCK texels of a row whose lines stay inside the map (fixed-size local arrays, so
+   the compiler can vectorise): both sides' minima along each of the 4 lines */
+#define RL__PPA_BLOCK 32
+static void rl__ppa_block(const float *r0, int w, int L, float tau, float sign, uint8_t *out)
+{
+    static const int lx[4] = {1, 0, 1, 1}, ly[4] = {0, 1, 1, -1};
+    float mp[RL__PPA_BLOCK], mm[RL__PPA_BLOCK];
+    int32_t is[RL__PPA_BLOCK];
+    int x, k, l;
+    for (x = 0; x < RL__PPA_BLOCK; x++) is[x] = 0;
+    for (l = 0; l < 4; l++) {
+        ptrdiff_t off = (ptrdiff_t)ly[l] * w + lx[l];
+        for (x = 0; x < RL__PPA_BLOCK; x++) { mp[x] = sign * r0[x + off]; mm[x] = sign * r0[x - off]; }
+        for (k = 2; k <= L; k++) {
+            const float *ra = r0 + k * off, *rb = r0 - k * off;
+            for (x = 0; x < RL__PPA_BLOCK; x++) {
+                float a = sign * ra[x], b = sign * rb[x];
+                mp[x] = a < mp[x] ? a : mp[x];
+                mm[x] = b < mm[x] ? b : mm[x];
+            }
+        }
+        for (x = 0; x < RL__PPA_BLOCK; x++) {
+            float c = sign * r0[x];
+            is[x] |= (c - mp[x] > tau) & (c - mm[x] > tau);
+        }
+    }
+    for (x = 0; x < RL__PPA_BLOCK; x++) out[x] = (uint8_t)is[x];
+}
+
 static void rl__ppa_candidates(const float *h, int w, int hh, int L, float tau, float sign, uint8_t *cand)
 {
     static const int lx[4] = {1, 0, 1, 1}, ly[4] = {0, 1, 1, -1};
-    int x, y, l, k;
+    int x, y, l;
     for (y = 0; y < hh; y++) {
         const float *row = h + (size_t)y * w;
         uint8_t *out = cand + (size_t)y * w;
-        int inner = y >= L && y + L < hh && w > 2 * L, x0 = inner ? L : w, x1 = inner ? w - L : w;
+        int inner = y >= L && y + L < hh && w - 2 * L >= RL__PPA_BLOCK, x0 = inner ? L : w, x1 = inner ? w - L : w;
         for (x = 0; x < w; x++) {          /* texels whose lines leave the map: one by one */
             float c;
             int is = 0;
@@ -518,28 +546,9 @@ static void rl__ppa_candidates(const float *h, int w, int hh, int L, float tau, 
                 is = rl__ppa_side(h, w, hh, x, y, lx[l], ly[l], L, c, tau, sign) && rl__ppa_side(h, w, hh, x, y, -lx[l], -ly[l], L, c, tau, sign);
             out[x] = (uint8_t)is;
         }
-        for (x = x0; x < x1; x++) out[x] = 0;
-        for (l = 0; l < 4; l++) {          /* the rest: both sides' minima along each line, row-wise */
-            ptrdiff_t off = (ptrdiff_t)ly[l] * w + lx[l];
-            int b0, nb;
-            for (b0 = x0; b0 < x1; b0 += nb) {  /* blocks of RL__PPA_BLOCK in local arrays: no aliasing */
-                float mp[RL__PPA_BLOCK], mm[RL__PPA_BLOCK];
-                const float *r0 = row + b0;
-                nb = x1 - b0 < RL__PPA_BLOCK ? x1 - b0 : RL__PPA_BLOCK;
-                for (x = 0; x < nb; x++) { mp[x] = sign * r0[x + off]; mm[x] = sign * r0[x - off]; }
-                for (k = 2; k <= L; k++) {
-                    const float *ra = r0 + k * off, *rb = r0 - k * off;
-                    for (x = 0; x < nb; x++) {
-                        float a = sign * ra[x], b = sign * rb[x];
-                        mp[x] = a < mp[x] ? a : mp[x];
-                        mm[x] = b < mm[x] ? b : mm[x];
-                    }
-                }
-                for (x = 0; x < nb; x++) {
-                    float c = sign * r0[x];
-                    out[b0 + x] |= (uint8_t)((c - mp[x] > tau) & (c - mm[x] > tau));
-                }
-            }
+        for (x = x0; x < x1; x += RL__PPA_BLOCK) { /* the last block flush with x1 (overlaps: same values) */
+            int b0 = x + RL__PPA_BLOCK <= x1 ? x : x1 - RL__PPA_BLOCK;
+            rl__ppa_block(row + b0, w, L, tau, sign, out + b0);
         }
     }
 }
@@ -1001,8 +1010,9 @@ typedef struct rl__synth {
     int32_t *queue;          /* P*P */
     int32_t *st_nb; float *st_g; uint8_t *st_cnt; /* 4*P*P, 4*P*P, P*P: the band's stencils */
     int *node;               /* P*P */
-    int32_t *fill_off;       /* P*P: the fill search's example offsets */
+    int32_t *fill_off;       /* P*P: the fill search's runs (or a feature's texel list) */
     float *fill_val;         /* and output values */
+    float *ex_half;          /* ew*eh: the example's even columns, then its odd ones */
     rl__flow flow;           /* graph-cut workspace for P*P texels */
 } rl__synth;
 
@@ -1369,25 +1379,29 @@ static rl_result rl__place_feature(rl__synth *S, const rl__feat *t, const rl__fe
    Section: non-feature fill (K best by SSD, then SSD + seam cost), the pipeline, the baseline
    --------------------------------------------------------------------------------------------- */
 
-/* mean squared difference of the example patch at (ex, ey) over the window's n listed texels
-   (float partial sums of 32), or -1 as soon as the sum passes limit * n; with nothing to match,
-   a fixed spread of costs in [0, 1000) */
-static double rl__fill_score(const rl__synth *S, int wx, int wy, int ex, int ey, int n, double limit)
+/* mean squared difference of the example patch at (ex, ey) over the window's n filled texels
+   (every other one of every other row, so all in example columns of ex's parity), listed as
+   nruns runs along rows (S->fill_off: row j, column i / 2, length; values in S->fill_val).
+   The example's columns of that parity lie contiguous in S->ex_half, so each run is a plain
+   loop (8 float lanes) that the compiler vectorises; -1 once the sum passes limit * n (checked
+   after each run); with nothing to match, a fixed spread of costs in [0, 1000). */
+static double rl__fill_score(const rl__synth *S, int wx, int wy, int ex, int ey, int nruns, int n, double limit)
 {
-    const float *base = S->ex + (size_t)ey * S->ew + ex;
+    int par = ex & 1, hw = par ? S->ew / 2 : (S->ew + 1) / 2, r, t, k;
+    const float *base = S->ex_half + (par ? (size_t)S->eh * (size_t)((S->ew + 1) / 2) : 0) + (size_t)ey * hw + (ex >> 1);
+    const float *val = S->fill_val;
+    const int32_t *run = S->fill_off;
     double c = 0.0, stop = limit * n;
-    int i = 0;
     if (!n) return (double)(((uint32_t)wx * 73856093u ^ (uint32_t)wy * 19349663u ^ (uint32_t)ex * 83492791u ^ (uint32_t)ey * 2654435761u) % 1000u);
-    while (i < n && c < stop) {        /* chunks of 32 terms, 4 float chains each */
-        float p0 = 0.0f, p1 = 0.0f, p2 = 0.0f, p3 = 0.0f;
-        int end = i + 32 < n ? i + 32 : n;
-        for (; i + 4 <= end; i += 4) {
-            float d0 = base[S->fill_off[i]] - S->fill_val[i], d1 = base[S->fill_off[i + 1]] - S->fill_val[i + 1];
-            float d2 = base[S->fill_off[i + 2]] - S->fill_val[i + 2], d3 = base[S->fill_off[i + 3]] - S->fill_val[i + 3];
-            p0 += d0 * d0; p1 += d1 * d1; p2 += d2 * d2; p3 += d3 * d3;
-        }
-        for (; i < end; i++) { float d = base[S->fill_off[i]] - S->fill_val[i]; p0 += d * d; }
-        c += (double)((p0 + p1) + (p2 + p3));
+    for (r = 0; r < nruns && c < stop; r++, run += 3) {
+        const float *e = base + (size_t)run[0] * hw + run[1];
+        int len = run[2];
+        float acc[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+        for (t = 0; t + 8 <= len; t += 8)
+            for (k = 0; k < 8; k++) { float d = e[t + k] - val[t + k]; acc[k] += d * d; }
+        for (; t < len; t++) { float d = e[t] - val[t]; acc[0] += d * d; }
+        c += (double)(((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])));
+        val += len;
     }
     return c >= stop ? -1.0 : c / n;
 }
@@ -1450,23 +1464,24 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
     enum { COARSE = 4 };
     double kc[RL__KMAX], cc[COARSE];
     int kx[RL__KMAX], ky[RL__KMAX], cx[COARSE], cy[COARSE], nk = 0, nc = 0, K = S->o.candidates, stride = S->o.search_stride;
-    int ex, ey, n = 0, i, j, q, pick;
+    int ex, ey, n = 0, nr = 0, i, j, q, pick;
     rl_result r;
     K = K > RL__KMAX ? RL__KMAX : K;
-    for (j = 0; j < S->P; j += 2)
+    for (j = 0; j < S->P; j += 2)           /* the filled texels compared on, as runs along rows */
         for (i = 0; i < S->P; i += 2) {
             int x = wx + i, y = wy + j;
-            size_t p;
-            if (x < 0 || y < 0 || x >= S->w || y >= S->h) continue;
-            p = (size_t)y * S->w + x;
-            if (S->owner[p] < 0) continue;
-            S->fill_off[n] = (int32_t)((size_t)j * S->ew + i);
-            S->fill_val[n] = S->out[p];
-            n++;
+            size_t p = (size_t)y * S->w + x;
+            if (x < 0 || y < 0 || x >= S->w || y >= S->h || S->owner[p] < 0) continue;
+            if (!nr || S->fill_off[3 * nr - 3] != j || S->fill_off[3 * nr - 2] + S->fill_off[3 * nr - 1] != i / 2) {
+                S->fill_off[3 * nr] = j; S->fill_off[3 * nr + 1] = i / 2; S->fill_off[3 * nr + 2] = 0;
+                nr++;
+            }
+            S->fill_off[3 * nr - 1]++;
+            S->fill_val[n++] = S->out[p];
         }
     for (ey = 0; ey + S->P <= S->eh; ey += 2 * stride)
         for (ex = 0; ex + S->P <= S->ew; ex += 2 * stride) {
-            double c = rl__fill_score(S, wx, wy, ex, ey, n, nc == COARSE ? cc[COARSE - 1] : 1e300);
+            double c = rl__fill_score(S, wx, wy, ex, ey, nr, n, nc == COARSE ? cc[COARSE - 1] : 1e300);
             if (c >= 0.0) rl__keep_best(cc, cx, cy, &nc, COARSE, c, ex, ey);
         }
     for (q = 0; q < nc; q++)
@@ -1478,7 +1493,7 @@ static rl_result rl__place_fill(rl__synth *S, int wx, int wy)
                 if (ex < 0 || ey < 0 || ex + S->P > S->ew || ey + S->P > S->eh) continue;
                 for (t = 0; t < nk; t++) dup |= kx[t] == ex && ky[t] == ey;
                 if (dup) continue;
-                c = rl__fill_score(S, wx, wy, ex, ey, n, nk == K ? kc[K - 1] : 1e300);
+                c = rl__fill_score(S, wx, wy, ex, ey, nr, n, nk == K ? kc[K - 1] : 1e300);
                 if (c >= 0.0) rl__keep_best(kc, kx, ky, &nk, K, c, ex, ey);
             }
     if ((r = rl__pick_fill(S, wx, wy, kx, ky, nk, &pick)) != RL_OK || pick < 0) return r;
@@ -1574,7 +1589,7 @@ static void rl__synth_free(rl__synth *S)
     rl__free(&S->a, S->cand); rl__free(&S->a, S->best); rl__free(&S->a, S->ga); rl__free(&S->a, S->gb);
     rl__free(&S->a, S->cons); rl__free(&S->a, S->lab); rl__free(&S->a, S->band); rl__free(&S->a, S->queue);
     rl__free(&S->a, S->st_nb); rl__free(&S->a, S->st_g); rl__free(&S->a, S->st_cnt);
-    rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab); rl__free(&S->a, S->fill_off); rl__free(&S->a, S->fill_val);
+    rl__free(&S->a, S->node); rl__free(&S->a, S->best_lab); rl__free(&S->a, S->fill_off); rl__free(&S->a, S->fill_val); rl__free(&S->a, S->ex_half);
     if (S->flow.to) rl__flow_free(&S->flow, &S->a);
 }
 
@@ -1633,7 +1648,8 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
     S->node = (int *)rl__alloc(&S->a, sizeof(int) * pp);
     S->fill_off = (int32_t *)rl__alloc(&S->a, sizeof(int32_t) * pp);
     S->fill_val = (float *)rl__alloc(&S->a, sizeof(float) * pp);
-    if (!S->fill_off || !S->fill_val) S->node = (rl__free(&S->a, S->node), (int *)NULL);
+    S->ex_half = (float *)rl__alloc(&S->a, sizeof(float) * (size_t)S->ew * (size_t)S->eh);
+    if (!S->fill_off || !S->fill_val || !S->ex_half) S->node = (rl__free(&S->a, S->node), (int *)NULL);
     if (S->owner && S->stroke && S->cand && S->best && S->ga && S->gb && S->cons && S->lab && S->best_lab && S->band && S->queue && S->node &&
         rl__flow_init(&S->flow, (int)pp, &S->a) != RL_OK)
         S->node = (rl__free(&S->a, S->node), (int *)NULL);
@@ -1643,6 +1659,12 @@ static rl_result rl__synth_init(rl__synth *S, const rl_map *example, const rl_ma
     }
     memset(S->owner, 0xFF, sizeof(int32_t) * n);
     memset(S->locked, 0, n);
+    {
+        int x, y, h0 = (S->ew + 1) / 2, h1 = S->ew / 2;
+        for (y = 0; y < S->eh; y++)
+            for (x = 0; x < S->ew; x++)
+                S->ex_half[(x & 1) ? (size_t)S->eh * h0 + (size_t)y * h1 + x / 2 : (size_t)y * h0 + x / 2] = S->ex[(size_t)y * S->ew + x];
+    }
     return RL_OK;
 }
 
