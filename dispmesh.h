@@ -2417,6 +2417,76 @@ static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, floa
     }
 }
 
+/* Every hit in [tmin, tmax], up to cap of them, into out (in traversal order); returns their
+   number, or cap + 1 when there are more. The hits are those dm__closest_hit would find with the
+   same ray and bounds: the same test per triangle. */
+static size_t dm__all_hits(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax, dm_hit *out, size_t cap)
+{
+    const dm__wnode *wn = bvh->wnodes;
+    const dm__tri4 *tris = bvh->blocks;
+    dm__entry stack[DM__WSTACK];
+    uint32_t ref = 0, count = 0;
+    size_t sp = 0, n = 0;
+    for (;;) {
+        if (count) {
+            const dm__tri4 *q = &tris[ref >> 2];
+            uint32_t left = count;
+            for (;;) {
+                float U[8], V[8], W[8];
+                int pass, nb, m = dm__leaf_lanes(r, q, left, U, V, W, &pass, &nb);
+                while (m) {
+                    const int i = (int)DM__CTZ((uint32_t)m), b = i >> 2, l = i & 3;
+                    float t, u, v;
+                    m &= m - 1;
+                    if (dm__lane_hit(r, q + b, l, (pass >> i) & 1, U + 4 * b, V + 4 * b, W + 4 * b, tmin, tmax, &t,
+                                     &u, &v)) {
+                        if (n == cap) return cap + 1;
+                        out[n].t = t;
+                        out[n].u = u;
+                        out[n].v = v;
+                        out[n++].triangle = q[b].id[l];
+                    }
+                }
+                if (left <= 4 * (uint32_t)nb) break;
+                left -= 4 * (uint32_t)nb;
+                q += nb;
+            }
+        } else {
+            const dm__wnode *nd = &wn[ref];
+            float te[DM__W];
+            int mask = dm__boxw(nd, r, tmin, tmax, te);
+            if (mask) {
+                uint32_t i, m = (uint32_t)mask, take = DM__CTZ(m);
+                for (m &= m - 1; m; m &= m - 1) {
+                    i = DM__CTZ(m);
+                    stack[sp].ref = nd->ref[i];
+                    stack[sp].count = nd->count[i];
+                    stack[sp++].t = te[i];
+                }
+                ref = nd->ref[take];
+                count = nd->count[take];
+                continue;
+            }
+        }
+        if (sp == 0) return n;
+        sp--;
+        ref = stack[sp].ref;
+        count = stack[sp].count;
+    }
+}
+
+/* Of the n hits in h, the nearest at or beyond tmin (the lower triangle id on a tie, as
+   dm__closest_hit chooses); NULL if none. */
+static const dm_hit *dm__first_hit_from(const dm_hit *h, size_t n, float tmin)
+{
+    const dm_hit *best = NULL;
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (h[i].t >= tmin && (!best || h[i].t < best->t || (h[i].t == best->t && h[i].triangle < best->triangle)))
+            best = h + i;
+    return best;
+}
+
 static void dm__clear_hit(dm_hit *hit)
 {
     hit->t = hit->u = hit->v = 0.0f;
@@ -7769,19 +7839,14 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
     }
 }
 
-/* Signed distance from p to a set of one-ring triangles (tf from dm__sh_tris; tris their ids),
-   with the angle-weighted pseudonormal (Baerentzen and Aanaes 2005) at the closest feature,
-   computed from these triangles only. *inner: the feature touches keep (or, when with_remove,
-   remove). *dist: the unsigned distance; *tri (may be NULL): the closest triangle, (size_t)-1 if
-   none. */
-static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const float *tf, size_t n,
-                            const double p[3], double max_dist, int with_remove, int *inner, double *dist,
-                            size_t *tri)
+/* The nearest to p of n one-ring triangles (tf from dm__sh_tris) closer than max_dist: its index
+   ((size_t)-1 if none), with the squared distance and the barycentric (u, v) of the closest point. */
+static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, double *d2best,
+                             double *bu, double *bv)
 {
-    double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150, bu = 0.0, bv = 0.0, q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
+    double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, bt = (size_t)-1;
-    uint32_t fv[3];
-    int k, j, nf = 0;
+    *bu = *bv = 0.0;
     for (i = 0; i < n; i++) {
         const float *f = tf + 16 * i;
         double u, v, d2, cs = (p[0] - f[9]) * (p[0] - f[9]) + (p[1] - f[10]) * (p[1] - f[10]) + (p[2] - f[11]) * (p[2] - f[11]);
@@ -7791,25 +7856,48 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
             best = d2;
             rb = sqrt(d2);
             bt = i;
-            bu = u;
-            bv = v;
+            *bu = u;
+            *bv = v;
         }
     }
-    *inner = 0;
-    *dist = bt == (size_t)-1 ? DBL_MAX : sqrt(best);
-    if (tri) *tri = bt;
-    if (bt == (size_t)-1) return -DBL_MAX;
+    *d2best = best;
+    return bt;
+}
+
+/* The closest feature on triangle bt at barycentric (bu, bv): its nf vertices into fv; returns 1
+   when the feature touches keep (or, when with_remove, remove). */
+static int dm__sh_feature(const dm_collapse *c, const uint32_t *tris, size_t bt, double bu, double bv,
+                          int with_remove, uint32_t fv[3], int *nf)
+{
+    double w[3];
+    int j, inner = 0;
+    w[0] = 1.0 - bu - bv;
+    w[1] = bu;
+    w[2] = bv;
+    *nf = 0;
+    for (j = 0; j < 3; j++)
+        if (w[j] > 1e-7) {
+            fv[(*nf)++] = tris[3 * bt + (size_t)j];
+            if (fv[*nf - 1] == c->keep || (with_remove && fv[*nf - 1] == c->remove)) inner = 1;
+        }
+    return inner;
+}
+
+/* The sign of p's distance dist to the one-ring at its closest feature fv (nf vertices) of
+   triangle bt, taken with the angle-weighted pseudonormal (Baerentzen and Aanaes 2005) computed
+   from these triangles only: +dist outside, -dist inside. */
+static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_t bt, double bu, double bv,
+                          const uint32_t fv[3], int nf, const double p[3], double dist)
+{
+    double q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
+    size_t i;
+    int k, j;
     w[0] = 1.0 - bu - bv;
     w[1] = bu;
     w[2] = bv;
     for (j = 0; j < 3; j++)
         for (k = 0; k < 3; k++) pt[j][k] = tf[16 * bt + 3 * (size_t)j + (size_t)k];
     for (k = 0; k < 3; k++) q[k] = w[0] * pt[0][k] + w[1] * pt[1][k] + w[2] * pt[2][k];
-    for (j = 0; j < 3; j++)
-        if (w[j] > 1e-7) {
-            fv[nf++] = tris[3 * bt + (size_t)j];
-            if (fv[nf - 1] == c->keep || (with_remove && fv[nf - 1] == c->remove)) *inner = 1;
-        }
     for (i = 0; i < n; i++) {
         const uint32_t *t = tris + 3 * i;
         double fn[3], ang = 1.0;
@@ -7838,7 +7926,20 @@ static double dm__sh_signed(const dm_collapse *c, const uint32_t *tris, const fl
         if (nf == 3) break;
     }
     dm__sub3(p, q, d);
-    return dm__dot3(d, N) > 0.0 ? *dist : -*dist;
+    return dm__dot3(d, N) > 0.0 ? dist : -dist;
+}
+
+/* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
+   is no triangle). */
+static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3])
+{
+    double d2, bu, bv;
+    uint32_t fv[3];
+    int nf;
+    size_t bt = dm__sh_nearest(tf, c->triangle_count, p, DBL_MAX, &d2, &bu, &bv);
+    if (bt == (size_t)-1) return -DBL_MAX;
+    dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
+    return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
 }
 
 /* The box the enclosure check gathers original vertices from: the proposed position and the
@@ -7929,15 +8030,19 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                 size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
                 for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
                     uint32_t v = in->cell_vert[q];
-                    double pp[3], sd, dist;
-                    int feat;
+                    double pp[3], sd, d2, bu, bv;
+                    uint32_t fv[3];
+                    size_t bt;
+                    int nf;
                     dm__load3(in->pos, v, pp);
                     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
                         pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                         continue;
-                    sd = dm__sh_signed(c, c->old_triangles, in->tri, c->old_triangle_count, pp, b->reach, 1, &feat,
-                                       &dist, NULL);
-                    if (!feat || dist > b->reach) continue;
+                    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, &d2, &bu, &bv);
+                    if (bt == (size_t)-1 || sqrt(d2) > b->reach ||
+                        !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
+                        continue; /* beyond reach, or closest to the ring's rim */
+                    sd = dm__sh_sign(c->old_triangles, in->tri, c->old_triangle_count, bt, bu, bv, fv, nf, pp, sqrt(d2));
                     if (!dm__sh_push_pt(sh, in, *npts, v, sd)) return 0;
                     (*npts)++;
                 }
@@ -7953,12 +8058,12 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
     size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count;
     int k;
     for (i = 0; i < npts; i++) {
-        double pp[3], pu[3], pw[3], dist, A[3], len;
+        double pp[3], pu[3], pw[3], d2, bu, bv, A[3], len;
         size_t t;
-        int feat, j;
+        int j;
         const uint32_t *tr;
         dm__load3(in->pos, in->pts[2 * i], pp);
-        dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, &t);
+        t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, &d2, &bu, &bv);
         if (t == (size_t)-1) continue;
         tr = c->triangles + 3 * t;
         for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
@@ -8014,12 +8119,11 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     size_t i, no = c->old_triangle_count, nr = c->triangle_count;
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
     for (i = 0; i < npts; i++) {
-        double pp[3], dist, sd;
+        double pp[3], sd;
         float f;
-        int feat;
         memcpy(&f, &in->pts[2 * i + 1], sizeof f);
         dm__load3(in->pos, in->pts[2 * i], pp);
-        sd = dm__sh_signed(c, c->triangles, in->tri + 16 * no, nr, pp, DBL_MAX, 0, &feat, &dist, NULL);
+        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp);
         if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
@@ -8142,6 +8246,36 @@ static int dm__sh_side(const dm__sh_internal *in, uint32_t tri, const double n[3
     return dm__dot3(fn, n) > 0.0 ? 1 : -1;
 }
 
+/* The hits of one ray (from tmin 0) along the original, asked for nearest first from a given
+   distance on: one traversal collects them all when there are few (there are a handful on these
+   short rays), with the same hits and ties as a query per distance would give. */
+typedef struct dm__sh_walk {
+    dm_ray ray;
+    dm_hit hit[16];
+    size_t n;
+} dm__sh_walk;
+
+static void dm__sh_walk_start(const dm__sh_internal *in, dm__sh_walk *w, const dm_ray *ray)
+{
+    dm__ray_pre r;
+    w->ray = *ray;
+    w->n = 0;
+    if (dm__prepare_ray(ray->org, ray->dir, 1.0f, &r)) w->n = dm__all_hits(in->bvh, &r, 0.0f, ray->tmax, w->hit, 16);
+}
+
+/* the nearest hit at or beyond `from` into *hit: 1, or 0 if none */
+static int dm__sh_walk_next(const dm__sh_internal *in, dm__sh_walk *w, float from, dm_hit *hit)
+{
+    const dm_hit *h;
+    if (w->n > 16) { /* too many for the buffer: one query */
+        w->ray.tmin = from;
+        return dm_bvh_intersect(in->bvh, &w->ray, hit);
+    }
+    h = dm__first_hit_from(w->hit, w->n, from);
+    if (h) *hit = *h;
+    return h != NULL;
+}
+
 static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, const double x[3],
                           const double *vn)
 {
@@ -8162,6 +8296,7 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
             double y[3], n[3], len, w[3] = {0.0, 0.0, 0.0};
             dm_ray ray;
             dm_hit hit;
+            dm__sh_walk walk;
             const uint32_t *ot;
             if (s < in->samples) { /* the triangle's samples, then the middle of its edge from keep */
                 for (k = 0; k < 3; k++) w[k] = dm__sh_bary[s][k];
@@ -8180,7 +8315,8 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
             }
             ray.tmin = 0.0f;
             ray.tmax = 2.25f * sh->thickness;
-            if (!dm_bvh_intersect(in->bvh, &ray, &hit)) {
+            dm__sh_walk_start(in, &walk, &ray);
+            if (!dm__sh_walk_next(in, &walk, 0.0f, &hit)) {
                 if (in->open) continue;
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
@@ -8203,8 +8339,8 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
             {
                 int crossings;
                 for (crossings = 0; crossings < 8; crossings++) {
-                    ray.tmin = hit.t + (float)in->margin;
-                    if (!(ray.tmin < ray.tmax) || !dm_bvh_intersect(in->bvh, &ray, &hit)) break;
+                    float from = hit.t + (float)in->margin;
+                    if (!(from < ray.tmax) || !dm__sh_walk_next(in, &walk, from, &hit)) break;
                     if (dm__sh_side(in, hit.triangle, n) > 0) {
                         sh->vetoed_overlap++;
                         return DM_COLLAPSE_VETO;
