@@ -2784,13 +2784,20 @@ __attribute__((target("avx"))) static void dfm__gemm_nt_avx(size_t m, size_t k, 
 #if !defined(DFM_NO_AVX512)
 #define DFM__AVX512 1
 typedef double dfm__v8 __attribute__((vector_size(64)));
+/* AVX-512F has FMA instructions: GCC contracts a * b + c into one in GNU C and in C++ modes
+   (clang: the pragma below), which would change the bits */
+#if defined(__clang__)
+#define DFM__NO_CONTRACT
+#else
+#define DFM__NO_CONTRACT , optimize("fp-contract=off")
+#endif
 
-__attribute__((target("avx512f"))) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p, const double *A,
+__attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p, const double *A,
                                                                     size_t lda, const double *B, size_t ldb,
                                                                     double *C, size_t ldc, int assign)
 {
 #ifdef __clang__
-#pragma STDC FP_CONTRACT OFF /* clang's avx512f implies FMA: no fused multiply-adds here */
+#pragma STDC FP_CONTRACT OFF /* clang: no fused multiply-adds here either */
 #endif
     size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
     if (jc < 4) jc = 4;
