@@ -152,10 +152,11 @@ static int load_map(const char *path, const int crop[3], rl_map *m)
         if (crop[0] < 0 || crop[1] < 0 || crop[0] + crop[2] > m->width || crop[1] + crop[2] > m->height) {
             fprintf(stderr, "relief: --crop %d,%d,%d lies outside the %dx%d example\n", crop[0], crop[1], crop[2], m->width, m->height);
             free(all);
+            m->data = NULL;
             return 0;
         }
         c = (float *)malloc(sizeof(float) * (size_t)crop[2] * (size_t)crop[2]);
-        if (!c) { free(all); return 0; }
+        if (!c) { free(all); m->data = NULL; return 0; }
         for (y = 0; y < crop[2]; y++) memcpy(c + (size_t)y * crop[2], all + (size_t)(crop[1] + y) * m->width + crop[0], sizeof(float) * (size_t)crop[2]);
         free(all);
         m->width = m->height = crop[2];

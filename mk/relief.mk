@@ -10,3 +10,5 @@ $(B)/ref_png: tests/ref_png.cpp $(ALLDEPS) | $(B)
 EXAMPLES  += $(B)/relief
 BENCHES   += $(if $(and $(HAVE_CXX),$(HAVE_OSMESA)),$(B)/bench_relief)
 BENCH_LIBS_relief = -lOSMesa
+# test_relief --cli runs the program (tests.list: relief_cli), so building the test builds it too
+$(B)/test_relief: | $(B)/relief

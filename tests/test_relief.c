@@ -18,13 +18,22 @@
    - bad input (NaN, empty, no strokes, patch too large, NULL), cancellation and failing the
      k-th allocation: named errors, nothing leaked.
    TEST_SANITIZE=1 runs fewer graph-cut trials (the synthesis keeps its size: its histograms need
-   enough patches). */
+   enough patches).
+   test_relief --cli PROG DIR instead checks the program examples/relief.c (PROG, built by
+   mk/relief.mk beside this test) on files it writes into DIR: a small good run exits 0 and
+   writes its picture; bad arguments exit 2, unreadable, truncated, empty or non-finite images,
+   stroke files without strokes or with bad lines, a crop outside the example and a patch too
+   large exit 1, each without a signal (a crash would be a status above 128) and without
+   writing the output picture. */
+#define _POSIX_C_SOURCE 200809L /* sys/wait.h: the --cli mode's exit statuses */
 #define RL_IMPLEMENTATION
 #include "relief.h"
 #include "failalloc.h"
 #include "test.h"
 
 #include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 static int g_small;
 
@@ -600,9 +609,105 @@ static void test_synthesis(void)
     free(ex); free(sk); free(g_ex); free(g_out); free(seams); free(away);
 }
 
+/* ---- the program: exit statuses on good and bad input -------------------------------------- */
+
+static void write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    T_CHECK_MSG(f != NULL, "cannot write %s", path);
+    if (!f) return;
+    if (n) T_CHECK(fwrite(data, 1, n, f) == n);
+    fclose(f);
+}
+
+/* runs PROG ARGS (output to DIR/cli.log) with DIR/out.png removed first; the exit status, or
+   1000 + the signal */
+static int run_cli(const char *prog, const char *dir, const char *args)
+{
+    char cmd[4096], out[1024], here[1024] = "";
+    int st;
+    snprintf(out, sizeof out, "%s/out.png", dir);
+    remove(out);
+    if (prog[0] != '/' && !getcwd(here, sizeof here)) return -1;
+    snprintf(cmd, sizeof cmd, "cd '%s' && '%s%s%s' %s >>cli.log 2>&1", dir, here, here[0] ? "/" : "", prog, args);
+    st = system(cmd);
+    if (st == -1) return -1;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : 1000 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
+}
+
+static int file_exists(const char *dir, const char *name)
+{
+    char path[1024];
+    FILE *f;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    f = fopen(path, "rb");
+    if (f) fclose(f);
+    return f != NULL;
+}
+
+static void test_cli(const char *prog, const char *dir)
+{
+    static const struct { const char *args; int status; } cases[] = {
+        {"gen:rock text:R", 2},                                   /* no -o */
+        {"gen:rock text:R -o out.png --bogus", 2},
+        {"gen:rock text:R -o out.png --patch 0", 2},
+        {"missing.png text:R -o out.png", 1},
+        {"trunc.png text:R -o out.png", 1},
+        {"trunc.pgm text:R -o out.png", 1},
+        {"empty.pgm text:R -o out.png", 1},
+        {"nan.pfm text:R -o out.png", 1},
+        {"gen:rock trunc.png -o out.png", 1},
+        {"gen:rock nostroke.txt -o out.png", 1},
+        {"gen:rock badline.txt -o out.png", 1},
+        {"tiny.pgm text:R -o out.png --size 64", 1},              /* patch 48 larger than the 8x8 example */
+        {"big.pgm text:R -o out.png --crop 40,40,32", 1},        /* the crop leaves the 64x64 example */
+        {"gen:rock blank.pgm -o out.png", 1},                     /* a sketch image without strokes */
+    };
+    static const unsigned char png_sig[12] = {0x89, 'P', 'N', 'G', 13, 10, 26, 10, 0, 0, 0, 13};
+    unsigned char tiny[11 + 64], big[13 + 64 * 64], blank[13 + 64 * 64], pfm[12 + 4 * 64];
+    float nan_value = NAN;
+    char path[1024], cmd[1200];
+    size_t k;
+    int i, st;
+    snprintf(cmd, sizeof cmd, "mkdir -p '%s'", dir);
+    T_CHECK(system(cmd) == 0);
+#define CLI_FILE(name, data, n) (snprintf(path, sizeof path, "%s/%s", dir, name), write_bytes(path, data, n))
+    CLI_FILE("trunc.png", png_sig, sizeof png_sig);
+    CLI_FILE("trunc.pgm", "P5\n4 4\n255\nab", 13);
+    CLI_FILE("empty.pgm", "P5\n0 0\n255\n", 11);
+    CLI_FILE("nostroke.txt", "size 64 64\n", 11);
+    CLI_FILE("badline.txt", "size 64 64\nwhite 1,1 nonsense\n", 31);
+    memcpy(tiny, "P5\n8 8\n255\n", 11);
+    for (i = 0; i < 64; i++) tiny[11 + i] = (unsigned char)(4 * i);
+    CLI_FILE("tiny.pgm", tiny, sizeof tiny);
+    memcpy(big, "P5\n64 64\n255\n", 13);
+    for (i = 0; i < 64 * 64; i++) big[13 + i] = (unsigned char)(i * 7);
+    CLI_FILE("big.pgm", big, sizeof big);
+    memcpy(blank, "P5\n64 64\n255\n", 13);
+    memset(blank + 13, 128, sizeof blank - 13);
+    CLI_FILE("blank.pgm", blank, sizeof blank);
+    memcpy(pfm, "Pf\n8 8\n-1.0\n", 12);
+    for (i = 0; i < 64; i++) memcpy(pfm + 12 + 4 * i, &nan_value, 4);
+    CLI_FILE("nan.pfm", pfm, sizeof pfm);
+#undef CLI_FILE
+    st = run_cli(prog, dir, "gen:rock text:R --size 96 --frame 120x90 -o out.png");
+    T_CHECK_MSG(st == 0, "good run: status %d", st);
+    T_CHECK(file_exists(dir, "out.png"));
+    for (k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        st = run_cli(prog, dir, cases[k].args);
+        T_CHECK_MSG(st == cases[k].status, "relief %s: status %d, expected %d", cases[k].args, st, cases[k].status);
+        T_CHECK_MSG(!file_exists(dir, "out.png"), "relief %s wrote its output", cases[k].args);
+    }
+    printf("relief program: 1 good run, %d bad ones with their statuses\n", (int)k);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
+    if (argc == 4 && strcmp(argv[1], "--cli") == 0) {
+        test_cli(argv[2], argv[3]);
+        return T_END();
+    }
     g_small = getenv("TEST_SANITIZE") != NULL;
     test_normal_map();
     test_skeleton();
