@@ -2778,6 +2778,41 @@ __attribute__((target("avx"))) static void dfm__gemm_nt_avx(size_t m, size_t k, 
     }
 }
 
+/* The last k % 4 (< 4) columns of C -= A B^T (C = -A B^T with assign) in strips of 16 rows,
+   one column at a time: each entry has its products subtracted one by one in order, as the
+   plain remainder loop does (same bits). Returns the rows done (a multiple of 16). */
+__attribute__((target("avx"))) static size_t dfm__gemm_cols_avx(size_t m, size_t kr, size_t p, const double *A,
+                                                                size_t lda, const double *B, size_t ldb, double *C,
+                                                                size_t ldc, int assign)
+{
+    size_t i, t, q;
+    for (i = 0; i + 16 <= m; i += 16)
+        for (q = 0; q < kr; q++) {
+            double *cq = C + i + q * ldc;
+            dfm__v4 z = {0.0, 0.0, 0.0, 0.0}, c0 = z, c1 = z, c2 = z, c3 = z;
+            const double *a = A + i;
+            if (!assign) {
+                memcpy(&c0, cq, sizeof c0);
+                memcpy(&c1, cq + 4, sizeof c1);
+                memcpy(&c2, cq + 8, sizeof c2);
+                memcpy(&c3, cq + 12, sizeof c3);
+            }
+            for (t = 0; t < p; t++, a += lda) {
+                dfm__v4 b = z + B[q + t * ldb], a0, a1, a2, a3;
+                memcpy(&a0, a, sizeof a0);
+                memcpy(&a1, a + 4, sizeof a1);
+                memcpy(&a2, a + 8, sizeof a2);
+                memcpy(&a3, a + 12, sizeof a3);
+                c0 -= a0 * b; c1 -= a1 * b; c2 -= a2 * b; c3 -= a3 * b;
+            }
+            memcpy(cq, &c0, sizeof c0);
+            memcpy(cq + 4, &c1, sizeof c1);
+            memcpy(cq + 8, &c2, sizeof c2);
+            memcpy(cq + 12, &c3, sizeof c3);
+        }
+    return i;
+}
+
 /* The same tile on 16 rows with AVX-512F (8 lanes): each entry gets the same operations in the
    same order as in the 8 x 4 tile (no FMA), so the bits do not change; twice the arithmetic per
    instruction. */
@@ -2844,17 +2879,20 @@ static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda,
                       double *C, size_t ldc, int assign)
 {
 #ifdef DFM__AVX
-    size_t m8 = m & ~(size_t)7, k4 = k & ~(size_t)3, m16 = 0;
-    if (m8 > 0 && k4 > 0 && __builtin_cpu_supports("avx")) {
+    size_t m8 = m & ~(size_t)7, k4 = k & ~(size_t)3, m16 = 0, i0;
+    if (m8 > 0 && __builtin_cpu_supports("avx")) {
 #ifdef DFM__AVX512
-        if (m >= 16 && __builtin_cpu_supports("avx512f")) {
+        if (m >= 16 && k4 > 0 && __builtin_cpu_supports("avx512f")) {
             m16 = m & ~(size_t)15;
             dfm__gemm_nt_avx512(m16, k4, p, A, lda, B, ldb, C, ldc, assign);
         }
 #endif
-        if (m8 > m16) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign);
-        if (m > m8) dfm__gemm_nt(m - m8, k4, p, A + m8, lda, B, ldb, C + m8, ldc, assign);
-        if (k > k4) dfm__gemm_nt(m, k - k4, p, A, lda, B + k4, ldb, C + k4 * ldc, ldc, assign);
+        if (m8 > m16 && k4 > 0) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign);
+        if (m > m8 && k4 > 0) dfm__gemm_nt(m - m8, k4, p, A + m8, lda, B, ldb, C + m8, ldc, assign);
+        if (k > k4) {
+            i0 = dfm__gemm_cols_avx(m, k - k4, p, A, lda, B + k4, ldb, C + k4 * ldc, ldc, assign);
+            if (m > i0) dfm__gemm_nt(m - i0, k - k4, p, A + i0, lda, B + k4, ldb, C + i0 + k4 * ldc, ldc, assign);
+        }
         return;
     }
 #endif
@@ -2963,12 +3001,38 @@ static long dfm__panel_chol(size_t nr, size_t nc, double *L, size_t ld)
    Section: numeric factorization (left-looking supernodal)
    --------------------------------------------------------------------------------------------- */
 
+/* Adds the lower part of a descendant's update U (m x k, rows rows[0..m), the first k of them
+   columns of the target) into the target's block Ls (nr rows): U[i,j] goes to row relmap[rows[i]]
+   of column relmap[rows[j]]. The rows are sorted, so the tail whose target rows are consecutive
+   is added as a straight vector sum; one addition per entry either way (the same bits). */
+static void dfm__scatter_update(size_t m, size_t k, const double *U, const int32_t *rows, const int32_t *relmap,
+                                int32_t *rel, double *Ls, size_t nr)
+{
+    size_t i, j, q;
+    for (i = 0; i < m; i++) rel[i] = relmap[rows[i]];
+    for (q = m - 1; q > 0 && rel[q - 1] + 1 == rel[q]; q--) {
+    }
+    for (j = 0; j < k; j++) {
+        double *col = Ls + (size_t)rel[j] * nr;
+        const double *u = U + j * m;
+        size_t e = q > j ? q : j;
+        double *c = col + rel[e];
+        for (i = j; i < e; i++) col[rel[i]] += u[i];
+        u += e;
+        i = 0;
+#ifdef DFM__V2
+        for (; i + 2 <= m - e; i += 2) dfm__st2(c + i, dfm__ld2(c + i) + dfm__ld2(u + i));
+#endif
+        for (; i < m - e; i++) c[i] += u[i];
+    }
+}
+
 DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
 {
     dfm_result err = DFM_OK;
     dfm_allocator *al;
     size_t s, ns, t;
-    int32_t *link_head = NULL, *link_next = NULL, *relmap = NULL;
+    int32_t *link_head = NULL, *link_next = NULL, *relmap = NULL, *rel = NULL;
     size_t *pos = NULL;
     double *upd = NULL, flops_done = 0.0, next_report;
     if (!chol) return DFM_ERR_INVALID_ARGUMENT;
@@ -2987,6 +3051,7 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
     link_next = (int32_t *)dfm__alloc(al, ns, sizeof(int32_t), &err);
     pos = (size_t *)dfm__alloc(al, ns, sizeof(size_t), &err);
     relmap = (int32_t *)dfm__alloc(al, chol->n, sizeof(int32_t), &err);
+    rel = (int32_t *)dfm__alloc(al, chol->max_rows + 1, sizeof(int32_t), &err);
     upd = (double *)dfm__alloc(al, chol->max_update, sizeof(double), &err);
     if (err != DFM_OK) goto done;
     for (s = 0; s < ns; s++) link_head[s] = -1;
@@ -3008,7 +3073,7 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
             size_t nrd = chol->sup_rowptr[d + 1] - chol->sup_rowptr[d];
             size_t ncd = (size_t)(chol->sup_first[d + 1] - chol->sup_first[d]);
             const double *Ld = chol->values + chol->sup_valptr[d];
-            size_t p0 = pos[d], p1 = p0, m, k, i;
+            size_t p0 = pos[d], p1 = p0, m, k;
             dnext = link_next[d];
             while (p1 < nrd && (size_t)rd[p1] < l) p1++;
             m = nrd - p0;
@@ -3018,11 +3083,7 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
                 dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0);
             } else {
                 dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m, 1);
-                for (j = 0; j < k; j++) {
-                    double *col = Ls + (size_t)(rd[p0 + j] - (int32_t)f) * nr;
-                    const double *u = upd + j * m;
-                    for (i = j; i < m; i++) col[relmap[rd[p0 + i]]] += u[i];
-                }
+                dfm__scatter_update(m, k, upd, rd + p0, relmap, rel, Ls, nr);
             }
             pos[d] = p1;
             if (p1 < nrd) {
@@ -3060,6 +3121,7 @@ done:
     dfm__free(al, link_next);
     dfm__free(al, pos);
     dfm__free(al, relmap);
+    dfm__free(al, rel);
     dfm__free(al, upd);
     return err;
 }
