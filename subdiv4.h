@@ -100,7 +100,11 @@
          + 1/2 cos(4 pi j/K))/K for K >= 5, (5/12, -1/12, -1/12) for K = 3, (3/8, 0, -1/8, 0)
          for K = 4; both ends extraordinary: the average of the two stencils. These weights are
          those of the w = 1/16 scheme whatever w is. Interior vertices of valence 1 or 2 (closed
-         "pillows") use the K >= 5 formula.
+         "pillows") use the K >= 5 formula. From K = 64 on, the K stencils around a vertex are
+         evaluated from three Fourier sums of its neighbours (the weights have three
+         frequencies), so the work is linear in the valence rather than quadratic; the result
+         differs from the direct sum by rounding only. Twins are found by binary search in each
+         vertex's half-edges sorted by end vertex: a level takes O(n log valence).
        boundary edge: the four-point rule above along the boundary loop.
      These are the rules OpenMesh's ModifiedButterflyT uses (the reference test matches it to
      float rounding on closed meshes). Deviation from Zorin's thesis: interior edges next to the
@@ -116,7 +120,7 @@
    MEMORY
      Curves and grids never allocate: the output is the caller's, of the size returned by
      sd4_curve_size / sd4_grid_size. Butterfly and terrain return an sd4_mesh allocated with
-     the options' allocator; free it with sd4_free_mesh. Butterfly keeps about 60 bytes per input
+     the options' allocator; free it with sd4_free_mesh. Butterfly keeps about 75 bytes per input
      triangle of connectivity while a level runs, plus input and output arrays.
 
    ERRORS
@@ -124,7 +128,9 @@
      arrays, levels outside 0..30 (curves, grids), 1..8 (butterfly) or 0..10 (terrain), dim
      outside 1..64, unknown option values, non-finite w, sizes that overflow size_t or the
      32-bit indices, too small an output buffer (SD4_ERR_BUFFER_TOO_SMALL), non-finite
-     coordinates or heights (SD4_ERR_BAD_POSITION), indices >= vertex_count. Non-manifold or
+     coordinates or heights (SD4_ERR_BAD_POSITION), indices >= vertex_count, finite input whose
+     result is not (SD4_ERR_NOT_FINITE: a huge w, amplitude or coordinate overflows a double, or
+     a float in a mesh; every output value is checked). Non-manifold or
      degenerate meshes are not errors (see BUTTERFLY). On failure an sd4_mesh is zeroed and
      nothing is leaked; a caller-owned grid buffer may hold partial results.
 
@@ -136,7 +142,11 @@
      point in double and rounds it to float once; old vertices are copied exactly.
 
    LIMITS
-     2^32 - 2 vertices per mesh. The terrain's split depth is capped at 10 (option max_split).
+     2^32 - 2 vertices per mesh. The terrain's split depth is capped at 10 (option max_split) and
+     its mesh at max_triangles (default 2^24, about 50 bytes a triangle while it is built): the
+     size is known from the split depths before anything is made, so a divergent w (heights that
+     grow level by level, every quad then split to the cap) is refused at once with
+     SD4_ERR_TOO_LARGE instead of filling the memory.
 
    REFERENCES
      N. Dyn, J. A. Gregory, D. Levin, "A 4-point interpolatory subdivision scheme for curve
@@ -179,7 +189,8 @@ typedef enum sd4_result {
     SD4_ERR_TOO_LARGE,        /* a size overflows size_t or the 32-bit indices */
     SD4_ERR_BUFFER_TOO_SMALL, /* the caller's output buffer is smaller than the size functions say */
     SD4_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
-    SD4_CANCELLED             /* the progress callback returned nonzero */
+    SD4_CANCELLED,            /* the progress callback returned nonzero */
+    SD4_ERR_NOT_FINITE        /* finite input whose result is not (it overflows a double or float) */
 } sd4_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -266,6 +277,8 @@ typedef struct sd4_terrain_desc {
     const sd4_allocator *allocator;
     int (*progress)(void *user, float done);
     void *progress_user;
+    size_t max_triangles;    /* refuse a mesh of more (SD4_ERR_TOO_LARGE), counted before any of it
+                                is made; 0 = 2^24 (the largest preset makes 1.5 M) */
 } sd4_terrain_desc;
 
 /* Fills d with paper 001's scene: "desert" (Fig 3: w 0.10, epsilon 2, sigma 0.06, amplitude 24,
@@ -341,6 +354,7 @@ SD4DEF const char *sd4_result_string(sd4_result r)
     case SD4_ERR_TOO_LARGE: return "SD4_ERR_TOO_LARGE";
     case SD4_ERR_BUFFER_TOO_SMALL: return "SD4_ERR_BUFFER_TOO_SMALL";
     case SD4_ERR_OUT_OF_MEMORY: return "SD4_ERR_OUT_OF_MEMORY";
+    case SD4_ERR_NOT_FINITE: return "SD4_ERR_NOT_FINITE";
     case SD4_CANCELLED: return "SD4_CANCELLED";
     }
     return "SD4_ERR_?";
@@ -533,6 +547,31 @@ static void sd4__pass_y(double *out, size_t W, int dim, size_t cstep, size_t nco
     }
 }
 
+/* 1 when none of the n values is NaN or infinite */
+static int sd4__all_finite(const double *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+/* a double as float, out-of-range values as infinities (the plain conversion is undefined) */
+static float sd4__to_float(double x)
+{
+    if (x > 3.4028234663852886e38) return HUGE_VALF;
+    if (x < -3.4028234663852886e38) return -HUGE_VALF;
+    return (float)x;
+}
+
+static int sd4__all_finite_f(const float *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
 static int sd4__valid_rule(int r) { return r == SD4_END_LINEAR || r == SD4_END_CUBIC || r == SD4_END_PERIODIC; }
 
 static sd4_result sd4__grid(const double *grid, size_t nx, size_t ny, int dim, double omega, int levels,
@@ -579,6 +618,7 @@ static sd4_result sd4__grid(const double *grid, size_t nx, size_t ny, int dim, d
             sd4__pass_x(out, W, dim, h, my2, s, mx, rx, w);
         }
     }
+    if (!sd4__all_finite(out, total)) return SD4_ERR_NOT_FINITE;
     if (o->progress && o->progress(o->progress_user, 1.0f)) return SD4_CANCELLED;
     return SD4_OK;
 }
@@ -639,7 +679,7 @@ SD4DEF sd4_result sd4_random_heights(size_t nx, size_t ny, double amplitude, int
     if (nx > (size_t)-1 / ny) return SD4_ERR_TOO_LARGE;
     n = nx * ny;
     for (i = 0; i < n; i++) out[i] = amplitude * sd4__uniform(seed, i, 0);
-    if (smooth_passes == 0) return SD4_OK;
+    if (smooth_passes == 0) return SD4_OK; /* |amplitude| * [0, 1): finite */
     tmp = (double *)sd4__alloc_array(&al, n, sizeof(double));
     if (!tmp) return SD4_ERR_OUT_OF_MEMORY;
     for (pass = 0; pass < smooth_passes; pass++) {
@@ -661,7 +701,7 @@ SD4DEF sd4_result sd4_random_heights(size_t nx, size_t ny, double amplitude, int
             }
     }
     sd4__free(&al, tmp);
-    return SD4_OK;
+    return sd4__all_finite(out, n) ? SD4_OK : SD4_ERR_NOT_FINITE; /* the sum of 9 may overflow */
 }
 
 SD4DEF sd4_result sd4_terrain_preset(const char *name, sd4_terrain_desc *d)
@@ -731,9 +771,9 @@ static uint32_t sd4__vertex(sd4__terrain *t, size_t I, size_t J)
     }
     t->keys[slot] = key;
     t->vals[slot] = (uint32_t)t->nv;
-    t->pos[3 * t->nv + 0] = (float)((double)I * lat);
-    t->pos[3 * t->nv + 1] = (float)sd4__height_at(t, I, J);
-    t->pos[3 * t->nv + 2] = (float)((double)J * lat);
+    t->pos[3 * t->nv + 0] = sd4__to_float((double)I * lat);
+    t->pos[3 * t->nv + 1] = sd4__to_float(sd4__height_at(t, I, J));
+    t->pos[3 * t->nv + 2] = sd4__to_float((double)J * lat);
     return (uint32_t)t->nv++;
 }
 
@@ -833,7 +873,7 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
     sd4__terrain t;
     double *control = NULL, *fine = NULL, h0, cell;
     unsigned char *dcell = NULL, *deh = NULL, *dev = NULL;
-    size_t nx, ny, NX, NY, cx, cy, i, j, tris = 0, vbound = 0, cap;
+    size_t nx, ny, NX, NY, cx, cy, i, j, tris = 0, vbound = 0, cap, max_tris;
     int levels, max_split;
     sd4_result r = SD4_OK;
     if (!out) return SD4_ERR_INVALID_ARGUMENT;
@@ -846,6 +886,7 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
     h0 = d->spacing != 0.0 ? d->spacing : 64.0;
     levels = d->levels;
     max_split = d->max_split ? d->max_split : 10;
+    max_tris = d->max_triangles ? d->max_triangles : (size_t)1 << 24;
     if (nx < 2 || ny < 2 || nx > 65536 || ny > 65536 || levels < 0 || levels > 10 || max_split < 0 || max_split > 10 ||
         !(h0 > 0.0) || !isfinite(h0) || !isfinite(d->epsilon) || !(d->sigma >= 0.0) || !isfinite(d->sigma) ||
         !isfinite(d->omega) || (d->border != SD4_END_LINEAR && d->border != SD4_END_CUBIC))
@@ -905,6 +946,14 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
             unsigned char a = i > 0 ? dcell[j * cx + i - 1] : 0, b = i < cx ? dcell[j * cx + i] : 0;
             dev[j * NX + i] = a > b ? a : b;
         }
+    /* refuse a mesh above max_triangles before counting it exactly: every small quad is at least
+       two triangles (a divergent w or a tiny epsilon would otherwise run for minutes) */
+    for (j = 0, tris = 0; j < cy * cx; j++) {
+        size_t least = (size_t)2 << (2 * dcell[j]);
+        if (least > max_tris - tris) { r = SD4_ERR_TOO_LARGE; goto done; }
+        tris += least;
+    }
+    tris = 0;
     /* count triangles and bound the vertices */
     t.fine = fine;
     t.NX = NX;
@@ -919,7 +968,7 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
             vbound += (n + 1) * (n + 1) + 4 * n + ((size_t)1 << dev[j * NX + i]) + ((size_t)1 << dev[j * NX + i + 1]) +
                       ((size_t)1 << deh[j * cx + i]) + ((size_t)1 << deh[(j + 1) * cx + i]);
         }
-    if (vbound >= 0xffffffffu || tris > ((size_t)-1) / 64) { r = SD4_ERR_TOO_LARGE; goto done; }
+    if (vbound >= 0xffffffffu || tris > ((size_t)-1) / 64 || tris > max_tris) { r = SD4_ERR_TOO_LARGE; goto done; }
     cap = 16;
     while (cap < 2 * vbound) cap *= 2;
     t.mask = cap - 1;
@@ -936,6 +985,7 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
         for (i = 0; i < cx; i++)
             sd4__cell(&t, i, j, dcell[j * cx + i], dev[j * NX + i], dev[j * NX + i + 1], deh[j * cx + i],
                       deh[(j + 1) * cx + i]);
+    if (!sd4__all_finite_f(t.pos, 3 * t.nv) || !sd4__all_finite_f(t.fn, 3 * t.nt)) { r = SD4_ERR_NOT_FINITE; goto done; }
     out->positions = t.pos;
     out->vertex_count = t.nv;
     out->indices = t.idx;
@@ -967,6 +1017,12 @@ done:
    (with their end vertex beside them, so the twin search reads memory in order), twins, fans.
    --------------------------------------------------------------------------------------------- */
 
+/* SD4_COUNT_OPS(n): a test hook (default: nothing) told the steps of the connectivity searches
+   and of the stencils, so that a test can check the work is linear in a vertex's valence */
+#ifndef SD4_COUNT_OPS
+#define SD4_COUNT_OPS(n) ((void)0)
+#endif
+
 #define SD4__NONE 0xffffffffu     /* no twin: boundary edge; no new vertex */
 #define SD4__NONMANIFOLD 0xfffffffeu
 #define SD4__VBOUNDARY 1u
@@ -986,32 +1042,88 @@ typedef struct sd4__level {
     uint32_t *valence;
     unsigned char *vflag;
     unsigned char *frozen; /* per triangle */
+    uint32_t *rot;      /* per half-edge out of a vertex of valence >= SD4__FOURIER: its place in the fan */
+    uint32_t *slot;     /* per vertex: its Fourier sums' index in four, or SD4__NONE */
+    double *four;       /* 15 a vertex of valence >= SD4__FOURIER: sum e_j, sum (cos, sin)(2 pi j/K) e_j, same at 4 pi */
 } sd4__level;
+
+/* from this valence on, ZSS stencils are evaluated from three Fourier sums per vertex (see
+   sd4__extraordinary): work linear in the valence instead of quadratic */
+#define SD4__FOURIER 64u
 
 static uint32_t sd4__next(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
 static uint32_t sd4__prev(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+
+/* The number of half-edges a -> b (a's group is sorted by end vertex: a binary search, then the
+   run of equal ends); *last = the last of them. */
+static uint32_t sd4__run(const sd4__level *L, uint32_t a, uint32_t b, uint32_t *last)
+{
+    uint32_t lo = L->off[a], hi = L->off[a + 1], n = 0;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        SD4_COUNT_OPS(1);
+        if (L->dest[mid] < b) lo = mid + 1;
+        else hi = mid;
+    }
+    for (; lo < L->off[a + 1] && L->dest[lo] == b; lo++, n++) { *last = L->out[lo]; SD4_COUNT_OPS(1); }
+    return n;
+}
+
+/* For each closed manifold fan of valence K >= SD4__FOURIER: its half-edges' places j in the
+   fan (rotating as sd4__extraordinary does) and F0 = sum e_j, F1 = sum (cos, sin)(2 pi j / K) e_j,
+   F2 the same at 4 pi j / K, in L->four. */
+static void sd4__fourier_sums(sd4__level *L)
+{
+    size_t v, n = 0;
+    for (v = 0; v < L->nv; v++) {
+        uint32_t K = L->valence[v], j, hh;
+        double *F;
+        L->slot[v] = SD4__NONE;
+        if (K < SD4__FOURIER || L->vflag[v] || L->off[v + 1] - L->off[v] != K) continue;
+        L->slot[v] = (uint32_t)n;
+        F = L->four + 15 * n++;
+        memset(F, 0, 15 * sizeof(double));
+        for (j = 0, hh = L->out[L->off[v]]; j < K; j++, hh = L->twin[sd4__prev(hh)]) {
+            const float *e = L->pos + 3 * (size_t)L->tri[sd4__next(hh)];
+            double x = 6.283185307179586 * (double)j / (double)K, c1 = cos(x), s1 = sin(x), c2 = cos(2.0 * x), s2 = sin(2.0 * x);
+            int k;
+            SD4_COUNT_OPS(1);
+            L->rot[hh] = j;
+            for (k = 0; k < 3; k++) {
+                F[k] += e[k];
+                F[3 + k] += c1 * e[k]; F[6 + k] += s1 * e[k];
+                F[9 + k] += c2 * e[k]; F[12 + k] += s2 * e[k];
+            }
+        }
+    }
+}
 
 static void sd4__topology(sd4__level *L)
 {
     size_t nh = 3 * L->nt, v, h, k;
     const uint32_t *T = L->tri;
+    uint32_t *by_dest = L->eid; /* scratch until the level numbers its new vertices */
+    /* half-edges by end vertex, then (stably) by origin: each origin's group sorted by end */
+    memset(L->off, 0, (L->nv + 1) * sizeof(uint32_t));
+    for (h = 0; h < nh; h++) L->off[T[sd4__next((uint32_t)h)] + 1]++;
+    for (v = 0; v < L->nv; v++) L->off[v + 1] += L->off[v];
+    memcpy(L->valence, L->off, L->nv * sizeof(uint32_t)); /* L->valence is the fill cursor here */
+    for (h = 0; h < nh; h++) by_dest[L->valence[T[sd4__next((uint32_t)h)]]++] = (uint32_t)h;
     memset(L->off, 0, (L->nv + 1) * sizeof(uint32_t));
     for (h = 0; h < nh; h++) L->off[T[h] + 1]++;
     for (v = 0; v < L->nv; v++) L->off[v + 1] += L->off[v];
-    /* L->valence is the fill cursor here */
     memcpy(L->valence, L->off, L->nv * sizeof(uint32_t));
-    for (h = 0; h < nh; h++) {
-        uint32_t a = T[h], s = L->valence[a]++;
-        L->out[s] = (uint32_t)h;
-        L->dest[s] = T[sd4__next((uint32_t)h)];
+    for (k = 0; k < nh; k++) {
+        uint32_t g = by_dest[k], a = T[g], s = L->valence[a]++;
+        L->out[s] = g;
+        L->dest[s] = T[sd4__next(g)];
     }
     /* twins: h = a -> b is manifold when it is the only a -> b and at most one b -> a exists */
     for (h = 0; h < nh; h++) {
-        uint32_t a = T[h], b = T[sd4__next((uint32_t)h)], same = 0, opp = 0, g = SD4__NONE;
+        uint32_t a = T[h], b = T[sd4__next((uint32_t)h)], same, opp, g;
         if (a == b) { L->twin[h] = SD4__NONMANIFOLD; continue; }
-        for (k = L->off[a]; k < L->off[a + 1]; k++) same += L->dest[k] == b;
-        for (k = L->off[b]; k < L->off[b + 1]; k++)
-            if (L->dest[k] == a) { opp++; g = L->out[k]; }
+        same = sd4__run(L, a, b, &g);
+        opp = sd4__run(L, b, a, &g);
         if (same != 1 || opp > 1) L->twin[h] = SD4__NONMANIFOLD;
         else L->twin[h] = opp ? g : SD4__NONE;
     }
@@ -1030,6 +1142,7 @@ static void sd4__topology(sd4__level *L)
             if (t == h0 || count > deg) break;
             hh = t;
             count++;
+            SD4_COUNT_OPS(1);
         }
         if (flag) { /* open fan: walk the other way from h0 */
             hh = h0;
@@ -1040,12 +1153,14 @@ static void sd4__topology(sd4__level *L)
                 hh = sd4__next(t);
                 if (hh == h0 || count > deg) break;
                 count++;
+                SD4_COUNT_OPS(1);
             }
             L->valence[v] = deg + 1;
         }
         if (count != deg) flag |= SD4__VNONMANIFOLD;
         L->vflag[v] = (unsigned char)flag;
     }
+    sd4__fourier_sums(L);
     for (h = 0; h < L->nt; h++) {
         unsigned char fz = 0;
         for (k = 0; k < 3; k++)
@@ -1079,7 +1194,21 @@ static void sd4__extraordinary(const sd4__level *L, uint32_t v, uint32_t hv, con
 {
     uint32_t K = L->valence[v], j, hh = hv;
     double sum = 0.0, wj;
+    if (K >= SD4__FOURIER && L->slot[v] != SD4__NONE) {
+        /* s_j = (1/4 + cos(2 pi j/K) + 1/2 cos(4 pi j/K)) / K is a circular convolution with three
+           frequencies: sum_j s_j e_(m+j) = (F0 / 4 + Re(conj(z^m) F1) + Re(conj(z^2m) F2) / 2) / K,
+           z = exp(2 pi i / K), m = hv's place in the fan; the weights sum to exactly 1/4 */
+        const double *F = L->four + 15 * (size_t)L->slot[v];
+        double x = 6.283185307179586 * (double)L->rot[hv] / (double)K, c1 = cos(x), s1 = sin(x), c2 = cos(2.0 * x), s2 = sin(2.0 * x);
+        int k;
+        SD4_COUNT_OPS(1);
+        for (k = 0; k < 3; k++)
+            p[k] += 0.75 * (double)L->pos[3 * (size_t)v + k] +
+                    (0.25 * F[k] + c1 * F[3 + k] + s1 * F[6 + k] + 0.5 * (c2 * F[9 + k] + s2 * F[12 + k])) / (double)K;
+        return;
+    }
     for (j = 0; j < K; j++) {
+        SD4_COUNT_OPS(1);
         wj = K < 32 ? wtab[K * 32 + j] : sd4__zss_weight(K, j);
         sd4__acc(p, L->pos + 3 * (size_t)L->tri[sd4__next(hh)], wj);
         sum += wj;
@@ -1136,9 +1265,9 @@ static void sd4__edge_point(const sd4__level *L, uint32_t h, double w, const dou
             if (exa && exb) { p[0] *= 0.5; p[1] *= 0.5; p[2] *= 0.5; }
         }
     }
-    out[0] = (float)p[0];
-    out[1] = (float)p[1];
-    out[2] = (float)p[2];
+    out[0] = sd4__to_float(p[0]);
+    out[1] = sd4__to_float(p[1]);
+    out[2] = sd4__to_float(p[2]);
 }
 
 /* One level: L (with its arrays allocated) -> new positions and triangles (allocated here). */
@@ -1220,6 +1349,9 @@ static void sd4__level_free(sd4__level *L, const sd4_allocator *al)
     sd4__free(al, L->valence);
     sd4__free(al, L->vflag);
     sd4__free(al, L->frozen);
+    sd4__free(al, L->rot);
+    sd4__free(al, L->slot);
+    sd4__free(al, L->four);
 }
 
 static sd4_result sd4__level_alloc(sd4__level *L, const sd4_allocator *al)
@@ -1235,8 +1367,11 @@ static sd4_result sd4__level_alloc(sd4__level *L, const sd4_allocator *al)
     L->valence = (uint32_t *)sd4__alloc_array(al, L->nv, sizeof(uint32_t));
     L->vflag = (unsigned char *)sd4__alloc_array(al, L->nv, 1);
     L->frozen = (unsigned char *)sd4__alloc_array(al, L->nt, 1);
+    L->rot = (uint32_t *)sd4__alloc_array(al, nh, sizeof(uint32_t));
+    L->slot = (uint32_t *)sd4__alloc_array(al, L->nv, sizeof(uint32_t));
+    L->four = (double *)sd4__alloc_array(al, nh / SD4__FOURIER + 1, 15 * sizeof(double));
     if (!L->off || !L->out || !L->dest || !L->twin || !L->eid || !L->bprev || !L->bnext || !L->valence || !L->vflag ||
-        !L->frozen)
+        !L->frozen || !L->rot || !L->slot || !L->four)
         return SD4_ERR_OUT_OF_MEMORY;
     return SD4_OK;
 }
@@ -1293,6 +1428,7 @@ SD4DEF sd4_result sd4_butterfly(const float *positions, size_t vertex_count, con
         nv = nv2;
         nt = nt2;
     }
+    if (r == SD4_OK && !sd4__all_finite_f(pos, 3 * nv)) r = SD4_ERR_NOT_FINITE; /* a large w overflows float */
     if (r == SD4_OK && o->progress && o->progress(o->progress_user, 1.0f)) r = SD4_CANCELLED;
     if (r != SD4_OK) {
         sd4__free(&al, pos);

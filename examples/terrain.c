@@ -108,7 +108,9 @@ int main(int argc, char **argv)
     if (half) d.omega_convention = SD4_OMEGA_HALF;
     if (cubic) d.border = SD4_END_CUBIC;
     if ((r = sd4_terrain_build(&d, &m)) != SD4_OK) {
-        fprintf(stderr, "terrain: %s\n", sd4_result_string(r));
+        fprintf(stderr, "terrain: %s%s\n", sd4_result_string(r),
+                r == SD4_ERR_TOO_LARGE ? " (the mesh would have more than 2^24 triangles: a divergent --omega, or --eps too small)"
+                : r == SD4_ERR_NOT_FINITE ? " (the heights overflow: --omega too large)" : "");
         return 2;
     }
     if (obj && !write_obj(obj, &m)) { fprintf(stderr, "terrain: cannot write %s\n", obj); status = 2; }

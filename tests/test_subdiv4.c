@@ -1,10 +1,18 @@
 /* test_subdiv4.c - unit tests of subdiv4.h: four-point curves and grids (interpolation, polynomial
    reproduction, commutation, closed curves, the basis function of paper note 001), the terrain
    pipeline (epsilon, conformity, determinism) and butterfly (counts, kept vertices, planes,
-   non-manifold input, errors, allocation failures, cancel). OpenMesh comparison: ref_openmesh_butterfly. */
+   non-manifold input, errors, allocation failures, cancel). OpenMesh comparison: ref_openmesh_butterfly.
+   Hardening (issue 21): finite input whose result overflows (curve w 1e308, two grid nodes at
+   1e308, random heights 1e308 smoothed, terrain w 1e308, butterfly w 1e300) gives
+   SD4_ERR_NOT_FINITE; a divergent terrain (mountain6, w 0.5) is refused with SD4_ERR_TOO_LARGE
+   and max_triangles is the exact count; butterfly's search and stencil steps (the SD4_COUNT_OPS
+   hook) on fans of 20k / 40k / 80k triangles grow at most 6x; the ZSS stencils reproduce
+   quadratics at the spoke midpoints of regular planar fans of valence 3..200 within 1e-6. */
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
+static unsigned long long g_ops; /* subdiv4.h's test hook: steps of its searches and stencils */
+#define SD4_COUNT_OPS(n) (g_ops += (unsigned long long)(n))
 #define SD4_IMPLEMENTATION
 #include "subdiv4.h"
 #include "test.h"
@@ -582,9 +590,180 @@ static void test_butterfly(void)
     }
 }
 
+/* ---- finite input, results that are not: SD4_ERR_NOT_FINITE; bounded terrain ----------------- */
+
+static void test_not_finite(void)
+{
+    double pts[2 * 5] = {0, 0, 1, 1, 2, -1, 3, 1, 4, 0}, out2[2 * 65], grid[16], fine[25 * 25], h[16];
+    float pos[3 * 9];
+    uint32_t tri[3 * 8];
+    sd4_terrain_desc d;
+    sd4_mesh m;
+    int i, j;
+    /* curve: w = 1e308 overflows (1/2 + w)(...) */
+    T_EQ_INT(sd4_curve_refine(pts, 5, 2, 1e308, 4, NULL, out2, 65), SD4_ERR_NOT_FINITE);
+    T_EQ_INT(sd4_curve_refine(pts, 5, 2, 0.0625, 4, NULL, out2, 65), SD4_OK);
+    /* grid: two neighbouring nodes at 1e308 (their sum in the rule overflows) */
+    for (i = 0; i < 16; i++) grid[i] = (double)(i % 5);
+    grid[5] = grid[6] = 1e308;
+    T_EQ_INT(sd4_grid_refine(grid, 4, 4, 1, 0.0625, 3, NULL, fine, 25 * 25), SD4_ERR_NOT_FINITE);
+    grid[5] = grid[6] = 1e300;
+    T_EQ_INT(sd4_grid_refine(grid, 4, 4, 1, 0.0625, 3, NULL, fine, 25 * 25), SD4_OK);
+    /* random heights: amplitude 1e308 is finite, their 3x3 sums are not */
+    T_EQ_INT(sd4_random_heights(4, 4, 1e308, 0, 7, NULL, h), SD4_OK);
+    T_EQ_INT(sd4_random_heights(4, 4, 1e308, 1, 7, NULL, h), SD4_ERR_NOT_FINITE);
+    /* terrain: omega = 1e308 */
+    T_EQ_INT(sd4_terrain_preset("desert", &d), SD4_OK);
+    d.omega = 1e308;
+    T_EQ_INT(sd4_terrain_build(&d, &m), SD4_ERR_NOT_FINITE);
+    T_CHECK(m.positions == NULL && m.indices == NULL);
+    /* butterfly: w = 1e300 on a 3x3 grid of triangles (its boundary edges use w): floats overflow */
+    for (j = 0; j < 3; j++)
+        for (i = 0; i < 3; i++) { pos[3 * (j * 3 + i)] = (float)i; pos[3 * (j * 3 + i) + 1] = (float)j; pos[3 * (j * 3 + i) + 2] = 0.1f * (float)(i * j); }
+    for (j = 0; j < 2; j++)
+        for (i = 0; i < 2; i++) {
+            uint32_t a = (uint32_t)(j * 3 + i), *t = tri + 6 * (j * 2 + i);
+            t[0] = a; t[1] = a + 1; t[2] = a + 4; t[3] = a; t[4] = a + 4; t[5] = a + 3;
+        }
+    T_EQ_INT(sd4_butterfly(pos, 9, tri, 8, 1, 1e300, NULL, &m), SD4_ERR_NOT_FINITE);
+    T_CHECK(m.positions == NULL);
+    T_EQ_INT(sd4_butterfly(pos, 9, tri, 8, 1, 1.0 / 16.0, NULL, &m), SD4_OK);
+    sd4_free_mesh(&m);
+    T_EQ_STR(sd4_result_string(SD4_ERR_NOT_FINITE), "SD4_ERR_NOT_FINITE");
+}
+
+static void test_terrain_bounded(void)
+{
+    sd4_terrain_desc d;
+    sd4_mesh m;
+    size_t count;
+    /* a divergent w (0.5: the heights grow level by level, every quad is split to the cap, 16384
+       quads x 4^10 x 2 triangles) is refused before anything is made */
+    T_EQ_INT(sd4_terrain_preset("mountain6", &d), SD4_OK);
+    d.omega = 0.5;
+    T_EQ_INT(sd4_terrain_build(&d, &m), SD4_ERR_TOO_LARGE);
+    T_CHECK(m.positions == NULL);
+    /* the limit is the exact triangle count: desert's count passes, one less does not */
+    T_EQ_INT(sd4_terrain_preset("desert", &d), SD4_OK);
+    T_EQ_INT(sd4_terrain_build(&d, &m), SD4_OK);
+    count = m.triangle_count;
+    sd4_free_mesh(&m);
+    d.max_triangles = count;
+    T_EQ_INT(sd4_terrain_build(&d, &m), SD4_OK);
+    T_EQ_SIZE(m.triangle_count, count);
+    sd4_free_mesh(&m);
+    d.max_triangles = count - 1;
+    T_EQ_INT(sd4_terrain_build(&d, &m), SD4_ERR_TOO_LARGE);
+    printf("terrain: mountain6 with w 0.5 refused; desert's %lu triangles pass max_triangles = %lu, not %lu\n",
+           (unsigned long)count, (unsigned long)count, (unsigned long)count - 1);
+}
+
+/* ---- butterfly at a vertex of high valence ---------------------------------------------------- */
+
+/* a closed (centre interior) or open fan of K triangles around vertex 0, the rim on the unit
+   circle in z = 0, the centre at height zc */
+static void fan(int K, int closed, float zc, float *pos, uint32_t *tri, size_t *nt)
+{
+    int i;
+    pos[0] = 0.0f; pos[1] = 0.0f; pos[2] = zc;
+    for (i = 0; i < K; i++) {
+        double a = 6.283185307179586 * i / K;
+        pos[3 + 3 * i] = (float)cos(a); pos[4 + 3 * i] = (float)sin(a); pos[5 + 3 * i] = 0.0f;
+    }
+    *nt = (size_t)(closed ? K : K - 1);
+    for (i = 0; i < (int)*nt; i++) { tri[3 * i] = 0; tri[3 * i + 1] = (uint32_t)(1 + i); tri[3 * i + 2] = (uint32_t)(1 + (i + 1) % K); }
+}
+
+static void test_butterfly_valence(void)
+{
+    static const int Ks[3] = {20000, 40000, 80000};
+    unsigned long long ops[2][3];
+    int closed, k;
+    for (closed = 0; closed < 2; closed++)
+        for (k = 0; k < 3; k++) {
+            int K = Ks[k];
+            float *pos = (float *)malloc(sizeof(float) * 3 * (size_t)(K + 1));
+            uint32_t *tri = (uint32_t *)malloc(sizeof(uint32_t) * 3 * (size_t)K);
+            size_t nt;
+            sd4_mesh m;
+            if (!pos || !tri) { T_CHECK(0); free(pos); free(tri); return; }
+            fan(K, closed, 0.2f, pos, tri, &nt);
+            g_ops = 0;
+            T_EQ_INT(sd4_butterfly(pos, (size_t)K + 1, tri, nt, 1, 1.0 / 16.0, NULL, &m), SD4_OK);
+            ops[closed][k] = g_ops;
+            sd4_free_mesh(&m);
+            free(pos);
+            free(tri);
+        }
+    for (closed = 0; closed < 2; closed++) {
+        printf("butterfly on a %s fan: %llu / %llu / %llu search and stencil steps at K = 20k / 40k / 80k (80k / 20k = %.2f)\n",
+               closed ? "closed" : "open", ops[closed][0], ops[closed][1], ops[closed][2],
+               ops[closed][0] ? (double)ops[closed][2] / (double)ops[closed][0] : 0.0);
+        T_CHECK(ops[closed][0] >= 20000);                  /* the hook counts: at least a step a spoke */
+        T_CHECK(ops[closed][2] <= 6 * ops[closed][0]);     /* linear (4x) up to a log factor, not quadratic (16x) */
+    }
+}
+
+/* Zorin-Schroeder-Sweldens' stencil of a valence-K vertex reproduces quadratics: on a regular
+   planar K-gon fan with heights z = q(x, y) the new point of each spoke is its midpoint with
+   z = q(midpoint) (K >= 5 and K = 4 for every quadratic; K = 3 for x^2 + y^2 and linear ones).
+   The fan's float positions are regular to 2^-24, so with |s_j| summing to at most 1.75 and
+   coordinates of at most 2, the point is within 1e-6 (a wrong weight moves it by 1e-3 or more).
+   Valences 32 and 64 on, the tabled and the Fourier forms, are included. */
+static void test_butterfly_stencil(void)
+{
+    static const int Ks[] = {3, 4, 5, 7, 8, 12, 31, 32, 33, 63, 64, 65, 200};
+    double worst = 0.0;
+    size_t t;
+    for (t = 0; t < sizeof Ks / sizeof Ks[0]; t++) {
+        int K = Ks[t], i, checked = 0;
+        unsigned char spoke[201 + 400];
+        float pos[3 * 201];
+        uint32_t tri[3 * 200];
+        size_t nt, v;
+        sd4_mesh m;
+        double a = 0.6, b = K == 3 ? 0.0 : -0.4, c = K == 3 ? 0.6 : 0.35;
+        fan(K, 1, 0.3f, pos, tri, &nt);
+        for (i = 0; i <= K; i++) {
+            double x = pos[3 * i], y = pos[3 * i + 1];
+            pos[3 * i + 2] = (float)(0.3 + 0.5 * x - 0.25 * y + a * x * x + b * x * y + c * y * y);
+        }
+        T_EQ_INT(sd4_butterfly(pos, (size_t)K + 1, tri, nt, 1, 1.0 / 16.0, NULL, &m), SD4_OK);
+        memset(spoke, 0, m.vertex_count);
+        for (v = 0; v < m.triangle_count; v++) /* the spokes' new points: the centre's new neighbours */
+            if (m.indices[3 * v] == 0 || m.indices[3 * v + 1] == 0 || m.indices[3 * v + 2] == 0)
+                for (i = 0; i < 3; i++) spoke[m.indices[3 * v + i]] = m.indices[3 * v + i] > (uint32_t)K;
+        for (v = (size_t)K + 1; v < m.vertex_count; v++) {
+            const float *p = m.positions + 3 * v;
+            double best = 1e30, err;
+            int j, bj = 0;
+            if (!spoke[v]) continue; /* a rim edge's point (the boundary rule) */
+            for (j = 0; j < K; j++) {
+                double dx = p[0] - 0.5 * (pos[0] + pos[3 + 3 * j]), dy = p[1] - 0.5 * (pos[1] + pos[4 + 3 * j]);
+                if (dx * dx + dy * dy < best) { best = dx * dx + dy * dy; bj = j; }
+            }
+            {
+                double mx = 0.5 * ((double)pos[0] + pos[3 + 3 * bj]), my = 0.5 * ((double)pos[1] + pos[4 + 3 * bj]);
+                double mz = 0.3 + 0.5 * mx - 0.25 * my + a * mx * mx + b * mx * my + c * my * my;
+                err = fabs(p[0] - mx) + fabs(p[1] - my) + fabs(p[2] - mz);
+            }
+            worst = err > worst ? err : worst;
+            T_CHECK_MSG(err <= 1e-6, "K = %d: spoke %d's point off its quadratic midpoint by %g", K, bj, err);
+            checked++;
+        }
+        T_EQ_INT(checked, K);
+        sd4_free_mesh(&m);
+    }
+    printf("butterfly ZSS stencils, K = 3..200: spoke points within %.2g of the quadratic's midpoints (bound 1e-6)\n", worst);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
+    test_not_finite();
+    test_terrain_bounded();
+    test_butterfly_valence();
+    test_butterfly_stencil();
     test_curves();
     test_basis();
     test_grids();
