@@ -2827,47 +2827,72 @@ typedef double dfm__v8 __attribute__((vector_size(64)));
 #define DFM__NO_CONTRACT , optimize("fp-contract=off")
 #endif
 
-__attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p, const double *A,
-                                                                    size_t lda, const double *B, size_t ldb,
-                                                                    double *C, size_t ldc, int assign)
+/* One 16 x 4 tile over the whole inner dimension: a steps by astep, b by bstep per t */
+__attribute__((target("avx512f") DFM__NO_CONTRACT)) static inline void dfm__tile16x4_avx512(
+    size_t p, const double *a, size_t astep, const double *bb, size_t bstep, double *C, size_t ldc, int assign)
 {
 #ifdef __clang__
 #pragma STDC FP_CONTRACT OFF /* clang: no fused multiply-adds here either */
 #endif
+    size_t t, q;
+    dfm__v8 z = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, acc[8];
+    for (q = 0; q < 8; q++) acc[q] = z;
+    for (t = 0; t < p; t++, a += astep, bb += bstep) {
+        dfm__v8 lo, hi, b0 = z + bb[0], b1 = z + bb[1], b2 = z + bb[2], b3 = z + bb[3];
+        memcpy(&lo, a, sizeof lo);
+        memcpy(&hi, a + 8, sizeof hi);
+        acc[0] += lo * b0; acc[1] += hi * b0;
+        acc[2] += lo * b1; acc[3] += hi * b1;
+        acc[4] += lo * b2; acc[5] += hi * b2;
+        acc[6] += lo * b3; acc[7] += hi * b3;
+    }
+    for (q = 0; q < 4; q++) {
+        double *cq = C + q * ldc;
+        dfm__v8 c0, c1;
+        if (assign) {
+            c0 = -acc[2 * q];
+            c1 = -acc[2 * q + 1];
+        } else {
+            memcpy(&c0, cq, sizeof c0);
+            memcpy(&c1, cq + 8, sizeof c1);
+            c0 -= acc[2 * q];
+            c1 -= acc[2 * q + 1];
+        }
+        memcpy(cq, &c0, sizeof c0);
+        memcpy(cq + 8, &c1, sizeof c1);
+    }
+}
+
+/* C (m x k) -= A B^T for m a multiple of 16 and k of 4. With a workspace (ws, at least
+   dfm__gemm_ws(p) doubles) and enough reuse, each chunk of B and each strip of A is first
+   copied into contiguous tile order (packing, as BLAS does), so the tiles stream unit-stride
+   memory whatever the leading dimensions; the sums are the same either way. */
+__attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p,
+                                                                                 const double *A, size_t lda,
+                                                                                 const double *B, size_t ldb,
+                                                                                 double *C, size_t ldc, int assign,
+                                                                                 double *ws)
+{
     size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
+    int pack = ws != NULL && m >= 64 && k >= 8 && p >= 8;
     if (jc < 4) jc = 4;
     for (j0 = 0; j0 < k; j0 += jc) {
         size_t j1 = k - j0 < jc ? k : j0 + jc;
-        for (i = 0; i < m; i += 16)
+        double *bp = ws, *ap = ws + (j1 - j0) * p;
+        if (pack)
+            for (j = j0; j < j1; j += 4)
+                for (t = 0; t < p; t++)
+                    for (q = 0; q < 4; q++) bp[(j - j0) * p + 4 * t + q] = B[j + q + t * ldb];
+        for (i = 0; i < m; i += 16) {
+            int pack_a = pack && j1 - j0 >= 32;
+            if (pack_a)
+                for (t = 0; t < p; t++) memcpy(ap + 16 * t, A + i + t * lda, 16 * sizeof(double));
             for (j = j0; j < j1; j += 4) {
-                const double *a = A + i, *bb = B + j;
-                dfm__v8 z = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, acc[8];
-                for (q = 0; q < 8; q++) acc[q] = z;
-                for (t = 0; t < p; t++, a += lda, bb += ldb) {
-                    dfm__v8 lo, hi, b0 = z + bb[0], b1 = z + bb[1], b2 = z + bb[2], b3 = z + bb[3];
-                    memcpy(&lo, a, sizeof lo);
-                    memcpy(&hi, a + 8, sizeof hi);
-                    acc[0] += lo * b0; acc[1] += hi * b0;
-                    acc[2] += lo * b1; acc[3] += hi * b1;
-                    acc[4] += lo * b2; acc[5] += hi * b2;
-                    acc[6] += lo * b3; acc[7] += hi * b3;
-                }
-                for (q = 0; q < 4; q++) {
-                    double *cq = C + i + (j + q) * ldc;
-                    dfm__v8 c0, c1;
-                    if (assign) {
-                        c0 = -acc[2 * q];
-                        c1 = -acc[2 * q + 1];
-                    } else {
-                        memcpy(&c0, cq, sizeof c0);
-                        memcpy(&c1, cq + 8, sizeof c1);
-                        c0 -= acc[2 * q];
-                        c1 -= acc[2 * q + 1];
-                    }
-                    memcpy(cq, &c0, sizeof c0);
-                    memcpy(cq + 8, &c1, sizeof c1);
-                }
+                if (pack) dfm__tile16x4_avx512(p, pack_a ? ap : A + i, pack_a ? 16 : lda, bp + (j - j0) * p, 4,
+                                               C + i + j * ldc, ldc, assign);
+                else dfm__tile16x4_avx512(p, A + i, lda, B + j, ldb, C + i + j * ldc, ldc, assign);
             }
+        }
     }
 }
 #endif
@@ -2876,7 +2901,7 @@ __attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx
 /* C (m x k) -= A B^T (C = -A B^T with assign), with the AVX-512 / AVX tiles where the CPU has
    them */
 static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda, const double *B, size_t ldb,
-                      double *C, size_t ldc, int assign)
+                      double *C, size_t ldc, int assign, double *ws)
 {
 #ifdef DFM__AVX
     size_t m8 = m & ~(size_t)7, k4 = k & ~(size_t)3, m16 = 0, i0;
@@ -2884,7 +2909,7 @@ static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda,
 #ifdef DFM__AVX512
         if (m >= 16 && k4 > 0 && __builtin_cpu_supports("avx512f")) {
             m16 = m & ~(size_t)15;
-            dfm__gemm_nt_avx512(m16, k4, p, A, lda, B, ldb, C, ldc, assign);
+            dfm__gemm_nt_avx512(m16, k4, p, A, lda, B, ldb, C, ldc, assign, ws);
         }
 #endif
         if (m8 > m16 && k4 > 0) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign);
@@ -2896,7 +2921,19 @@ static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda,
         return;
     }
 #endif
+    (void)ws;
     dfm__gemm_nt(m, k, p, A, lda, B, ldb, C, ldc, assign);
+}
+
+/* doubles of gemm workspace for an inner dimension up to p (0: the kernels need none) */
+static size_t dfm__gemm_ws(size_t p)
+{
+#ifdef DFM__AVX512
+    return DFM__GEMM_L2 + 20 * p;
+#else
+    (void)p;
+    return 0;
+#endif
 }
 
 /* The rows below a factored jb x jb diagonal block D: X (m x jb) <- X D^-T, in tiles of rows.
@@ -2971,13 +3008,13 @@ static void dfm__trsm_rows(size_t m, size_t jb, const double *D, double *X, size
    failing column. Blocked left-looking: each block of columns is updated by the ones before it
    with the gemm kernel, its diagonal block factored column by column, then the rows below it
    solved in row tiles (dfm__trsm_rows: the same operations per entry as the column loop). */
-static long dfm__panel_chol(size_t nr, size_t nc, double *L, size_t ld)
+static long dfm__panel_chol(size_t nr, size_t nc, double *L, size_t ld, double *ws)
 {
     const size_t NB = 48;
     size_t j0, c, t, r;
     for (j0 = 0; j0 < nc; j0 += NB) {
         size_t jb = nc - j0 < NB ? nc - j0 : NB, end = j0 + jb;
-        if (j0 > 0) dfm__gemm(nr - j0, jb, j0, L + j0, ld, L + j0, ld, L + j0 + j0 * ld, ld, 0);
+        if (j0 > 0) dfm__gemm(nr - j0, jb, j0, L + j0, ld, L + j0, ld, L + j0 + j0 * ld, ld, 0, ws);
         for (c = j0; c < end; c++) {
             double *lc = L + c * ld, d, inv;
             for (t = j0; t < c; t++) {
@@ -3034,7 +3071,7 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
     size_t s, ns, t;
     int32_t *link_head = NULL, *link_next = NULL, *relmap = NULL, *rel = NULL;
     size_t *pos = NULL;
-    double *upd = NULL, flops_done = 0.0, next_report;
+    double *upd = NULL, *ws = NULL, flops_done = 0.0, next_report;
     if (!chol) return DFM_ERR_INVALID_ARGUMENT;
     al = &chol->al;
     chol->factored = 0;
@@ -3053,6 +3090,9 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
     relmap = (int32_t *)dfm__alloc(al, chol->n, sizeof(int32_t), &err);
     rel = (int32_t *)dfm__alloc(al, chol->max_rows + 1, sizeof(int32_t), &err);
     upd = (double *)dfm__alloc(al, chol->max_update, sizeof(double), &err);
+    for (s = 0, t = 0; s < ns; s++) /* t: the widest supernode, the gemm's largest inner dimension */
+        if ((size_t)(chol->sup_first[s + 1] - chol->sup_first[s]) > t) t = (size_t)(chol->sup_first[s + 1] - chol->sup_first[s]);
+    if (dfm__gemm_ws(t) > 0) ws = (double *)dfm__alloc(al, dfm__gemm_ws(t), sizeof(double), &err);
     if (err != DFM_OK) goto done;
     for (s = 0; s < ns; s++) link_head[s] = -1;
     next_report = chol->flops / 64.0;
@@ -3080,9 +3120,9 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
             k = p1 - p0;
             if (m == nr && k == nc && (size_t)rd[p0] == f) {
                 /* the descendant's rows are exactly this supernode's: update in place */
-                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0);
+                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0, ws);
             } else {
-                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m, 1);
+                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m, 1, ws);
                 dfm__scatter_update(m, k, upd, rd + p0, relmap, rel, Ls, nr);
             }
             pos[d] = p1;
@@ -3092,7 +3132,7 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
                 link_head[target] = d;
             }
         }
-        fail = dfm__panel_chol(nr, nc, Ls, nr);
+        fail = dfm__panel_chol(nr, nc, Ls, nr, ws);
         if (fail >= 0) {
             chol->failed_column = (long long)chol->perm[f + (size_t)fail];
             err = DFM_ERR_NOT_POSITIVE_DEFINITE;
@@ -3123,6 +3163,7 @@ done:
     dfm__free(al, relmap);
     dfm__free(al, rel);
     dfm__free(al, upd);
+    dfm__free(al, ws);
     return err;
 }
 

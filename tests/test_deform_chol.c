@@ -1275,22 +1275,27 @@ static void ref_gemm(size_t m, size_t k, size_t p, const double *A, size_t lda, 
 
 static void test_dense_kernel_bits(void)
 {
-    static const size_t ms[] = {1, 3, 4, 7, 8, 9, 15, 16, 17, 24, 31, 33, 40};
-    static const size_t ks[] = {1, 3, 4, 5, 8, 11, 16};
+    static const size_t ms[] = {1, 3, 4, 7, 8, 9, 15, 16, 17, 24, 31, 33, 40, 64, 70};
+    static const size_t ks[] = {1, 3, 4, 5, 8, 11, 16, 36};
     static const size_t ps[] = {0, 1, 2, 5, 17, 48};
     size_t a, b, c, i, mism = 0, cases = 0, tmism = 0;
-    double *A = random_vector(64 * 64, 301), *B = random_vector(64 * 64, 302), *C0 = random_vector(64 * 64, 303);
-    double *C1 = (double *)malloc(64 * 64 * sizeof(double)), *C2 = (double *)malloc(64 * 64 * sizeof(double));
+    const size_t N = 128 * 128;
+    double *A = random_vector(N, 301), *B = random_vector(N, 302), *C0 = random_vector(N, 303);
+    double *C1 = (double *)malloc(N * sizeof(double)), *C2 = (double *)malloc(N * sizeof(double));
+    double *ws = (double *)malloc((dfm__gemm_ws(64) + 1) * sizeof(double));
+    int packed;
+    /* without the workspace, and with it (packed tiles where the shape has the reuse) */
+    for (packed = 0; packed < 2; packed++)
     for (a = 0; a < sizeof ms / sizeof *ms; a++)
         for (b = 0; b < sizeof ks / sizeof *ks; b++)
             for (c = 0; c < sizeof ps / sizeof *ps; c++) {
                 int assign;
                 for (assign = 0; assign < 2; assign++) {
-                    memcpy(C1, C0, 64 * 64 * sizeof(double));
-                    memcpy(C2, C0, 64 * 64 * sizeof(double));
-                    dfm__gemm(ms[a], ks[b], ps[c], A + 1, 61, B + 2, 57, C1 + 3, 50, assign);
-                    ref_gemm(ms[a], ks[b], ps[c], A + 1, 61, B + 2, 57, C2 + 3, 50, assign);
-                    mism += memcmp(C1, C2, 64 * 64 * sizeof(double)) != 0;
+                    memcpy(C1, C0, N * sizeof(double));
+                    memcpy(C2, C0, N * sizeof(double));
+                    dfm__gemm(ms[a], ks[b], ps[c], A + 1, 75, B + 2, 57, C1 + 3, 80, assign, packed ? ws : NULL);
+                    ref_gemm(ms[a], ks[b], ps[c], A + 1, 75, B + 2, 57, C2 + 3, 80, assign);
+                    mism += memcmp(C1, C2, N * sizeof(double)) != 0;
                     cases++;
                 }
             }
@@ -1301,7 +1306,7 @@ static void test_dense_kernel_bits(void)
         for (b = 1; b <= 9; b++) {
             size_t r, q, t;
             double *D = C1, *X = C2, *Y = A + 2048;
-            for (i = 0; i < 64 * 64; i++) D[i] = B[i];
+            for (i = 0; i < N; i++) D[i] = B[i];
             for (q = 0; q < b; q++) D[q + q * 64] = 2.0 + B[q];
             for (i = 0; i < 64 * 16; i++) X[i] = Y[i] = C0[i];
             dfm__trsm_rows(a, b, D, X, 64);
@@ -1318,6 +1323,7 @@ static void test_dense_kernel_bits(void)
     free(C0);
     free(C1);
     free(C2);
+    free(ws);
 }
 
 /* ---- digests (issue 16: "digests first") ---------------------------------------------------------
