@@ -593,7 +593,7 @@ DMDEF const char *dm_result_string(dm_result r);
 #define DM_SIMPLIFY_LOCK_BOUNDARY 1u /* boundary vertices never move and are never removed */
 
 /* What a constraint returns for a candidate collapse. */
-enum { DM_COLLAPSE_ALLOW = 0, DM_COLLAPSE_VETO = 1, DM_COLLAPSE_MOVE = 2 };
+enum { DM_COLLAPSE_ALLOW = 0, DM_COLLAPSE_VETO = 1, DM_COLLAPSE_MOVE = 2, DM_COLLAPSE_PLACED = 3 };
 
 /* A candidate collapse, as the constraint sees it. Vertex ids are the input's. */
 typedef struct dm_collapse {
@@ -611,10 +611,19 @@ typedef struct dm_collapse {
     size_t level;              /* collapses done before this one in this dm_simplify run: 0 until
                                   the first is done, so a constraint that follows the mesh (like
                                   dm_shell_constraint) sees a new run begin */
+    double metric[6];          /* how the error grows away from position: as (x - position)^T M
+                                  (x - position), up to a scale, M = (m00 m01 m02 m11 m12 m22), the
+                                  summed quadrics' matrix; all 0: as the plain distance does */
+    int placement_only;        /* 1: only where keep would go is asked for. The constraint may
+                                  answer DM_COLLAPSE_PLACED with that place in corrected[] before
+                                  making the checks that do not move keep: the simplifier then
+                                  either queues the candidate again at the cost there or asks
+                                  again, in full, with the same candidate (placement_only 0) */
 } dm_collapse;
 
 /* Returns DM_COLLAPSE_ALLOW, DM_COLLAPSE_VETO, or DM_COLLAPSE_MOVE after writing a corrected position
-   into corrected[3] (checked again for flips and degenerate triangles; vetoed if it fails). */
+   into corrected[3] (checked again for flips and degenerate triangles; vetoed if it fails); or,
+   only when candidate->placement_only, DM_COLLAPSE_PLACED (see dm_collapse). */
 typedef int (*dm_collapse_constraint)(void *user, const dm_collapse *candidate, float corrected[3]);
 
 typedef struct dm_simplify_options {
@@ -4374,59 +4383,104 @@ static dm_result dm__qem_reserve(dm__qem_simp *s, size_t to_remove, size_t verte
     return DM_OK;
 }
 
+/* The cost and error of collapse (keep, rem) with keep at `at`; if that costs much more than the
+   candidate was queued at, it goes back in the queue at that cost: returns 1 (0 if not, -1 when
+   out of memory). */
+static int dm__qem_requeue_if_dear(dm__qem_simp *s, const dm__qem_cand *e, uint32_t keep, uint32_t rem,
+                                   const float at[3], double *cost, double *err)
+{
+    dm__qem_quadric qs;
+    dm__qem_cand e2;
+    double q[3];
+    int k;
+    for (k = 0; k < 3; k++) q[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
+    dm__qem_quadric_sum(&qs, &s->vx[keep].q, &s->vx[rem].q);
+    *cost = dm__qem_quadric_eval(&qs, q);
+    *err = qs.w > 0.0 ? sqrt(*cost / qs.w) * s->scale : 0.0;
+    e2 = dm__qem_make_cand(s, DM__QEM_CAND_A(e), e->b, *cost);
+    if (!((e2.key >> 32) > (e->key >> 32) && (double)*cost > DM__QEM_REQUEUE * (double)dm__qem_key_cost(e->key)))
+        return 0;
+    if (!dm__qem_heap_push(s, &e2)) return -1;
+    s->requeued++;
+    return 1;
+}
+
+/* May keep go to `at`, where the constraint moved it: finite, not a locked vertex or a boundary
+   one that absorbs an interior one (those stay put), and no flip or degenerate triangle there
+   (which refills the ring scratch at `at`). */
+static int dm__qem_move_ok(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
+{
+    int k, ok = 1;
+    for (k = 0; k < 3; k++) ok &= at[k] >= -DM__MAX_COORD && at[k] <= DM__MAX_COORD;
+    if (((s->vx[keep].flag & DM__QEM_V_LOCKED) || ((s->vx[keep].flag ^ s->vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
+        memcmp(at, s->pos + 3 * (size_t)keep, 3 * sizeof(float)) != 0)
+        ok = 0;
+    return ok && dm__qem_check_geometry(s, keep, rem, at) != (size_t)-1;
+}
+
+/* The candidate as the constraint sees it (metric: the summed quadrics' matrix). */
+static void dm__qem_fill_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3], double err,
+                                  size_t ring_count, dm_collapse *c)
+{
+    const dm__qem_quadric *qa = &s->vx[keep].q, *qb = &s->vx[rem].q;
+    int k;
+    c->keep = keep;
+    c->remove = rem;
+    for (k = 0; k < 3; k++) c->position[k] = at[k];
+    c->error = err;
+    c->positions = s->pos;
+    c->triangles = s->ring;
+    c->triangle_count = ring_count;
+    c->old_triangles = s->oring;
+    c->old_triangle_count = dm__qem_old_ring(s, keep, rem);
+    c->level = s->nrec;
+    c->metric[0] = qa->a00 + qb->a00;
+    c->metric[1] = qa->a01 + qb->a01;
+    c->metric[2] = qa->a02 + qb->a02;
+    c->metric[3] = qa->a11 + qb->a11;
+    c->metric[4] = qa->a12 + qb->a12;
+    c->metric[5] = qa->a22 + qb->a22;
+    c->placement_only = 0;
+}
+
 /* the user's constraint on collapse (keep, rem) of candidate e to at: 1 = go on (at, cost and
    err as the constraint moved them), 0 = skip it (vetoed: both ends parked; or moved to where it
-   costs much more: back in the queue at that cost), -1 = out of memory. Called once, inlined. */
+   costs much more: back in the queue at that cost), -1 = out of memory. First only where keep
+   would go is asked for; a candidate that waits needs no more. */
 static int dm__qem_ask_constraint(dm__qem_simp *s, const dm__qem_cand *e, uint32_t keep, uint32_t rem, float at[3],
                                   double *cost, double *err, size_t ring_count)
 {
     const dm_simplify_options *opt = s->opt;
-    uint32_t ea = DM__QEM_CAND_A(e);
     dm_collapse cand;
     float corrected[3];
-    int verdict, k;
-    cand.keep = keep;
-    cand.remove = rem;
-    for (k = 0; k < 3; k++) cand.position[k] = corrected[k] = at[k];
-    cand.error = *err;
-    cand.positions = s->pos;
-    cand.triangles = s->ring;
-    cand.triangle_count = ring_count;
-    cand.old_triangles = s->oring;
-    cand.old_triangle_count = dm__qem_old_ring(s, keep, rem);
-    cand.level = s->nrec;
+    int verdict, k, wait;
+    dm__qem_fill_collapse(s, keep, rem, at, *err, ring_count, &cand);
+    for (k = 0; k < 3; k++) corrected[k] = at[k];
+    cand.placement_only = 1;
     verdict = opt->constraint(opt->constraint_user, &cand, corrected);
+    if (verdict == DM_COLLAPSE_PLACED) {
+        double c2, e2;
+        wait = dm__qem_requeue_if_dear(s, e, keep, rem, corrected, &c2, &e2);
+        if (wait) return wait < 0 ? -1 : 0;
+        cand.placement_only = 0;
+        for (k = 0; k < 3; k++) corrected[k] = at[k];
+        verdict = opt->constraint(opt->constraint_user, &cand, corrected);
+        if (verdict == DM_COLLAPSE_PLACED) verdict = DM_COLLAPSE_VETO; /* not an answer in full */
+    }
     if (verdict == DM_COLLAPSE_MOVE) {
-        double q[3];
-        dm__qem_quadric qs;
-        int ok = 1;
-        for (k = 0; k < 3; k++) {
-            ok &= corrected[k] >= -DM__MAX_COORD && corrected[k] <= DM__MAX_COORD;
-            at[k] = corrected[k];
-            q[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
-        }
-        if (((s->vx[keep].flag & DM__QEM_V_LOCKED) || ((s->vx[keep].flag ^ s->vx[rem].flag) & DM__QEM_V_BOUNDARY)) &&
-            memcmp(at, s->pos + 3 * (size_t)keep, 3 * sizeof(float)) != 0)
-            ok = 0; /* a locked vertex, or a boundary one that absorbs an interior one, stays put */
-        if (ok && dm__qem_check_geometry(s, keep, rem, at) == (size_t)-1) ok = 0;
-        if (!ok) verdict = DM_COLLAPSE_VETO;
-        dm__qem_quadric_sum(&qs, &s->vx[keep].q, &s->vx[rem].q);
-        *cost = dm__qem_quadric_eval(&qs, q);
-        *err = qs.w > 0.0 ? sqrt(*cost / qs.w) * s->scale : 0.0;
-        if (ok) { /* costs much more where the constraint puts it: back in the queue at that cost */
-            dm__qem_cand e2 = dm__qem_make_cand(s, ea, e->b, *cost);
-            if ((e2.key >> 32) > (e->key >> 32) && (double)*cost > DM__QEM_REQUEUE * (double)dm__qem_key_cost(e->key)) {
-                if (!dm__qem_heap_push(s, &e2)) return -1;
-                s->requeued++;
-                return 0;
-            }
+        for (k = 0; k < 3; k++) at[k] = corrected[k];
+        if (!dm__qem_move_ok(s, keep, rem, at)) {
+            verdict = DM_COLLAPSE_VETO;
+        } else {
+            wait = dm__qem_requeue_if_dear(s, e, keep, rem, at, cost, err);
+            if (wait) return wait < 0 ? -1 : 0;
         }
     } else if (verdict != DM_COLLAPSE_ALLOW) {
         verdict = DM_COLLAPSE_VETO;
     }
     if (verdict == DM_COLLAPSE_VETO) {
         s->vetoed++;
-        s->vx[ea].flag |= DM__QEM_V_PARKED;
+        s->vx[DM__QEM_CAND_A(e)].flag |= DM__QEM_V_PARKED;
         s->vx[e->b].flag |= DM__QEM_V_PARKED;
         return 0;
     }
@@ -4438,17 +4492,7 @@ static void dm__qem_tell_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, 
                                   size_t ring_count)
 {
     dm_collapse done_c;
-    int k;
-    done_c.keep = keep;
-    done_c.remove = rem;
-    for (k = 0; k < 3; k++) done_c.position[k] = at[k];
-    done_c.error = err;
-    done_c.positions = s->pos;
-    done_c.triangles = s->ring; /* filled by the geometry check at `at` */
-    done_c.triangle_count = ring_count;
-    done_c.old_triangles = s->oring;
-    done_c.old_triangle_count = dm__qem_old_ring(s, keep, rem);
-    done_c.level = s->nrec;
+    dm__qem_fill_collapse(s, keep, rem, at, err, ring_count, &done_c); /* the ring from the geometry check at `at` */
     s->opt->on_collapse(s->opt->constraint_user, &done_c);
 }
 
@@ -7440,6 +7484,12 @@ typedef struct dm__sh_internal {
     uint32_t *cell_first, *cell_vert;
     uint32_t relaxed_keep; /* keep of the last candidate allowed only by the relaxed check */
     size_t relaxed_level;
+    /* the enclosure's answer for the last candidate (asked for where keep goes, then in full) */
+    int placed_valid, placed_verdict, placed_moved;
+    uint32_t placed_keep, placed_remove;
+    size_t placed_level;
+    float placed_at[3];
+    double placed_x[3];
 } dm__sh_internal;
 
 DMDEF void dm_shell_free(dm_shell *shell)
@@ -7751,6 +7801,7 @@ static void dm__sh_run_check(dm_shell *sh, dm__sh_internal *in, size_t level)
     if (level == 0 && (in->collapsed > 0 || in->last_level > 0)) {
         dm__vertex_normals(in->pos, in->nv, in->idx, in->nt, in->vsum, sh->normals);
         in->collapsed = in->accepted = 0;
+        in->placed_valid = 0;
         sh->moved = sh->vetoed_enclose = sh->vetoed_shell = sh->vetoed_overlap = 0;
         sh->fallback = 0;
         sh->fallback_collapses = 0;
@@ -8082,14 +8133,56 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
     return np;
 }
 
-/* x moved to the point nearest it on the outer side of all np planes (Dykstra's alternating
-   projections, at most 200 sweeps, until none is violated by more than half a margin); the
-   corrections, 3 per plane, follow the planes in pl */
-static void dm__sh_dykstra(const dm__sh_internal *in, double *pl, size_t np, double x[3])
+/* How far a move along the surface costs against a move across it, in the metric the enclosure
+   projects in: the quadric's matrix plus this fraction of its mean eigenvalue. With none, keep
+   slides far along flat parts (their quadric does not see it) and its triangles lose their shape;
+   with the plain distance it moves the shortest way, often where its error grows fastest. */
+#define DM__SH_TANGENT 0.1
+
+/* For each of the np planes in pl, the step direction of a projection onto it in the metric M
+   (DM__SH_TANGENT): M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
+static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
 {
-    double *yv = pl + 4 * np;
+    double M[3][3], Mi[3][3], tr, det;
+    size_t i;
+    int j, k;
+    M[0][0] = metric[0]; M[0][1] = M[1][0] = metric[1]; M[0][2] = M[2][0] = metric[2];
+    M[1][1] = metric[3]; M[1][2] = M[2][1] = metric[4]; M[2][2] = metric[5];
+    tr = (M[0][0] + M[1][1] + M[2][2]) / 3.0;
+    if (!(tr > 0.0 && tr < 1e300)) /* no quadric: the plain distance */
+        for (j = 0; j < 3; j++)
+            for (k = 0; k < 3; k++) M[j][k] = j == k;
+    else
+        for (j = 0; j < 3; j++) M[j][j] += DM__SH_TANGENT * tr;
+    Mi[0][0] = M[1][1] * M[2][2] - M[1][2] * M[2][1];
+    Mi[0][1] = M[0][2] * M[2][1] - M[0][1] * M[2][2];
+    Mi[0][2] = M[0][1] * M[1][2] - M[0][2] * M[1][1];
+    Mi[1][1] = M[0][0] * M[2][2] - M[0][2] * M[2][0];
+    Mi[1][2] = M[0][2] * M[1][0] - M[0][0] * M[1][2];
+    Mi[2][2] = M[0][0] * M[1][1] - M[0][1] * M[1][0];
+    Mi[1][0] = Mi[0][1];
+    Mi[2][0] = Mi[0][2];
+    Mi[2][1] = Mi[1][2];
+    det = M[0][0] * Mi[0][0] + M[0][1] * Mi[1][0] + M[0][2] * Mi[2][0]; /* > 0: M is positive definite */
+    for (i = 0; i < np; i++) {
+        const double *n = pl + 4 * i;
+        double *gi = g + 3 * i, ng;
+        for (k = 0; k < 3; k++) gi[k] = (Mi[k][0] * n[0] + Mi[k][1] * n[1] + Mi[k][2] * n[2]) / det;
+        ng = dm__dot3(n, gi);
+        for (k = 0; k < 3; k++) gi[k] /= ng;
+    }
+}
+
+/* x moved to the point nearest it in the metric (dm__sh_step_dirs) on the outer side of all np
+   planes (Dykstra's alternating projections, at most 200 sweeps, until none is violated by more
+   than half a margin); the corrections (3 per plane) and the step directions (3 per plane) follow
+   the planes in pl */
+static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], double *pl, size_t np, double x[3])
+{
+    double *yv = pl + 4 * np, *g = pl + 7 * np;
     size_t i;
     int k, iter;
+    dm__sh_step_dirs(metric, pl, np, g);
     for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
     for (iter = 0; iter < 200 && np; iter++) {
         double worst = 0.0;
@@ -8099,7 +8192,7 @@ static void dm__sh_dykstra(const dm__sh_internal *in, double *pl, size_t np, dou
             for (k = 0; k < 3; k++) z[k] = x[k] + yv[3 * i + (size_t)k];
             sdist = pl[4 * i + 3] - dm__dot3(n, z);
             for (k = 0; k < 3; k++) {
-                double nx = sdist > 0.0 ? z[k] + sdist * n[k] : z[k];
+                double nx = sdist > 0.0 ? z[k] + sdist * g[3 * i + (size_t)k] : z[k];
                 yv[3 * i + (size_t)k] = z[k] - nx;
                 x[k] = nx;
             }
@@ -8151,10 +8244,10 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     for (k = 0; k < 3; k++) x0[k] = x[k] = c->position[k];
     if (!dm__sh_old_new_tris(sh, in, c, x0)) return DM_COLLAPSE_VETO;
     if (!dm__sh_gather(sh, in, c, &b, &npts)) return DM_COLLAPSE_VETO;
-    if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
+    if (!dm__sh_grow_scratch(sh, in, 10 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
     pl = in->scratch;
     np = dm__sh_planes(in, c, npts, pl);
-    dm__sh_dykstra(in, pl, np, x);
+    dm__sh_dykstra(in, c->metric, pl, np, x);
     for (k = 0; k < 3; k++) {
         corrected[k] = (float)x[k];
         x[k] = corrected[k];
@@ -8292,16 +8385,17 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
         int kc;
         for (kc = 0; kc < 2 && t[kc] != c->keep; kc++) {}
-        for (s = 0; s <= in->samples; s++) {
+        for (s = 0; s < in->samples + 3; s++) {
             double y[3], n[3], len, w[3] = {0.0, 0.0, 0.0};
             dm_ray ray;
             dm_hit hit;
             dm__sh_walk walk;
             const uint32_t *ot;
-            if (s < in->samples) { /* the triangle's samples, then the middle of its edge from keep */
+            if (s < in->samples) { /* the triangle's samples, then its edge from keep at 1/2, 1/4 and 3/4 */
                 for (k = 0; k < 3; k++) w[k] = dm__sh_bary[s][k];
             } else {
-                w[kc] = w[(kc + 1) % 3] = 0.5;
+                w[kc] = 0.5 - 0.25 * (s - in->samples == 1) + 0.25 * (s - in->samples == 2);
+                w[(kc + 1) % 3] = 1.0 - w[kc];
             }
             dm__sh_sample((const double(*)[3])p, vn + 9 * i, w, y, n);
             len = dm__len3(n);
@@ -8420,6 +8514,36 @@ DMDEF size_t dm_shell_fallback_triangles(const dm_shell *sh, const uint32_t *idx
     return n;
 }
 
+/* The enclosure for candidate c (dm__sh_enclose), kept for the call in full that follows a
+   placement_only one: x, corrected and *moved as it leaves them. */
+static int dm__sh_placed(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
+                         int *moved)
+{
+    int k;
+    if (in->placed_valid && in->placed_keep == c->keep && in->placed_remove == c->remove &&
+        in->placed_level == c->level && memcmp(in->placed_at, c->position, sizeof in->placed_at) == 0) {
+        for (k = 0; k < 3; k++) {
+            x[k] = in->placed_x[k];
+            corrected[k] = (float)x[k];
+        }
+        *moved = in->placed_moved;
+        in->placed_valid = 0;
+        return in->placed_verdict;
+    }
+    for (k = 0; k < 3; k++) x[k] = c->position[k];
+    in->placed_verdict = dm__sh_enclose(sh, in, c, x, corrected, moved);
+    if (in->placed_verdict != DM_COLLAPSE_ALLOW) /* x and corrected are the position */
+        for (k = 0; k < 3; k++) x[k] = corrected[k] = c->position[k];
+    in->placed_valid = 1;
+    in->placed_keep = c->keep;
+    in->placed_remove = c->remove;
+    in->placed_level = c->level;
+    memcpy(in->placed_at, c->position, sizeof in->placed_at);
+    for (k = 0; k < 3; k++) in->placed_x[k] = x[k];
+    in->placed_moved = *moved;
+    return in->placed_verdict;
+}
+
 DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[3])
 {
     dm_shell *sh = (dm_shell *)user;
@@ -8431,8 +8555,13 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
     in = (dm__sh_internal *)sh->internal;
     dm__sh_run_check(sh, in, c->level);
     in->relaxed_keep = UINT32_MAX;
-    for (k = 0; k < 3; k++) x[k] = c->position[k];
-    verdict = dm__sh_enclose(sh, in, c, x, corrected, &moved);
+    verdict = dm__sh_placed(sh, in, c, x, corrected, &moved);
+    if (c->placement_only) { /* where keep goes; where the enclosure fails, the relaxed check decides */
+        if (verdict != DM_COLLAPSE_ALLOW && !sh->fallback) return DM_COLLAPSE_VETO;
+        if (verdict != DM_COLLAPSE_ALLOW)
+            for (k = 0; k < 3; k++) corrected[k] = c->position[k];
+        return DM_COLLAPSE_PLACED;
+    }
     /* (2) Inside the shell: keep lies within the offset grown at its closest point of the
        original; the points of the new triangles are checked along the overlap rays, where the
        depth to the original must not exceed the offset grown at the hit. */
