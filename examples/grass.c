@@ -1,11 +1,15 @@
 /* grass - paper 002's withering grass (time-varying texels, texel.h) over a subdiv4.h terrain,
    drawn by render.h's shell marcher (sr_draw_shell) with texel.h's sampler, written with its PNG writer.
 
-   usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]
-                [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S]
-                [--quiet]
+   usage: grass [--scene mountain|mesh|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]
+                [--mesh sphere|hill|FILE [--mesh-cells N]] [--wd A,B,C] [--wd-sun G]
+                [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S] [--quiet]
      --scene   mountain (default): the paper's Fig 13, N x N tiles (80: 6400 tiles of 400 blades,
                  2.56M blades) on a four-point terrain, one panel per wd (default 0,0.30,0.917);
+               mesh: grass over a mesh shell (render.h's sr_draw_mesh_shell), one panel per wd
+                 (default 0.45), each tile's wd from a map over the mesh's tile coordinates:
+                 wd + G (the tile's facing toward the sun less the mesh's mean) / 2, G = --wd-sun
+                 (0.9), or a grey --wd-map stretched over the tiles;
                wither: one 400-blade patch seen close, at wd 0 .. 1 in six panels;
                mingle: the paper's Fig 11: two mingling functions (rows t1, t2) at three wd,
                  and 700 against 300 blades (row b).
@@ -16,6 +20,10 @@
      --wd-map  a grey image over the mountain (row 0 at the far, +y edge): each tile's wd is
                  wd + G (grey - 0.5) at the tile's centre (plus the jitter), instead of the
                  slope term; G = --wd-map-gain (1)
+     --mesh    sphere (a cube-sphere, 8 x 8 tiles per face), hill (a 12 x 12 bump of 24 x 24 tiles) or
+                 a mesh file (y up), made coarse by clustering its vertices on N cells across
+                 (--mesh-cells, 40), with box-projection charts and a shell of 0.4 tile (a file's
+                 mesh may bend sharply; texel.h reports the folded prisms, the marcher skips them)
      --lod-bias  levels 2^B times coarser than the footprint asks (0): B = 1 halves the samples
                  and about halves the mountain's render time, a little blurrier
    Each panel prints "RESULT grass scene=... wd=... coverage=... render_ms=...". Progress goes to
@@ -28,7 +36,9 @@
    supplies the content through one callback (grass_sample): the LOD level from the pixel's
    footprint, one voxel of that level per step, empty space skipped with the coarsest level.
    Each tile has its own wd (drier on slopes facing the sun, plus a per-tile jitter) and one of
-   four mingled TVT variants. */
+   four mingled TVT variants. The mesh scene does the same over a triangle mesh's shell
+   (sr_draw_mesh_shell walks its prisms; texel.h's tvt_build_shell checks them for folds and
+   tvt_tile_wd reads the per-tile wd map). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,6 +51,8 @@
 #include "subdiv4.h"
 #define SR_IMPLEMENTATION
 #include "render.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
 
 #define VARIANTS 4
 #define SAMPLES 7
@@ -158,6 +170,7 @@ static float tile_wd(const scene *s, const sr_shell_desc *shell, int i, int j)
 typedef struct grass_view {
     const scene *s;
     const sr_shell_desc *shell;
+    const tvt_wd_map *map;     /* a mesh shell's per-tile wd (NULL: the terrain's tile_wd) */
     int ci, cj, v;
     float wd;
 } grass_view;
@@ -176,7 +189,7 @@ static void grass_sample(void *user, const sr_shell_query *q, sr_shell_sample *o
     if (q->tile_x != g->ci || q->tile_y != g->cj) { /* a new tile: its variant and wd */
         g->ci = q->tile_x; g->cj = q->tile_y;
         g->v = (int)(tile_hash(g->cj, g->ci) % (uint32_t)s->variant_count);
-        g->wd = tile_wd(s, g->shell, g->ci, g->cj);
+        g->wd = g->map ? tvt_tile_wd(g->map, g->ci, g->cj) : tile_wd(s, g->shell, g->ci, g->cj);
     }
     tv = s->variant[g->v];
     p[0] = q->p[0] * res; p[1] = q->p[1] * res; p[2] = q->p[2] * res;
@@ -211,6 +224,56 @@ static uint8_t to_srgb8(float x)
     return (uint8_t)(y * 255.0f + 0.5f);
 }
 
+/* a panel's framebuffer with the sky, its camera and the sun; 0 on failure */
+static int panel_begin(const scene *s, int w, int hgt, sr_framebuffer *fb, sr_camera *cam, sr_light *sun, sr_image8 *img)
+{
+    float up[3] = {0, 0, 1};
+    int x, y;
+    img->pixels = NULL;
+    if (sr_framebuffer_create(fb, w, hgt, NULL) != SR_OK) return 0;
+    sr_camera_look_at(cam, s->eye, s->target, up, s->fovy, (float)w / (float)hgt, 0.1f, 1e4f);
+    sr_framebuffer_clear(fb, NULL, 1.0f);
+    for (y = 0; y < hgt; y++)
+        for (x = 0; x < w; x++) {
+            float o[3], d[3];
+            sr_camera_ray(cam, w, hgt, (float)x + 0.5f, (float)y + 0.5f, o, d);
+            sky(d, fb->color + 4 * ((size_t)y * w + x));
+        }
+    sr_light_default(sun, s->sun);
+    sun->ambient[0] = 0.22f; sun->ambient[1] = 0.25f; sun->ambient[2] = 0.30f; /* a blue sky's fill light */
+    sun->diffuse[0] = sun->diffuse[1] = sun->diffuse[2] = 1.0f;
+    sun->specular[0] = sun->specular[1] = sun->specular[2] = 1.0f;
+    return 1;
+}
+
+static void grass_material(sr_material *m)
+{
+    m->specular[0] = m->specular[1] = m->specular[2] = 0.35f;
+    m->shininess = 24.0f;
+    memset(m->emission, 0, sizeof(m->emission));
+}
+
+/* the framebuffer into img (sRGB 8-bit), freed; the coverage, or -1 on failure */
+static double panel_end(sr_framebuffer *fb, sr_result r, const sr_shell_stats *stats, sr_image8 *img)
+{
+    size_t i, n = (size_t)fb->width * (size_t)fb->height;
+    img->width = fb->width; img->height = fb->height; img->channels = 3;
+    img->pixels = r == SR_OK ? (uint8_t *)malloc(n * 3) : NULL;
+    if (r != SR_OK || !img->pixels) {
+        fprintf(stderr, "grass: render: %s\n", r == SR_OK ? "out of memory" : sr_result_string(r));
+        sr_framebuffer_free(fb);
+        return -1;
+    }
+    for (i = 0; i < n; i++) {
+        img->pixels[3 * i + 0] = to_srgb8(fb->color[4 * i + 0]);
+        img->pixels[3 * i + 1] = to_srgb8(fb->color[4 * i + 1]);
+        img->pixels[3 * i + 2] = to_srgb8(fb->color[4 * i + 2]);
+    }
+    sr_framebuffer_free(fb);
+    samples_per_pixel = (double)stats->samples / (double)n;
+    return (double)stats->covered / (double)n;
+}
+
 /* Renders a panel (sky, then render.h's shell marcher over it); returns the share of pixels
    whose grass opacity reached 0.5, or -1 on failure. */
 static double render(const scene *s, int w, int hgt, sr_image8 *img, const char *what)
@@ -221,50 +284,18 @@ static double render(const scene *s, int w, int hgt, sr_image8 *img, const char 
     sr_shell_stats stats;
     sr_light sun;
     grass_view view;
-    float up[3] = {0, 0, 1};
-    size_t i;
-    int x, y;
     sr_result r;
-    img->pixels = NULL;
-    if (sr_framebuffer_create(&fb, w, hgt, NULL) != SR_OK) return -1;
-    sr_camera_look_at(&cam, s->eye, s->target, up, s->fovy, (float)w / (float)hgt, 0.1f, 1e4f);
-    sr_framebuffer_clear(&fb, NULL, 1.0f);
-    for (y = 0; y < hgt; y++)
-        for (x = 0; x < w; x++) {
-            float o[3], d[3];
-            sr_camera_ray(&cam, w, hgt, (float)x + 0.5f, (float)y + 0.5f, o, d);
-            sky(d, fb.color + 4 * ((size_t)y * w + x));
-        }
+    if (!panel_begin(s, w, hgt, &fb, &cam, &sun, img)) return -1;
     shell_of(s, &shell);
-    sr_light_default(&sun, s->sun);
-    sun.ambient[0] = 0.22f; sun.ambient[1] = 0.25f; sun.ambient[2] = 0.30f; /* a blue sky's fill light */
-    sun.diffuse[0] = sun.diffuse[1] = sun.diffuse[2] = 1.0f;
-    sun.specular[0] = sun.specular[1] = sun.specular[2] = 1.0f;
     shell.lights = &sun; shell.light_count = 1;
-    shell.material.specular[0] = shell.material.specular[1] = shell.material.specular[2] = 0.35f;
-    shell.material.shininess = 24.0f;
-    memset(shell.material.emission, 0, sizeof(shell.material.emission));
+    grass_material(&shell.material);
     memset(&view, 0, sizeof(view));
     view.s = s; view.shell = &shell; view.ci = view.cj = -1;
     shell.sample = grass_sample; shell.user = &view;
     shell.progress = progress_print; shell.progress_user = (void *)what;
     r = sr_draw_shell(&fb, &cam, &shell, &stats);
     progress_end(what);
-    img->width = w; img->height = hgt; img->channels = 3;
-    img->pixels = r == SR_OK ? (uint8_t *)malloc((size_t)w * hgt * 3) : NULL;
-    if (r != SR_OK || !img->pixels) {
-        fprintf(stderr, "grass: render: %s\n", r == SR_OK ? "out of memory" : sr_result_string(r));
-        sr_framebuffer_free(&fb);
-        return -1;
-    }
-    for (i = 0; i < (size_t)w * hgt; i++) {
-        img->pixels[3 * i + 0] = to_srgb8(fb.color[4 * i + 0]);
-        img->pixels[3 * i + 1] = to_srgb8(fb.color[4 * i + 1]);
-        img->pixels[3 * i + 2] = to_srgb8(fb.color[4 * i + 2]);
-    }
-    sr_framebuffer_free(&fb);
-    samples_per_pixel = (double)stats.samples / ((double)w * hgt);
-    return (double)stats.covered / ((double)w * hgt);
+    return panel_end(&fb, r, &stats, img);
 }
 
 /* ---- building the TVTs ---------------------------------------------------------------------- */
@@ -390,6 +421,290 @@ static int mountain_setup(scene *s, grass_set *g, int res, int tiles, int frames
     return 1;
 }
 
+/* a grey map for the tiles' wd: channel 0 in [0, 1], m->v (free with free) */
+typedef struct wd_map { float *v; int w, h; float gain; } wd_map;
+/* ---- a mesh shell: grass over a triangle mesh (render.h's sr_draw_mesh_shell) ------------------ */
+typedef struct gmesh { float *pos, *nrm, *uv; uint32_t *idx; size_t nv, nt; } gmesh;
+
+static void gmesh_free(gmesh *m)
+{
+    free(m->pos); free(m->nrm); free(m->uv); free(m->idx);
+    memset(m, 0, sizeof(*m));
+}
+
+static int gmesh_alloc(gmesh *m, size_t nv, size_t nt)
+{
+    m->nv = nv; m->nt = nt;
+    m->pos = (float *)malloc(nv * 3 * sizeof(float)); m->nrm = (float *)malloc(nv * 3 * sizeof(float));
+    m->uv = (float *)malloc(nv * 2 * sizeof(float)); m->idx = (uint32_t *)malloc(nt * 3 * sizeof(uint32_t));
+    if (m->pos && m->nrm && m->uv && m->idx) return 1;
+    gmesh_free(m);
+    fprintf(stderr, "grass: out of memory\n");
+    return 0;
+}
+
+/* A cube-sphere of radius r: each cube face an n x n grid pushed onto the sphere, its own chart
+   of `tiles` x `tiles` tiles (face f's u offset by f tiles, so every tile is distinct; the
+   charts meet at the cube's edges, where the walk crosses from one chart to the next). */
+static int make_sphere(gmesh *m, int n, float r, int tiles)
+{
+    int f, i, j;
+    size_t v = 0, t = 0;
+    if (!gmesh_alloc(m, 6 * (size_t)(n + 1) * (n + 1), 12 * (size_t)n * n)) return 0;
+    for (f = 0; f < 6; f++) {
+        int ax = f / 2;
+        float sg = f % 2 ? -1.0f : 1.0f;
+        size_t base = v;
+        for (j = 0; j <= n; j++)
+            for (i = 0; i <= n; i++, v++) {
+                float a = tanf(0.785398f * (2.0f * (float)i / (float)n - 1.0f)), b = tanf(0.785398f * (2.0f * (float)j / (float)n - 1.0f));
+                float c[3], l;
+                int k;
+                c[ax] = sg; c[(ax + 1) % 3] = sg * a; c[(ax + 2) % 3] = b; /* equal angles, not equal steps */
+                l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+                for (k = 0; k < 3; k++) { m->nrm[3 * v + k] = c[k] / l; m->pos[3 * v + k] = r * c[k] / l; }
+                m->uv[2 * v] = (float)tiles * ((float)i / (float)n + (float)f);
+                m->uv[2 * v + 1] = (float)tiles * (float)j / (float)n;
+            }
+        for (j = 0; j < n; j++)
+            for (i = 0; i < n; i++) {
+                uint32_t a = (uint32_t)(base + (size_t)j * (n + 1) + i), b = a + 1, c = a + (uint32_t)(n + 1), d = c + 1;
+                uint32_t *q = m->idx + 3 * t;
+                q[0] = a; q[1] = b; q[2] = d; q[3] = a; q[4] = d; q[5] = c;
+                t += 2;
+            }
+    }
+    return 1;
+}
+
+/* A hill: an n x n grid over [0, size]^2 with a broad bump and a ridge, normals of the grid,
+   uv = xy / tile (one chart). */
+static int make_hill(gmesh *m, int n, float size, float tile)
+{
+    int i, j;
+    if (!gmesh_alloc(m, (size_t)n * n, 2 * (size_t)(n - 1) * (n - 1))) return 0;
+    for (j = 0; j < n; j++)
+        for (i = 0; i < n; i++) {
+            size_t v = (size_t)j * n + i;
+            float x = size * (float)i / (float)(n - 1), y = size * (float)j / (float)(n - 1);
+            float dx = (x - 0.55f * size) / (0.25f * size), dy = (y - 0.5f * size) / (0.3f * size);
+            m->pos[3 * v] = x; m->pos[3 * v + 1] = y;
+            m->pos[3 * v + 2] = 0.28f * size * expf(-0.5f * (dx * dx + dy * dy)) + 0.04f * size * sinf(6.2831853f * x / size) * cosf(3.14159265f * y / size);
+            m->uv[2 * v] = x / tile; m->uv[2 * v + 1] = y / tile;
+        }
+    for (j = 0; j + 1 < n; j++)
+        for (i = 0; i + 1 < n; i++) {
+            uint32_t a = (uint32_t)(j * n + i), b = a + 1, c = a + (uint32_t)n, d = c + 1;
+            uint32_t *q = m->idx + 6 * ((size_t)j * (n - 1) + i);
+            q[0] = a; q[1] = b; q[2] = d; q[3] = a; q[4] = d; q[5] = c;
+        }
+    return sr_compute_vertex_normals(m->pos, m->nv, m->idx, m->nt, m->nrm) == SR_OK;
+}
+
+/* A mesh file (y up, turned to z up) made coarse and given tile coordinates: vertices clustered on a grid of `cells`
+   along the bounding box's longest side (dispmesh's coarse bunny look; collapsed triangles
+   dropped), smooth normals, then box-projection charts: each triangle goes to the axis its
+   normal is closest to and its vertices are repeated per chart, uv = the other two coordinates
+   / tile. */
+static int load_mesh(gmesh *m, const char *path, int cells, float *tile, float *radius, float centre[3])
+{
+    mio_mesh in;
+    mio_error err;
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f}, cell, *cpos = NULL, *cnrm = NULL, *cnt = NULL;
+    uint32_t *cid = NULL, *tri = NULL, *slot = NULL;
+    size_t i, nt = 0, nv = 0, ncells;
+    int k, ok = 0;
+    memset(m, 0, sizeof(*m));
+    if (mio_read_file(path, NULL, &in, &err) != MIO_OK) { fprintf(stderr, "grass: %s: %s\n", path, err.message); return 0; }
+    for (i = 0; i < in.vertex_count; i++) { /* y up (the files' custom) to z up: (x, y, z) -> (x, -z, y) */
+        float y = in.positions[3 * i + 1];
+        in.positions[3 * i + 1] = -in.positions[3 * i + 2];
+        in.positions[3 * i + 2] = y;
+    }
+    for (i = 0; i < in.vertex_count; i++)
+        for (k = 0; k < 3; k++) { lo[k] = fminf(lo[k], in.positions[3 * i + k]); hi[k] = fmaxf(hi[k], in.positions[3 * i + k]); }
+    cell = fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2])) / (float)cells;
+    if (!(cell > 0.0f) || in.triangle_count == 0) { fprintf(stderr, "grass: %s: an empty or flat mesh\n", path); goto done; }
+    ncells = (size_t)(cells + 1) * (cells + 1) * (cells + 1);
+    cid = (uint32_t *)malloc(in.vertex_count * sizeof(uint32_t));
+    slot = (uint32_t *)malloc(ncells * sizeof(uint32_t));
+    cpos = (float *)calloc(in.vertex_count * 3, sizeof(float));
+    cnt = (float *)calloc(in.vertex_count, sizeof(float));
+    tri = (uint32_t *)malloc(in.triangle_count * 3 * sizeof(uint32_t));
+    if (!cid || !slot || !cpos || !cnt || !tri) { fprintf(stderr, "grass: out of memory\n"); goto done; }
+    for (i = 0; i < ncells; i++) slot[i] = 0xFFFFFFFFu;
+    for (i = 0; i < in.vertex_count; i++) { /* cluster: the mean of a cell's vertices */
+        size_t c = 0;
+        for (k = 2; k >= 0; k--) {
+            int q = (int)((in.positions[3 * i + k] - lo[k]) / cell);
+            c = c * (size_t)(cells + 1) + (size_t)(q < 0 ? 0 : q > cells ? cells : q);
+        }
+        if (slot[c] == 0xFFFFFFFFu) slot[c] = (uint32_t)nv++;
+        cid[i] = slot[c];
+        for (k = 0; k < 3; k++) cpos[3 * cid[i] + k] += in.positions[3 * i + k];
+        cnt[cid[i]] += 1.0f;
+    }
+    for (i = 0; i < nv; i++) for (k = 0; k < 3; k++) cpos[3 * i + k] /= cnt[i];
+    for (i = 0; i < in.triangle_count; i++) {
+        uint32_t a = cid[in.indices[3 * i]], b = cid[in.indices[3 * i + 1]], c = cid[in.indices[3 * i + 2]];
+        if (a == b || b == c || a == c) continue;
+        tri[3 * nt] = a; tri[3 * nt + 1] = b; tri[3 * nt + 2] = c; nt++;
+    }
+    cnrm = (float *)malloc(nv * 3 * sizeof(float));
+    if (!cnrm || nt == 0 || sr_compute_vertex_normals(cpos, nv, tri, nt, cnrm) != SR_OK) { fprintf(stderr, "grass: %s: no triangles left\n", path); goto done; }
+    *tile = 2.0f * cell;
+    *radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    for (k = 0; k < 3; k++) centre[k] = 0.5f * (lo[k] + hi[k]);
+    if (!gmesh_alloc(m, 3 * nt, nt)) goto done;
+    for (i = 0; i < nt; i++) { /* box-projection charts; every corner its own vertex (seams everywhere are fine) */
+        const float *p0 = cpos + 3 * tri[3 * i], *p1 = cpos + 3 * tri[3 * i + 1], *p2 = cpos + 3 * tri[3 * i + 2];
+        float e1[3], e2[3], fn[3];
+        int ax = 0, c;
+        for (k = 0; k < 3; k++) { e1[k] = p1[k] - p0[k]; e2[k] = p2[k] - p0[k]; }
+        fn[0] = e1[1] * e2[2] - e1[2] * e2[1]; fn[1] = e1[2] * e2[0] - e1[0] * e2[2]; fn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        for (k = 1; k < 3; k++) if (fabsf(fn[k]) > fabsf(fn[ax])) ax = k;
+        for (c = 0; c < 3; c++) {
+            size_t v = 3 * i + (size_t)c, src = tri[3 * i + (size_t)c];
+            memcpy(m->pos + 3 * v, cpos + 3 * src, 3 * sizeof(float));
+            memcpy(m->nrm + 3 * v, cnrm + 3 * src, 3 * sizeof(float));
+            if (!(m->nrm[3 * v] * m->nrm[3 * v] + m->nrm[3 * v + 1] * m->nrm[3 * v + 1] + m->nrm[3 * v + 2] * m->nrm[3 * v + 2] > 1e-6f))
+                memcpy(m->nrm + 3 * v, fn, 3 * sizeof(float)); /* opposite faces cancelled: the face's own */
+            m->uv[2 * v] = cpos[3 * src + (ax + 1) % 3] / *tile + 64.0f * (float)ax;
+            m->uv[2 * v + 1] = cpos[3 * src + (ax + 2) % 3] / *tile;
+            m->idx[v] = (uint32_t)v;
+        }
+    }
+    ok = 1;
+done:
+    free(cid); free(slot); free(cpos); free(cnt); free(tri); free(cnrm);
+    mio_free_mesh(&in);
+    if (!ok) gmesh_free(m);
+    return ok;
+}
+
+/* the per-tile wd over the mesh's tile coordinates: wd + gain * (the tile's mean facing toward
+   the sun, less the whole mesh's) / 2 + jitter, or, with a grey map stretched over the tiles,
+   wd + gain (grey - 0.5) + jitter */
+typedef struct tile_map { float *wd; tvt_wd_map m; long covered; } tile_map; /* covered: tiles with triangles */
+
+static int make_tile_map(const gmesh *g, const scene *s, float gain, const wd_map *grey, tile_map *out)
+{
+    float ulo = 1e30f, uhi = -1e30f, vlo = 1e30f, vhi = -1e30f, *acc, mean = 0.0f, area = 0.0f;
+    size_t i, n;
+    int w, h;
+    memset(out, 0, sizeof(*out));
+    for (i = 0; i < g->nv; i++) {
+        ulo = fminf(ulo, g->uv[2 * i]); uhi = fmaxf(uhi, g->uv[2 * i]);
+        vlo = fminf(vlo, g->uv[2 * i + 1]); vhi = fmaxf(vhi, g->uv[2 * i + 1]);
+    }
+    w = (int)floorf(uhi) - (int)floorf(ulo) + 1; h = (int)floorf(vhi) - (int)floorf(vlo) + 1;
+    if (w < 1 || h < 1 || (double)w * h > 16e6) { fprintf(stderr, "grass: the mesh has too many tiles (%d x %d)\n", w, h); return 0; }
+    n = (size_t)w * (size_t)h;
+    out->wd = (float *)calloc(n, sizeof(float));
+    acc = (float *)calloc(n, sizeof(float));
+    if (!out->wd || !acc) { free(out->wd); free(acc); out->wd = NULL; fprintf(stderr, "grass: out of memory\n"); return 0; }
+    out->m.wd = out->wd; out->m.width = w; out->m.height = h;
+    out->m.origin[0] = (int)floorf(ulo); out->m.origin[1] = (int)floorf(vlo);
+    for (i = 0; i < g->nt; i++) { /* each triangle's area-weighted facing into the tile of its centroid */
+        const uint32_t *t = g->idx + 3 * i;
+        const float *a = g->pos + 3 * t[0], *b = g->pos + 3 * t[1], *c = g->pos + 3 * t[2];
+        float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]}, fn[3], area;
+        int x = (int)floorf((g->uv[2 * t[0]] + g->uv[2 * t[1]] + g->uv[2 * t[2]]) / 3.0f) - out->m.origin[0];
+        int y = (int)floorf((g->uv[2 * t[0] + 1] + g->uv[2 * t[1] + 1] + g->uv[2 * t[2] + 1]) / 3.0f) - out->m.origin[1];
+        fn[0] = e1[1] * e2[2] - e1[2] * e2[1]; fn[1] = e1[2] * e2[0] - e1[0] * e2[2]; fn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        area = sqrtf(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+        if (!(area > 0.0f) || x < 0 || y < 0 || x >= w || y >= h) continue;
+        out->wd[(size_t)y * w + x] += fn[0] * s->sun[0] + fn[1] * s->sun[1] + fn[2] * s->sun[2];
+        acc[(size_t)y * w + x] += area;
+    }
+    for (i = 0; i < n; i++) { out->covered += acc[i] > 0.0f; mean += out->wd[i]; area += acc[i]; }
+    mean = area > 0.0f ? mean / area : 0.0f; /* the facing relative to the mesh's mean (a hill's flat ground: 0) */
+    for (i = 0; i < n; i++) {
+        float jitter = s->wd_jitter * ((float)(tile_hash((int)(i % (size_t)w) + out->m.origin[0], (int)(i / (size_t)w) + out->m.origin[1]) & 1023) / 1023.0f - 0.5f);
+        float v;
+        if (grey && grey->v) { /* the grey map's pixel under the tile, row 0 at the top (largest v) */
+            int gx = (int)(((float)(i % (size_t)w) + 0.5f) / (float)w * (float)grey->w);
+            int gy = (int)((1.0f - ((float)(i / (size_t)w) + 0.5f) / (float)h) * (float)grey->h);
+            v = s->wd + gain * (grey->v[(size_t)(gy < grey->h ? gy : grey->h - 1) * (size_t)grey->w + (size_t)(gx < grey->w ? gx : grey->w - 1)] - 0.5f);
+        } else
+            v = s->wd + 0.5f * gain * (acc[i] > 0.0f ? out->wd[i] / acc[i] - mean : 0.0f);
+        out->wd[i] = v + jitter; /* tvt_tile_wd clamps to [0, 1] */
+    }
+    free(acc);
+    return 1;
+}
+
+/* Renders a panel of the grass over the mesh shell (height along the normals, one texel high);
+   returns the coverage, or -1 on failure. */
+static double render_mesh(const scene *s, const gmesh *g, float height, const tvt_wd_map *map, int w, int hgt,
+                          sr_image8 *img, const char *what)
+{
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_mesh_shell_desc d;
+    sr_shell_stats stats;
+    sr_light sun;
+    grass_view view;
+    sr_result r;
+    if (!panel_begin(s, w, hgt, &fb, &cam, &sun, img)) return -1;
+    sr_mesh_shell_desc_default(&d);
+    d.positions = g->pos; d.normals = g->nrm; d.uvs = g->uv; d.vertex_count = g->nv;
+    d.indices = g->idx; d.triangle_count = g->nt; d.height = height;
+    d.lights = &sun; d.light_count = 1;
+    grass_material(&d.material);
+    memset(&view, 0, sizeof(view));
+    view.s = s; view.map = map; view.ci = view.cj = -2147483647 - 1; /* no tile yet (tiles may be negative) */
+    d.sample = grass_sample; d.user = &view;
+    d.progress = progress_print; d.progress_user = (void *)what;
+    r = sr_draw_mesh_shell(&fb, &cam, &d, &stats);
+    progress_end(what);
+    return panel_end(&fb, r, &stats, img);
+}
+
+/* The mesh scene's grass: 7 samples of 100 blades, 4 variants of 400, shadows for light from the
+   tile's zenith (a mesh's tiles each see the sun from their own direction; one shadow volume
+   per variant cannot follow it, so the self-shadow is the depth below the top, and the
+   direction's part is Kajiya-Kay's and the marcher's horizon cut). */
+static int mesh_grass(scene *s, grass_set *g, int res, int frames, uint64_t seed)
+{
+    const float zenith[3] = {0, 0, 1};
+    int k;
+    memset(g, 0, sizeof(*g));
+    if (!build_samples(g, res, frames, seed, SAMPLES) || !build_mountain_variants(g, frames) || !build_shadows(g, zenith)) return 0;
+    for (k = 0; k < g->variants; k++) { s->variant[k] = &g->variant[k]; s->shadow[k] = &g->shadow[k]; }
+    s->variant_count = g->variants;
+    return 1;
+}
+
+/* The mesh, its shell height (one tile: blades keep the texel's proportions) and the camera:
+   kind "sphere", "hill" or a mesh file. */
+static int mesh_setup(scene *s, gmesh *g, float *height, const char *kind, int cells, int res)
+{
+    float tile, radius, c[3] = {0, 0, 0};
+    memset(s, 0, sizeof(*s));
+    s->res = res; s->wd_jitter = 0.08f;
+    set_sun(s);
+    s->fovy = 40.0f;
+    if (!strcmp(kind, "hill")) {
+        if (!make_hill(g, 65, 12.0f, 0.5f)) return 0;
+        s->target[0] = 6.5f; s->target[1] = 6.5f; s->target[2] = 1.2f;
+        s->eye[0] = 0.5f; s->eye[1] = -5.0f; s->eye[2] = 6.5f;
+        *height = 0.5f;
+        return 1;
+    }
+    if (!strcmp(kind, "sphere")) {
+        if (!make_sphere(g, 24, 1.0f, 8)) return 0;
+        *height = 1.5708f / 8.0f; /* a tile: a face's quarter circle over 8 tiles */
+        radius = 1.0f + *height;
+    } else {
+        if (!load_mesh(g, kind, cells, &tile, &radius, c)) return 0;
+        *height = 0.4f * tile; /* a file's mesh may bend sharply anywhere: a short lawn (blades squashed 2.5x) */
+    }
+    s->target[0] = c[0]; s->target[1] = c[1]; s->target[2] = c[2];
+    s->eye[0] = c[0] - 0.9f * radius; s->eye[1] = c[1] - 2.6f * radius; s->eye[2] = c[2] + 1.1f * radius;
+    return 1;
+}
+
 #ifndef GRASS_NO_MAIN /* bench/bench_texel.c includes this file for the mountain */
 static double now_ms(void) { return 1e3 * (double)clock() / CLOCKS_PER_SEC; }
 
@@ -404,8 +719,6 @@ static int write_sheet(const sr_image8 *panels, const char *const *captions, int
     return 1;
 }
 
-/* a grey map for the tiles' wd: channel 0 in [0, 1], m->v (free with free) */
-typedef struct wd_map { float *v; int w, h; float gain; } wd_map;
 
 static int read_wd_map(const char *path, wd_map *m)
 {
@@ -539,21 +852,77 @@ static int scene_mingle(int w, int h, int res, int frames, uint64_t seed, const 
     return ok;
 }
 
+/* Grass over a mesh shell (issue 19 point 4): one panel per wd, each tile's wd from a map over
+   the mesh's tile coordinates (drier where the tile faces the sun, or a grey map). */
+static int scene_mesh(int w, int h, int res, int frames, uint64_t seed, const float *wds, int nwd, const wd_map *grey,
+                      const char *kind, int cells, float gain, const char *path)
+{
+    grass_set g;
+    scene s;
+    gmesh m;
+    sr_image8 panels[8];
+    char caption[8][64];
+    const char *caps[8];
+    float height = 0;
+    int k, ok, done = 0;
+    memset(&g, 0, sizeof(g));
+    ok = mesh_setup(&s, &m, &height, kind, cells, res);
+    if (ok) { /* texel.h's check of the prisms: a folded one overlaps its neighbours */
+        tvt_shell_desc sd;
+        tvt_shell sh;
+        tvt_result r;
+        memset(&sd, 0, sizeof(sd));
+        sd.positions = m.pos; sd.normals = m.nrm; sd.uvs = m.uv; sd.vertex_count = m.nv;
+        sd.indices = m.idx; sd.triangle_count = m.nt; sd.height = height; sd.allow_folded = 1;
+        r = tvt_build_shell(&sd, &sh);
+        if (r != TVT_OK) { fprintf(stderr, "grass: the mesh shell: %s\n", tvt_result_string(r)); ok = 0; }
+        else if (sh.folded && !quiet) fprintf(stderr, "grass: %zu of %zu prisms fold (drawn overlapping)\n", sh.folded, m.nt);
+        tvt_shell_free(&sh);
+    }
+    if (ok) ok = mesh_grass(&s, &g, res, frames, seed);
+    for (k = 0; ok && k < nwd; k++) {
+        double t0 = now_ms(), cov;
+        char what[64];
+        tile_map tm;
+        s.wd = wds[k];
+        snprintf(what, sizeof(what), "grass: mesh wd %.3f", wds[k]);
+        if (!make_tile_map(&m, &s, grey && grey->v ? grey->gain : gain, grey, &tm)) { ok = 0; break; }
+        cov = render_mesh(&s, &m, height, &tm.m, w, h, &panels[k], what);
+        free(tm.wd);
+        if (cov < 0) { ok = 0; break; }
+        done = k + 1;
+        printf("RESULT grass scene=mesh mesh=%s wd=%.3f width=%d height=%d triangles=%zu tiles=%ld blades=%ld coverage=%.3f "
+               "render_ms=%.0f samples_per_pixel=%.1f\n", strchr(kind, '/') ? strrchr(kind, '/') + 1 : kind, wds[k], w, h,
+               m.nt, tm.covered, 400 * tm.covered, cov, now_ms() - t0, samples_per_pixel);
+        snprintf(caption[k], sizeof(caption[k]), "wd = %.3f", wds[k]);
+        caps[k] = caption[k];
+    }
+    if (ok) ok = write_sheet(panels, caps, nwd, nwd, path);
+    for (k = 0; k < done; k++) free(panels[k].pixels);
+    gmesh_free(&m);
+    free_set(&g);
+    return ok;
+}
+
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: grass [--scene mountain|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
-                "             [--wd A,B,C] [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F]\n"
-                "             [--seed S] [--quiet]\n");
+    fprintf(to, "usage: grass [--scene mountain|mesh|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
+                "             [--mesh sphere|hill|FILE [--mesh-cells N]] [--wd A,B,C] [--wd-sun G]\n"
+                "             [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S] [--quiet]\n");
     if (to != stdout) return;
     fprintf(to, "  --scene   mountain: the paper's Fig 13 (N x N tiles of 400 blades), one panel per wd;\n"
+                "            mesh: grass over a mesh shell, drier where it faces the sun;\n"
                 "            wither: one patch at wd 0..1; mingle: the paper's Fig 11 (default mountain)\n"
+                "  --mesh    the mesh scene's mesh (implies --scene mesh): sphere (default), hill, or a mesh\n"
+                "            file (OBJ, OFF, PLY, STL; y up), made coarse on N cells across (--mesh-cells, 40)\n"
+                "  --wd-sun  mesh: a tile's wd is wd + G * (its facing toward the sun) / 2, G in [0, 2] (0.9)\n"
                 "  -o        the PNG to write (a contact sheet of the panels)\n"
-                "  --size    panel size (800x600 for mountain, 320x240 otherwise)\n"
+                "  --size    panel size (800x600 for mountain, 640x480 for mesh, 320x240 otherwise)\n"
                 "  --res     texel resolution, a power of two in 16..256 (64)\n"
                 "  --tiles   mountain tiles per side (80: 6400 tiles, 2.56M blades)\n"
-                "  --wd      mountain's weathering degrees, in [0, 1] (0,0.30,0.917)\n"
-                "  --wd-map  a grey image (PNG, PGM, PPM, PFM) over the mountain: a tile's wd is wd +\n"
-                "            G * (grey - 0.5) at its centre, instead of drier on sunny slopes\n"
+                "  --wd      weathering degrees, one panel each, in [0, 1] (0,0.30,0.917; mesh 0.45)\n"
+                "  --wd-map  a grey image (PNG, PGM, PPM, PFM) over the mountain or the mesh's tiles: a\n"
+                "            tile's wd is wd + G * (grey - 0.5) at its centre, instead of the sun term\n"
                 "  --wd-map-gain  G, in [0, 2] (1)\n"
                 "  --lod-bias B  mountain: levels 2^B times coarser than the pixel's footprint asks, 0..3 (0)\n"
                 "  --frames  key frames per TVT, 2..64 (6)\n"
@@ -563,8 +932,9 @@ static void usage(FILE *to)
 
 int main(int argc, char **argv)
 {
-    const char *scene_name = "mountain", *out = NULL;
-    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, lod_bias = 0, i, ok;
+    const char *scene_name = "mountain", *out = NULL, *mesh_kind = "sphere";
+    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, lod_bias = 0, cells = 40, wd_given = 0, i, ok;
+    float wd_sun = 0.9f;
     float wds[8] = {0.0f, 0.30f, 0.917f};
     uint64_t seed = 2010;
     const char *map_path = NULL;
@@ -582,6 +952,13 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--frames")) { frames = atoi(v); if (frames < 2 || frames > 64) { fprintf(stderr, "grass: --frames must be 2..64\n"); return 2; } }
         else if (!strcmp(a, "--seed")) seed = (uint64_t)strtoull(v, NULL, 10);
         else if (!strcmp(a, "--wd-map")) map_path = v;
+        else if (!strcmp(a, "--mesh")) { mesh_kind = v; scene_name = "mesh"; }
+        else if (!strcmp(a, "--mesh-cells")) { cells = atoi(v); if (cells < 4 || cells > 512) { fprintf(stderr, "grass: --mesh-cells must be 4..512\n"); return 2; } }
+        else if (!strcmp(a, "--wd-sun")) {
+            char *end;
+            wd_sun = strtof(v, &end);
+            if (end == v || *end || !(wd_sun >= 0.0f && wd_sun <= 2.0f)) { fprintf(stderr, "grass: --wd-sun must be in [0, 2]\n"); return 2; }
+        }
         else if (!strcmp(a, "--lod-bias")) { lod_bias = atoi(v); if (lod_bias < 0 || lod_bias > 3 || !(*v >= '0' && *v <= '3') || v[1]) { fprintf(stderr, "grass: --lod-bias must be 0..3\n"); return 2; } }
         else if (!strcmp(a, "--wd-map-gain")) {
             char *end;
@@ -592,6 +969,7 @@ int main(int argc, char **argv)
             char *end;
             const char *p = v;
             nwd = 0;
+            wd_given = 1;
             while (*p && nwd < 8) {
                 wds[nwd] = strtof(p, &end);
                 if (end == p || !(wds[nwd] >= 0.0f && wds[nwd] <= 1.0f)) { fprintf(stderr, "grass: --wd values must be in [0, 1]\n"); return 2; }
@@ -603,11 +981,17 @@ int main(int argc, char **argv)
         i++;
     }
     if (!out) { fprintf(stderr, "grass: -o OUT.png is required\n"); usage(stderr); return 2; }
-    if (map_path && strcmp(scene_name, "mountain")) { fprintf(stderr, "grass: --wd-map is for the mountain\n"); return 2; }
+    if (map_path && strcmp(scene_name, "mountain") && strcmp(scene_name, "mesh")) { fprintf(stderr, "grass: --wd-map is for the mountain and the mesh\n"); return 2; }
     if (!strcmp(scene_name, "mountain")) {
         if (!w) { w = 800; h = 600; }
         if (map_path && !read_wd_map(map_path, &map)) return 1;
         ok = scene_mountain(w, h, res, tiles, frames, seed, wds, nwd, &map, lod_bias, out);
+        free(map.v);
+    } else if (!strcmp(scene_name, "mesh")) {
+        if (!w) { w = 640; h = 480; }
+        if (!wd_given) { wds[0] = 0.45f; nwd = 1; }
+        if (map_path && !read_wd_map(map_path, &map)) return 1;
+        ok = scene_mesh(w, h, res, frames, seed, wds, nwd, &map, mesh_kind, cells, wd_sun, out);
         free(map.v);
     } else if (!strcmp(scene_name, "wither")) {
         if (!w) { w = 320; h = 240; }
@@ -616,7 +1000,7 @@ int main(int argc, char **argv)
         if (!w) { w = 320; h = 240; }
         ok = scene_mingle(w, h, res, frames, seed, out);
     } else {
-        fprintf(stderr, "grass: unknown scene %s (mountain, wither, mingle)\n", scene_name);
+        fprintf(stderr, "grass: unknown scene %s (mountain, mesh, wither, mingle)\n", scene_name);
         return 2;
     }
     return ok ? 0 : 1;

@@ -123,15 +123,19 @@
      border). Leaving through the outer surface or a border it looks for the next entry; the
      mesh itself is opaque ground (Lambert with the interpolated normals, two-sided) unless
      see_through. Tangents return to the world by the inverse map, normals by its transpose;
-     shading, compositing and depth are sr_draw_shell's. Memory: 3 tetrahedra per triangle (168
+     shading, compositing and depth are sr_draw_shell's, except that the mesh shadows the
+     layer under its horizon: light 0 is scaled by clamp(5 n.L + 0.5, 0, 1), n the unit
+     gradient of w (full light above 0.1, none below -0.1; a sphere's night side stays dark). Memory: 3 tetrahedra per triangle (168
      bytes each), the boundary faces (68 bytes each) and their BVH (32 bytes per node, 2 per
      face), through `allocator`, freed before returning; building them sorts 16 bytes per
      tetrahedron face. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, fewer than 3
      vertices or no triangle, more than 2^30 vertices or 2^31 / 12 triangles, a NaN or infinite
      position, normal or uv, a zero normal, an index out of range or repeated, a triangle of zero
      area in the world or in uv, a singular tetrahedron, height <= 0 or depth < 0 or not finite;
-     SR_ERR_OUT_OF_MEMORY; SR_CANCELLED (rows drawn so far stay). Folded prisms (texel.h reports
-     them) are drawn as they come: their content overlaps. Thread safety: as sr_draw_shell.
+     SR_ERR_OUT_OF_MEMORY; SR_CANCELLED (rows drawn so far stay). A folded tetrahedron (its map
+     turns orientation against its prism's: texel.h's tvt_build_shell finds the same ones) is
+     crossed without sampling: near the fold its map's gain is unbounded (steps would shrink to
+     nothing) and its content would overlap its neighbours'; the mesh under it still stops rays. Thread safety: as sr_draw_shell.
      Limits: the camera must be outside the shell (a ray starts at its first entry); a ray walks
      at most 65536 tetrahedra; faces shared by more than two tetrahedra are walls the walk
      leaves by, like borders.
@@ -2532,6 +2536,7 @@ typedef struct sr__mtet {
     float u0[3], J[9];  /* world -> the content's frame (u, v, w depth) */
     float Ji[9];        /* frame -> world (tangents) */
     float scale;        /* frame units per world unit across the surface (footprints) */
+    int folded;         /* the map turns orientation against the prism's: content skipped */
     int32_t nb[4];      /* across face k (opposite vertex k): 4 tet + its face; -1 inner, -2 outer, -3 side */
     uint32_t v[4];      /* shell vertex ids: a mesh vertex, or vertex_count + it for its offset copy */
 } sr__mtet;
@@ -2607,8 +2612,9 @@ static void sr__mshell_vertex(const sr__mshell *S, uint32_t v, double x[3], doub
     u[0] = d->uvs[2 * (size_t)m]; u[1] = d->uvs[2 * (size_t)m + 1]; u[2] = v < n ? 0.0 : S->depth;
 }
 
-/* one tetrahedron's maps; 0 if it is singular in the world or in the frame */
-static int sr__mshell_tet(const sr__mshell *S, const uint32_t ids[4], float scale, sr__mtet *T)
+/* one tetrahedron's maps (orient: the sign its map's determinant must have, the triangle's
+   winding about its normals times its uv winding); 0 if it is singular in the world or frame */
+static int sr__mshell_tet(const sr__mshell *S, const uint32_t ids[4], float scale, int orient, sr__mtet *T)
 {
     double x[4][3], u[4][3], A[9], B[9], Ai[9], Bi[9];
     int k, r;
@@ -2616,6 +2622,7 @@ static int sr__mshell_tet(const sr__mshell *S, const uint32_t ids[4], float scal
     for (r = 0; r < 3; r++)
         for (k = 0; k < 3; k++) { A[r * 3 + k] = x[k + 1][r] - x[0][r]; B[r * 3 + k] = u[k + 1][r] - u[0][r]; }
     if (!sr__inv3d(A, Ai) || !sr__inv3d(B, Bi)) return 0;
+    T->folded = (sr__det3d(A) > 0.0) == (sr__det3d(B) > 0.0) ? orient <= 0 : orient >= 0;
     for (k = 0; k < 3; k++) { T->o[k] = (float)x[0][k]; T->u0[k] = (float)u[0][k]; }
     for (k = 0; k < 9; k++) T->M[k] = (float)Ai[k];
     sr__mul3d(B, Ai, T->J);
@@ -2641,14 +2648,20 @@ static int sr__mshell_tets(sr__mshell *S, double *mean_edge)
     for (t = 0; t < d->triangle_count; t++) {
         const uint32_t *tri = d->indices + 3 * t;
         uint32_t a = tri[0], b = tri[1], c = tri[2], s, ids[3][4];
-        double x[3][3], u[3][3], e1[3], e2[3], cr[3], aw, au;
-        int k;
+        double x[3][3], u[3][3], e1[3], e2[3], cr[3], aw, au, cu, ns = 0.0;
+        int k, orient;
         if (a >= n || b >= n || c >= n || a == b || b == c || a == c) return 0;
         for (k = 0; k < 3; k++) sr__mshell_vertex(S, tri[k], x[k], u[k]);
         for (k = 0; k < 3; k++) { e1[k] = x[1][k] - x[0][k]; e2[k] = x[2][k] - x[0][k]; }
         cr[0] = e1[1] * e2[2] - e1[2] * e2[1]; cr[1] = e1[2] * e2[0] - e1[0] * e2[2]; cr[2] = e1[0] * e2[1] - e1[1] * e2[0];
         aw = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
-        au = fabs((u[1][0] - u[0][0]) * (u[2][1] - u[0][1]) - (u[1][1] - u[0][1]) * (u[2][0] - u[0][0]));
+        cu = (u[1][0] - u[0][0]) * (u[2][1] - u[0][1]) - (u[1][1] - u[0][1]) * (u[2][0] - u[0][0]);
+        au = fabs(cu);
+        for (k = 0; k < 3; k++) {
+            const float *nr = d->normals + 3 * (size_t)tri[k];
+            ns += cr[0] * nr[0] + cr[1] * nr[1] + cr[2] * nr[2];
+        }
+        orient = (ns > 0.0 ? 1 : ns < 0.0 ? -1 : 0) * (cu > 0.0 ? 1 : -1);
         edges += sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]) + sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
         if (!(aw > 0.0) || !(au > 0.0)) return 0;
         if (a > b) { s = a; a = b; b = s; }
@@ -2658,7 +2671,7 @@ static int sr__mshell_tets(sr__mshell *S, double *mean_edge)
         ids[1][0] = a; ids[1][1] = b;     ids[1][2] = b + n; ids[1][3] = c + n;
         ids[2][0] = a; ids[2][1] = a + n; ids[2][2] = b + n; ids[2][3] = c + n;
         for (k = 0; k < 3; k++)
-            if (!sr__mshell_tet(S, ids[k], (float)sqrt(au / aw), &S->tets[3 * t + (size_t)k])) return 0;
+            if (!sr__mshell_tet(S, ids[k], (float)sqrt(au / aw), orient, &S->tets[3 * t + (size_t)k])) return 0;
     }
     *mean_edge = edges / (2.0 * (double)d->triangle_count);
     return 1;
@@ -2971,6 +2984,12 @@ static float sr__mshell_sample(sr__mshell *S, const sr__mwalk *w, const float o[
         return fmaxf(step / per_world, S->min_step);
     }
     alpha = 1.0f - expf(-s.sigma * step);
+    if (S->nl > 0) { /* the mesh hides light 0 under the layer's local horizon (n: the w gradient) */
+        float n[3] = {T->J[6], T->J[7], T->J[8]}, L[3];
+        sr__normalize(n);
+        sr__light_dir(&S->lights[0], p, L);
+        s.light *= sr__clampf(5.0f * sr__dot(n, L) + 0.5f, 0.0f, 1.0f);
+    }
     for (k = 0; k < 3; k++) { /* tangents by the inverse map, normals by its transpose */
         Tw[k] = T->Ji[3 * k] * s.tangent[0] + T->Ji[3 * k + 1] * s.tangent[1] + T->Ji[3 * k + 2] * s.tangent[2];
         Nw[k] = T->J[k] * s.normal[0] + T->J[3 + k] * s.normal[1] + T->J[6 + k] * s.normal[2];
@@ -3009,6 +3028,11 @@ static void sr__mshell_trace(sr__mshell *S, const float o[3], const float dir[3]
             if (w.t > ts) { ts = w.t; after_empty = 1; }
         }
         if (ts >= t1) break;
+        if (S->tets[w.tet].folded) { /* skipped: its map is turned over, and its gain unbounded */
+            ts = w.t_exit + fmaxf(S->tol, 1e-6f * fabsf(w.t_exit));
+            after_empty = 1;
+            continue;
+        }
         ts += sr__mshell_sample(S, &w, o, dir, ts, V, &after_empty, r);
     }
 }
