@@ -7891,19 +7891,29 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
 }
 
 /* The nearest to p of n one-ring triangles (tf from dm__sh_tris) closer than max_dist: its index
-   ((size_t)-1 if none), with the squared distance and the barycentric (u, v) of the closest point. */
-static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, double *d2best,
-                             double *bu, double *bv)
+   ((size_t)-1 if none), with the squared distance and the barycentric (u, v) of the closest point;
+   of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
+   first, so that the others are mostly skipped by their bounding spheres and planes; the answer
+   is the one a scan in order gives. */
+static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, size_t hint,
+                             double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
-    size_t i, bt = (size_t)-1;
+    size_t i, k, bt = (size_t)-1;
     *bu = *bv = 0.0;
-    for (i = 0; i < n; i++) {
-        const float *f = tf + 16 * i;
-        double u, v, d2, cs = (p[0] - f[9]) * (p[0] - f[9]) + (p[1] - f[10]) * (p[1] - f[10]) + (p[2] - f[11]) * (p[2] - f[11]);
+    for (k = 0; k <= n; k++) {
+        const float *f;
+        double u, v, d2, cs, pd;
+        if (k == 0 && !(hint < n)) continue;
+        i = k == 0 ? hint : k - 1;
+        if (k > 0 && i == hint) continue;
+        f = tf + 16 * i;
+        cs = (p[0] - f[9]) * (p[0] - f[9]) + (p[1] - f[10]) * (p[1] - f[10]) + (p[2] - f[11]) * (p[2] - f[11]);
         if (cs > (rb + f[12]) * (rb + f[12])) continue; /* its bounding sphere lies beyond the best */
+        pd = (p[0] - f[0]) * f[13] + (p[1] - f[1]) * f[14] + (p[2] - f[2]) * f[15];
+        if (pd * pd * 0.99999 > best) continue; /* so does its plane (the factor covers the unit normal's rounding) */
         d2 = dm__triangle_d2(p, f, &u, &v);
-        if (d2 < best) {
+        if (d2 < best || (d2 == best && i < bt)) {
             best = d2;
             rb = sqrt(d2);
             bt = i;
@@ -7981,14 +7991,15 @@ static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_
 }
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
-   is no triangle). */
-static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3])
+   is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
+static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3], size_t *hint)
 {
     double d2, bu, bv;
     uint32_t fv[3];
     int nf;
-    size_t bt = dm__sh_nearest(tf, c->triangle_count, p, DBL_MAX, &d2, &bu, &bv);
+    size_t bt = dm__sh_nearest(tf, c->triangle_count, p, DBL_MAX, *hint, &d2, &bu, &bv);
     if (bt == (size_t)-1) return -DBL_MAX;
+    *hint = bt;
     dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
     return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
 }
@@ -8070,6 +8081,7 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
 {
     const double *lo = b->lo, *hi = b->hi;
     double grow = b->grow;
+    size_t hint = (size_t)-1; /* the last point's nearest triangle: the next one is near it */
     int cl[3], ch[3], cx, cy, cz, k;
     for (k = 0; k < 3; k++) {
         cl[k] = dm__sh_coord(in, lo[k] - grow, k);
@@ -8089,7 +8101,8 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
                         pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                         continue;
-                    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, &d2, &bu, &bv);
+                    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, hint, &d2, &bu, &bv);
+                    if (bt != (size_t)-1) hint = bt;
                     if (bt == (size_t)-1 || sqrt(d2) > b->reach ||
                         !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
                         continue; /* beyond reach, or closest to the ring's rim */
@@ -8106,7 +8119,7 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
    returns their number */
 static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
 {
-    size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count;
+    size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
     int k;
     for (i = 0; i < npts; i++) {
         double pp[3], pu[3], pw[3], d2, bu, bv, A[3], len;
@@ -8114,8 +8127,9 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
         int j;
         const uint32_t *tr;
         dm__load3(in->pos, in->pts[2 * i], pp);
-        t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, &d2, &bu, &bv);
+        t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, hint, &d2, &bu, &bv);
         if (t == (size_t)-1) continue;
+        hint = t;
         tr = c->triangles + 3 * t;
         for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
         if (j == 3) continue;
@@ -8209,14 +8223,14 @@ static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], do
    beyond 4 margins and beyond its old one by a margin) */
 static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3], size_t npts)
 {
-    size_t i, no = c->old_triangle_count, nr = c->triangle_count;
+    size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
     for (i = 0; i < npts; i++) {
         double pp[3], sd;
         float f;
         memcpy(&f, &in->pts[2 * i + 1], sizeof f);
         dm__load3(in->pos, in->pts[2 * i], pp);
-        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp);
+        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
         if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
