@@ -219,8 +219,9 @@
        boundary as vertex separator, down to parts of 128 nodes, then minimum degree constrained to
        eliminate the parts first and the separators deepest-first, like CHOLMOD's NESDIS with
        CAMD; tried only when AMD's fill is high, and the smaller fill kept), elimination tree (Liu
-       1990) of the permuted matrix, postorder, column counts by row-subtree traversal
-       (O(nnz(L))), fundamental supernodes, then relaxed amalgamation (a child merged into its
+       1990) of the permuted matrix, postorder (the tree relabelled, not recomputed), column
+       counts (those AMD counted while eliminating when exact, else by row-subtree traversal,
+       O(nnz(L))), fundamental supernodes, then relaxed amalgamation (a child merged into its
        parent when the merged block stays small or adds few explicit zeros, as CHOLMOD does), the
        supernode partition, A's entries mapped to their places in L, then each supernode's sorted
        row structure (dfm_chol_analyze calls one function per step, in this order).
@@ -292,8 +293,12 @@
          fills compared are the ones AMD and its constrained form count while eliminating
          (exact when no dense row is set aside; otherwise both orderings are counted
          symbolically), so no extra symbolic pass is made.
-       - Column counts by row subtrees rather than Gilbert-Ng-Peyton: O(nnz(L)) instead of almost
-         O(nnz(A)), simpler; it is a small part of the analysis time for mesh systems.
+       - Column counts come from the minimum degree ordering itself: the element formed at a
+         pivot is exactly the pivot's column below its supervariable, so AMD (and its constrained
+         form in nested dissection) knows every count without a symbolic pass when no dense row
+         was set aside. Otherwise (given or natural orderings, dense rows, vertex blocks) they
+         are counted by row subtrees rather than Gilbert-Ng-Peyton: O(nnz(L)) instead of almost
+         O(nnz(A)), simpler.
        - Relaxed amalgamation uses CHOLMOD's published thresholds (merge when the result has at most
          4 columns, or at most 16 columns and < 80% zeros, or 48 and < 10%, else < 5%).
 
@@ -1657,10 +1662,10 @@ static void dfm__fill_add(dfm__fill *fl, int64_t f, int64_t r)
    left; supervariables never mix sets. fill (or NULL) receives the ordering's fill. */
 static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const int32_t *cset,
                                  const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm,
-                                 dfm__fill *fill)
+                                 dfm__fill *fill, int32_t *count)
 {
     dfm__amd S, *s = &S;
-    int32_t npivots = 0;
+    int32_t npivots = 0, k;
     dfm__fill fl = {0.0, 0.0, 0};
     dfm_result err = dfm__amd_alloc(s, n, adj_start[n], al);
     if (err == DFM_OK) dfm__amd_init(s, adj_start, adj, cset);
@@ -1689,6 +1694,10 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         dfm__amd_supervariables(s, pme1, pme2);                   /* 5 */
         dfm__amd_degrees(s, p, pme1, pme2, lp_nv);                /* 6 */
         dfm__fill_add(&fl, s->nel - nel0, (int64_t)lp_nv + s->dense_count);
+        if (count) { /* the pivot's members, in their order: r + f, r + f - 1, ... */
+            int32_t v, c = s->nel - nel0 + lp_nv + s->dense_count;
+            for (v = s->first[p]; v >= 0; v = s->follow[v]) count[v] = c--;
+        }
         s->nv[p] = nvp;
         if (s->len[p] == 0) { /* an element with nothing left: a root */
             s->status[p] = DFM__DEAD;
@@ -1697,6 +1706,8 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         s->wflg += n + 1;
     }
     if (err == DFM_OK) err = dfm__amd_permutation(s, npivots, adj_start, perm);
+    if (err == DFM_OK && count)
+        for (k = n - s->dense_count; k < n; k++) count[perm[k]] = n - k;
     dfm__fill_add(&fl, s->dense_count, 0);
     fl.exact = s->dense_count == 0;
     if (fill) *fill = fl;
@@ -1837,7 +1848,7 @@ static void dfm__nd_layout(int32_t *part, size_t m, const int32_t *side, int32_t
 
 static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_t *adj, const double *coords,
                                 const dfm_allocator *al, int (*progress)(void *, float), void *puser, int32_t *perm,
-                                dfm__fill *fill)
+                                dfm__fill *fill, int32_t *count)
 {
     dfm_result err = DFM_OK;
     int32_t *nodes = NULL, *tag = NULL, *side = NULL, *local = NULL, *cset = NULL, stamp = 0;
@@ -1897,7 +1908,7 @@ static dfm_result dfm__nd_order(int32_t n, const size_t *adj_start, const int32_
             stack[top++].hi = tk.lo + a;
         }
     }
-    err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm, fill);
+    err = dfm__amd_order(n, adj_start, adj, cset, al, progress, puser, perm, fill, count);
 done:
     dfm__free(al, nodes);
     dfm__free(al, tag);
@@ -2197,6 +2208,7 @@ typedef struct dfm__symbolic {
     size_t *gcols, *grows, *gzeros, *gnext; /* relaxed groups of fundamental supernodes */
     int32_t *arow;      /* nnz(A): the new row of each of A's entries, grouped by new column */
     int32_t *relmap, *buf; /* n: relative row positions, gathered rows */
+    int32_t *node_count;   /* NULL, or n: column counts by input index, exact, from the ordering */
 } dfm__symbolic;
 
 static void dfm__symbolic_free(dfm__symbolic *s, const dfm_allocator *al)
@@ -2218,6 +2230,7 @@ static void dfm__symbolic_free(dfm__symbolic *s, const dfm_allocator *al)
     dfm__free(al, s->arow);
     dfm__free(al, s->relmap);
     dfm__free(al, s->buf);
+    dfm__free(al, s->node_count);
     memset(s, 0, sizeof *s);
 }
 
@@ -2301,22 +2314,39 @@ static dfm_result dfm__graph_order(const dfm_csc *a, const dfm_chol_options *opt
 {
     size_t b = opt->block_size > 1 ? opt->block_size : 1, nb = a->n_cols / b, k, r;
     size_t *adj_start = NULL;
-    int32_t *adj = NULL, *amd = s->post, *nd = s->w3;
-    dfm__fill fa, fn;
+    int32_t *adj = NULL, *amd = s->post, *nd = s->w3, *cnt_nd = NULL;
+    dfm__fill fa = {0.0, 0.0, 0}, fn = {0.0, 0.0, 0};
     dfm_result err = DFM_OK;
     for (k = 0; opt->coords && k < 3 * nb && err == DFM_OK; k++)
         if (!dfm__finite(opt->coords[k])) err = DFM_ERR_BAD_VALUE;
     if (err == DFM_OK) err = dfm__adjacency(a, b, al, &adj_start, &adj);
-    if (err == DFM_OK) err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, al, opt->progress, opt->progress_user, amd, &fa);
+    if (err == DFM_OK) s->node_count = (int32_t *)dfm__alloc(al, nb, sizeof(int32_t), &err);
+    if (err == DFM_OK)
+        err = dfm__amd_order((int32_t)nb, adj_start, adj, NULL, al, opt->progress, opt->progress_user, amd, &fa,
+                             s->node_count);
     if (err == DFM_OK && opt->coords && nb > DFM__ND_LEAF && dfm__try_dissection(&fa, a->col_start[a->n_cols], b)) {
-        err = dfm__nd_order((int32_t)nb, adj_start, adj, opt->coords, al, opt->progress, opt->progress_user, nd, &fn);
+        cnt_nd = (int32_t *)dfm__alloc(al, nb, sizeof(int32_t), &err);
+        if (err == DFM_OK)
+            err = dfm__nd_order((int32_t)nb, adj_start, adj, opt->coords, al, opt->progress, opt->progress_user, nd,
+                                &fn, cnt_nd);
         if (err == DFM_OK && !(fa.exact && fn.exact)) err = dfm__graph_fill(nb, adj_start, adj, amd, al, &fa.lnz);
         if (err == DFM_OK && !(fa.exact && fn.exact)) err = dfm__graph_fill(nb, adj_start, adj, nd, al, &fn.lnz);
-        if (err == DFM_OK && fn.lnz < fa.lnz) memcpy(amd, nd, nb * sizeof(int32_t));
+        if (err == DFM_OK && fn.lnz < fa.lnz) {
+            int32_t *t = s->node_count;
+            memcpy(amd, nd, nb * sizeof(int32_t));
+            s->node_count = cnt_nd;
+            cnt_nd = t;
+            fa = fn;
+        }
     }
     if (err == DFM_OK)
         for (k = 0; k < nb; k++)
             for (r = 0; r < b; r++) s->order[k * b + r] = (int32_t)((size_t)amd[k] * b + r);
+    if (b > 1 || !fa.exact) { /* counts of the block graph, or inexact with dense rows: not used */
+        dfm__free(al, s->node_count);
+        s->node_count = NULL;
+    }
+    dfm__free(al, cnt_nd);
     dfm__free(al, adj_start);
     dfm__free(al, adj);
     return err;
@@ -2360,23 +2390,32 @@ static dfm_result dfm__postordered_etree(const dfm_csc *a, dfm_chol *c, const df
     dfm__postorder(n, s->parent, s->w1, s->w2, s->w3, s->post);
     for (j = 0; j < n; j++) c->perm[j] = s->order[s->post[j]];
     for (j = 0; j < n; j++) c->iperm[c->perm[j]] = (int32_t)j;
-    err = dfm__permute_pattern(a, c, al, s);
-    if (err != DFM_OK) return err;
-    dfm__etree(n, s->ust, s->ur, s->parent, s->w1);
+    /* the etree of the postordered matrix is the same tree relabelled: a postorder keeps each
+       column's ancestors, which hold its structure, in their order */
+    for (j = 0; j < n; j++) s->w1[s->post[j]] = (int32_t)j;
+    for (j = 0; j < n; j++) s->w2[j] = s->parent[s->post[j]] < 0 ? -1 : s->w1[s->parent[s->post[j]]];
+    memcpy(s->parent, s->w2, n * sizeof(int32_t));
     return DFM_OK;
 }
 
-/* Step 3: column counts by row subtrees: row r of L holds the etree nodes on the paths from each
-   upper entry (k, r) up to r. Also nnz(L) and the flop count. */
-static void dfm__column_counts(dfm_chol *c, dfm__symbolic *s)
+/* Step 3: column counts: the ones AMD counted when exact (s->node_count), else by row subtrees
+   (row r of L holds the etree nodes on the paths from each upper entry (k, r) up to r, on the
+   pattern in the final numbering). Also nnz(L) and the flop count. */
+static dfm_result dfm__column_counts(const dfm_csc *a, dfm_chol *c, const dfm_allocator *al, dfm__symbolic *s)
 {
     size_t j, p, n = c->n;
     int32_t *mark = s->w1;
-    for (j = 0; j < n; j++) {
+    dfm_result err = DFM_OK;
+    if (s->node_count)
+        for (j = 0; j < n; j++) s->count[j] = (size_t)s->node_count[c->perm[j]];
+    else
+        err = dfm__permute_pattern(a, c, al, s);
+    if (err != DFM_OK) return err;
+    for (j = 0; j < n && !s->node_count; j++) {
         s->count[j] = 1;
         mark[j] = -1;
     }
-    for (j = 0; j < n; j++) {
+    for (j = 0; j < n && !s->node_count; j++) {
         mark[j] = (int32_t)j;
         for (p = s->ust[j]; p < s->ust[j + 1]; p++) {
             int32_t x = s->ur[p];
@@ -2393,6 +2432,7 @@ static void dfm__column_counts(dfm_chol *c, dfm__symbolic *s)
         c->nnz_l += s->count[j];
         c->flops += (double)s->count[j] * (double)s->count[j];
     }
+    return DFM_OK;
 }
 
 /* Step 4: fundamental supernodes: j + 1 joins j when it is j's parent, its only child, and its
@@ -2593,7 +2633,7 @@ DFMDEF dfm_result dfm_chol_analyze(const dfm_csc *a, const dfm_chol_options *opt
     err = dfm__chol_create(a, &opt, &al, &c, &s);
     if (err == DFM_OK) err = dfm__fill_order(a, &opt, &al, &s);       /* 1. AMD / ND / given */
     if (err == DFM_OK) err = dfm__postordered_etree(a, c, &al, &s);   /* 2. etree, postorder */
-    if (err == DFM_OK) dfm__column_counts(c, &s);                     /* 3. column counts */
+    if (err == DFM_OK) err = dfm__column_counts(a, c, &al, &s);       /* 3. column counts */
     if (err == DFM_OK) err = dfm__fundamental_supernodes(c->n, &al, &s); /* 4. supernodes */
     if (err == DFM_OK) dfm__relax_supernodes(&s);                     /* 5. amalgamation */
     if (err == DFM_OK) err = dfm__supernode_layout(c, &al, &s);       /* 6. partition */

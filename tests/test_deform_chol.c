@@ -1142,8 +1142,9 @@ static void test_nested_dissection(void)
         int is_perm = 1;
         T_EQ_INT(dfm__adjacency(&l, 1, &al, &st, &adj), DFM_OK);
         dfm__fill fill_nd, fill_amd;
-        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd, &fill_nd), DFM_OK);
-        T_EQ_INT(dfm__amd_order((int32_t)nv, st, adj, NULL, &al, NULL, NULL, pamd, &fill_amd), DFM_OK);
+        int32_t *cnd = (int32_t *)malloc(nv * sizeof(int32_t)), *camd = (int32_t *)malloc(nv * sizeof(int32_t));
+        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd, &fill_nd, cnd), DFM_OK);
+        T_EQ_INT(dfm__amd_order((int32_t)nv, st, adj, NULL, &al, NULL, NULL, pamd, &fill_amd, camd), DFM_OK);
         for (i = 0; i < nv; i++) {
             if (pnd[i] < 0 || (size_t)pnd[i] >= nv || seen[pnd[i]]) is_perm = 0;
             else seen[pnd[i]] = 1;
@@ -1158,6 +1159,25 @@ static void test_nested_dissection(void)
         T_CHECK(fill_amd.exact && fill_nd.exact);
         T_CHECK_MSG(fill_amd.lnz == famd, "AMD's count %.0f, symbolic %.0f", fill_amd.lnz, famd);
         T_CHECK_MSG(fill_nd.lnz == fnd, "constrained AMD's count %.0f, symbolic %.0f", fill_nd.lnz, fnd);
+        /* and so is each column's count (the analysis takes them instead of counting again):
+           the same as the row-subtree counts of the analysis given that ordering */
+        {
+            int pass;
+            for (pass = 0; pass < 2; pass++) {
+                dfm_chol *cg = NULL;
+                dfm_chol_options og = dfm_chol_default_options();
+                size_t bad = 0;
+                og.ordering = DFM_ORDER_GIVEN;
+                og.perm = pass ? pnd : pamd;
+                T_EQ_INT(dfm_chol_analyze(&l, &og, &cg), DFM_OK);
+                for (i = 0; cg && i < nv; i++)
+                    bad += dfm_chol_column_counts(cg)[i] != (size_t)(pass ? cnd : camd)[dfm_chol_permutation(cg)[i]];
+                T_CHECK_MSG(bad == 0, "%s: %zu column counts differ from the symbolic ones", pass ? "ND" : "AMD", bad);
+                dfm_chol_free(cg);
+            }
+        }
+        free(cnd);
+        free(camd);
         free(st);
         free(adj);
         free(pnd);
@@ -1415,7 +1435,7 @@ static void test_factor_digests(void)
         int32_t *adj = NULL, *pnd = (int32_t *)malloc(nv * sizeof(int32_t));
         dfm__fill fill;
         T_EQ_INT(dfm__adjacency(&bil, 1, &al, &st, &adj), DFM_OK);
-        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd, &fill), DFM_OK);
+        T_EQ_INT(dfm__nd_order((int32_t)nv, st, adj, co, &al, NULL, NULL, pnd, &fill, NULL), DFM_OK);
         o.ordering = DFM_ORDER_GIVEN;
         o.perm = pnd;
         got[2] = digest_of(&bil, &o);
