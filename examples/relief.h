@@ -723,7 +723,7 @@ typedef struct rl__flow {
     int nodes;
     int *to, *parent, *pn, *queue, *orphans, *stamp, time, qtail; /* pn: the parent arc's head */
     uint8_t *tree, *queued;     /* tree: 0 free, 1 source, 2 sink */
-    double *cap, *tr;
+    double *cap, *tr, *diff;    /* diff: per grid texel (nodes of them), |a - b| */
 } rl__flow;
 
 #define RL__TERMINAL (-1)
@@ -734,7 +734,7 @@ static void rl__flow_free(rl__flow *f, const rl_allocator *a)
 {
     rl__free(a, f->to); rl__free(a, f->parent); rl__free(a, f->pn);
     rl__free(a, f->queue); rl__free(a, f->orphans); rl__free(a, f->tree); rl__free(a, f->queued); rl__free(a, f->stamp);
-    rl__free(a, f->cap); rl__free(a, f->tr);
+    rl__free(a, f->cap); rl__free(a, f->tr); rl__free(a, f->diff);
     memset(f, 0, sizeof *f);
 }
 
@@ -751,9 +751,10 @@ static rl_result rl__flow_init(rl__flow *f, int nodes, const rl_allocator *a)
     f->tree = (uint8_t *)rl__alloc(a, nn);
     f->queued = (uint8_t *)rl__alloc(a, nn);
     f->tr = (double *)rl__alloc(a, sizeof(double) * nn);
+    f->diff = (double *)rl__alloc(a, sizeof(double) * nn);
     f->to = (int *)rl__alloc(a, sizeof(int) * 4 * nn);
     f->cap = (double *)rl__alloc(a, sizeof(double) * 4 * nn);
-    if (!f->parent || !f->pn || !f->queue || !f->orphans || !f->stamp || !f->tree || !f->queued || !f->tr || !f->to || !f->cap) {
+    if (!f->parent || !f->pn || !f->queue || !f->orphans || !f->stamp || !f->tree || !f->queued || !f->tr || !f->diff || !f->to || !f->cap) {
         rl__flow_free(f, a);
         return RL_ERR_OUT_OF_MEMORY;
     }
@@ -886,21 +887,16 @@ static void rl__flow_run(rl__flow *f)
     }
 }
 
-static double rl__pair_cost(const float *a, const float *b, size_t s, size_t t)
-{
-    return fabs((double)a[s] - (double)b[s]) + fabs((double)a[t] - (double)b[t]);
-}
-
 /* One grid pair, q east (d = 1) or south (d = 0) of p: free-free pairs become an arc pair, a
    free texel beside a pinned one gets the cost on its link to the pinned side's terminal (the
    pair is cut exactly when the free texel takes the other label), pinned-pinned pairs cost
    nothing that a cut can change. */
-static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, const float *a, const float *b, size_t p, size_t q, int d)
+static void rl__cut_pair(rl__flow *f, const int *node, const uint8_t *cons, size_t p, size_t q, int d)
 {
     int np = node[p], nq = node[q];
     double c;
     if (np < 0 && nq < 0) return;
-    c = rl__pair_cost(a, b, p, q);
+    c = f->diff[p] + f->diff[q]; /* |a(p) - b(p)| + |a(q) - b(q)|, each texel's computed once */
     if (np >= 0 && nq >= 0) {
         f->to[4 * np + d] = nq; f->cap[4 * np + d] = c;
         f->to[4 * nq + 3 - d] = np; f->cap[4 * nq + 3 - d] = c;
@@ -916,28 +912,33 @@ static void rl__cut_solve(rl__flow *f, const float *a, const float *b, const uin
 {
     size_t n = (size_t)width * (size_t)height, i;
     int x, y, free_count = 0;
-    for (i = 0; i < n; i++) node[i] = (!cons || !cons[i]) ? free_count++ : -1;
+    for (i = 0; i < n; i++) {
+        node[i] = (!cons || !cons[i]) ? free_count++ : -1;
+        f->diff[i] = fabs((double)a[i] - (double)b[i]);
+    }
     rl__flow_reset(f, free_count > 0 ? free_count : 1);
     for (y = 0; y < height; y++)
         for (x = 0; x < width; x++) {
             size_t p = (size_t)y * width + x;
-            if (x + 1 < width) rl__cut_pair(f, node, cons, a, b, p, p + 1, 1);
-            if (y + 1 < height) rl__cut_pair(f, node, cons, a, b, p, p + (size_t)width, 0);
+            if (x + 1 < width) rl__cut_pair(f, node, cons, p, p + 1, 1);
+            if (y + 1 < height) rl__cut_pair(f, node, cons, p, p + (size_t)width, 0);
         }
     /* a texel linked to both terminals passes the smaller link's flow at once (Boykov & Kolmogorov) */
     if (free_count) rl__flow_run(f);
     for (i = 0; i < n; i++) labels[i] = node[i] >= 0 ? (f->tree[node[i]] == 1 ? 0 : 1) : (cons[i] == 1 ? 0 : 1);
 }
 
-static double rl__cut_cost(const float *a, const float *b, const uint8_t *labels, int width, int height)
+/* the cost of labels: over pairs with different labels, diff[s] + diff[t] (rl__cut_solve's
+   per-texel |a - b|) */
+static double rl__cut_cost(const double *diff, const uint8_t *labels, int width, int height)
 {
     double c = 0.0;
     int x, y;
     for (y = 0; y < height; y++)
         for (x = 0; x < width; x++) {
             size_t p = (size_t)y * width + x;
-            if (x + 1 < width && labels[p] != labels[p + 1]) c += rl__pair_cost(a, b, p, p + 1);
-            if (y + 1 < height && labels[p] != labels[p + (size_t)width]) c += rl__pair_cost(a, b, p, p + (size_t)width);
+            if (x + 1 < width && labels[p] != labels[p + 1]) c += diff[p] + diff[p + 1];
+            if (y + 1 < height && labels[p] != labels[p + (size_t)width]) c += diff[p] + diff[p + (size_t)width];
         }
     return c;
 }
@@ -962,8 +963,8 @@ RLDEF rl_result rl_graph_cut(const float *a, const float *b, const uint8_t *cons
     if (!node) { rl__flow_free(&f, &al); return RL_ERR_OUT_OF_MEMORY; }
     rl__cut_solve(&f, a, b, constraint, width, height, node, labels);
     rl__free(&al, node);
+    if (cost) *cost = rl__cut_cost(f.diff, labels, width, height);
     rl__flow_free(&f, &al);
-    if (cost) *cost = rl__cut_cost(a, b, labels, width, height);
     return RL_OK;
 }
 
@@ -1033,19 +1034,34 @@ static float rl__bilinear(const float *m, int w, int h, float x, float y)
     return a + fy * (b - a);
 }
 
+/* rl__bilinear where x, y >= 0 and x + 1, y + 1 < the map's sides (no clamp would act: the same
+   values) */
+static float rl__bilinear_in(const float *m, int w, float x, float y)
+{
+    int x0 = (int)x, y0 = (int)y;
+    float fx = x - (float)x0, fy = y - (float)y0, a, b;
+    const float *r0 = m + (size_t)y0 * w + x0, *r1 = r0 + w;
+    a = r0[0] + fx * (r0[1] - r0[0]);
+    b = r1[0] + fx * (r1[1] - r1[0]);
+    return a + fy * (b - a);
+}
+
 /* The example patch centred at example texel (cx, cy), rotated by angle, for the output window
    whose centre is at window texel (P/2, P/2): the only warp (see DECISIONS). With a list, only
    its n window texels (j * P + i) are sampled; else every step-th texel of every step-th row. */
 static void rl__sample_patch(const rl__synth *S, float cx, float cy, float angle, int step, const int32_t *list, int n, float *dst)
 {
-    float c = cosf(angle), s = sinf(angle), h = 0.5f * (float)S->P - 0.5f;
+    float c = cosf(angle), s = sinf(angle), h = 0.5f * (float)S->P - 0.5f, R = 2.0f * h + 2.0f;
     int i, j, t, count = list ? n : ((S->P + step - 1) / step) * ((S->P + step - 1) / step), per_row = (S->P + step - 1) / step;
+    int inside = cx - R >= 0.0f && cy - R >= 0.0f && cx + R + 1.0f < (float)S->ew && cy + R + 1.0f < (float)S->eh;
     for (t = 0; t < count; t++) {
-        float u, v;
+        float u, v, x, y;
         if (list) { i = list[t] % S->P; j = list[t] / S->P; }
         else { i = (t % per_row) * step; j = (t / per_row) * step; }
         u = (float)i - h; v = (float)j - h;
-        dst[j * S->P + i] = rl__bilinear(S->ex, S->ew, S->eh, cx + 0.5f + c * u - s * v - 0.5f, cy + 0.5f + s * u + c * v - 0.5f);
+        x = cx + 0.5f + c * u - s * v - 0.5f;
+        y = cy + 0.5f + s * u + c * v - 0.5f;
+        dst[j * S->P + i] = inside ? rl__bilinear_in(S->ex, S->ew, x, y) : rl__bilinear(S->ex, S->ew, S->eh, x, y);
     }
 }
 
@@ -1109,7 +1125,7 @@ static rl_result rl__cut(rl__synth *S, int wx, int wy, const float *cand, float 
     *overlap = nover;
     if (!nover) { memset(S->lab, 1, (size_t)rw * (size_t)rh); *cost = 0.0; return RL_OK; }
     rl__cut_solve(&S->flow, S->ga, S->gb, S->cons, rw, rh, S->node, S->lab);
-    *cost = rl__cut_cost(S->ga, S->gb, S->lab, rw, rh);
+    *cost = rl__cut_cost(S->flow.diff, S->lab, rw, rh);
     return RL_OK;
 }
 

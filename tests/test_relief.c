@@ -278,6 +278,12 @@ static void test_loop_elimination(void)
 /* ---- graph cut ---------------------------------------------------------------------------- */
 
 
+/* the cost of cutting between texels s and t, as rl_graph_cut defines it */
+static double pair_cost(const float *a, const float *b, size_t s, size_t t)
+{
+    return fabs((double)a[s] - (double)b[s]) + fabs((double)a[t] - (double)b[t]);
+}
+
 /* exact minimum over all 2^64 labellings, one row (8 labels, bit x = B) at a time */
 static double cut_exact(const float *a, const float *b, const uint8_t *cons)
 {
@@ -291,7 +297,7 @@ static double cut_exact(const float *a, const float *b, const uint8_t *cons)
             for (x = 0; x < 8; x++) {
                 int l = (r >> x) & 1, p = y * 8 + x;
                 if ((cons[p] == 1 && l) || (cons[p] == 2 && !l)) ok = 0;
-                if (x < 7 && l != ((r >> (x + 1)) & 1)) row += rl__pair_cost(a, b, (size_t)p, (size_t)p + 1);
+                if (x < 7 && l != ((r >> (x + 1)) & 1)) row += pair_cost(a, b, (size_t)p, (size_t)p + 1);
             }
             next[r] = 1e300;
             if (!ok) continue;
@@ -299,7 +305,7 @@ static double cut_exact(const float *a, const float *b, const uint8_t *cons)
                 double c = best[q] + row;
                 if (y > 0) {
                     for (x = 0; x < 8; x++)
-                        if (((q ^ r) >> x) & 1) c += rl__pair_cost(a, b, (size_t)((y - 1) * 8 + x), (size_t)(y * 8 + x));
+                        if (((q ^ r) >> x) & 1) c += pair_cost(a, b, (size_t)((y - 1) * 8 + x), (size_t)(y * 8 + x));
                 } else if (q) {
                     continue;
                 }
