@@ -8383,6 +8383,58 @@ static int dm__sh_walk_next(const dm__sh_internal *in, dm__sh_walk *w, float fro
     return h != NULL;
 }
 
+/* The overlap check of one sample: point y with normal n (not normalised). 0 when a ray from a
+   little outside y along -n meets the original's front side first (or nothing, on an open
+   original), within the offset grown at the hit, with no re-entry within that depth; else 1
+   (overlap: a back face first, a re-entry, a zero normal, a miss on a closed original) or 2 (the
+   hit lies deeper than the shell). */
+static int dm__sh_sample_fails(const dm_shell *sh, const dm__sh_internal *in, const double y[3], const double n[3])
+{
+    double len = dm__len3(n), h;
+    dm_ray ray;
+    dm_hit hit;
+    dm__sh_walk walk;
+    const uint32_t *ot;
+    int k, crossings;
+    if (!(len > 0.0)) return 1;
+    for (k = 0; k < 3; k++) { /* from a little outside: the triangle may graze a bump */
+        ray.dir[k] = (float)(-n[k] / len);
+        ray.org[k] = (float)(y[k] + 0.25 * sh->thickness * n[k] / len);
+    }
+    ray.tmin = 0.0f;
+    ray.tmax = 2.25f * sh->thickness;
+    dm__sh_walk_start(in, &walk, &ray);
+    if (!dm__sh_walk_next(in, &walk, 0.0f, &hit)) return in->open ? 0 : 1;
+    ot = in->idx + 3 * (size_t)hit.triangle;
+    if (dm__sh_side(in, hit.triangle, n) < 0) return 1;
+    /* the shell along the ray: no deeper than the offset grown at the hit */
+    h = (1.0 - hit.u - hit.v) * sh->offset[ot[0]] + hit.u * sh->offset[ot[1]] + hit.v * sh->offset[ot[2]];
+    if ((double)hit.t - 0.25 * sh->thickness > h + in->margin) return 2;
+    /* and no re-entry within the same depth: in (this hit), out, in again is the fold of the
+       paper's Fig 4.1.3, where one texel would have three depths and the part of the original
+       between them would be reached by no ray */
+    for (crossings = 0; crossings < 8; crossings++) {
+        float from = hit.t + (float)in->margin;
+        if (!(from < ray.tmax) || !dm__sh_walk_next(in, &walk, from, &hit)) break;
+        if (dm__sh_side(in, hit.triangle, n) > 0) return 1;
+    }
+    return 0;
+}
+
+/* Sample s of a triangle (dm__sh_sample weights): its in->samples inner points, then its edge
+   from corner kc to the next at 1/2, 1/4 and 3/4. */
+static void dm__sh_sample_weights(const dm__sh_internal *in, int s, int kc, double w[3])
+{
+    int k;
+    if (s < in->samples) {
+        for (k = 0; k < 3; k++) w[k] = dm__sh_bary[s][k];
+        return;
+    }
+    w[0] = w[1] = w[2] = 0.0;
+    w[kc] = 0.5 - 0.25 * (s - in->samples == 1) + 0.25 * (s - in->samples == 2);
+    w[(kc + 1) % 3] = 1.0 - w[kc];
+}
+
 static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_collapse *c, const double x[3],
                           const double *vn)
 {
@@ -8395,65 +8447,19 @@ static int dm__sh_overlap(dm_shell *sh, const dm__sh_internal *in, const dm_coll
     for (i = 0; i < nr; i++) {
         const uint32_t *t = c->triangles + 3 * i;
         double p[3][3];
-        int s;
+        int s, kc;
         for (k = 0; k < 3; k++) dm__sh_at(c, t[k], x, p[k]);
-        int kc;
         for (kc = 0; kc < 2 && t[kc] != c->keep; kc++) {}
         for (s = 0; s < in->samples + 3; s++) {
-            double y[3], n[3], len, w[3] = {0.0, 0.0, 0.0};
-            dm_ray ray;
-            dm_hit hit;
-            dm__sh_walk walk;
-            const uint32_t *ot;
-            if (s < in->samples) { /* the triangle's samples, then its edge from keep at 1/2, 1/4 and 3/4 */
-                for (k = 0; k < 3; k++) w[k] = dm__sh_bary[s][k];
-            } else {
-                w[kc] = 0.5 - 0.25 * (s - in->samples == 1) + 0.25 * (s - in->samples == 2);
-                w[(kc + 1) % 3] = 1.0 - w[kc];
-            }
+            double y[3], n[3], w[3];
+            int fails;
+            dm__sh_sample_weights(in, s, kc, w);
             dm__sh_sample((const double(*)[3])p, vn + 9 * i, w, y, n);
-            len = dm__len3(n);
-            if (!(len > 0.0)) {
-                sh->vetoed_overlap++;
+            fails = dm__sh_sample_fails(sh, in, y, n);
+            if (fails) {
+                if (fails == 2) sh->vetoed_shell++;
+                else sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
-            }
-            for (k = 0; k < 3; k++) { /* from a little outside: the triangle may graze a bump */
-                ray.dir[k] = (float)(-n[k] / len);
-                ray.org[k] = (float)(y[k] + 0.25 * sh->thickness * n[k] / len);
-            }
-            ray.tmin = 0.0f;
-            ray.tmax = 2.25f * sh->thickness;
-            dm__sh_walk_start(in, &walk, &ray);
-            if (!dm__sh_walk_next(in, &walk, 0.0f, &hit)) {
-                if (in->open) continue;
-                sh->vetoed_overlap++;
-                return DM_COLLAPSE_VETO;
-            }
-            ot = in->idx + 3 * (size_t)hit.triangle;
-            if (dm__sh_side(in, hit.triangle, n) < 0) {
-                sh->vetoed_overlap++;
-                return DM_COLLAPSE_VETO;
-            }
-            { /* the shell along the ray: no deeper than the offset grown at the hit */
-                double h = (1.0 - hit.u - hit.v) * sh->offset[ot[0]] + hit.u * sh->offset[ot[1]] + hit.v * sh->offset[ot[2]];
-                if ((double)hit.t - 0.25 * sh->thickness > h + in->margin) {
-                    sh->vetoed_shell++;
-                    return DM_COLLAPSE_VETO;
-                }
-            }
-            /* and no re-entry within the same depth: in (this hit), out, in again is the fold of
-               the paper's Fig 4.1.3, where one texel would have three depths and the part of the
-               original between them would be reached by no ray */
-            {
-                int crossings;
-                for (crossings = 0; crossings < 8; crossings++) {
-                    float from = hit.t + (float)in->margin;
-                    if (!(from < ray.tmax) || !dm__sh_walk_next(in, &walk, from, &hit)) break;
-                    if (dm__sh_side(in, hit.triangle, n) > 0) {
-                        sh->vetoed_overlap++;
-                        return DM_COLLAPSE_VETO;
-                    }
-                }
             }
         }
     }
