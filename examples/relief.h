@@ -65,9 +65,9 @@
 
    PERFORMANCE
      One thread, 2-core AMD EPYC virtual machine: a 512 x 512 synthesis from a 384 x 384 example
-     with the defaults takes about 0.12 s (0.17 s beside other work; about 45% of it in the
-     graph cuts, 10% in the Poisson bands, 8% each in the fill search and the feature patches'
-     sampling), its normal map about 1 ms, the emboss baseline about 25 ms.
+     with the defaults takes about 0.12 s (about 45% of it in the graph cuts, 10% in the
+     Poisson bands, 8% each in the fill search and the feature patches' sampling), its normal
+     map about 1 ms, the emboss baseline about 25 ms.
 
    LIMITS
      Maps up to 16384 on a side and 2^26 texels. The sketch sets the output size. Patches up to
