@@ -2,7 +2,8 @@
    libFuzzer: clang -g -O1 -I. -fsanitize=fuzzer,address,undefined tests/fuzz_subdiv4.c -o fuzz_subdiv4 -lm
    plain:     gcc -std=c99 -g -O1 -I. tests/fuzz_subdiv4.c tests/fuzz_main.c -o fuzz_subdiv4 -lm
               && ./fuzz_subdiv4 tests/fuzz/corpus/subdiv4
-   The first byte picks the entry point, the next ones its sizes, options, a cancelling progress
+   The first byte picks the entry point (bits 0-1; bit 2: a grid's columns first; bit 7: raw
+   numbers), the next ones its sizes, options, a cancelling progress
    callback and the allocation to fail (0 = none); numbers are read either as raw 8-byte doubles
    / 4-byte floats (any bits: NaN, infinities, 1e308, subnormals) or as small values, by a flag.
    Every call must return SD4_OK with a sound result, or one of the documented codes with nothing
@@ -115,7 +116,7 @@ static void fz_options(fz_in *in, sd4_options *o, double *wl, int levels, const 
     o->progress_user = g;
 }
 
-static void fz_curve_or_grid(fz_in *in, int grid, const sd4_allocator *a, fz_prog *g)
+static void fz_curve_or_grid(fz_in *in, int grid, int columns_first, const sd4_allocator *a, fz_prog *g)
 {
     size_t nx = fz_byte(in) % 17, ny = grid ? fz_byte(in) % 9 : 1, np, m = 0, mx = 0, my = 0, i, cap, S;
     int dim = (int)(fz_byte(in) % 5), levels = (int)(fz_byte(in) % 9) - (grid ? 2 : 0), closed;
@@ -138,8 +139,9 @@ static void fz_curve_or_grid(fz_in *in, int grid, const sd4_allocator *a, fz_pro
     cap = m * (size_t)(grid ? dim : 1) - (fz_byte(in) & 1); /* sometimes one short */
     out = (double *)malloc(sizeof(double) * (m * (size_t)dim + 1));
     if (!out) return;
-    r = grid ? sd4_grid_refine(np ? pts : NULL, nx, ny, dim, w, levels, &o, out, cap)
-             : sd4_curve_refine(nx ? pts : NULL, nx, dim, w, levels, &o, out, cap);
+    if (grid && columns_first) r = sd4_grid_refine_columns_first(np ? pts : NULL, nx, ny, dim, w, levels, &o, out, cap);
+    else if (grid) r = sd4_grid_refine(np ? pts : NULL, nx, ny, dim, w, levels, &o, out, cap);
+    else r = sd4_curve_refine(nx ? pts : NULL, nx, dim, w, levels, &o, out, cap);
     fz_check(fz_known(r));
     if (r == SD4_OK) {
         fz_check(rs == SD4_OK && cap >= m * (size_t)(grid ? dim : 1));
@@ -253,8 +255,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     a.free = fz_free;
     a.user = &f;
     switch (op & 3) {
-    case 0: fz_curve_or_grid(&in, 0, &a, &g); break;
-    case 1: fz_curve_or_grid(&in, 1, &a, &g); break;
+    case 0: fz_curve_or_grid(&in, 0, 0, &a, &g); break;
+    case 1: fz_curve_or_grid(&in, 1, (op & 4) != 0, &a, &g); break;
     case 2: fz_terrain(&in, &a, &g); break;
     default: fz_butterfly(&in, &a, &g); break;
     }
