@@ -2,12 +2,14 @@
    simulation step, splatting, the key frame's bytes) and the mountain of 2.56M blades at 800x600.
    No peer: no library ages grass (the paper's own figures are in bench/README.md).
 
-   usage: bench_texel [ignored mesh path] [--no-render]
+   usage: bench_texel [ignored mesh path] [--no-render] [--mesh-only]
 
    Figures (details and timed regions in bench/README.md):
      RESULT texel res=256 blades=100 points=<n> sample_ms=<t> step_ms=<t> splat_ms=<t> keyframe_mb=<m> ...
      RESULT texel_render scene=mountain width=800 height=600 blades=2560000 coverage=<c> render_ms=<t> peak_mb=<m>
      RESULT texel_render_lod1 ... the same with LOD levels one step coarser (grass --lod-bias 1)
+     RESULT texel_render scene=mesh mesh=sphere width=800 height=600 triangles=<n> blades=<n> coverage=<c> render_ms=<t> peak_mb=<m>
+       grass over a cube-sphere's mesh shell (grass --mesh sphere --wd 0.45), median of 5
    Each figure: one warm-up run, then the median of 11 with its min and max (bench.h's
    bench_interleave, one side), one thread. sample_cold_ms is the process's first tvt_sample
    (fresh heap pages: the page faults of the points array are in it), before the warm-up. */
@@ -147,13 +149,67 @@ static int bench_render(void)
     return ok;
 }
 
+typedef struct mesh_case {
+    scene s;
+    grass_set g;
+    gmesh m;
+    float height;
+    sr_image8 img;
+    double coverage;
+    long tiles;
+} mesh_case;
+
+/* timed: the variants' shadow volumes, the per-tile wd map, then the 800x600 image */
+static int run_mesh(void *u)
+{
+    mesh_case *c = (mesh_case *)u;
+    const float zenith[3] = {0, 0, 1};
+    tile_map tm;
+    if (!build_shadows(&c->g, zenith) || !make_tile_map(&c->m, &c->s, 0.9f, NULL, &tm)) return 1;
+    c->tiles = tm.covered;
+    c->coverage = render_mesh(&c->s, &c->m, c->height, &tm.m, 800, 600, &c->img, "bench_texel: mesh");
+    free(tm.wd);
+    return c->coverage < 0;
+}
+static void after_mesh(void *u) { mesh_case *c = (mesh_case *)u; free(c->img.pixels); c->img.pixels = NULL; }
+
+/* grass over the cube-sphere's shell (grass --mesh sphere --wd 0.45 at 800x600): one warm-up,
+   the median of 5 */
+static int bench_mesh(void)
+{
+    mesh_case c;
+    bench_side t;
+    int ok;
+    memset(&c, 0, sizeof(c));
+    quiet = 1;
+    fprintf(stderr, "bench_texel: building the mesh scene's TVTs\n");
+    if (!mesh_setup(&c.s, &c.m, &c.height, "sphere", 40, 64) || !mesh_grass(&c.s, &c.g, 64, 6, 2010)) return 0;
+    c.s.wd = 0.45f;
+    bench_reset_peak_rss();
+    fprintf(stderr, "bench_texel: rendering the mesh scene 6 times\n");
+    t = bench_make_side("render", run_mesh, after_mesh, &c);
+    ok = bench_interleave(&t, 1, 5) == 0;
+    if (ok) {
+        printf("RESULT texel_render scene=mesh mesh=sphere width=800 height=600 triangles=%zu blades=%ld coverage=%.3f",
+               c.m.nt, 400 * c.tiles, c.coverage);
+        bench_print_ms("render", &t);
+        printf(" peak_mb=%.1f\n", bench_peak_rss_kb() / 1024.0);
+    }
+    gmesh_free(&c.m);
+    free_set(&c.g);
+    return ok;
+}
+
 int main(int argc, char **argv)
 {
-    int i, do_render = 1;
-    for (i = 1; i < argc; i++)
-        if (!strcmp(argv[i], "--no-render")) do_render = 0;
+    int i, do_texel = 1, do_render = 1, do_mesh = 1;
+    for (i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--no-render")) do_render = do_mesh = 0;
+        if (!strcmp(argv[i], "--mesh-only")) do_texel = do_render = 0;
+    }
     BENCH_PRINT_FLAGS("bench_texel");
-    if (!bench_texel_case()) { fprintf(stderr, "bench_texel: the texel case failed\n"); return 1; }
+    if (do_texel && !bench_texel_case()) { fprintf(stderr, "bench_texel: the texel case failed\n"); return 1; }
     if (do_render && !bench_render()) { fprintf(stderr, "bench_texel: the render failed\n"); return 1; }
+    if (do_mesh && !bench_mesh()) { fprintf(stderr, "bench_texel: the mesh render failed\n"); return 1; }
     return 0;
 }

@@ -73,6 +73,16 @@ fi
 "$B/relief" gen:rock "$OUT/relief_strokes.txt" --cylinder -o "$OUT/relief_fig6-7_cylinder.png"
 "$B/relief" gen:rock "$OUT/relief_strokes.txt" --emboss -o "$OUT/relief_baseline_emboss.png" --sheet "$OUT/relief_baseline_sheet.png"
 rendered=$((rendered + 3))
+# texel.h over a mesh shell (issue 19 point 4): a sphere's grass at wd 0.2 and 0.6, each tile's wd from
+# a map over the mesh's tile coordinates (drier where the tile faces the sun), and the coarse bunny
+"$B/grass" --mesh sphere --wd 0.2,0.6 --size 320x240 -o "$OUT/grass_mesh_sphere.png"
+rendered=$((rendered + 1))
+if [ -f /usr/share/glmark2/models/bunny.obj ]; then
+  "$B/grass" --mesh /usr/share/glmark2/models/bunny.obj --wd 0.3 --size 320x240 -o "$OUT/grass_mesh_bunny.png"
+  rendered=$((rendered + 1))
+else
+  echo "demo: /usr/share/glmark2/models/bunny.obj not found (apt-get install glmark2-data): grass bunny skipped"
+fi
 for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done

@@ -699,9 +699,10 @@ static int mesh_setup(scene *s, gmesh *g, float *height, const char *kind, int c
     } else {
         if (!load_mesh(g, kind, cells, &tile, &radius, c)) return 0;
         *height = 0.4f * tile; /* a file's mesh may bend sharply anywhere: a short lawn (blades squashed 2.5x) */
+        radius *= 0.7f;        /* the bounding box's half diagonal overstates a shape's size */
     }
     s->target[0] = c[0]; s->target[1] = c[1]; s->target[2] = c[2];
-    s->eye[0] = c[0] - 0.9f * radius; s->eye[1] = c[1] - 2.6f * radius; s->eye[2] = c[2] + 1.1f * radius;
+    s->eye[0] = c[0] + 1.2f * radius; s->eye[1] = c[1] - 3.4f * radius; s->eye[2] = c[2] + 1.5f * radius; /* the sun's side */
     return 1;
 }
 

@@ -133,12 +133,14 @@
      position, normal or uv, a zero normal, an index out of range or repeated, a triangle of zero
      area in the world or in uv, a singular tetrahedron, height <= 0 or depth < 0 or not finite;
      SR_ERR_OUT_OF_MEMORY; SR_CANCELLED (rows drawn so far stay). A folded tetrahedron (its map
-     turns orientation against its prism's: texel.h's tvt_build_shell finds the same ones) is
-     crossed without sampling: near the fold its map's gain is unbounded (steps would shrink to
-     nothing) and its content would overlap its neighbours'; the mesh under it still stops rays. Thread safety: as sr_draw_shell.
+     turns orientation against its prism's: texel.h's tvt_build_shell finds the same ones) or a
+     nearly folded one (its map's gain, the Frobenius norm, over 16 sqrt 3 times the prism's,
+     the larger of sqrt(uv area / area) and depth / height) is crossed without sampling: near a
+     fold the gain is unbounded (steps would shrink to nothing) and the content would overlap
+     its neighbours'; the mesh under it still stops rays. Thread safety: as sr_draw_shell.
      Limits: the camera must be outside the shell (a ray starts at its first entry); a ray walks
-     at most 65536 tetrahedra; faces shared by more than two tetrahedra are walls the walk
-     leaves by, like borders.
+     at most 16384 tetrahedra, and ends where a folded neighbour leaves it no exit; faces shared
+     by more than two tetrahedra are walls the walk leaves by, like borders.
 
    THREAD SAFETY
      No global state. Different framebuffers may be drawn from different threads at once.
@@ -2626,6 +2628,11 @@ static int sr__mshell_tet(const sr__mshell *S, const uint32_t ids[4], float scal
     for (k = 0; k < 3; k++) { T->o[k] = (float)x[0][k]; T->u0[k] = (float)u[0][k]; }
     for (k = 0; k < 9; k++) T->M[k] = (float)Ai[k];
     sr__mul3d(B, Ai, T->J);
+    { /* nearly folded: a gain over 16 times the prism's own (across, scale; up, depth / height) */
+        float g2 = 0.0f, nominal = scale > S->depth / S->d->height ? scale : S->depth / S->d->height;
+        for (k = 0; k < 9; k++) g2 += T->J[k] * T->J[k];
+        if (!(g2 <= 3.0f * 256.0f * nominal * nominal)) T->folded = 1;
+    }
     sr__mul3d(A, Bi, T->Ji);
     T->scale = scale;
     memcpy(T->v, ids, sizeof T->v);
@@ -3011,7 +3018,7 @@ static void sr__mshell_trace(sr__mshell *S, const float o[3], const float dir[3]
     float term = d->termination > 0.0f ? 1.0f - d->termination : 0.01f, V[3], ts;
     sr__mwalk w;
     int after_empty = 1;
-    long budget = 1L << 16;
+    long budget = 1L << 14;
     V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
     r->rgb[0] = r->rgb[1] = r->rgb[2] = 0.0f;
     r->T = r->layer_T = 1.0f;
@@ -3027,7 +3034,7 @@ static void sr__mshell_trace(sr__mshell *S, const float o[3], const float dir[3]
             if (!sr__mshell_enter(S, &w, o, dir, w.t_exit - S->tol, t1, V, r)) return;
             if (w.t > ts) { ts = w.t; after_empty = 1; }
         }
-        if (ts >= t1) break;
+        if (ts >= t1 || w.k_exit < 0) break; /* no way out: a folded neighbour turned the walk back */
         if (S->tets[w.tet].folded) { /* skipped: its map is turned over, and its gain unbounded */
             ts = w.t_exit + fmaxf(S->tol, 1e-6f * fabsf(w.t_exit));
             after_empty = 1;
