@@ -1503,9 +1503,13 @@ static void dfm__amd_prune(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2, i
 {
     int64_t q;
     for (q = pme1; q < pme2; q++) {
-        int32_t v = s->iw[q], ne = 0, nvi = -s->nv[v];
+        int32_t v = s->iw[q], ne = 0, nvi = -s->nv[v], pend = p;
         int64_t r, pos, start = s->pe[v], deg = 0, h = 0;
         int32_t old_elen = s->elen[v], old_len = s->len[v];
+        /* the kept entries go one slot later, after p: each is written when the next one is read
+           (a slot is only written once read), the last one after the loops. There is room: the
+           list dropped p itself or an element absorbed into p (adjacency in the quotient graph
+           is symmetric) */
         pos = start;
         for (r = start; r < start + old_elen; r++) {
             int64_t we;
@@ -1520,7 +1524,8 @@ static void dfm__amd_prune(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2, i
             }
             deg += we;
             h += e;
-            s->iw[pos++] = e;
+            s->iw[pos++] = pend;
+            pend = e;
             ne++;
         }
         for (r = start + old_elen; r < start + old_len; r++) {
@@ -1528,13 +1533,10 @@ static void dfm__amd_prune(dfm__amd *s, int32_t p, int64_t pme1, int64_t pme2, i
             if (s->status[j] != DFM__VAR || s->nv[j] <= 0) continue; /* gone, merged or in L_p */
             deg += s->nv[j];
             h += j;
-            s->iw[pos++] = j;
+            s->iw[pos++] = pend;
+            pend = j;
         }
-        /* p goes first; there is room: the list dropped p itself or an element absorbed into p
-           (adjacency in the quotient graph is symmetric) */
-        memmove(s->iw + start + 1, s->iw + start, (size_t)(pos - start) * sizeof(int32_t));
-        pos++;
-        s->iw[start] = p;
+        s->iw[pos++] = pend;
         s->elen[v] = ne + 1;
         s->len[v] = (int32_t)(pos - start);
         if (s->elen[v] == 1 && s->len[v] == 1) { /* mass elimination: v is adjacent to p only */
