@@ -2,8 +2,10 @@
    across shared side faces, the round trips, the flat case against the height-field tiling's
    map, folding, bad input, allocation failure, per-tile wd from a map, determinism), then
    render.h's mesh shell marcher (sr_draw_mesh_shell): a flat mesh shell against sr_draw_shell
-   with the same content, a closed cube-sphere with no holes at its seams, bad input,
-   allocation failure, cancellation and determinism. TEST_SANITIZE=1 shrinks the pictures. */
+   with the same content and with a TVT's grass at per-tile wd from a map, a closed cube-sphere
+   with no holes at its seams, the sun cut under the horizon, a see-through shell's optical
+   depth, a folded prism, bad input, allocation failure, cancellation and determinism.
+   TEST_SANITIZE=1 shrinks the pictures. */
 #define SR_IMPLEMENTATION
 #include "render.h"
 #define TVT_IMPLEMENTATION
@@ -606,6 +608,93 @@ static void test_grass_mesh_against_terrain(void)
     mesh_free(&m);
 }
 
+
+/* The mesh hides the sun under the layer's horizon: with no ambient light, a sphere's grass is
+   black where the surface faces away from the sun (n.L < -0.2: the marcher cuts light 0 below
+   -0.1 of its prisms' w gradient, which follows the sphere's normal within the faceting) and
+   lit where it faces it (n.L > 0.3); a see-through shell lets rays cross the mesh. */
+static void test_horizon(void)
+{
+    int w = sanitize() ? 32 : 64, h = w, x, y, dark_bad = 0, lit_bad = 0, dark = 0, lit = 0;
+    float r = 1.0f, hs = 0.1f, eye[3] = {0.0f, -4.0f, 0.0f}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1}, Ld[3] = {1, 0, 0};
+    mesh m = sphere_mesh(6, r, 3.0f);
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_light sun;
+    content c = {40.0f, 0.9f, 1.0f / 64.0f, 0, 0, 1};
+    sr_light_default(&sun, Ld);
+    memset(sun.ambient, 0, sizeof sun.ambient);
+    sr_camera_look_at(&cam, eye, at, up, 40.0f, 1.0f, 0.05f, 100.0f);
+    sr_framebuffer_create(&fb, w, h, NULL);
+    sr_framebuffer_clear(&fb, NULL, 1.0f);
+    T_EQ_INT(mesh_desc_draw(&fb, &cam, &m, hs, &c, NULL, NULL, &sun), SR_OK);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            float o[3], d[3], oc, b2, R = r + 0.5f * hs, t, n;
+            size_t i = (size_t)y * w + x;
+            sr_camera_ray(&cam, w, h, x + 0.5f, y + 0.5f, o, d);
+            oc = o[0] * d[0] + o[1] * d[1] + o[2] * d[2];
+            b2 = o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - oc * oc;
+            if (b2 > 0.9f * R * R) continue; /* the silhouette: left out */
+            t = -oc - sqrtf(R * R - b2);
+            n = (o[0] + t * d[0]) / R; /* n.L with L = +x */
+            if (n < -0.2f) { dark++; dark_bad += fb.color[4 * i] + fb.color[4 * i + 1] + fb.color[4 * i + 2] > 0.0f; }
+            if (n > 0.3f) { lit++; lit_bad += !(fb.color[4 * i + 1] > 0.01f); }
+        }
+    T_CHECK(dark > w * h / 20 && lit > w * h / 20);
+    T_EQ_INT(dark_bad, 0);
+    T_EQ_INT(lit_bad, 0);
+    { /* see-through: with a thin layer, the rays through the middle cross it twice and see the sky */
+        sr_mesh_shell_desc d;
+        content thin = {0.2f, 0.9f, 1.0f / 64.0f, 0, 0, 1};
+        size_t i = (size_t)(h / 2) * w + w / 2;
+        float bg[4] = {0.0f, 0.0f, 1.0f, 1.0f};
+        sr_framebuffer_clear(&fb, bg, 1.0f);
+        sr_mesh_shell_desc_default(&d);
+        d.positions = m.pos; d.normals = m.nrm; d.uvs = m.uv; d.vertex_count = m.nv;
+        d.indices = m.idx; d.triangle_count = m.nt; d.height = hs;
+        d.sample = fibres; d.user = &thin; d.lights = &sun; d.light_count = 1; d.see_through = 1;
+        memset(sun.diffuse, 0, sizeof sun.diffuse); memset(sun.specular, 0, sizeof sun.specular); /* an unlit layer */
+        memset(d.material.emission, 0, sizeof d.material.emission);
+        T_EQ_INT(sr_draw_mesh_shell(&fb, &cam, &d, NULL), SR_OK);
+        /* two crossings of the content (w below 0.9, one frame unit per shell height along the normal)
+           at sigma 0.2: the sky's blue times exp(-0.36); each crossing may lose or gain one step of
+           1/64 and the ray's slant at the centre pixel is under 1%: within 2 (2/64 + 0.01) 0.2 = 0.017 in
+           optical depth */
+        T_CHECK_MSG(fabs(log(fb.color[4 * i + 2]) + 0.36) < 0.017, "blue %.4f", fb.color[4 * i + 2]);
+    }
+    sr_framebuffer_free(&fb);
+    mesh_free(&m);
+}
+
+/* A mesh whose prism folds (a thick shell over converging normals): the marcher crosses the folded
+   tetrahedra without sampling, ends every ray and returns; the samples stay bounded. */
+static void test_folded_render(void)
+{
+    float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, nrm[9], uv[6] = {0, 0, 1, 0, 0, 1}, eye[3] = {0.3f, -2.0f, 2.0f}, at[3] = {0.33f, 0.33f, 0.5f};
+    uint32_t idx[3] = {0, 1, 2};
+    mesh m;
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_shell_stats st;
+    sr_light sun;
+    content c = {4.0f, 0.9f, 1.0f / 32.0f, 0, 0, 1};
+    int v;
+    for (v = 0; v < 3; v++) {
+        float cx = 1.0f / 3 - pos[3 * v], cy = 1.0f / 3 - pos[3 * v + 1], l = sqrtf(cx * cx + cy * cy);
+        nrm[3 * v] = 0.866f * cx / l; nrm[3 * v + 1] = 0.866f * cy / l; nrm[3 * v + 2] = 0.5f;
+    }
+    m.pos = pos; m.nrm = nrm; m.uv = uv; m.idx = idx; m.nv = 3; m.nt = 1;
+    set_lights(&sun);
+    sr_camera_look_at(&cam, eye, at, NULL, 50.0f, 1.0f, 0.05f, 100.0f);
+    sr_framebuffer_create(&fb, 32, 32, NULL);
+    sr_framebuffer_clear(&fb, NULL, 1.0f);
+    T_EQ_INT(mesh_desc_draw(&fb, &cam, &m, 2.0f, &c, NULL, &st, &sun), SR_OK);
+    /* at most one sample per 1/32 frame unit along a ray of at most ~3 frame units per tetrahedron crossed */
+    T_CHECK_MSG(st.samples < 32L * 32 * 3 * 3 * 32, "samples %ld", st.samples);
+    sr_framebuffer_free(&fb);
+}
+
 static int cancel_at_half(void *user, float done) { (void)user; return done >= 0.5f; }
 
 static void test_render_bad_input(void)
@@ -671,6 +760,8 @@ int main(int argc, char **argv)
     test_flat_against_height_field();
     test_sphere();
     test_grass_mesh_against_terrain();
+    test_horizon();
+    test_folded_render();
     test_render_bad_input();
     return T_END();
 }
