@@ -695,6 +695,73 @@ static void test_folded_render(void)
     sr_framebuffer_free(&fb);
 }
 
+
+/* render.h's marcher and texel.h's map are the same map: looking straight down on a bumpy mesh
+   shell, the frame point (tile + p) of each ray's first sample, taken back to the world by
+   tvt_shell_unmap in the prism that holds it, lies on that ray (x, y of the pixel's centre) and
+   on the outer surface or the mesh's open border (the first sample is where the ray enters). */
+typedef struct first { int have; int tile[2]; float p[3]; } first;
+static void first_sample(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    first *f = (first *)user;
+    if (!f->have) { f->have = 1; f->tile[0] = q->tile_x; f->tile[1] = q->tile_y; memcpy(f->p, q->p, sizeof f->p); }
+    out->sigma = 1000.0f; /* opaque: one sample per ray */
+    out->step = 1.0f;
+}
+
+static void test_same_map(void)
+{
+    mesh m = grid_mesh(6, 2.0f, 0.3f, 0.5f);
+    float height = 0.25f, top[3] = {1.0f, 1.0f, 5.0f}, mid[3] = {1.0f, 1.0f, 0.0f}, north[3] = {0, 1, 0};
+    tvt_shell_desc sd = shell_desc(&m, height);
+    tvt_shell s;
+    sr_camera cam;
+    int n = 24, x, y, rays = 0, found = 0;
+    T_EQ_INT(tvt_build_shell(&sd, &s), TVT_OK);
+    sr_camera_ortho(&cam, top, mid, north, 0.9f, 1.0f, 0.05f, 100.0f);
+    for (y = 0; y < n; y++)
+        for (x = 0; x < n; x++) {
+            sr_framebuffer fb;
+            sr_mesh_shell_desc d;
+            first f;
+            float o[3], dir[3];
+            size_t k;
+            int ok = 0;
+            /* the pixel's ray, drawn alone: a 1 x 1 orthographic frame around it */
+            sr_camera_ray(&cam, n, n, x + 0.5f, y + 0.5f, o, dir);
+            {
+                float eye1[3] = {o[0], o[1], 5.0f}, at1[3] = {o[0], o[1], 0.0f};
+                sr_camera c1;
+                sr_camera_ortho(&c1, eye1, at1, north, 1e-4f, 1.0f, 0.05f, 100.0f);
+                memset(&f, 0, sizeof f);
+                sr_framebuffer_create(&fb, 1, 1, NULL);
+                sr_mesh_shell_desc_default(&d);
+                d.positions = m.pos; d.normals = m.nrm; d.uvs = m.uv; d.vertex_count = m.nv;
+                d.indices = m.idx; d.triangle_count = m.nt; d.height = height; d.sample = first_sample; d.user = &f;
+                sr_draw_mesh_shell(&fb, &c1, &d, NULL);
+                sr_framebuffer_free(&fb);
+            }
+            if (!f.have) continue;
+            rays++;
+            for (k = 0; k < m.nt && !ok; k++) {
+                float uvw[3], p[3];
+                uvw[0] = (float)f.tile[0] + f.p[0]; uvw[1] = (float)f.tile[1] + f.p[1]; uvw[2] = f.p[2];
+                if (tvt_shell_unmap(&s, k, uvw, p) != 1) continue;
+                /* float maps of coordinates up to 5 with gains up to 8 (map_tol), and w clamped below 1
+                   by 1 ulp: the outer surface within the same */
+                ok = fabsf(p[0] - o[0]) <= map_tol(5.0, 8.0) && fabsf(p[1] - o[1]) <= map_tol(5.0, 8.0) &&
+                     (fabsf(uvw[2] - 1.0f) <= map_tol(1.0, 8.0) || /* or it enters by the mesh's open border */
+                      fabsf(uvw[0]) <= map_tol(4.0, 8.0) || fabsf(uvw[0] - 4.0f) <= map_tol(4.0, 8.0) ||
+                      fabsf(uvw[1]) <= map_tol(4.0, 8.0) || fabsf(uvw[1] - 4.0f) <= map_tol(4.0, 8.0));
+            }
+            found += ok;
+        }
+    T_CHECK(rays > n * n / 2);
+    T_EQ_INT(found, rays);
+    tvt_shell_free(&s);
+    mesh_free(&m);
+}
+
 static int cancel_at_half(void *user, float done) { (void)user; return done >= 0.5f; }
 
 static void test_render_bad_input(void)
@@ -762,6 +829,7 @@ int main(int argc, char **argv)
     test_grass_mesh_against_terrain();
     test_horizon();
     test_folded_render();
+    test_same_map();
     test_render_bad_input();
     return T_END();
 }
