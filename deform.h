@@ -2787,10 +2787,11 @@ typedef double dfm__v4 __attribute__((vector_size(32)));
    of C go in chunks whose rows of B (jc x p) stay in L2, and each strip of 8 rows of A stays in
    L1 across the chunk's tiles, so A is read from memory once a chunk instead of once per 4
    columns. Every tile still sums its full inner dimension in order: the bits do not depend on
-   the chunking. */
+   the chunking. Row i of C is row i0 + i of the caller's (for skipping tiles above the diagonal
+   with assign). */
 __attribute__((target("avx"))) static void dfm__gemm_nt_avx(size_t m, size_t k, size_t p, const double *A, size_t lda,
                                                               const double *B, size_t ldb, double *C, size_t ldc,
-                                                              int assign)
+                                                              int assign, size_t i0)
 {
     size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
     if (jc < 4) jc = 4;
@@ -2799,6 +2800,7 @@ __attribute__((target("avx"))) static void dfm__gemm_nt_avx(size_t m, size_t k, 
         for (i = 0; i < m; i += 8)
             for (j = j0; j < j1; j += 4) {
                 const double *a = A + i, *bb = B + j;
+                if (assign && i0 + i + 8 <= j) continue; /* above the diagonal (dfm__gemm) */
                 dfm__v4 z = {0.0, 0.0, 0.0, 0.0}, acc[8];
                 for (q = 0; q < 8; q++) acc[q] = z;
                 for (t = 0; t < p; t++, a += lda, bb += ldb) {
@@ -2940,6 +2942,7 @@ __attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx
             if (pack_a)
                 for (t = 0; t < p; t++) memcpy(ap + 16 * t, A + i + t * lda, 16 * sizeof(double));
             for (j = j0; j < j1; j += 4) {
+                if (assign && i + 16 <= j) continue; /* above the diagonal: not needed (dfm__gemm) */
                 if (pack) dfm__tile16x4_avx512(p, pack_a ? ap : A + i, pack_a ? 16 : lda, bp + (j - j0) * p, 4,
                                                C + i + j * ldc, ldc, assign);
                 else dfm__tile16x4_avx512(p, A + i, lda, B + j, ldb, C + i + j * ldc, ldc, assign);
@@ -2950,8 +2953,9 @@ __attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx
 #endif
 #endif
 
-/* C (m x k) -= A B^T (C = -A B^T with assign), with the AVX-512 / AVX tiles where the CPU has
-   them */
+/* C (m x k) -= A B^T, or C = -A B^T with assign: then only the entries on and below the diagonal
+   (row >= column) are the product's, those above may be left unset. With the AVX-512 / AVX tiles
+   where the CPU has them. */
 static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda, const double *B, size_t ldb,
                       double *C, size_t ldc, int assign, double *ws)
 {
@@ -2964,7 +2968,7 @@ static void dfm__gemm(size_t m, size_t k, size_t p, const double *A, size_t lda,
             dfm__gemm_nt_avx512(m16, k4, p, A, lda, B, ldb, C, ldc, assign, ws);
         }
 #endif
-        if (m8 > m16 && k4 > 0) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign);
+        if (m8 > m16 && k4 > 0) dfm__gemm_nt_avx(m8 - m16, k4, p, A + m16, lda, B, ldb, C + m16, ldc, assign, m16);
         if (m > m8 && k4 > 0) dfm__gemm_nt(m - m8, k4, p, A + m8, lda, B, ldb, C + m8, ldc, assign);
         if (k > k4) {
             i0 = dfm__gemm_cols_avx(m, k - k4, p, A, lda, B + k4, ldb, C + k4 * ldc, ldc, assign);
