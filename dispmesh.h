@@ -8147,11 +8147,11 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
     return np;
 }
 
-/* How far a move along the surface costs against a move across it, in the metric the enclosure
-   projects in: the quadric's matrix plus this fraction of its mean eigenvalue. With none, keep
-   slides far along flat parts (their quadric does not see it) and its triangles lose their shape;
-   with the plain distance it moves the shortest way, often where its error grows fastest. */
-#define DM__SH_TANGENT 0.1
+/* The metric the enclosure projects in: the quadric's matrix plus this fraction of its mean
+   eigenvalue. With the plain distance keep moves the shortest way, often where its error grows
+   fastest; with much less than the mean eigenvalue added it slides far along flat parts (their
+   quadric does not see it), its triangles lose their shape and the charts stretch. */
+#define DM__SH_TANGENT 1.0
 
 /* For each of the np planes in pl, the step direction of a projection onto it in the metric M
    (DM__SH_TANGENT): M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */

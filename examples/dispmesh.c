@@ -15,8 +15,11 @@
                  encloses the original, as the shell constraint makes it
      --fallback  where the shell constraint stops above --faces (the shell too thin for an enclosing
                  base), relax it there (dm_shell_relax): the base may cross the original, and its
-                 triangles there are baked both ways; RESULT's fallback= is the share of the
-                 original's area over them (by the coverage weights)
+                 triangles there are baked both ways. RESULT's fallback_region= is the share of
+                 the original's area over them (by the coverage weights), fallback= the share
+                 where the base then lies inside the original (texels of negative depth, each
+                 triangle's share of its weight), the part of the surface that needs the signed
+                 displacement
      --min-quality Q  the simplifier's sliver guard (dm_simplify_options.min_quality, 2 area /
                  longest edge^2, e.g. 0.1; default 0 = none)
    The pipeline (dispmesh.h): dm_weld when the triangles do not share their vertices (an STL file),
@@ -32,8 +35,8 @@
      PREFIX_recon.obj    the reconstruction (positions only)
      PREFIX_views.png    original | base with wireframe | reconstruction, one camera, captions
    Progress goes to stderr; the last line on stdout is
-     RESULT dispmesh target= faces= fallback= res= rms= max= base_only_rms= base_only_max= unconstrained_rms=
-            equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
+     RESULT dispmesh target= faces= fallback= fallback_region= res= rms= max= base_only_rms= base_only_max=
+            unconstrained_rms= equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
    with distances as fractions of the original's bounding-box diagonal (see print_result).
    The stage notes say which constraint vetoed how many collapses (enclosure, shell, overlap) and
    whether the target was reached; RESULT's target= is --faces and faces= what was reached.
@@ -602,6 +605,29 @@ static int fallback_region(run *R)
     return 1;
 }
 
+/* The share of the original's area (by the coverage weights) where the base lies inside the
+   original: of each both-ways triangle's weight, the share of its baked texels with a negative
+   depth. The fallback's signed displacement is used there and nowhere else. */
+static double signed_share(const run *R)
+{
+    size_t n = (size_t)R->map->width * (size_t)R->map->height, k, t;
+    size_t *cnt = (size_t *)calloc(2 * R->base.nt + 1, sizeof(size_t));
+    double all = 0.0, neg = 0.0;
+    if (!cnt) return -1.0;
+    for (k = 0; k < n; k++) {
+        uint32_t tt = R->param->texel_triangle[k];
+        if (R->map->status[k] != DM_TEXEL_HIT || tt >= R->base.nt || !R->both_ways[tt]) continue;
+        cnt[2 * tt]++;
+        if (R->map->disp[k] < 0.0f) cnt[2 * tt + 1]++;
+    }
+    for (t = 0; t < R->base.nt; t++) {
+        all += R->weights[t];
+        if (cnt[2 * t]) neg += R->weights[t] * (double)cnt[2 * t + 1] / (double)cnt[2 * t];
+    }
+    free(cnt);
+    return all > 0.0 ? neg / all : 0.0;
+}
+
 /* The result is unusable when parts of the base get no texel (the map is too coarse for the base:
    the reconstruction would have holes there) or when more than 1% of the texels under the base
    find no original surface. Returns 1 when it is usable; otherwise says why. */
@@ -655,7 +681,7 @@ int main(int argc, char **argv)
     dm_param_options po;
     dm_bake_options bo;
     dm_distance_report d_recon, d_base, d_same, d_bytes;
-    double t0 = now_ms(), diag, bake_ms = 0.0, flagged = 0.0, fallback_share = 0.0;
+    double t0 = now_ms(), diag, bake_ms = 0.0, flagged = 0.0, fallback_share = 0.0, fallback_signed = 0.0;
     float lo[3], hi[3];
     size_t uv_count = 0, inside = 0, missed = 0, k, bytes_base = 0, bytes_free = 0;
     char *path = NULL;
@@ -832,6 +858,7 @@ int main(int argc, char **argv)
         stage_end(&st, note);
     }
     if (!result_usable(&R, res, inside, missed)) goto done;
+    if ((fallback_signed = signed_share(&R)) < 0.0) { fprintf(stderr, "dispmesh: out of memory\n"); goto done; }
 
     /* 6. the reconstruction and the distances */
     stage_begin(&st, "reconstruct");
@@ -950,9 +977,10 @@ int main(int argc, char **argv)
                     "(%zu triangles)\n", R.base.nv, R.base.nt, uv_count, bytes_base, bytes_free, R.free_bytes.nt);
 
     /* 8. the result */
-    printf("RESULT dispmesh target=%ld faces=%zu fallback=%.4f res=%ld rms=%.4e max=%.4e base_only_rms=%.4e base_only_max=%.4e "
-           "unconstrained_rms=%.4e equal_bytes_rms=%.4e equal_bytes_max=%.4e flagged=%.5f bake_ms=%.1f total_ms=%.1f\n",
-           faces, R.base.nt, fallback_share, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
+    printf("RESULT dispmesh target=%ld faces=%zu fallback=%.4f fallback_region=%.4f res=%ld rms=%.4e max=%.4e base_only_rms=%.4e "
+           "base_only_max=%.4e unconstrained_rms=%.4e equal_bytes_rms=%.4e equal_bytes_max=%.4e flagged=%.5f bake_ms=%.1f "
+           "total_ms=%.1f\n",
+           faces, R.base.nt, fallback_signed, fallback_share, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
            bake_ms, now_ms() - t0);
     fflush(stdout);
     status = ferror(stdout) ? 2 : 0;
