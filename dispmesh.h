@@ -139,18 +139,23 @@
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
           new one-ring (signed distance with the angle-weighted pseudonormal, Baerentzen-Aanaes
           2005). Each asks keep to lie outside one plane; the proposed position is projected on
-          those half-spaces (Dykstra) and checked again (DM_COLLAPSE_MOVE, or a veto). Against
-          Sander et al.'s progressive hulls, which enclose each previous level and so pile up the
-          offsets, this encloses the original itself.
+          those half-spaces (Dykstra, in the metric of the collapse's quadric plus its mean
+          eigenvalue: where the error grows least, without sliding far along flat parts) and
+          checked again (DM_COLLAPSE_MOVE, or a veto). Against Sander et al.'s progressive hulls,
+          which enclose each previous level and so pile up the offsets, this encloses the
+          original itself.
        2. Shell: keep within the offset grown at its closest point of the original; along each
           ray of 3., the depth to the original no more than the offset grown at the hit.
-       3. Overlap: from overlap_samples points of each new triangle and the middle of its edge
-          from keep, a ray along the inverted interpolated normal (started a quarter thickness
-          outside) must meet a front face of the original first, within 2.25 thicknesses, and not
-          go out and in again within that depth. The normals are the mesh's angle-weighted vertex
-          normals after the collapse (dm_shell_collapsed keeps their sums). A miss is a violation
-          unless the original is open.
+       3. Overlap: from overlap_samples points of each new triangle and the middle and quarter
+          points of its edge from keep, a ray along the inverted interpolated normal (started a
+          quarter thickness outside) must meet a front face of the original first, within 2.25
+          thicknesses, and not go out and in again within that depth. The normals are the mesh's
+          angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums).
+          A miss is a violation unless the original is open.
      The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
+     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED), and keeps
+     that answer for the call in full: a candidate the simplifier queues again at the cost there
+     needs no more.
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes every remaining collapse above the face count. With opt.relax =
      dm_shell_relax, dm_simplify then relaxes it: a candidate that fails 1-3 is still allowed when,
@@ -158,9 +163,10 @@
      within the thickness) faces the way the base does, so that a bake both ways finds one depth
      (a second relax leaves only the simplifier's own checks). Candidates that pass 1-3 stay
      exact. dm_shell_fallback_triangles gives the base triangles at relaxed keeps: bake them both
-     ways (dm_bake_options.both_ways; their displacement is signed) and report the share of the
-     original's area over them (dm_coverage_weights). The relaxed region is not confined to the
-     thin parts: once the constraints are stuck everywhere, every later collapse is relaxed.
+     ways (dm_bake_options.both_ways; their displacement is signed). The relaxed region is not
+     confined to the thin parts: once the constraints are stuck everywhere, every later collapse
+     is relaxed; the part of it where the base ends up inside the original is where the baked
+     depth is negative.
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
