@@ -125,10 +125,10 @@
      see_through. Tangents return to the world by the inverse map, normals by its transpose;
      shading, compositing and depth are sr_draw_shell's, except that the mesh shadows the
      layer under its horizon: light 0 is scaled by clamp(5 n.L + 0.5, 0, 1), n the unit
-     gradient of w (full light above 0.1, none below -0.1; a sphere's night side stays dark). Memory: 3 tetrahedra per triangle (168
-     bytes each), the boundary faces (68 bytes each) and their BVH (32 bytes per node, 2 per
-     face), through `allocator`, freed before returning; building them sorts 16 bytes per
-     tetrahedron face. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, fewer than 3
+     gradient of w (full light above 0.1, none below -0.1; a sphere's night side stays dark).
+     Memory: 3 tetrahedra per triangle (172 bytes each), the boundary faces (68 bytes each) and
+     their BVH (32 bytes per node, 2 per face), through `allocator`, built by each call and freed
+     before it returns; building them sorts 16 bytes per tetrahedron face. Errors: SR_ERR_INVALID_ARGUMENT for a NULL pointer or sample, fewer than 3
      vertices or no triangle, more than 2^30 vertices or 2^31 / 12 triangles, a NaN or infinite
      position, normal or uv, a zero normal, an index out of range or repeated, a triangle of zero
      area in the world or in uv, a singular tetrahedron, height <= 0 or depth < 0 or not finite;
