@@ -556,7 +556,12 @@ static int load_mesh(gmesh *m, const char *path, int cells, float *tile, float *
     *radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
     for (k = 0; k < 3; k++) centre[k] = 0.5f * (lo[k] + hi[k]);
     if (!gmesh_alloc(m, 3 * nt, nt)) goto done;
-    for (i = 0; i < nt; i++) { /* box-projection charts; every corner its own vertex (seams everywhere are fine) */
+    free(slot); /* reused: the vertex of (cluster, chart), 3 per cluster */
+    slot = (uint32_t *)malloc(3 * nv * sizeof(uint32_t));
+    if (!slot) { fprintf(stderr, "grass: out of memory\n"); gmesh_free(m); goto done; }
+    for (i = 0; i < 3 * nv; i++) slot[i] = 0xFFFFFFFFu;
+    m->nv = 0;
+    for (i = 0; i < nt; i++) { /* box-projection charts: a vertex per (cluster, chart), so a chart's prisms share faces */
         const float *p0 = cpos + 3 * tri[3 * i], *p1 = cpos + 3 * tri[3 * i + 1], *p2 = cpos + 3 * tri[3 * i + 2];
         float e1[3], e2[3], fn[3];
         int ax = 0, c;
@@ -564,14 +569,17 @@ static int load_mesh(gmesh *m, const char *path, int cells, float *tile, float *
         fn[0] = e1[1] * e2[2] - e1[2] * e2[1]; fn[1] = e1[2] * e2[0] - e1[0] * e2[2]; fn[2] = e1[0] * e2[1] - e1[1] * e2[0];
         for (k = 1; k < 3; k++) if (fabsf(fn[k]) > fabsf(fn[ax])) ax = k;
         for (c = 0; c < 3; c++) {
-            size_t v = 3 * i + (size_t)c, src = tri[3 * i + (size_t)c];
+            size_t src = tri[3 * i + (size_t)c], v = slot[3 * src + (size_t)ax];
+            m->idx[3 * i + (size_t)c] = (uint32_t)(v == 0xFFFFFFFFu ? m->nv : v);
+            if (v != 0xFFFFFFFFu) continue;
+            v = m->nv++;
+            slot[3 * src + (size_t)ax] = (uint32_t)v;
             memcpy(m->pos + 3 * v, cpos + 3 * src, 3 * sizeof(float));
             memcpy(m->nrm + 3 * v, cnrm + 3 * src, 3 * sizeof(float));
             if (!(m->nrm[3 * v] * m->nrm[3 * v] + m->nrm[3 * v + 1] * m->nrm[3 * v + 1] + m->nrm[3 * v + 2] * m->nrm[3 * v + 2] > 1e-6f))
                 memcpy(m->nrm + 3 * v, fn, 3 * sizeof(float)); /* opposite faces cancelled: the face's own */
             m->uv[2 * v] = cpos[3 * src + (ax + 1) % 3] / *tile + 64.0f * (float)ax;
             m->uv[2 * v + 1] = cpos[3 * src + (ax + 2) % 3] / *tile;
-            m->idx[v] = (uint32_t)v;
         }
     }
     ok = 1;
@@ -877,7 +885,7 @@ static int scene_mesh(int w, int h, int res, int frames, uint64_t seed, const fl
         sd.indices = m.idx; sd.triangle_count = m.nt; sd.height = height; sd.allow_folded = 1;
         r = tvt_build_shell(&sd, &sh);
         if (r != TVT_OK) { fprintf(stderr, "grass: the mesh shell: %s\n", tvt_result_string(r)); ok = 0; }
-        else if (sh.folded && !quiet) fprintf(stderr, "grass: %zu of %zu prisms fold (drawn overlapping)\n", sh.folded, m.nt);
+        else if (sh.folded && !quiet) fprintf(stderr, "grass: %zu of %zu prisms fold (the marcher skips their content)\n", sh.folded, m.nt);
         tvt_shell_free(&sh);
     }
     if (ok) ok = mesh_grass(&s, &g, res, frames, seed);
