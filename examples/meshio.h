@@ -1,12 +1,15 @@
 /* meshio.h - v0.1 - MIT licence (see end of file)
-   Triangle-mesh reading (OBJ, OFF, PLY, STL) and writing (OBJ, PLY) with strict error reporting.
+   Triangle-mesh reading (OBJ, OFF, PLY, STL), writing (OBJ, OFF, PLY, STL) and welding, with strict
+   error reporting.
 
    WHAT
      Reads a polygon mesh into two flat arrays: positions (x,y,z floats, packed) and indices
      (three uint32_t per triangle). Polygons are triangulated as a fan. Everything else in the
      file (normals, texture coordinates, colours, materials, groups, lines, points) is ignored.
-     Writes the same two arrays as OBJ or PLY (ascii or binary little-endian) so that reading
-     the file back gives the same bits.
+     Writes the same two arrays as OBJ, OFF, PLY or STL (PLY and STL ascii or binary
+     little-endian) so that reading the file back gives the same bits (STL keeps no shared
+     vertices: it gives back each triangle's corners, bit-exact).
+     mio_weld() joins vertices with equal positions (an STL soup becomes a connected mesh).
 
    HOW TO USE (in ten lines)
        // in exactly one C or C++ file, #define MIO_IMPLEMENTATION before #include "meshio.h";
@@ -73,8 +76,8 @@
      STL  ascii (several "solid" blocks allowed, keywords case-insensitive) and binary (80-byte
           header, uint32 count, 50 bytes per facet; the size must match exactly). A binary file
           may begin with "solid": it is recognised by its size. Vertices are NOT welded: facet k
-          gives vertices 3k, 3k+1, 3k+2, so a closed STL solid reads as separate triangles; weld
-          them yourself if you need connectivity.
+          gives vertices 3k, 3k+1, 3k+2, so a closed STL solid reads as separate triangles; call
+          mio_weld() for connectivity (exact equality: a reader option would hide that choice).
      Triangulation: a polygon v0 v1 ... vn-1 becomes the fan (v0, vi, vi+1), i = 1..n-2, which is
      right for convex polygons; a concave polygon gives a fan that may overlap itself.
      Detection (MIO_FORMAT_AUTO): a size that matches a binary STL count; "ply" magic; an OFF
@@ -202,6 +205,32 @@ MIODEF mio_result mio_write_obj(const char *path, const float *positions, size_t
 MIODEF mio_result mio_write_ply(const char *path, const float *positions, size_t vertex_count,
                                 const uint32_t *indices, size_t triangle_count, int binary, mio_error *err);
 
+/* Writes OFF: "OFF", "V T 0", one "x y z" line per vertex (%.9g), "3 a b c" per triangle.
+   Parameters as mio_write_obj. */
+MIODEF mio_result mio_write_off(const char *path, const float *positions, size_t vertex_count,
+                                const uint32_t *indices, size_t triangle_count, mio_error *err);
+
+/* Writes STL, one facet per triangle with its unit normal (0 0 0 for a degenerate triangle).
+   binary: 0 = ascii ("solid meshio", %.9g), 1 = binary little-endian (80-byte header that does not
+   begin with "solid", uint32 count). STL has no shared vertices: reading the file back gives
+   3 vertices per triangle; mio_weld() joins them again. triangle_count > UINT32_MAX is
+   MIO_ERR_TOO_LARGE for binary. Other parameters as mio_write_obj. */
+MIODEF mio_result mio_write_stl(const char *path, const float *positions, size_t vertex_count,
+                                const uint32_t *indices, size_t triangle_count, int binary, mio_error *err);
+
+/* Welds, in place, vertices whose positions are exactly equal (float ==, so -0 and +0 are one
+   vertex; no tolerance: a tolerance would join vertices that the file kept apart on purpose and
+   would depend on the order of the merges). The kept vertex is the first occurrence in the
+   positions array, with its bits; kept vertices stay in their order (first-use order); indices
+   are renumbered; vertices no triangle uses are kept. Deterministic. A mesh with no duplicate
+   position is left exactly as it was. Memory: the positions array is replaced by a new one from
+   mesh->allocator (MIO_MALLOC/MIO_FREE if mesh->allocator.alloc is NULL); temporaries are about
+   12 bytes per vertex. Errors: NULL mesh or arrays, a non-finite coordinate
+   (MIO_ERR_INVALID_ARGUMENT), an index >= vertex_count (MIO_ERR_INDEX_RANGE), more than
+   UINT32_MAX - 1 vertices (MIO_ERR_TOO_LARGE), MIO_ERR_OUT_OF_MEMORY; on any error the mesh is
+   unchanged. err may be NULL. */
+MIODEF mio_result mio_weld(mio_mesh *mesh, mio_error *err);
+
 /* Frees a mesh's arrays with mesh->allocator and zeroes it. Safe on a zeroed mesh and on NULL. */
 MIODEF void mio_free_mesh(mio_mesh *mesh);
 
@@ -231,6 +260,7 @@ MIODEF const char *mio_format_string(mio_format f);
 #include <stdarg.h>
 #include <string.h>
 #include <float.h>
+#include <math.h>
 
 #if defined(MIO_MALLOC) && defined(MIO_FREE)
 /* both given */
@@ -1809,6 +1839,184 @@ MIODEF mio_result mio_write_ply(const char *path, const float *positions, size_t
                               (unsigned long)indices[3 * i + 2]) < 0;
     }
     return mio__finish_write(f, failed, path, err);
+}
+
+MIODEF mio_result mio_write_off(const char *path, const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, mio_error *err)
+{
+    mio_result r = mio__check_write(path, positions, vertex_count, indices, triangle_count, err);
+    FILE *f;
+    size_t i;
+    int failed = 0;
+    if (r != MIO_OK) return r;
+    f = fopen(path, "wb");
+    if (!f) return mio__set_error(err, MIO_ERR_IO, "cannot create %.140s", path);
+    failed |= fprintf(f, "OFF\n%llu %llu 0\n", (unsigned long long)vertex_count, (unsigned long long)triangle_count) < 0;
+    for (i = 0; i < vertex_count && !failed; i++) failed |= mio__write_xyz_line(f, "", positions + 3 * i);
+    for (i = 0; i < triangle_count && !failed; i++)
+        failed |= fprintf(f, "3 %lu %lu %lu\n", (unsigned long)indices[3 * i], (unsigned long)indices[3 * i + 1],
+                          (unsigned long)indices[3 * i + 2]) < 0;
+    return mio__finish_write(f, failed, path, err);
+}
+
+/* The unit normal of triangle t (computed in double), or 0 0 0 when it has no area. */
+static void mio__facet_normal(const float *positions, const uint32_t *tri, float n[3])
+{
+    const float *a = positions + 3 * (size_t)tri[0], *b = positions + 3 * (size_t)tri[1], *d = positions + 3 * (size_t)tri[2];
+    double u[3], v[3], c[3], len;
+    int k;
+    for (k = 0; k < 3; k++) { u[k] = (double)b[k] - a[k]; v[k] = (double)d[k] - a[k]; }
+    c[0] = u[1] * v[2] - u[2] * v[1];
+    c[1] = u[2] * v[0] - u[0] * v[2];
+    c[2] = u[0] * v[1] - u[1] * v[0];
+    len = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    len = len > 0.0 && len <= DBL_MAX ? 1.0 / sqrt(len) : 0.0;
+    for (k = 0; k < 3; k++) n[k] = (float)(c[k] * len);
+}
+
+static int mio__write_stl_facet(FILE *f, const float *positions, const uint32_t *tri, int binary)
+{
+    float n[3];
+    int k, failed = 0;
+    mio__facet_normal(positions, tri, n);
+    if (binary) {
+        unsigned char rec[50];
+        uint32_t u[3];
+        memcpy(u, n, sizeof u);
+        for (k = 0; k < 3; k++) mio__put_le32(rec + 4 * k, u[k]);
+        for (k = 0; k < 3; k++) {
+            memcpy(u, positions + 3 * (size_t)tri[k], sizeof u);
+            mio__put_le32(rec + 12 + 12 * k, u[0]);
+            mio__put_le32(rec + 16 + 12 * k, u[1]);
+            mio__put_le32(rec + 20 + 12 * k, u[2]);
+        }
+        rec[48] = rec[49] = 0;
+        return fwrite(rec, 1, 50, f) != 50;
+    }
+    failed |= mio__write_xyz_line(f, " facet normal ", n);
+    failed |= fputs("  outer loop\n", f) < 0;
+    for (k = 0; k < 3 && !failed; k++) failed |= mio__write_xyz_line(f, "   vertex ", positions + 3 * (size_t)tri[k]);
+    failed |= fputs("  endloop\n endfacet\n", f) < 0;
+    return failed;
+}
+
+MIODEF mio_result mio_write_stl(const char *path, const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, int binary, mio_error *err)
+{
+    mio_result r = mio__check_write(path, positions, vertex_count, indices, triangle_count, err);
+    FILE *f;
+    size_t i;
+    int failed = 0;
+    if (r != MIO_OK) return r;
+    if (binary != 0 && binary != 1) return mio__set_error(err, MIO_ERR_INVALID_ARGUMENT, "binary must be 0 or 1");
+    if (binary && (uint64_t)triangle_count > 0xFFFFFFFFu)
+        return mio__set_error(err, MIO_ERR_TOO_LARGE, "binary STL holds at most 4294967295 triangles");
+    f = fopen(path, "wb");
+    if (!f) return mio__set_error(err, MIO_ERR_IO, "cannot create %.140s", path);
+    if (binary) {
+        unsigned char head[84];
+        memset(head, ' ', 80);
+        memcpy(head, "binary STL written by meshio.h", 30);
+        mio__put_le32(head + 80, (uint32_t)triangle_count);
+        failed |= fwrite(head, 1, 84, f) != 84;
+    } else {
+        failed |= fputs("solid meshio\n", f) < 0;
+    }
+    for (i = 0; i < triangle_count && !failed; i++) failed |= mio__write_stl_facet(f, positions, indices + 3 * i, binary);
+    if (!binary && !failed) failed |= fputs("endsolid meshio\n", f) < 0;
+    return mio__finish_write(f, failed, path, err);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   Section: welding
+   --------------------------------------------------------------------------------------------- */
+
+/* Hash of a position's bits, -0 counted as +0 so that equal floats hash equally. */
+static uint32_t mio__hash_position(const float *p)
+{
+    uint32_t h = 2166136261u, u;
+    int k;
+    for (k = 0; k < 3; k++) {
+        memcpy(&u, p + k, 4);
+        if (u == 0x80000000u) u = 0;
+        h = (h ^ u) * 16777619u;
+        h ^= h >> 15;
+    }
+    return h;
+}
+
+static mio_result mio__weld_check(const mio_mesh *m, mio_error *err)
+{
+    size_t i;
+    if (!m) return mio__set_error(err, MIO_ERR_INVALID_ARGUMENT, "mesh is NULL");
+    if ((!m->positions && m->vertex_count) || (!m->indices && m->triangle_count))
+        return mio__set_error(err, MIO_ERR_INVALID_ARGUMENT, "mesh arrays are NULL");
+    if ((uint64_t)m->vertex_count >= 0xFFFFFFFFu || m->triangle_count > ((size_t)-1) / 12)
+        return mio__set_error(err, MIO_ERR_TOO_LARGE, "too many vertices or triangles to weld");
+    for (i = 0; i < 3 * m->vertex_count; i++)
+        if (!(m->positions[i] - m->positions[i] == 0.0f))
+            return mio__set_error(err, MIO_ERR_INVALID_ARGUMENT, "vertex %llu has a non-finite coordinate",
+                                  (unsigned long long)(i / 3));
+    for (i = 0; i < 3 * m->triangle_count; i++)
+        if ((size_t)m->indices[i] >= m->vertex_count)
+            return mio__set_error(err, MIO_ERR_INDEX_RANGE, "triangle %llu: index %lu out of range (%llu vertices)",
+                                  (unsigned long long)(i / 3), (unsigned long)m->indices[i],
+                                  (unsigned long long)m->vertex_count);
+    return MIO_OK;
+}
+
+/* remap[i] = the welded number of vertex i; returns the number of distinct positions.
+   table has cap (a power of two > vertex_count) slots; UINT32_MAX marks an empty slot. */
+static size_t mio__weld_map(const float *pos, size_t n, uint32_t *table, size_t cap, uint32_t *remap)
+{
+    size_t i, kept = 0;
+    for (i = 0; i < cap; i++) table[i] = 0xFFFFFFFFu;
+    for (i = 0; i < n; i++) {
+        const float *p = pos + 3 * i;
+        size_t s = mio__hash_position(p) & (cap - 1);
+        for (;;) {
+            uint32_t j = table[s];
+            if (j == 0xFFFFFFFFu) { table[s] = (uint32_t)i; remap[i] = (uint32_t)kept++; break; }
+            if (pos[3 * (size_t)j] == p[0] && pos[3 * (size_t)j + 1] == p[1] && pos[3 * (size_t)j + 2] == p[2]) {
+                remap[i] = remap[j];
+                break;
+            }
+            s = (s + 1) & (cap - 1);
+        }
+    }
+    return kept;
+}
+
+MIODEF mio_result mio_weld(mio_mesh *mesh, mio_error *err)
+{
+    mio_allocator a;
+    mio_result r;
+    size_t n, cap = 16, kept, i;
+    uint32_t *table, *remap;
+    float *fresh;
+    if (err) mio__clear_error(err);
+    r = mio__weld_check(mesh, err);
+    if (r != MIO_OK) return r;
+    n = mesh->vertex_count;
+    a = mesh->allocator;
+    if (!a.alloc || !a.free) { a.alloc = mio__default_alloc; a.free = mio__default_free; a.user = NULL; }
+    while (cap < 2 * n) cap *= 2; /* n < 2^32 and 12 bytes/vertex fit, so this does not overflow */
+    if (cap > ((size_t)-1) / 4 - n) return mio__set_error(err, MIO_ERR_TOO_LARGE, "too many vertices to weld");
+    table = (uint32_t *)a.alloc(a.user, (cap + n) * sizeof(uint32_t));
+    if (!table) return mio__set_error(err, MIO_ERR_OUT_OF_MEMORY, "out of memory");
+    remap = table + cap;
+    kept = mio__weld_map(mesh->positions, n, table, cap, remap);
+    if (kept == n) { a.free(a.user, table); return MIO_OK; }
+    fresh = (float *)a.alloc(a.user, kept * 3 * sizeof(float) + (kept == 0));
+    if (!fresh) { a.free(a.user, table); return mio__set_error(err, MIO_ERR_OUT_OF_MEMORY, "out of memory"); }
+    for (i = 0, kept = 0; i < n; i++)
+        if (remap[i] == kept) memcpy(fresh + 3 * kept++, mesh->positions + 3 * i, 3 * sizeof(float));
+    for (i = 0; i < 3 * mesh->triangle_count; i++) mesh->indices[i] = remap[mesh->indices[i]];
+    a.free(a.user, table);
+    a.free(a.user, mesh->positions);
+    mesh->positions = fresh;
+    mesh->vertex_count = kept;
+    return MIO_OK;
 }
 
 #ifdef __cplusplus

@@ -789,27 +789,52 @@ static uint32_t rng_next(uint64_t *state)
     return (uint32_t)(*state >> 32);
 }
 
+/* Writes with kind 0..5 (obj, ascii ply, binary ply, off, ascii stl, binary stl). */
+static mio_result write_kind(int kind, const char *path, const float *pos, size_t nv, const uint32_t *idx, size_t nt, mio_error *e)
+{
+    switch (kind) {
+    case 0: return mio_write_obj(path, pos, nv, idx, nt, e);
+    case 1: case 2: return mio_write_ply(path, pos, nv, idx, nt, kind - 1, e);
+    case 3: return mio_write_off(path, pos, nv, idx, nt, e);
+    default: return mio_write_stl(path, pos, nv, idx, nt, kind - 4, e);
+    }
+}
+
+/* STL keeps no shared vertices: corner k of triangle t reads back as vertex 3t+k, with the bits of
+   pos[idx[3t+k]], and the indices are 0, 1, 2, ... */
+static int same_soup(const mio_mesh *m, const float *pos, const uint32_t *idx, size_t nt)
+{
+    size_t i;
+    if (m->vertex_count != 3 * nt || m->triangle_count != nt) return 0;
+    for (i = 0; i < 3 * nt; i++)
+        if (m->indices[i] != (uint32_t)i || memcmp(m->positions + 3 * i, pos + 3 * (size_t)idx[i], 3 * sizeof(float)) != 0) return 0;
+    return 1;
+}
+
+#define ROUND_TRIP_KINDS 6
 static void round_trip(const char *what, const float *pos, size_t nv, const uint32_t *idx, size_t nt)
 {
-    static const char *const tags[3] = { "rt.obj", "rt_ascii.ply", "rt_binary.ply" };
+    static const char *const tags[ROUND_TRIP_KINDS] = { "rt.obj", "rt_ascii.ply", "rt_binary.ply", "rt.off", "rt_ascii.stl", "rt_binary.stl" };
     int kind;
-    for (kind = 0; kind < 3; kind++) {
+    for (kind = 0; kind < ROUND_TRIP_KINDS; kind++) {
         char path[512];
         mio_error e;
         mio_mesh m;
         mio_result r;
         counter c;
         mio_read_options opt;
+        int same;
         temp_path(path, sizeof path, tags[kind]);
-        r = kind == 0 ? mio_write_obj(path, pos, nv, idx, nt, &e) : mio_write_ply(path, pos, nv, idx, nt, kind - 1, &e);
+        r = write_kind(kind, path, pos, nv, idx, nt, &e);
         T_CHECK_MSG(r == MIO_OK, "%s %s write: %s", what, tags[kind], e.message);
         counter_init(&c);
         memset(&opt, 0, sizeof opt);
         opt.allocator = &c.a;
         r = mio_read_file(path, &opt, &m, &e);
-        T_CHECK_MSG(r == MIO_OK && m.vertex_count == nv && m.triangle_count == nt && same_floats(m.positions, pos, 3 * nv) &&
-                        same_indices(m.indices, idx, 3 * nt),
-                    "%s %s: read back %s (%s), not bit-exact", what, tags[kind], mio_result_string(r), e.message);
+        if (kind >= 4) same = r == MIO_OK && same_soup(&m, pos, idx, nt);
+        else same = r == MIO_OK && m.vertex_count == nv && m.triangle_count == nt && same_floats(m.positions, pos, 3 * nv) &&
+                    same_indices(m.indices, idx, 3 * nt);
+        T_CHECK_MSG(same, "%s %s: read back %s (%s), not bit-exact", what, tags[kind], mio_result_string(r), e.message);
         mio_free_mesh(&m);
         T_CHECK(c.live == 0);
         remove(path);
@@ -855,7 +880,7 @@ static void test_round_trips(void)
             round_trip("comma locale", pos, nv, idx, nt);
             setlocale(LC_NUMERIC, "C");
         }
-        if (!found) T_SKIP_N(9, "comma-locale round trip", "no de_DE/fr_FR locale (make test generates de_DE.UTF-8 as root: localedef -i de_DE -f UTF-8 de_DE.UTF-8)");
+        if (!found) T_SKIP_N(3 * ROUND_TRIP_KINDS, "comma-locale round trip", "no de_DE/fr_FR locale (make test generates de_DE.UTF-8 as root: localedef -i de_DE -f UTF-8 de_DE.UTF-8)");
     }
     {   /* allocation failures in mio_read_file (the file buffer too) */
         char path[512];
@@ -884,6 +909,196 @@ static void test_round_trips(void)
     }
     free(pos);
     free(idx);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   mio_weld
+   --------------------------------------------------------------------------------------------- */
+
+static const float cube_pos[24] = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1 };
+static const uint32_t cube_idx[36] = { 0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                       1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7 };
+
+/* Every welded corner equals (float ==: -0 may have become +0) the original corner, and the
+   welded positions are pairwise different (so nothing equal was left apart). */
+static int weld_keeps_corners(const mio_mesh *m, const float *pos, const uint32_t *idx, size_t nt)
+{
+    size_t i, j, k;
+    if (m->triangle_count != nt) return 0;
+    for (i = 0; i < 3 * nt; i++)
+        for (k = 0; k < 3; k++)
+            if (!(m->positions[3 * (size_t)m->indices[i] + k] == pos[3 * (size_t)idx[i] + k])) return 0;
+    for (i = 0; i < m->vertex_count; i++)
+        for (j = i + 1; j < m->vertex_count; j++) {
+            const float *a = m->positions + 3 * i, *b = m->positions + 3 * j;
+            if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2]) return 0;
+        }
+    return 1;
+}
+
+/* Reads the cube written as an STL soup (ascii or binary) with allocator c. */
+static mio_result read_cube_soup(int binary, counter *c, mio_mesh *m)
+{
+    char path[512];
+    mio_read_options opt;
+    mio_error e;
+    mio_result r;
+    temp_path(path, sizeof path, binary ? "cube_b.stl" : "cube_a.stl");
+    r = mio_write_stl(path, cube_pos, 8, cube_idx, 12, binary, &e);
+    if (r != MIO_OK) return r;
+    memset(&opt, 0, sizeof opt);
+    opt.allocator = c ? &c->a : NULL;
+    r = mio_read_file(path, &opt, m, &e);
+    remove(path);
+    return r;
+}
+
+static void test_weld_cube(void)
+{
+    int binary;
+    for (binary = 0; binary < 2; binary++) {
+        mio_mesh m;
+        mio_error e;
+        counter c;
+        counter_init(&c);
+        T_CHECK(read_cube_soup(binary, &c, &m) == MIO_OK && m.vertex_count == 36 && m.triangle_count == 12);
+        T_CHECK(mio_weld(&m, &e) == MIO_OK && e.code == MIO_OK);
+        T_EQ_SIZE(m.vertex_count, 8);
+        T_CHECK(weld_keeps_corners(&m, cube_pos, cube_idx, 12));
+        /* first-use order: the soup's corners visit the cube's vertices in the order 0 2 1 3 4 5 6 7 */
+        {
+            static const uint32_t order[8] = { 0, 2, 1, 3, 4, 5, 6, 7 };
+            size_t k;
+            int ok = m.vertex_count == 8;
+            for (k = 0; k < 8 && ok; k++) ok = memcmp(m.positions + 3 * k, cube_pos + 3 * order[k], 3 * sizeof(float)) == 0;
+            T_CHECK(ok);
+        }
+        mio_free_mesh(&m);
+        T_CHECK_MSG(c.live == 0, "%ld blocks leaked", c.live);
+    }
+}
+
+static void test_weld_unchanged_and_errors(void)
+{
+    mio_mesh m, copy;
+    mio_error e;
+    float pos[24];
+    uint32_t idx[36];
+    /* already welded: same arrays, same bits */
+    memcpy(pos, cube_pos, sizeof pos);
+    memcpy(idx, cube_idx, sizeof idx);
+    memset(&m, 0, sizeof m);
+    m.positions = pos; m.vertex_count = 8; m.indices = idx; m.triangle_count = 12;
+    copy = m;
+    T_CHECK(mio_weld(&m, &e) == MIO_OK);
+    T_CHECK(m.positions == pos && m.indices == idx && m.vertex_count == 8 && m.triangle_count == 12);
+    T_CHECK(same_floats(pos, cube_pos, 24) && same_indices(idx, cube_idx, 36));
+    /* -0 and +0 are one vertex; the first occurrence's bits are kept */
+    {
+        static const float pz[12] = { 0.0f, 0, 0, -0.0f, 0, 0, 1, 0, 0, 0, 1, 0 };
+        static const uint32_t iz[6] = { 1, 2, 3, 0, 3, 2 };
+        mio_mesh z;
+        memset(&z, 0, sizeof z);
+        z.positions = (float *)malloc(sizeof pz);
+        z.indices = (uint32_t *)malloc(sizeof iz);
+        memcpy(z.positions, pz, sizeof pz);
+        memcpy(z.indices, iz, sizeof iz);
+        z.vertex_count = 4; z.triangle_count = 2;
+        T_CHECK(mio_weld(&z, &e) == MIO_OK && z.vertex_count == 3);
+        T_CHECK(z.vertex_count == 3 && !signbit(z.positions[0]) && z.indices[0] == 0 && z.indices[3] == 0);
+        mio_free_mesh(&z);
+    }
+    /* errors leave the mesh as it was */
+    T_CHECK(mio_weld(NULL, &e) == MIO_ERR_INVALID_ARGUMENT && e.code == MIO_ERR_INVALID_ARGUMENT);
+    idx[5] = 8;
+    T_CHECK(mio_weld(&m, &e) == MIO_ERR_INDEX_RANGE && e.code == MIO_ERR_INDEX_RANGE);
+    idx[5] = cube_idx[5];
+    pos[4] = (float)NAN;
+    T_CHECK(mio_weld(&m, &e) == MIO_ERR_INVALID_ARGUMENT);
+    pos[4] = cube_pos[4];
+    m.positions = NULL;
+    T_CHECK(mio_weld(&m, NULL) == MIO_ERR_INVALID_ARGUMENT);
+    m = copy;
+    T_CHECK(same_floats(pos, cube_pos, 24) && same_indices(idx, cube_idx, 36) && m.vertex_count == 8);
+}
+
+/* Fails the k-th allocation of mio_weld for every k: OUT_OF_MEMORY, mesh unchanged, nothing leaked. */
+static void test_weld_alloc_failures(void)
+{
+    counter c;
+    mio_mesh m, before;
+    mio_error e;
+    size_t base, needed, k, bad_at = 0;
+    float snapshot[108];
+    uint32_t snap_idx[36];
+    counter_init(&c);
+    T_CHECK(read_cube_soup(1, &c, &m) == MIO_OK && m.vertex_count == 36);
+    base = c.calls;
+    T_CHECK(mio_weld(&m, &e) == MIO_OK && m.vertex_count == 8);
+    needed = c.calls - base;
+    T_CHECK(needed == 2); /* the table + remap block, the new positions */
+    mio_free_mesh(&m);
+    for (k = 1; k <= needed; k++) {
+        counter_init(&c);
+        if (read_cube_soup(1, &c, &m) != MIO_OK || m.vertex_count != 36) { bad_at = k; continue; }
+        memcpy(snapshot, m.positions, sizeof snapshot);
+        memcpy(snap_idx, m.indices, sizeof snap_idx);
+        before = m;
+        c.fail_at = c.calls + k;
+        if (mio_weld(&m, &e) != MIO_ERR_OUT_OF_MEMORY || e.code != MIO_ERR_OUT_OF_MEMORY || m.positions != before.positions ||
+            m.vertex_count != 36 || !same_floats(m.positions, snapshot, 108) || !same_indices(m.indices, snap_idx, 36))
+            bad_at = k;
+        mio_free_mesh(&m);
+        if (c.live != 0) bad_at = k;
+    }
+    T_CHECK_MSG(bad_at == 0, "mio_weld: failing allocation %zu of %zu", bad_at, needed);
+}
+
+/* A soup drawn from a pool of 200 positions (with -0/+0 twins): the weld gives exactly the distinct
+   positions in their order of first occurrence, found here by brute force. */
+static void test_weld_random(void)
+{
+    uint64_t state = 777;
+    size_t nv = 3000, nt = 1000, i, j, distinct = 0;
+    float pool[600], *pos = (float *)malloc(nv * 3 * sizeof(float)), *ref = (float *)malloc(nv * 3 * sizeof(float));
+    uint32_t *idx = (uint32_t *)malloc(nt * 3 * sizeof(uint32_t)), *orig = (uint32_t *)malloc(nt * 3 * sizeof(uint32_t));
+    mio_mesh m;
+    mio_error e;
+    int order_ok = 1;
+    for (i = 0; i < 600; i++) pool[i] = (float)(rng_next(&state) % 7) - 3.0f; /* 0 appears: -0 below */
+    for (i = 0; i < nv; i++) {
+        uint32_t p = rng_next(&state) % 200;
+        for (j = 0; j < 3; j++) {
+            float x = pool[3 * p + j];
+            pos[3 * i + j] = (x == 0.0f && (rng_next(&state) & 1)) ? -0.0f : x;
+        }
+    }
+    for (i = 0; i < 3 * nt; i++) orig[i] = idx[i] = rng_next(&state) % (uint32_t)nv;
+    for (i = 0; i < nv; i++) {
+        const float *p = pos + 3 * i;
+        for (j = 0; j < distinct; j++)
+            if (ref[3 * j] == p[0] && ref[3 * j + 1] == p[1] && ref[3 * j + 2] == p[2]) break;
+        if (j == distinct) { memcpy(ref + 3 * distinct, p, 3 * sizeof(float)); distinct++; }
+    }
+    memset(&m, 0, sizeof m);
+    m.positions = pos; m.vertex_count = nv; m.indices = idx; m.triangle_count = nt;
+    {   /* the corners' original positions, before the weld replaces pos */
+        float *corners = (float *)malloc(nt * 9 * sizeof(float));
+        uint32_t *seq = (uint32_t *)malloc(nt * 3 * sizeof(uint32_t));
+        for (i = 0; i < 3 * nt; i++) { memcpy(corners + 3 * i, pos + 3 * (size_t)orig[i], 3 * sizeof(float)); seq[i] = (uint32_t)i; }
+        T_CHECK(mio_weld(&m, &e) == MIO_OK);
+        T_EQ_SIZE(m.vertex_count, distinct);
+        T_CHECK(distinct < 200 + 100); /* the pool bounds it (plus -0 twins); the test means something */
+        T_CHECK(weld_keeps_corners(&m, corners, seq, nt));
+        for (i = 0; i < distinct && i < m.vertex_count; i++)
+            if (memcmp(m.positions + 3 * i, ref + 3 * i, 3 * sizeof(float)) != 0) order_ok = 0;
+        T_CHECK(order_ok);
+        free(corners);
+        free(seq);
+    }
+    mio_free_mesh(&m);
+    free(ref);
+    free(orig);
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -1108,6 +1323,10 @@ int main(int argc, char **argv)
         test_alloc_failures(&samples[i]);
     }
     test_round_trips();
+    test_weld_cube();
+    test_weld_unchanged_and_errors();
+    test_weld_alloc_failures();
+    test_weld_random();
     test_bunny();
     /* the table sits beside this source file (found from the repository top, where tests/run.sh
        runs tests); MIO_ASSIMP_TABLE names another file */
