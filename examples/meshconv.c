@@ -1,78 +1,202 @@
-/* meshconv - read a mesh in any format meshio.h knows and write it as OBJ or PLY.
+/* meshconv - read a mesh in any format meshio.h knows and write it as OBJ, OFF, PLY or STL.
 
-     meshconv INPUT [-o OUTPUT.obj|OUTPUT.ply] [--ascii]
+     meshconv INPUT [-o OUTPUT.obj|.off|.ply|.stl] [--ascii] [--weld] [--format F]
 
-   Prints one line "RESULT meshconv vertices=V triangles=T bbox=..." on stdout. Without -o it only
-   reads and reports. PLY output is binary little-endian unless --ascii is given. On malformed input
-   it prints meshio's message (with the line or byte offset) and exits with status 1. */
+   Prints one line "RESULT meshconv input=... vertices=V triangles=T bbox=..." on stdout. Without -o
+   it only reads and reports. The output format follows the output's extension, in any case (.OBJ,
+   .Stl). PLY and STL are binary little-endian unless --ascii is given. --weld joins vertices with
+   exactly equal positions (mio_weld), which an STL input needs for connectivity. The output is
+   written to OUTPUT.tmp and renamed to OUTPUT when complete, so a failed run leaves no file.
+   Exit status: 0 done, 1 failure (unreadable input, failed write), 2 usage (bad arguments). */
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
 
+#include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
-static int ends_with(const char *s, const char *suffix)
+#define MESHCONV_VERSION "meshconv 0.2 (meshio.h v0.1)"
+
+typedef struct args {
+    const char *input, *output;
+    int ascii, weld;
+    mio_format in_format, out_format;
+} args;
+
+static void usage(FILE *to)
 {
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
+    fprintf(to,
+            "usage: meshconv INPUT [-o OUTPUT] [--ascii] [--weld] [--format F]\n"
+            "Reads a mesh (OBJ, OFF, PLY, STL), prints a RESULT line with its counts and bounding box,\n"
+            "and with -o writes it again.\n"
+            "  -o, --output FILE  write the mesh to FILE; the format follows the extension in any case:\n"
+            "                     .obj .off .ply .stl (default: no output, only the RESULT line)\n"
+            "  --ascii            write PLY and STL as ascii text (default: binary little-endian)\n"
+            "  --weld             join vertices with exactly equal positions before writing, in order of\n"
+            "                     first use; an STL input needs it to be connected (default: off)\n"
+            "  --format F         read INPUT as F = obj, off, ply or stl (default: auto, from the\n"
+            "                     content, then the extension)\n"
+            "  -h, --help         show this help and exit\n"
+            "  --version          show the version and exit\n"
+            "Exit status: 0 done, 1 failure (unreadable input, failed write), 2 usage.\n"
+            "The output is written to FILE.tmp and renamed when complete: a failed run leaves nothing.\n");
+}
+
+static int usage_error(const char *fmt, const char *what)
+{
+    fprintf(stderr, "meshconv: ");
+    fprintf(stderr, fmt, what);
+    fprintf(stderr, " (see meshconv --help)\n");
+    return 2;
+}
+
+/* The format named by the file's extension, any case; MIO_FORMAT_AUTO if none of the four. */
+static mio_format format_of_extension(const char *path)
+{
+    static const char *const ext[4] = {"obj", "off", "ply", "stl"};
+    static const mio_format fmt[4] = {MIO_FORMAT_OBJ, MIO_FORMAT_OFF, MIO_FORMAT_PLY, MIO_FORMAT_STL};
+    const char *dot = strrchr(path, '.');
+    int k, i;
+    if (!dot || strchr(dot, '/') || strlen(dot) != 4) return MIO_FORMAT_AUTO;
+    for (k = 0; k < 4; k++) {
+        for (i = 0; i < 3; i++) {
+            char c = dot[1 + i];
+            if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
+            if (c != ext[k][i]) break;
+        }
+        if (i == 3) return fmt[k];
+    }
+    return MIO_FORMAT_AUTO;
+}
+
+static mio_format format_of_name(const char *s)
+{
+    if (strcmp(s, "obj") == 0) return MIO_FORMAT_OBJ;
+    if (strcmp(s, "off") == 0) return MIO_FORMAT_OFF;
+    if (strcmp(s, "ply") == 0) return MIO_FORMAT_PLY;
+    if (strcmp(s, "stl") == 0) return MIO_FORMAT_STL;
+    return MIO_FORMAT_AUTO;
+}
+
+/* Returns -1 to go on, or the exit status (0 for --help/--version, 2 for a usage error). */
+static int parse_args(int argc, char **argv, args *a)
+{
+    int i;
+    memset(a, 0, sizeof *a);
+    for (i = 1; i < argc; i++) {
+        const char *s = argv[i];
+        if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) { usage(stdout); return 0; }
+        if (strcmp(s, "--version") == 0) { printf("%s\n", MESHCONV_VERSION); return 0; }
+        if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0) {
+            if (i + 1 >= argc || argv[i + 1][0] == '\0') return usage_error("%s needs a file name", s);
+            a->output = argv[++i];
+        } else if (strcmp(s, "--format") == 0) {
+            if (i + 1 >= argc) return usage_error("%s needs obj, off, ply or stl", s);
+            a->in_format = format_of_name(argv[++i]);
+            if (a->in_format == MIO_FORMAT_AUTO) return usage_error("--format '%s': not obj, off, ply or stl", argv[i]);
+        } else if (strcmp(s, "--ascii") == 0) a->ascii = 1;
+        else if (strcmp(s, "--weld") == 0) a->weld = 1;
+        else if (s[0] == '-' && s[1] != '\0') return usage_error("unknown option '%s'", s);
+        else if (a->input) return usage_error("unexpected argument '%s': one INPUT only", s);
+        else a->input = s;
+    }
+    if (!a->input) return usage_error("%s", "no INPUT given");
+    if (a->output) {
+        a->out_format = format_of_extension(a->output);
+        if (a->out_format == MIO_FORMAT_AUTO)
+            return usage_error("output '%s': the name must end in .obj, .off, .ply or .stl (any case)", a->output);
+    }
+    return -1;
+}
+
+static void report_error(const char *path, mio_result r, const mio_error *err, int saved_errno)
+{
+    fprintf(stderr, "meshconv: %s: %s", path, err->message);
+    if (r == MIO_ERR_IO && saved_errno) fprintf(stderr, ": %s", strerror(saved_errno));
+    fprintf(stderr, " (%s: %s)\n", mio_result_string(r), mio_result_description(r));
+}
+
+static mio_result write_mesh(const args *a, const char *path, const mio_mesh *m, mio_error *err)
+{
+    switch (a->out_format) {
+    case MIO_FORMAT_OBJ: return mio_write_obj(path, m->positions, m->vertex_count, m->indices, m->triangle_count, err);
+    case MIO_FORMAT_OFF: return mio_write_off(path, m->positions, m->vertex_count, m->indices, m->triangle_count, err);
+    case MIO_FORMAT_PLY:
+        return mio_write_ply(path, m->positions, m->vertex_count, m->indices, m->triangle_count, !a->ascii, err);
+    default: return mio_write_stl(path, m->positions, m->vertex_count, m->indices, m->triangle_count, !a->ascii, err);
+    }
+}
+
+/* Writes OUTPUT.tmp, then renames it to OUTPUT; on any failure removes OUTPUT.tmp. Returns 0 or 1. */
+static int write_output(const args *a, const mio_mesh *m)
+{
+    size_t n = strlen(a->output);
+    char *tmp = (char *)malloc(n + 5);
+    mio_error err;
+    mio_result r;
+    int saved;
+    if (!tmp) { fprintf(stderr, "meshconv: out of memory\n"); return 1; }
+    memcpy(tmp, a->output, n);
+    memcpy(tmp + n, ".tmp", 5);
+    errno = 0;
+    r = write_mesh(a, tmp, m, &err);
+    saved = errno;
+    if (r != MIO_OK) {
+        report_error(a->output, r, &err, saved);
+        remove(tmp);
+        free(tmp);
+        return 1;
+    }
+    if (rename(tmp, a->output) != 0) {
+        fprintf(stderr, "meshconv: %s: cannot rename %s to it: %s\n", a->output, tmp, strerror(errno));
+        remove(tmp);
+        free(tmp);
+        return 1;
+    }
+    free(tmp);
+    return 0;
+}
+
+static void bounding_box(const mio_mesh *m, float lo[3], float hi[3])
+{
+    size_t v;
+    int k;
+    for (k = 0; k < 3; k++) lo[k] = hi[k] = 0.0f;
+    for (v = 0; v < m->vertex_count; v++)
+        for (k = 0; k < 3; k++) {
+            float x = m->positions[3 * v + (size_t)k];
+            if (v == 0 || x < lo[k]) lo[k] = x;
+            if (v == 0 || x > hi[k]) hi[k] = x;
+        }
 }
 
 int main(int argc, char **argv)
 {
-    const char *input = NULL, *output = NULL;
-    int ascii = 0, i;
+    args a;
+    mio_read_options opt;
     mio_mesh mesh;
     mio_error err;
     mio_result r;
-    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    size_t v;
-
-    for (i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "-o") == 0 && i + 1 < argc) output = argv[++i];
-        else if (strcmp(argv[i], "--ascii") == 0) ascii = 1;
-        else if (argv[i][0] != '-' && !input) input = argv[i];
-        else {
-            fprintf(stderr, "usage: meshconv INPUT [-o OUTPUT.obj|OUTPUT.ply] [--ascii]\n");
-            return 2;
-        }
-    }
-    if (!input) {
-        fprintf(stderr, "usage: meshconv INPUT [-o OUTPUT.obj|OUTPUT.ply] [--ascii]\n");
-        return 2;
-    }
-    r = mio_read_file(input, NULL, &mesh, &err);
-    if (r != MIO_OK) {
-        fprintf(stderr, "meshconv: %s: %s (%s)\n", input, err.message, mio_result_string(r));
+    float lo[3], hi[3];
+    int status = parse_args(argc, argv, &a), saved;
+    if (status >= 0) return status;
+    memset(&opt, 0, sizeof opt);
+    opt.format = a.in_format;
+    errno = 0;
+    r = mio_read_file(a.input, &opt, &mesh, &err);
+    saved = errno;
+    if (r != MIO_OK) { report_error(a.input, r, &err, saved); return 1; }
+    if (a.weld && (r = mio_weld(&mesh, &err)) != MIO_OK) {
+        report_error(a.input, r, &err, 0);
+        mio_free_mesh(&mesh);
         return 1;
     }
-    for (v = 0; v < mesh.vertex_count; v++) {
-        int k;
-        for (k = 0; k < 3; k++) {
-            float x = mesh.positions[3 * v + k];
-            if (v == 0 || x < lo[k]) lo[k] = x;
-            if (v == 0 || x > hi[k]) hi[k] = x;
-        }
-    }
-    if (output) {
-        if (ends_with(output, ".obj"))
-            r = mio_write_obj(output, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, &err);
-        else if (ends_with(output, ".ply"))
-            r = mio_write_ply(output, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
-                              !ascii, &err);
-        else {
-            fprintf(stderr, "meshconv: %s: the output must end in .obj or .ply\n", output);
-            mio_free_mesh(&mesh);
-            return 2;
-        }
-        if (r != MIO_OK) {
-            fprintf(stderr, "meshconv: %s: %s (%s)\n", output, err.message, mio_result_string(r));
-            mio_free_mesh(&mesh);
-            return 1;
-        }
-    }
-    printf("RESULT meshconv input=%s vertices=%lu triangles=%lu bbox=%g,%g,%g:%g,%g,%g%s%s\n", input,
-           (unsigned long)mesh.vertex_count, (unsigned long)mesh.triangle_count, lo[0], lo[1], lo[2], hi[0],
-           hi[1], hi[2], output ? " output=" : "", output ? output : "");
+    if (a.output && write_output(&a, &mesh) != 0) { mio_free_mesh(&mesh); return 1; }
+    bounding_box(&mesh, lo, hi);
+    printf("RESULT meshconv input=%s vertices=%lu triangles=%lu bbox=%g,%g,%g:%g,%g,%g%s%s\n", a.input,
+           (unsigned long)mesh.vertex_count, (unsigned long)mesh.triangle_count, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
+           a.output ? " output=" : "", a.output ? a.output : "");
     mio_free_mesh(&mesh);
     return 0;
 }

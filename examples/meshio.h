@@ -237,6 +237,9 @@ MIODEF void mio_free_mesh(mio_mesh *mesh);
 /* "MIO_OK", "MIO_ERR_SYNTAX", ... (the enum name); "MIO_ERR_?" for values outside the enum. */
 MIODEF const char *mio_result_string(mio_result r);
 
+/* What the result means, in a few words ("malformed content", "out of memory", ...), for messages. */
+MIODEF const char *mio_result_description(mio_result r);
+
 /* Guesses the format from content, then from the extension of path_or_null (may be NULL).
    Returns MIO_FORMAT_AUTO when it cannot tell. data may be NULL only when size is 0. */
 MIODEF mio_format mio_detect_format(const void *data, size_t size, const char *path_or_null);
@@ -1685,6 +1688,24 @@ MIODEF const char *mio_result_string(mio_result r)
     case MIO_ERR_EMPTY: return "MIO_ERR_EMPTY";
     }
     return "MIO_ERR_?";
+}
+
+MIODEF const char *mio_result_description(mio_result r)
+{
+    switch (r) {
+    case MIO_OK: return "success";
+    case MIO_ERR_INVALID_ARGUMENT: return "invalid argument (a NULL pointer, a bad option or a non-finite coordinate)";
+    case MIO_ERR_OUT_OF_MEMORY: return "out of memory";
+    case MIO_ERR_IO: return "the file could not be opened, read or written";
+    case MIO_ERR_UNKNOWN_FORMAT: return "neither the content nor the extension tells the format";
+    case MIO_ERR_SYNTAX: return "malformed content";
+    case MIO_ERR_TRUNCATED: return "the data ends early";
+    case MIO_ERR_INDEX_RANGE: return "a face refers to a vertex that does not exist";
+    case MIO_ERR_TOO_LARGE: return "more vertices or bytes than fit";
+    case MIO_ERR_UNSUPPORTED: return "a valid variant this reader does not support";
+    case MIO_ERR_EMPTY: return "no triangles";
+    }
+    return "unknown result code";
 }
 
 MIODEF const char *mio_format_string(mio_format f)

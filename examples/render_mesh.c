@@ -1,15 +1,12 @@
 /* render_mesh - renders any mesh file that meshio.h reads (OBJ, OFF, PLY, STL) to a PNG.
 
-   usage: render_mesh IN -o OUT.png [--view NAME|AZ,EL] [--wire] [--size W[xH]] [--shading S]
-     --view    iso (default), front, back, left, right, top, bottom, or azimuth,elevation in
-               degrees (azimuth around +y from +z, elevation above the xz plane)
-     --wire    draw the triangle edges over the shading
-     --size    image size in pixels (default 800x800)
-     --shading phong (default), gouraud or flat
-     --ortho   orthographic instead of perspective projection
+   usage: render_mesh IN -o OUT.png [--view NAME|AZ,EL] [--wire] [--size W[xH]] [--shading S] [--ortho]
+   (render_mesh --help lists every option with its default.)
    The camera frames the mesh's bounding sphere; one directional key light from the upper left
-   of the viewer plus a dim fill light; area-weighted vertex normals.
-   Exit status 0 on success, 1 on bad arguments or unreadable input, 2 on render/write failure. */
+   of the viewer plus a dim fill light; area-weighted vertex normals. The PNG is written to
+   OUT.png.tmp and renamed when complete, so a failed run leaves no file.
+   Exit status: 0 done, 1 failure (unreadable input, render or write failure), 2 usage. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,10 +17,51 @@
 #define SR_IMPLEMENTATION
 #include "render.h"
 
+#define RENDER_MESH_VERSION "render_mesh 0.2 (meshio.h v0.1, render.h)"
+
+typedef struct args {
+    const char *in, *out;
+    float az, el;
+    int wire, W, H, ortho;
+    sr_shading shading;
+} args;
+
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: render_mesh IN -o OUT.png [--view iso|front|back|left|right|top|bottom|AZ,EL] [--wire]\n"
-                "                   [--size W[xH]] [--shading phong|gouraud|flat] [--ortho]\n");
+    fprintf(to, "usage: render_mesh IN -o OUT.png [options]\n"
+                "Renders a mesh file (OBJ, OFF, PLY, STL) to a PNG image.\n"
+                "  -o, --output FILE    the PNG to write; the name must end in .png (any case) (required)\n"
+                "  --view V             iso (default: azimuth 35, elevation 25), front, back, left, right, top,\n"
+                "                       bottom, or AZ,EL in degrees: azimuth around +y from +z, elevation above\n"
+                "                       the xz plane, strictly between -90 and 90\n"
+                "  --wire               draw the triangle edges over the shading (default: off)\n"
+                "  --size W[xH]         image size in pixels, 1 to 16384 each; W alone is square (default 800x800)\n"
+                "  --shading S          phong (default), gouraud or flat\n"
+                "  --ortho              orthographic instead of perspective projection (default: perspective)\n"
+                "  -h, --help           show this help and exit\n"
+                "  --version            show the version and exit\n"
+                "Exit status: 0 done, 1 failure (unreadable input, render or write failure), 2 usage.\n"
+                "The PNG is written to FILE.tmp and renamed when complete: a failed run leaves nothing.\n");
+}
+
+static int usage_error(const char *fmt, const char *what)
+{
+    fprintf(stderr, "render_mesh: ");
+    fprintf(stderr, fmt, what);
+    fprintf(stderr, " (see render_mesh --help)\n");
+    return 2;
+}
+
+/* A finite float that is the whole of [s, stop) ; stop may be NULL for the end of s. */
+static int parse_float(const char *s, char stop, float *out)
+{
+    char *end;
+    double v;
+    errno = 0;
+    v = strtod(s, &end);
+    if (end == s || *end != stop || errno == ERANGE || !(v - v == 0.0) || fabs(v) > 1e30) return 0;
+    *out = (float)v;
+    return 1;
 }
 
 static int parse_view(const char *s, float *az, float *el)
@@ -32,109 +70,205 @@ static int parse_view(const char *s, float *az, float *el)
         {"iso", 35.0f, 25.0f}, {"front", 0.0f, 0.0f}, {"back", 180.0f, 0.0f}, {"left", -90.0f, 0.0f},
         {"right", 90.0f, 0.0f}, {"top", 0.0f, 89.9f}, {"bottom", 0.0f, -89.9f}};
     size_t i;
-    char *end;
+    const char *comma = strchr(s, ',');
     for (i = 0; i < sizeof views / sizeof views[0]; i++)
         if (strcmp(s, views[i].name) == 0) { *az = views[i].az; *el = views[i].el; return 1; }
-    *az = strtof(s, &end);
-    if (end == s || *end != ',') return 0;
-    s = end + 1;
-    *el = strtof(s, &end);
-    return end != s && *end == '\0' && *el > -90.0f && *el < 90.0f;
+    if (!comma || !parse_float(s, ',', az) || !parse_float(comma + 1, '\0', el)) return 0;
+    return *el > -90.0f && *el < 90.0f && fabsf(*az) <= 1e6f;
 }
 
-int main(int argc, char **argv)
+/* A decimal integer 1..16384 filling [s, stop). */
+static int parse_pixels(const char *s, char stop, int *out, const char **rest)
 {
-    const char *in = NULL, *out = NULL;
-    float az = 35.0f, el = 25.0f, lo[3], hi[3], c[3], radius = 0.0f, eye[3], dir[3];
-    int wire = 0, W = 800, H = 800, ortho = 0, i;
-    sr_shading shading = SR_SHADE_PHONG;
-    mio_mesh mesh;
-    mio_error err;
-    sr_framebuffer fb;
-    sr_camera cam;
-    sr_draw_desc d;
-    sr_light lights[2];
-    sr_result r;
-    float *normals, bg[4] = {0.93f, 0.94f, 0.96f, 1.0f}, key[3], fill[3];
-    size_t v;
+    long v = 0;
+    const char *p = s;
+    while (*p >= '0' && *p <= '9' && v <= 16384) v = v * 10 + (*p++ - '0');
+    if (p == s || *p != stop || v < 1 || v > 16384) return 0;
+    *out = (int)v;
+    if (rest) *rest = p;
+    return 1;
+}
+
+static int parse_size(const char *s, int *W, int *H)
+{
+    const char *rest;
+    if (parse_pixels(s, '\0', W, NULL)) { *H = *W; return 1; }
+    return parse_pixels(s, 'x', W, &rest) && parse_pixels(rest + 1, '\0', H, NULL);
+}
+
+static int has_png_extension(const char *path)
+{
+    size_t n = strlen(path);
+    const char *e = path + (n >= 4 ? n - 4 : 0);
+    return n > 4 && e[0] == '.' && (e[1] == 'p' || e[1] == 'P') && (e[2] == 'n' || e[2] == 'N') && (e[3] == 'g' || e[3] == 'G');
+}
+
+/* Returns -1 to go on, or the exit status (0 for --help/--version, 2 for a usage error). */
+static int parse_args(int argc, char **argv, args *a)
+{
+    int i;
+    memset(a, 0, sizeof *a);
+    a->az = 35.0f; a->el = 25.0f; a->W = a->H = 800; a->shading = SR_SHADE_PHONG;
     for (i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "-o") == 0 && i + 1 < argc) out = argv[++i];
-        else if (strcmp(argv[i], "--wire") == 0) wire = 1;
-        else if (strcmp(argv[i], "--ortho") == 0) ortho = 1;
-        else if (strcmp(argv[i], "--view") == 0 && i + 1 < argc) {
-            if (!parse_view(argv[++i], &az, &el)) { fprintf(stderr, "render_mesh: bad --view %s\n", argv[i]); return 1; }
-        } else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) {
-            int n = sscanf(argv[++i], "%dx%d", &W, &H);
-            if (n == 1) H = W;
-            if (n < 1 || W < 1 || H < 1 || W > 16384 || H > 16384) { fprintf(stderr, "render_mesh: bad --size %s\n", argv[i]); return 1; }
-        } else if (strcmp(argv[i], "--shading") == 0 && i + 1 < argc) {
-            const char *s = argv[++i];
-            if (strcmp(s, "phong") == 0) shading = SR_SHADE_PHONG;
-            else if (strcmp(s, "gouraud") == 0) shading = SR_SHADE_GOURAUD;
-            else if (strcmp(s, "flat") == 0) shading = SR_SHADE_FLAT;
-            else { fprintf(stderr, "render_mesh: bad --shading %s\n", s); return 1; }
-        } else if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) { usage(stdout); return 0; }
-        else if (argv[i][0] != '-' && !in) in = argv[i];
-        else { usage(stderr); return 1; }
+        const char *s = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0 || strcmp(s, "--view") == 0 ||
+                    strcmp(s, "--size") == 0 || strcmp(s, "--shading") == 0;
+        if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) { usage(stdout); return 0; }
+        if (strcmp(s, "--version") == 0) { printf("%s\n", RENDER_MESH_VERSION); return 0; }
+        if (takes && !v) return usage_error("%s needs a value", s);
+        if (takes) i++;
+        if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0) a->out = v;
+        else if (strcmp(s, "--view") == 0) {
+            if (!parse_view(v, &a->az, &a->el)) return usage_error("--view '%s': not a view name or AZ,EL with -90 < EL < 90", v);
+        } else if (strcmp(s, "--size") == 0) {
+            if (!parse_size(v, &a->W, &a->H)) return usage_error("--size '%s': not W or WxH with 1 <= W, H <= 16384", v);
+        } else if (strcmp(s, "--shading") == 0) {
+            if (strcmp(v, "phong") == 0) a->shading = SR_SHADE_PHONG;
+            else if (strcmp(v, "gouraud") == 0) a->shading = SR_SHADE_GOURAUD;
+            else if (strcmp(v, "flat") == 0) a->shading = SR_SHADE_FLAT;
+            else return usage_error("--shading '%s': not phong, gouraud or flat", v);
+        } else if (strcmp(s, "--wire") == 0) a->wire = 1;
+        else if (strcmp(s, "--ortho") == 0) a->ortho = 1;
+        else if (s[0] == '-' && s[1] != '\0') return usage_error("unknown option '%s'", s);
+        else if (a->in) return usage_error("unexpected argument '%s': one IN only", s);
+        else a->in = s;
     }
-    if (!in || !out) { usage(stderr); return 1; }
-    if (mio_read_file(in, NULL, &mesh, &err) != MIO_OK) {
-        fprintf(stderr, "render_mesh: %s: %s\n", in, err.message);
+    if (!a->in) return usage_error("%s", "no input mesh given");
+    if (!a->out) return usage_error("%s", "no output given: -o OUT.png");
+    if (!has_png_extension(a->out)) return usage_error("output '%s': only PNG is written; the name must end in .png", a->out);
+    return -1;
+}
+
+/* Writes the framebuffer to OUT.tmp and renames it to OUT; removes OUT.tmp on failure. 0 or 1. */
+static int write_png(const sr_framebuffer *fb, const char *out)
+{
+    size_t n = strlen(out);
+    char *tmp = (char *)malloc(n + 5);
+    sr_result r;
+    int saved;
+    if (!tmp) { fprintf(stderr, "render_mesh: out of memory\n"); return 1; }
+    memcpy(tmp, out, n);
+    memcpy(tmp + n, ".tmp", 5);
+    errno = 0;
+    r = sr_write_framebuffer_png(fb, tmp, 0);
+    saved = errno;
+    if (r == SR_OK && rename(tmp, out) != 0) {
+        fprintf(stderr, "render_mesh: %s: cannot rename %s to it: %s\n", out, tmp, strerror(errno));
+        remove(tmp); free(tmp);
         return 1;
     }
-    /* bounding sphere (box centre, farthest vertex) */
-    for (i = 0; i < 3; i++) { lo[i] = mesh.positions[i]; hi[i] = mesh.positions[i]; }
-    for (v = 0; v < mesh.vertex_count; v++)
+    if (r != SR_OK) {
+        fprintf(stderr, "render_mesh: %s: %s", out, sr_result_string(r));
+        if (r == SR_ERR_IO && saved) fprintf(stderr, ": %s", strerror(saved));
+        fprintf(stderr, "\n");
+        remove(tmp);
+    }
+    free(tmp);
+    return r == SR_OK ? 0 : 1;
+}
+
+/* The camera looks at the centre of the bounding box from direction (az, el), far enough for the
+   bounding sphere (box centre, farthest vertex) to fill the view. */
+static void frame_camera(const mio_mesh *mesh, const args *a, sr_camera *cam)
+{
+    float lo[3], hi[3], c[3], radius = 0.0f, eye[3], dir[3];
+    float fov = 35.0f, dist, aspect = (float)a->W / (float)a->H;
+    size_t v;
+    int i;
+    for (i = 0; i < 3; i++) { lo[i] = mesh->positions[i]; hi[i] = mesh->positions[i]; }
+    for (v = 0; v < mesh->vertex_count; v++)
         for (i = 0; i < 3; i++) {
-            float x = mesh.positions[3 * v + (size_t)i];
+            float x = mesh->positions[3 * v + (size_t)i];
             if (x < lo[i]) lo[i] = x;
             if (x > hi[i]) hi[i] = x;
         }
     for (i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
-    for (v = 0; v < mesh.vertex_count; v++) {
-        const float *p = mesh.positions + 3 * v;
+    for (v = 0; v < mesh->vertex_count; v++) {
+        const float *p = mesh->positions + 3 * v;
         float dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2], r2 = sqrtf(dx * dx + dy * dy + dz * dz);
         if (r2 > radius) radius = r2;
     }
     if (!(radius > 0.0f)) radius = 1.0f;
-    dir[0] = cosf(el * 0.0174533f) * sinf(az * 0.0174533f);
-    dir[1] = sinf(el * 0.0174533f);
-    dir[2] = cosf(el * 0.0174533f) * cosf(az * 0.0174533f);
-    {
-        float fov = 35.0f, dist = radius / sinf(0.5f * fov * 0.0174533f) * 1.05f, aspect = (float)W / (float)H;
-        if (aspect < 1.0f) dist /= aspect;
-        for (i = 0; i < 3; i++) eye[i] = c[i] + dir[i] * dist;
-        if (ortho) sr_camera_ortho(&cam, eye, c, NULL, radius * 1.05f * (aspect < 1.0f ? 1.0f / aspect : 1.0f), aspect, dist - radius * 1.1f, dist + radius * 1.1f);
-        else sr_camera_look_at(&cam, eye, c, NULL, fov, aspect, (dist - radius * 1.1f) > dist * 0.01f ? dist - radius * 1.1f : dist * 0.01f, dist + radius * 1.1f);
+    dir[0] = cosf(a->el * 0.0174533f) * sinf(a->az * 0.0174533f);
+    dir[1] = sinf(a->el * 0.0174533f);
+    dir[2] = cosf(a->el * 0.0174533f) * cosf(a->az * 0.0174533f);
+    dist = radius / sinf(0.5f * fov * 0.0174533f) * 1.05f;
+    if (aspect < 1.0f) dist /= aspect;
+    for (i = 0; i < 3; i++) eye[i] = c[i] + dir[i] * dist;
+    if (a->ortho)
+        sr_camera_ortho(cam, eye, c, NULL, radius * 1.05f * (aspect < 1.0f ? 1.0f / aspect : 1.0f), aspect, dist - radius * 1.1f,
+                        dist + radius * 1.1f);
+    else
+        sr_camera_look_at(cam, eye, c, NULL, fov, aspect,
+                          (dist - radius * 1.1f) > dist * 0.01f ? dist - radius * 1.1f : dist * 0.01f, dist + radius * 1.1f);
+}
+
+/* Draws the mesh with a key light from the viewer's upper left and a dim fill light. */
+static sr_result draw(sr_framebuffer *fb, const sr_camera *cam, const mio_mesh *mesh, const float *normals, const args *a)
+{
+    sr_draw_desc d;
+    sr_light lights[2];
+    float key[3], fill[3];
+    int i;
+    for (i = 0; i < 3; i++) {
+        key[i] = -cam->forward[i] + 0.6f * cam->up[i] - 0.5f * cam->right[i];
+        fill[i] = -cam->forward[i] + 0.8f * cam->right[i] - 0.3f * cam->up[i];
     }
-    normals = (float *)malloc(mesh.vertex_count * 3 * sizeof(float) + 1);
-    if (!normals) { fprintf(stderr, "render_mesh: out of memory\n"); mio_free_mesh(&mesh); return 2; }
-    sr_compute_vertex_normals(mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, normals);
-    for (i = 0; i < 3; i++) { key[i] = -cam.forward[i] + 0.6f * cam.up[i] - 0.5f * cam.right[i]; fill[i] = -cam.forward[i] + 0.8f * cam.right[i] - 0.3f * cam.up[i]; }
     sr_light_default(&lights[0], key);
     sr_light_default(&lights[1], fill);
-    for (i = 0; i < 3; i++) { lights[0].diffuse[i] = 0.85f; lights[0].specular[i] = 0.6f; lights[1].diffuse[i] = 0.3f; lights[1].specular[i] = 0.0f; lights[1].ambient[i] = 0.0f; }
-    if ((r = sr_framebuffer_create(&fb, W, H, NULL)) != SR_OK) {
-        fprintf(stderr, "render_mesh: framebuffer: %s\n", sr_result_string(r));
-        free(normals); mio_free_mesh(&mesh); return 2;
+    for (i = 0; i < 3; i++) {
+        lights[0].diffuse[i] = 0.85f; lights[0].specular[i] = 0.6f;
+        lights[1].diffuse[i] = 0.3f; lights[1].specular[i] = 0.0f; lights[1].ambient[i] = 0.0f;
     }
-    sr_framebuffer_clear(&fb, bg, 1.0f);
     sr_draw_desc_default(&d);
-    d.positions = mesh.positions; d.vertex_count = mesh.vertex_count;
-    d.indices = mesh.indices; d.triangle_count = mesh.triangle_count;
+    d.positions = mesh->positions; d.vertex_count = mesh->vertex_count;
+    d.indices = mesh->indices; d.triangle_count = mesh->triangle_count;
     d.normals = normals;
-    d.shading = shading;
+    d.shading = a->shading;
     d.lights = lights; d.light_count = 2;
     d.material.diffuse[0] = 0.75f; d.material.diffuse[1] = 0.72f; d.material.diffuse[2] = 0.68f;
     d.material.ambient[0] = 0.75f; d.material.ambient[1] = 0.72f; d.material.ambient[2] = 0.68f;
-    d.wireframe = wire;
+    d.wireframe = a->wire;
     d.wire_color[0] = 0.1f; d.wire_color[1] = 0.1f; d.wire_color[2] = 0.15f;
-    r = sr_draw_mesh(&fb, &cam, &d);
-    if (r == SR_OK) r = sr_write_framebuffer_png(&fb, out, 0);
-    if (r != SR_OK) fprintf(stderr, "render_mesh: %s: %s\n", out, sr_result_string(r));
-    else fprintf(stderr, "render_mesh: %s: %zu triangles -> %s (%dx%d)\n", in, mesh.triangle_count, out, W, H);
+    return sr_draw_mesh(fb, cam, &d);
+}
+
+int main(int argc, char **argv)
+{
+    args a;
+    mio_mesh mesh;
+    mio_error err;
+    mio_result mr;
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_result r;
+    float *normals, bg[4] = {0.93f, 0.94f, 0.96f, 1.0f};
+    int status = parse_args(argc, argv, &a), saved;
+    if (status >= 0) return status;
+    errno = 0;
+    mr = mio_read_file(a.in, NULL, &mesh, &err);
+    saved = errno;
+    if (mr != MIO_OK) {
+        fprintf(stderr, "render_mesh: %s: %s", a.in, err.message);
+        if (mr == MIO_ERR_IO && saved) fprintf(stderr, ": %s", strerror(saved));
+        fprintf(stderr, " (%s: %s)\n", mio_result_string(mr), mio_result_description(mr));
+        return 1;
+    }
+    frame_camera(&mesh, &a, &cam);
+    normals = (float *)malloc(mesh.vertex_count * 3 * sizeof(float) + 1);
+    if (!normals) { fprintf(stderr, "render_mesh: out of memory\n"); mio_free_mesh(&mesh); return 1; }
+    sr_compute_vertex_normals(mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, normals);
+    if ((r = sr_framebuffer_create(&fb, a.W, a.H, NULL)) != SR_OK) {
+        fprintf(stderr, "render_mesh: %dx%d framebuffer: %s\n", a.W, a.H, sr_result_string(r));
+        free(normals); mio_free_mesh(&mesh); return 1;
+    }
+    sr_framebuffer_clear(&fb, bg, 1.0f);
+    r = draw(&fb, &cam, &mesh, normals, &a);
+    if (r != SR_OK) fprintf(stderr, "render_mesh: %s: drawing failed: %s\n", a.in, sr_result_string(r));
+    status = r == SR_OK ? write_png(&fb, a.out) : 1;
+    if (status == 0) fprintf(stderr, "render_mesh: %s: %zu triangles -> %s (%dx%d)\n", a.in, mesh.triangle_count, a.out, a.W, a.H);
     sr_framebuffer_free(&fb);
     free(normals);
     mio_free_mesh(&mesh);
-    return r == SR_OK ? 0 : 2;
+    return status;
 }

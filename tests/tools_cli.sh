@@ -1,0 +1,174 @@
+#!/bin/sh
+# tools_cli.sh BUILD_DIR - examples/meshconv.c and examples/render_mesh.c behave as tools (issue 21, point 5):
+#   --help (exit 0) names every option and its default; --version (exit 0) prints a line;
+#   bad arguments (unknown option, missing value, malformed or out-of-range number, nan, a bad name,
+#   an output extension the program does not write such as -o x.jpg) exit 2 with a message that
+#   names the bad argument, and create no output;
+#   failures exit 1 with their cause: a missing input (the system's reason), malformed input (meshio's
+#   result name and meaning), an output directory that does not exist, and a write cut short by the
+#   file-size limit (ulimit -f with SIGXFSZ ignored, so write() fails with EFBIG as on a full disk):
+#   afterwards neither OUTPUT nor OUTPUT.tmp exists, and an OUTPUT that existed before is unchanged;
+#   meshconv round trips a 30x30 grid through .OBJ .Off .ply .STL (binary and --ascii) with the same
+#   counts and bounding box (STL: 3 vertices per triangle, --weld gives the grid's count back), and a
+#   cube's 12-facet STL soup welds to 8 vertices; render_mesh writes a PNG (signature checked), also
+#   for a .PNG name, and leaves no .tmp.
+# The binaries are built here with make (with the sanitizer flags of `make sanitize` when
+# TEST_SANITIZE=1; the sizes are small enough that nothing needs shrinking).
+B="$1"
+top=$(cd "$(dirname "$0")/.." && pwd)
+pass=0; fail=0; skip=0
+ok() { pass=$((pass + 1)); }
+bad() { echo "FAIL $*"; fail=$((fail + 1)); }
+check() { # check DESCRIPTION CONDITION-COMMAND...
+  what="$1"; shift
+  if "$@"; then ok; else bad "$what"; fi
+}
+LC_ALL=C; export LC_ALL
+
+for p in meshconv render_mesh; do
+  if [ "${TEST_SANITIZE:-0}" = 1 ]; then
+    make -s -C "$top" --no-print-directory B="$B" OPT="-O1 -g" \
+      XFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" "$B/$p" >&2
+  else
+    make -s -C "$top" --no-print-directory B="$B" "$B/$p" >&2
+  fi
+  if [ $? -ne 0 ] || [ ! -x "$B/$p" ]; then
+    echo "FAIL $B/$p could not be built (make $B/$p)"
+    echo "TESTCOUNT tools_cli passed=0 failed=1 skipped=0"
+    exit 1
+  fi
+done
+case "$B" in /*) bin="$B" ;; *) bin="$top/$B" ;; esac
+MC="$bin/meshconv"; RM="$bin/render_mesh"
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/tools_cli.XXXXXX") || { echo "FAIL mktemp"; exit 1; }
+trap 'rm -rf "$tmp"' EXIT
+
+# ---- inputs ---------------------------------------------------------------------------------------
+awk 'BEGIN { n = 30; for (j = 0; j < n; j++) for (i = 0; i < n; i++) printf "v %.4f %.4f %.4f\n", i / 7.0, j / 11.0, (i * j) % 5 / 3.0;
+             for (j = 0; j < n - 1; j++) for (i = 0; i < n - 1; i++) { a = j * n + i + 1; printf "f %d %d %d\nf %d %d %d\n", a, a + 1, a + n + 1, a, a + n + 1, a + n } }' \
+  >"$tmp/grid.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n%s\n' \
+  'f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8' >"$tmp/cube.obj"
+printf 'v 0 0 0\nv 1 0 0\nf 1 2 7\n' >"$tmp/bad.obj"
+
+# run NAME PROGRAM ARGS...: status in $rc, stdout in $tmp/NAME.out, stderr in $tmp/NAME.err
+run() {
+  run_name="$1"; shift
+  "$@" >"$tmp/$run_name.out" 2>"$tmp/$run_name.err"
+  rc=$?
+  if grep -q -E 'Sanitizer|runtime error' "$tmp/$run_name.err"; then bad "$run_name: sanitizer report"; cat "$tmp/$run_name.err"; fi
+}
+field() { # field NAME KEY: the value of KEY= in the RESULT line of run NAME
+  grep '^RESULT meshconv ' "$tmp/$1.out" | tr ' ' '\n' | sed -n "s/^$2=//p"
+}
+# refuse NAME STATUS WORD PROGRAM ARGS...: exits STATUS, stderr names WORD, no $tmp/o* file appears
+refuse() {
+  rname="$1"; want="$2"; word="$3"; shift 3
+  rm -f "$tmp"/o*
+  run "$rname" "$@"
+  check "$rname: exit $want (got $rc: $(cat "$tmp/$rname.err"))" [ "$rc" -eq "$want" ]
+  check "$rname: the message names '$word' ($(cat "$tmp/$rname.err"))" grep -q -F -e "$word" "$tmp/$rname.err"
+  check "$rname: no output file left ($(ls "$tmp" | grep '^o' | tr '\n' ' '))" sh -c "! ls '$tmp' | grep -q '^o'"
+}
+
+# ---- --help and --version -------------------------------------------------------------------------
+for p in meshconv render_mesh; do
+  prog="$bin/$p"
+  run "$p-help" "$prog" --help
+  check "$p --help exits 0" [ "$rc" -eq 0 ]
+  check "$p --help says default" grep -q default "$tmp/$p-help.out"
+  run "$p-version" "$prog" --version
+  check "$p --version exits 0 with a line naming $p" sh -c "[ $rc -eq 0 ] && grep -q '^$p ' '$tmp/$p-version.out'"
+done
+for o in -o --output --ascii --weld --format --help --version; do
+  check "meshconv --help lists $o" grep -q -e " $o" "$tmp/meshconv-help.out"
+done
+for o in -o --output --view --wire --size --shading --ortho --help --version; do
+  check "render_mesh --help lists $o" grep -q -e " $o" "$tmp/render_mesh-help.out"
+done
+
+# ---- meshconv: usage errors (2) and failures (1) ---------------------------------------------------
+refuse mc-none 2 INPUT "$MC"
+refuse mc-unknown 2 --bogus "$MC" "$tmp/grid.obj" --bogus
+refuse mc-format 2 xyz "$MC" "$tmp/grid.obj" --format xyz
+refuse mc-o-missing 2 -o "$MC" "$tmp/grid.obj" -o
+refuse mc-two-inputs 2 "$tmp/cube.obj" "$MC" "$tmp/grid.obj" "$tmp/cube.obj"
+refuse mc-jpg 2 out.jpg "$MC" "$tmp/grid.obj" -o "$tmp/out.jpg"
+refuse mc-noext 2 out "$MC" "$tmp/grid.obj" -o "$tmp/out"
+refuse mc-missing-input 1 "No such file or directory" "$MC" "$tmp/missing.obj" -o "$tmp/out.obj"
+refuse mc-bad-input 1 "MIO_ERR_INDEX_RANGE: a face refers to a vertex that does not exist" "$MC" "$tmp/bad.obj" -o "$tmp/out.obj"
+refuse mc-no-dir 1 "No such file or directory" "$MC" "$tmp/grid.obj" -o "$tmp/nodir/out.obj"
+check "mc-no-dir: nothing created in the missing directory" [ ! -e "$tmp/nodir" ]
+# a write cut short: 2 blocks of file size (1 KiB in dash, 2 KiB in bash) against about 40 KB of text
+refuse mc-efbig 1 "File too large" sh -c "ulimit -f 2; trap '' XFSZ; exec '$MC' '$tmp/grid.obj' -o '$tmp/out.ply' --ascii"
+printf 'old\n' >"$tmp/keep.obj"
+run mc-keep sh -c "ulimit -f 2; trap '' XFSZ; exec '$MC' '$tmp/grid.obj' -o '$tmp/keep.obj'"
+check "mc-keep: exit 1 (got $rc)" [ "$rc" -eq 1 ]
+check "mc-keep: the existing output is unchanged and no .tmp is left" sh -c "[ \"\$(cat '$tmp/keep.obj')\" = old ] && [ ! -e '$tmp/keep.obj.tmp' ]"
+
+# ---- meshconv: round trips -------------------------------------------------------------------------
+run mc-grid "$MC" "$tmp/grid.obj"
+V=$(field mc-grid vertices); T=$(field mc-grid triangles); BOX=$(field mc-grid bbox)
+check "grid reads as 900 vertices, 1682 triangles (got $V, $T)" test "$V" = 900 -a "$T" = 1682
+i=0
+for spec in "g.OBJ" "g.Off" "g.ply" "g.PLY --ascii" "g.STL" "g.Stl --ascii"; do
+  i=$((i + 1))
+  set -- $spec
+  name="mc-rt$i"
+  run "$name-w" "$MC" "$tmp/grid.obj" -o "$tmp/$1" $2
+  check "$name: meshconv grid.obj -o $spec exits 0 ($(cat "$tmp/$name-w.err"))" [ "$rc" -eq 0 ]
+  check "$name: $1 exists and no .tmp is left" sh -c "[ -s '$tmp/$1' ] && [ ! -e '$tmp/$1.tmp' ]"
+  run "$name-r" "$MC" "$tmp/$1"
+  case "$1" in *.STL|*.Stl) wantv=$((3 * T)) ;; *) wantv=$V ;; esac
+  check "$name: $1 reads back with $wantv vertices, $T triangles, bbox $BOX (got $(field "$name-r" vertices), $(field "$name-r" triangles), $(field "$name-r" bbox))" \
+    test "$(field "$name-r" vertices)" = "$wantv" -a "$(field "$name-r" triangles)" = "$T" -a "$(field "$name-r" bbox)" = "$BOX"
+  run "$name-weld" "$MC" "$tmp/$1" --weld
+  check "$name: $1 --weld gives $V vertices (got $(field "$name-weld" vertices))" [ "$(field "$name-weld" vertices)" = "$V" ]
+done
+run mc-cube-stl "$MC" "$tmp/cube.obj" -o "$tmp/cube.stl"
+run mc-cube-soup "$MC" "$tmp/cube.stl"
+check "cube STL soup has 36 vertices (got $(field mc-cube-soup vertices))" [ "$(field mc-cube-soup vertices)" = 36 ]
+run mc-cube-weld "$MC" "$tmp/cube.stl" --weld -o "$tmp/cube_welded.off"
+check "cube STL --weld gives 8 vertices, 12 triangles (got $(field mc-cube-weld vertices), $(field mc-cube-weld triangles))" \
+  test "$(field mc-cube-weld vertices)" = 8 -a "$(field mc-cube-weld triangles)" = 12
+check "welded cube written as OFF with 8 vertices" sh -c "sed -n 2p '$tmp/cube_welded.off' | grep -q '^8 12 0\$'"
+
+# ---- render_mesh -----------------------------------------------------------------------------------
+refuse rm-none 2 "no input" "$RM"
+refuse rm-no-o 2 "-o" "$RM" "$tmp/grid.obj"
+refuse rm-unknown 2 --bogus "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --bogus
+refuse rm-jpg 2 out.jpg "$RM" "$tmp/grid.obj" -o "$tmp/out.jpg"
+for s in 10xabc 0 16385 4294967297 -5 10x 'x10' '10x10x10' ' 10'; do
+  refuse "rm-size[$s]" 2 "--size '$s'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --size "$s"
+done
+for v in nan,0 0,nan inf,10 0,90 0,-90 1,2x abc 1e40,0 ''; do
+  refuse "rm-view[$v]" 2 "--view '$v'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --view "$v"
+done
+refuse rm-shading 2 "--shading 'toon'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --shading toon
+refuse rm-size-missing 2 "--size needs a value" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --size
+refuse rm-missing-input 1 "No such file or directory" "$RM" "$tmp/missing.obj" -o "$tmp/out.png"
+refuse rm-bad-input 1 "MIO_ERR_INDEX_RANGE" "$RM" "$tmp/bad.obj" -o "$tmp/out.png"
+refuse rm-no-dir 1 "SR_ERR_IO" "$RM" "$tmp/grid.obj" -o "$tmp/nodir/out.png"
+refuse rm-efbig 1 "File too large" sh -c "ulimit -f 2; trap '' XFSZ; exec '$RM' '$tmp/grid.obj' -o '$tmp/out.png' --size 512"
+for spec in "out.png 64x48" "out2.PNG 33"; do
+  set -- $spec
+  run "rm-ok-$1" "$RM" "$tmp/grid.obj" -o "$tmp/$1" --size "$2" --wire --view 20,-30
+  check "render_mesh -o $1 --size $2 exits 0 ($(cat "$tmp/rm-ok-$1.err"))" [ "$rc" -eq 0 ]
+  check "$1 begins with the PNG signature and no .tmp is left" \
+    sh -c "[ \"\$(od -An -tx1 -N8 '$tmp/$1' | tr -d ' \n')\" = 89504e470d0a1a0a ] && [ ! -e '$tmp/$1.tmp' ]"
+done
+
+echo "TESTCOUNT tools_cli passed=$pass failed=$fail skipped=$skip"
+[ $fail -eq 0 ]
