@@ -1,9 +1,10 @@
 /* render_mesh - renders any mesh file that meshio.h reads (OBJ, OFF, PLY, STL) to a PNG.
 
-   usage: render_mesh IN -o OUT.png [--view NAME|AZ,EL] [--wire] [--size W[xH]] [--shading S] [--ortho]
+   usage: render_mesh IN -o OUT.png [--view NAME|AZ,EL] [--wire] [--size W[xH]] [--shading S] [--ortho] [--up x|y|z]
    (render_mesh --help lists every option with its default.)
-   The camera frames the mesh's bounding sphere; one directional key light from the upper left
-   of the viewer plus a dim fill light; area-weighted vertex normals. The PNG is written to
+   The view is fitted: the mesh fills the frame up to a 5% border (not its bounding sphere, which
+   leaves a long mesh small). One directional key light from the upper left of the viewer plus a
+   dim fill light; area-weighted vertex normals. The PNG is written to
    OUT.png.tmp and renamed when complete, so a failed run leaves no file.
    Exit status: 0 done, 1 failure (unreadable input, render or write failure), 2 usage. */
 #include <errno.h>
@@ -22,7 +23,7 @@
 typedef struct args {
     const char *in, *out;
     float az, el;
-    int wire, W, H, ortho;
+    int wire, W, H, ortho, up; /* up: 0 = x, 1 = y, 2 = z */
     sr_shading shading;
 } args;
 
@@ -32,8 +33,10 @@ static void usage(FILE *to)
                 "Renders a mesh file (OBJ, OFF, PLY, STL) to a PNG image.\n"
                 "  -o, --output FILE    the PNG to write; the name must end in .png (any case) (required)\n"
                 "  --view V             iso (default: azimuth 35, elevation 25), front, back, left, right, top,\n"
-                "                       bottom, or AZ,EL in degrees: azimuth around +y from +z, elevation above\n"
-                "                       the xz plane, strictly between -90 and 90\n"
+                "                       bottom, or AZ,EL in degrees: azimuth around the up axis from the front, elevation above\n"
+                "                       the ground plane, strictly between -90 and 90\n"
+                "  --up A               the model's up axis: x, y (default) or z; the views turn with it\n"
+                "                       (z up: front looks from -y; x up: front looks from +y)\n"
                 "  --wire               draw the triangle edges over the shading (default: off)\n"
                 "  --size W[xH]         image size in pixels, 1 to 16384 each; W alone is square (default 800x800)\n"
                 "  --shading S          phong (default), gouraud or flat\n"
@@ -108,11 +111,11 @@ static int parse_args(int argc, char **argv, args *a)
 {
     int i;
     memset(a, 0, sizeof *a);
-    a->az = 35.0f; a->el = 25.0f; a->W = a->H = 800; a->shading = SR_SHADE_PHONG;
+    a->az = 35.0f; a->el = 25.0f; a->W = a->H = 800; a->up = 1; a->shading = SR_SHADE_PHONG;
     for (i = 1; i < argc; i++) {
         const char *s = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int takes = strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0 || strcmp(s, "--view") == 0 ||
-                    strcmp(s, "--size") == 0 || strcmp(s, "--shading") == 0;
+                    strcmp(s, "--size") == 0 || strcmp(s, "--shading") == 0 || strcmp(s, "--up") == 0;
         if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) { usage(stdout); return 0; }
         if (strcmp(s, "--version") == 0) { printf("%s\n", RENDER_MESH_VERSION); return 0; }
         if (takes && !v) return usage_error("%s needs a value", s);
@@ -127,6 +130,9 @@ static int parse_args(int argc, char **argv, args *a)
             else if (strcmp(v, "gouraud") == 0) a->shading = SR_SHADE_GOURAUD;
             else if (strcmp(v, "flat") == 0) a->shading = SR_SHADE_FLAT;
             else return usage_error("--shading '%s': not phong, gouraud or flat", v);
+        } else if (strcmp(s, "--up") == 0) {
+            if ((v[0] != 'x' && v[0] != 'y' && v[0] != 'z') || v[1] != '\0') return usage_error("--up '%s': not x, y or z", v);
+            a->up = v[0] - 'x';
         } else if (strcmp(s, "--wire") == 0) a->wire = 1;
         else if (strcmp(s, "--ortho") == 0) a->ortho = 1;
         else if (s[0] == '-' && s[1] != '\0') return usage_error("unknown option '%s'", s);
@@ -167,40 +173,73 @@ static int write_png(const sr_framebuffer *fb, const char *out)
     return r == SR_OK ? 0 : 1;
 }
 
-/* The camera looks at the centre of the bounding box from direction (az, el), far enough for the
-   bounding sphere (box centre, farthest vertex) to fill the view. */
+/* The view direction (from the target towards the eye) for azimuth az around the up axis from the
+   front axis and elevation el above the ground plane. Frames (side, up, front): y up (x, y, z),
+   z up (x, z, -y), x up (z, x, y): each right-handed, so "front" looks at the model's front. */
+static void view_direction(const args *a, float dir[3], float up[3])
+{
+    static const float frames[3][3][3] = {{{0, 0, 1}, {1, 0, 0}, {0, 1, 0}},
+                                          {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                                          {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}}};
+    const float (*f)[3] = frames[a->up];
+    float cs = cosf(a->el * 0.0174533f) * sinf(a->az * 0.0174533f), sn = sinf(a->el * 0.0174533f);
+    float cc = cosf(a->el * 0.0174533f) * cosf(a->az * 0.0174533f);
+    int i;
+    for (i = 0; i < 3; i++) {
+        dir[i] = cs * f[0][i] + sn * f[1][i] + cc * f[2][i];
+        up[i] = f[1][i];
+    }
+}
+
+static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* A fitted view: the camera looks along the chosen direction at the middle of the mesh's extent
+   across the view, from the nearest distance at which every vertex is inside the frame with a 5%
+   border (perspective: each vertex needs distance >= its depth + its offset / tan(fov/2)). */
 static void frame_camera(const mio_mesh *mesh, const args *a, sr_camera *cam)
 {
-    float lo[3], hi[3], c[3], radius = 0.0f, eye[3], dir[3];
-    float fov = 35.0f, dist, aspect = (float)a->W / (float)a->H;
+    float dir[3], up[3], c[3] = {0, 0, 0}, eye[3], R[3], U[3], lo[3], hi[3], d[3];
+    float fov = 35.0f, aspect = (float)a->W / (float)a->H, t, need = 0.0f, span, half, dist;
     size_t v;
-    int i;
-    for (i = 0; i < 3; i++) { lo[i] = mesh->positions[i]; hi[i] = mesh->positions[i]; }
-    for (v = 0; v < mesh->vertex_count; v++)
-        for (i = 0; i < 3; i++) {
-            float x = mesh->positions[3 * v + (size_t)i];
-            if (x < lo[i]) lo[i] = x;
-            if (x > hi[i]) hi[i] = x;
-        }
-    for (i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
+    int i, k;
+    view_direction(a, dir, up);
+    for (i = 0; i < 3; i++) eye[i] = dir[i];
+    sr_camera_look_at(cam, eye, c, up, fov, aspect, 0.1f, 10.0f); /* only for its right and up axes */
+    for (i = 0; i < 3; i++) { R[i] = cam->right[i]; U[i] = cam->up[i]; }
+    /* extents along (right, up, dir); float is enough for framing */
     for (v = 0; v < mesh->vertex_count; v++) {
         const float *p = mesh->positions + 3 * v;
-        float dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2], r2 = sqrtf(dx * dx + dy * dy + dz * dz);
-        if (r2 > radius) radius = r2;
+        d[0] = dot3(p, R); d[1] = dot3(p, U); d[2] = dot3(p, dir);
+        for (k = 0; k < 3; k++) {
+            if (v == 0 || d[k] < lo[k]) lo[k] = d[k];
+            if (v == 0 || d[k] > hi[k]) hi[k] = d[k];
+        }
     }
-    if (!(radius > 0.0f)) radius = 1.0f;
-    dir[0] = cosf(a->el * 0.0174533f) * sinf(a->az * 0.0174533f);
-    dir[1] = sinf(a->el * 0.0174533f);
-    dir[2] = cosf(a->el * 0.0174533f) * cosf(a->az * 0.0174533f);
-    dist = radius / sinf(0.5f * fov * 0.0174533f) * 1.05f;
-    if (aspect < 1.0f) dist /= aspect;
+    for (i = 0; i < 3; i++) c[i] = 0.5f * (lo[0] + hi[0]) * R[i] + 0.5f * (lo[1] + hi[1]) * U[i] + 0.5f * (lo[2] + hi[2]) * dir[i];
+    span = hi[0] - lo[0];
+    if (hi[1] - lo[1] > span) span = hi[1] - lo[1];
+    if (hi[2] - lo[2] > span) span = hi[2] - lo[2];
+    if (!(span > 0.0f)) span = 1.0f; /* a single point: any scale shows it */
+    half = 0.5f * (hi[2] - lo[2]);   /* the depth of the mesh in front of the centre */
+    t = tanf(0.5f * fov * 0.0174533f) / 1.05f;
+    for (v = 0; v < mesh->vertex_count; v++) {
+        const float *p = mesh->positions + 3 * v;
+        float x = fabsf(dot3(p, R) - dot3(c, R)), y = fabsf(dot3(p, U) - dot3(c, U)), z = dot3(p, dir) - dot3(c, dir);
+        float n = z + (y / t > x / (t * aspect) ? y / t : x / (t * aspect));
+        if (a->ortho) n = 1.05f * (y > x / aspect ? y : x / aspect);
+        if (n > need) need = n;
+    }
+    if (a->ortho) {
+        dist = half + span;
+        for (i = 0; i < 3; i++) eye[i] = c[i] + dir[i] * dist;
+        sr_camera_ortho(cam, eye, c, up, need > 0.0f ? need : 0.5f * span, aspect, dist - half - 0.05f * span,
+                        dist + half + 0.05f * span);
+        return;
+    }
+    dist = need > half + 0.01f * span ? need : half + 0.01f * span;
     for (i = 0; i < 3; i++) eye[i] = c[i] + dir[i] * dist;
-    if (a->ortho)
-        sr_camera_ortho(cam, eye, c, NULL, radius * 1.05f * (aspect < 1.0f ? 1.0f / aspect : 1.0f), aspect, dist - radius * 1.1f,
-                        dist + radius * 1.1f);
-    else
-        sr_camera_look_at(cam, eye, c, NULL, fov, aspect,
-                          (dist - radius * 1.1f) > dist * 0.01f ? dist - radius * 1.1f : dist * 0.01f, dist + radius * 1.1f);
+    sr_camera_look_at(cam, eye, c, up, fov, aspect, (dist - half) * 0.99f > dist * 0.001f ? (dist - half) * 0.99f : dist * 0.001f,
+                      (dist + half) * 1.01f);
 }
 
 /* Draws the mesh with a key light from the viewer's upper left and a dim fill light. */

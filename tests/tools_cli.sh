@@ -11,7 +11,9 @@
 #   meshconv round trips a 30x30 grid through .OBJ .Off .ply .STL (binary and --ascii) with the same
 #   counts and bounding box (STL: 3 vertices per triangle, --weld gives the grid's count back), and a
 #   cube's 12-facet STL soup welds to 8 vertices; render_mesh writes a PNG (signature checked), also
-#   for a .PNG name, and leaves no .tmp.
+#   for a .PNG name, and leaves no .tmp; its view is fitted and turns with --up (a 1x1x10 bar seen
+#   from the front: y up shows the square end, z up the bar upright, x up the bar across, each
+#   filling >= 85% of the image side with a border; pixels read back with python3, skipped without).
 # The binaries are built here with make (with the sanitizer flags of `make sanitize` when
 # TEST_SANITIZE=1; the sizes are small enough that nothing needs shrinking).
 B="$1"
@@ -95,7 +97,7 @@ done
 for o in -o --output --ascii --weld --format --help --version; do
   check "meshconv --help lists $o" grep -q -e " $o" "$tmp/meshconv-help.out"
 done
-for o in -o --output --view --wire --size --shading --ortho --help --version; do
+for o in -o --output --view --up --wire --size --shading --ortho --help --version; do
   check "render_mesh --help lists $o" grep -q -e " $o" "$tmp/render_mesh-help.out"
 done
 
@@ -156,6 +158,7 @@ done
 for v in nan,0 0,nan inf,10 0,90 0,-90 1,2x abc 1e40,0 ''; do
   refuse "rm-view[$v]" 2 "--view '$v'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --view "$v"
 done
+refuse rm-up 2 "--up 'w'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --up w
 refuse rm-shading 2 "--shading 'toon'" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --shading toon
 refuse rm-size-missing 2 "--size needs a value" "$RM" "$tmp/grid.obj" -o "$tmp/out.png" --size
 refuse rm-missing-input 1 "No such file or directory" "$RM" "$tmp/missing.obj" -o "$tmp/out.png"
@@ -169,6 +172,67 @@ for spec in "out.png 64x48" "out2.PNG 33"; do
   check "$1 begins with the PNG signature and no .tmp is left" \
     sh -c "[ \"\$(od -An -tx1 -N8 '$tmp/$1' | tr -d ' \n')\" = 89504e470d0a1a0a ] && [ ! -e '$tmp/$1.tmp' ]"
 done
+
+# ---- render_mesh: a fitted view that turns with --up -------------------------------------------------
+# bbox PNG: "x0 y0 x1 y1 W H" of the pixels that differ from the corner pixel (the background), read
+# with python3's zlib (PNG's five row filters undone here).
+bbox() {
+  python3 - "$1" <<'PY'
+import sys, zlib, struct
+d = open(sys.argv[1], 'rb').read()
+assert d[:8] == b'\x89PNG\r\n\x1a\n'
+pos, idat, w = 8, b'', 0
+while pos < len(d):
+    n, t = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]; pos += 12 + n
+    if t == b'IHDR': w, h, depth, ctype = struct.unpack('>IIBB', body[:10])
+    if t == b'IDAT': idat += body
+bpp = {2: 3, 6: 4}[ctype]; raw = zlib.decompress(idat); stride = w * bpp
+rows, prev, i = [], bytearray(stride), 0
+for y in range(h):
+    f = raw[i]; line = bytearray(raw[i + 1:i + 1 + stride]); i += 1 + stride
+    for x in range(stride):
+        a = line[x - bpp] if x >= bpp else 0; b = prev[x]; c = prev[x - bpp] if x >= bpp else 0
+        if f == 1: line[x] = (line[x] + a) & 255
+        elif f == 2: line[x] = (line[x] + b) & 255
+        elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
+        elif f == 4:
+            p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+            line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+    rows.append(line); prev = line
+bg = rows[0][0:3]; x0, y0, x1, y1 = w, h, -1, -1
+for y in range(h):
+    for x in range(w):
+        if sum(abs(rows[y][x * bpp + k] - bg[k]) for k in range(3)) > 24:
+            x0, y0, x1, y1 = min(x0, x), min(y0, y), max(x1, x), max(y1, y)
+print(x0, y0, x1, y1, w, h)
+PY
+}
+if command -v python3 >/dev/null 2>&1; then
+  # a bar 10 long in z: front with y up sees its 1x1 end; z up turns it upright; x up lays it across
+  printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 10\nv 1 0 10\nv 1 1 10\nv 0 1 10\n%s\n' "$(sed -n '/^f/p' "$tmp/cube.obj")" >"$tmp/bar.obj"
+  for spec in "y persp" "z persp" "x persp" "z ortho" "x ortho"; do
+    set -- $spec
+    extra=""; [ "$2" = ortho ] && extra=--ortho
+    run "rm-up-$1-$2" "$RM" "$tmp/bar.obj" -o "$tmp/up_$1_$2.png" --size 120x100 --view front --shading flat --up "$1" $extra
+    check "render_mesh --up $1 ($2) exits 0 ($(cat "$tmp/rm-up-$1-$2.err"))" [ "$rc" -eq 0 ]
+    set -- $(bbox "$tmp/up_$1_$2.png") "$1" "$2"
+    echo "render_mesh --up $7 ($8) front of a 1x1x10 bar: mesh pixels $1,$2-$3,$4 of $5x$6"
+    bw=$(($3 - $1 + 1)); bh=$(($4 - $2 + 1))
+    # fitted with a 5% border: the long side fills >= 85% of its image side, and no pixel touches the edge
+    check "--up $7 ($8): the mesh inside the frame with a border (box $1,$2-$3,$4 of $5x$6)" \
+      test "$1" -ge 1 -a "$2" -ge 1 -a "$3" -le $(($5 - 2)) -a "$4" -le $(($6 - 2))
+    case "$7" in
+      y) check "--up y front: the bar's 1x1 end fills the height (box ${bw}x$bh of $5x$6)" \
+           test $((bh * 100)) -ge $(($6 * 85)) -a $((bw * 2)) -ge "$bh" -a $((bh * 2)) -ge "$bw" ;;
+      z) check "--up z front: the bar stands upright, filling the height (box ${bw}x$bh of $5x$6)" \
+           test $((bh * 100)) -ge $(($6 * 85)) -a "$bh" -ge $((5 * bw)) ;;
+      x) check "--up x front: the bar lies across, filling the width (box ${bw}x$bh of $5x$6)" \
+           test $((bw * 100)) -ge $(($5 * 85)) -a "$bw" -ge $((5 * bh)) ;;
+    esac
+  done
+else
+  echo "SKIP render_mesh fitted-view checks: python3 not installed"; skip=$((skip + 15))
+fi
 
 echo "TESTCOUNT tools_cli passed=$pass failed=$fail skipped=$skip"
 [ $fail -eq 0 ]
