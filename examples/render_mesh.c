@@ -242,6 +242,34 @@ static void frame_camera(const mio_mesh *mesh, const args *a, sr_camera *cam)
                       (dist + half) * 1.01f);
 }
 
+/* Moves the mesh's bounding box centre to the origin and scales its largest side to 1 (in double),
+   so that framing and rasterizing work alike for any finite size: 3e38 or 1e-30 wide meshes would
+   otherwise overflow or underflow in float and render as an empty picture. The picture is the same
+   up to rounding: the camera is fitted and the lights are directional. */
+static void normalize_mesh(mio_mesh *mesh)
+{
+    double lo[3], hi[3], c[3], span = 0.0;
+    size_t v;
+    int k;
+    for (k = 0; k < 3; k++) lo[k] = hi[k] = mesh->positions[k];
+    for (v = 0; v < mesh->vertex_count; v++)
+        for (k = 0; k < 3; k++) {
+            double x = mesh->positions[3 * v + (size_t)k];
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    for (k = 0; k < 3; k++) {
+        c[k] = 0.5 * (lo[k] + hi[k]);
+        if (hi[k] - lo[k] > span) span = hi[k] - lo[k];
+    }
+    if (!(span > 0.0)) span = 1.0;
+    for (v = 0; v < mesh->vertex_count; v++)
+        for (k = 0; k < 3; k++) {
+            float *x = &mesh->positions[3 * v + (size_t)k];
+            *x = (float)((*x - c[k]) / span);
+        }
+}
+
 /* Draws the mesh with a key light from the viewer's upper left and a dim fill light. */
 static sr_result draw(sr_framebuffer *fb, const sr_camera *cam, const mio_mesh *mesh, const float *normals, const args *a)
 {
@@ -293,6 +321,7 @@ int main(int argc, char **argv)
         fprintf(stderr, " (%s: %s)\n", mio_result_string(mr), mio_result_description(mr));
         return 1;
     }
+    normalize_mesh(&mesh);
     frame_camera(&mesh, &a, &cam);
     normals = (float *)malloc(mesh.vertex_count * 3 * sizeof(float) + 1);
     if (!normals) { fprintf(stderr, "render_mesh: out of memory\n"); mio_free_mesh(&mesh); return 1; }

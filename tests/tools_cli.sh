@@ -13,7 +13,8 @@
 #   cube's 12-facet STL soup welds to 8 vertices; render_mesh writes a PNG (signature checked), also
 #   for a .PNG name, and leaves no .tmp; its view is fitted and turns with --up (a 1x1x10 bar seen
 #   from the front: y up shows the square end, z up the bar upright, x up the bar across, each
-#   filling >= 85% of the image side with a border; pixels read back with python3, skipped without).
+#   filling >= 85% of the image side with a border; triangles 6e38 and 6e-30 wide draw the same
+#   pixel box as a unit one; pixels read back with python3, skipped without).
 # The binaries are built here with make (with the sanitizer flags of `make sanitize` when
 # TEST_SANITIZE=1; the sizes are small enough that nothing needs shrinking).
 B="$1"
@@ -230,8 +231,21 @@ if command -v python3 >/dev/null 2>&1; then
            test $((bw * 100)) -ge $(($5 * 85)) -a "$bw" -ge $((5 * bh)) ;;
     esac
   done
+  # any finite size renders: a triangle 6e38 wide and one 3e-30 wide fill the frame like a unit one
+  for sz in 3e38 3e-30 1; do
+    printf 'v -%s 0 0\nv %s 0 0\nv 0 %s 0\nf 1 2 3\n' $sz $sz $sz >"$tmp/tri_$sz.obj"
+    run "rm-tri-$sz" "$RM" "$tmp/tri_$sz.obj" -o "$tmp/tri_$sz.png" --size 64 --view front
+    check "render_mesh of a triangle of size $sz exits 0" [ "$rc" -eq 0 ]
+    box=$(bbox "$tmp/tri_$sz.png")
+    [ $sz = 1 ] && unit_box="$box"
+    set -- $box
+    check "triangle of size $sz: drawn, filling >= 85% of the width (box $box)" test "$3" -ge 0 -a $((($3 - $1 + 1) * 100)) -ge $((64 * 85))
+  done
+  for sz in 3e38 3e-30; do
+    check "triangle of size $sz covers the same pixels box as size 1 ($(bbox "$tmp/tri_$sz.png") vs $unit_box)" test "$(bbox "$tmp/tri_$sz.png")" = "$unit_box"
+  done
 else
-  echo "SKIP render_mesh fitted-view checks: python3 not installed"; skip=$((skip + 15))
+  echo "SKIP render_mesh fitted-view checks: python3 not installed"; skip=$((skip + 23))
 fi
 
 echo "TESTCOUNT tools_cli passed=$pass failed=$fail skipped=$skip"
