@@ -2208,6 +2208,47 @@ static int dfm__cmp_i32(const void *x, const void *y)
     return a < b ? -1 : a > b;
 }
 
+/* Ascending sort of distinct row indices without qsort's comparison calls: quicksort (median of
+   three, Hoare partition, the smaller part first so the stack stays below 64), insertion sort
+   below 16 entries. Distinct keys: every correct sort gives the same result. */
+static void dfm__sort_rows(int32_t *a, size_t n)
+{
+    size_t stack[128], top = 0, lo = 0, hi = n, i, j;
+    for (;;) {
+        while (hi - lo > 16) {
+            int32_t x = a[lo], y = a[lo + (hi - lo) / 2], z = a[hi - 1], piv, t;
+            piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+            i = lo - 1;
+            j = hi;
+            for (;;) {
+                do i++; while (a[i] < piv);
+                do j--; while (a[j] > piv);
+                if (i >= j) break;
+                t = a[i];
+                a[i] = a[j];
+                a[j] = t;
+            }
+            if (j + 1 - lo < hi - j - 1) { /* [lo, j] and [j + 1, hi) */
+                stack[top++] = j + 1;
+                stack[top++] = hi;
+                hi = j + 1;
+            } else {
+                stack[top++] = lo;
+                stack[top++] = j + 1;
+                lo = j + 1;
+            }
+        }
+        for (i = lo + 1; i < hi; i++) {
+            int32_t v = a[i];
+            for (j = i; j > lo && a[j - 1] > v; j--) a[j] = a[j - 1];
+            a[j] = v;
+        }
+        if (top == 0) break;
+        hi = stack[--top];
+        lo = stack[--top];
+    }
+}
+
 /* Workspace of the symbolic analysis, one home for every temporary array (freed together). */
 typedef struct dfm__symbolic {
     size_t *ust;        /* n + 2: the upper pattern of the permuted matrix by columns ... */
@@ -2609,7 +2650,7 @@ static dfm_result dfm__supernode_rows(dfm_chol *c, const dfm_chol_options *opt, 
         size_t cnt = dfm__gather_rows(c, sn, s);
         int32_t *rs = c->rows + c->sup_rowptr[sn];
         if (cnt != c->sup_rowptr[sn + 1] - c->sup_rowptr[sn]) return DFM_ERR_INVALID_ARGUMENT; /* cannot happen */
-        qsort(s->buf + nc, cnt - nc, sizeof(int32_t), dfm__cmp_i32);
+        dfm__sort_rows(s->buf + nc, cnt - nc);
         memcpy(rs, s->buf, cnt * sizeof(int32_t));
         if (cnt > c->max_rows) c->max_rows = cnt;
         for (r = 0; r < cnt; r++) s->relmap[rs[r]] = (int32_t)r;

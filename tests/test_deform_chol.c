@@ -1293,6 +1293,37 @@ static void ref_gemm(size_t m, size_t k, size_t p, const double *A, size_t lda, 
         }
 }
 
+/* the analysis's row sort equals qsort on distinct keys, sizes 0 .. 600, shuffled and sorted-run
+   inputs (the supernode rows are a union of sorted lists) */
+static void test_sort_rows(void)
+{
+    size_t n, i, bad = 0;
+    int32_t *a = (int32_t *)malloc(600 * sizeof(int32_t)), *b = (int32_t *)malloc(600 * sizeof(int32_t));
+    uint64_t h = 12345;
+    for (n = 0; n <= 600; n += (n < 40 ? 1 : 37)) {
+        int runs;
+        for (runs = 0; runs < 2; runs++) {
+            for (i = 0; i < n; i++) a[i] = (int32_t)(3 * i + 7);
+            for (i = n; i > 1; i--) { /* Fisher-Yates, or 4 sorted runs interleaved by blocks */
+                size_t k;
+                int32_t t;
+                h = h * 6364136223846793005ull + 1442695040888963407ull;
+                k = runs ? (i - 1) - (i - 1) % 4 : (size_t)(h >> 33) % i;
+                t = a[i - 1];
+                a[i - 1] = a[k];
+                a[k] = t;
+            }
+            memcpy(b, a, n * sizeof(int32_t));
+            dfm__sort_rows(a, n);
+            qsort(b, n, sizeof(int32_t), dfm__cmp_i32);
+            bad += n > 0 && memcmp(a, b, n * sizeof(int32_t)) != 0;
+        }
+    }
+    T_CHECK_MSG(bad == 0, "%zu inputs sorted differently from qsort", bad);
+    free(a);
+    free(b);
+}
+
 static void test_dense_kernel_bits(void)
 {
     static const size_t ms[] = {1, 3, 4, 7, 8, 9, 15, 16, 17, 24, 31, 33, 40, 64, 70};
@@ -1505,6 +1536,7 @@ int main(int argc, char **argv)
     test_amd_quality();
     test_nested_dissection();
     test_bunny();
+    test_sort_rows();
     test_dense_kernel_bits();
     test_factor_digests();
     return T_END();
