@@ -43,6 +43,8 @@
      100-byte file claiming 10^12 faces fails without allocating. Peak memory is about the output
      arrays plus (mio_read_file only) the whole file; arrays grown while parsing OBJ and ascii STL
      may be up to twice their final size.
+     mio_weld() replaces mesh->positions by a smaller array from the mesh's allocator and needs
+     about 12 bytes per vertex while it runs; on failure the mesh is untouched.
 
    ERRORS
      Every function returns a mio_result; mio_result_string() names it. If the mio_error pointer
@@ -59,6 +61,9 @@
          MIO_ERR_EMPTY; so is a 0-byte input.
        - Numbers must be complete tokens: "3.1+e2" is a syntax error, not 3.1.
        - UTF-16 text (byte order mark FE FF or FF FE) is MIO_ERR_UNSUPPORTED; a UTF-8 BOM is skipped.
+       - Welding is a separate call, mio_weld(), not a reader option, so that a caller sees the
+         file's own vertices first; it joins only exactly equal positions (-0 equals +0), never
+         within a tolerance, keeps the first occurrence and never reorders the kept vertices.
 
    FORMATS
      OBJ  "v x y z [w | r g b ...]" (anything after z is ignored) and "f" with i, i/t, i//n, i/t/n

@@ -121,6 +121,17 @@ run mc-keep sh -c "ulimit -f 2; trap '' XFSZ; exec '$MC' '$tmp/grid.obj' -o '$tm
 check "mc-keep: exit 1 (got $rc)" [ "$rc" -eq 1 ]
 check "mc-keep: the existing output is unchanged and no .tmp is left" sh -c "[ \"\$(cat '$tmp/keep.obj')\" = old ] && [ ! -e '$tmp/keep.obj.tmp' ]"
 
+mkdir "$tmp/odir.obj"
+run mc-dir "$MC" "$tmp/grid.obj" -o "$tmp/odir.obj"
+check "mc-dir: an output that is a directory: exit 1 naming the cause ($(cat "$tmp/mc-dir.err"))" \
+  sh -c "[ $rc -eq 1 ] && grep -q 'cannot rename' '$tmp/mc-dir.err' && [ ! -e '$tmp/odir.obj.tmp' ]"
+rmdir "$tmp/odir.obj"
+cp "$tmp/cube.obj" "$tmp/same.obj"
+run mc-same "$MC" "$tmp/same.obj" -o "$tmp/same.obj"
+run mc-same-r "$MC" "$tmp/same.obj"
+check "mc-same: input and output the same file: exit 0 and the file reads as the cube ($(cat "$tmp/mc-same.err"))" \
+  test "$rc" -eq 0 -a "$(field mc-same-r vertices)" = 8 -a "$(field mc-same-r triangles)" = 12
+
 # ---- meshconv: round trips -------------------------------------------------------------------------
 run mc-grid "$MC" "$tmp/grid.obj"
 V=$(field mc-grid vertices); T=$(field mc-grid triangles); BOX=$(field mc-grid bbox)
