@@ -2379,62 +2379,10 @@ done:
     return 1;
 }
 
-/* Any hit in [tmin, tmax]: children in slot order, the first hit ends the search. */
-static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax)
-{
-    const dm__wnode *wn = bvh->wnodes;
-    const dm__tri4 *tris = bvh->blocks;
-    dm__entry stack[DM__WSTACK];
-    uint32_t ref = 0, count = 0;
-    size_t sp = 0;
-    for (;;) {
-        if (count) {
-            const dm__tri4 *q = &tris[ref >> 2];
-            uint32_t left = count;
-            for (;;) {
-                float U[8], V[8], W[8];
-                int pass, nb, m = dm__leaf_lanes(r, q, left, U, V, W, &pass, &nb);
-                while (m) {
-                    const int i = (int)DM__CTZ((uint32_t)m), b = i >> 2, l = i & 3;
-                    float t, u, v;
-                    m &= m - 1;
-                    if (dm__lane_hit(r, q + b, l, (pass >> i) & 1, U + 4 * b, V + 4 * b, W + 4 * b, tmin, tmax, &t,
-                                     &u, &v))
-                        return 1;
-                }
-                if (left <= 4 * (uint32_t)nb) break;
-                left -= 4 * (uint32_t)nb;
-                q += nb;
-            }
-        } else {
-            const dm__wnode *n = &wn[ref];
-            float te[DM__W];
-            int mask = dm__boxw(n, r, tmin, tmax, te);
-            if (mask) {
-                uint32_t i, m = (uint32_t)mask, take = DM__CTZ(m);
-                DM__PREFETCH_CHILD(wn, tris, n, take);
-                for (m &= m - 1; m; m &= m - 1) {
-                    i = DM__CTZ(m);
-                    DM__PREFETCH_CHILD(wn, tris, n, i);
-                    stack[sp].ref = n->ref[i];
-                    stack[sp].count = n->count[i];
-                    stack[sp++].t = te[i];
-                }
-                ref = n->ref[take];
-                count = n->count[take];
-                continue;
-            }
-        }
-        if (sp == 0) return 0;
-        sp--;
-        ref = stack[sp].ref;
-        count = stack[sp].count;
-    }
-}
-
-/* Every hit in [tmin, tmax], up to cap of them, into out (in traversal order); returns their
-   number, or cap + 1 when there are more. The hits are those dm__closest_hit would find with the
-   same ray and bounds: the same test per triangle. */
+/* Every hit in [tmin, tmax], up to cap of them, into out (in traversal order, children in slot
+   order); returns their number, or cap + 1 when there are more (so cap 0 is an any-hit query that
+   ends at the first). The hits are those dm__closest_hit would find with the same ray and bounds:
+   the same test per triangle. */
 static size_t dm__all_hits(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax, dm_hit *out, size_t cap)
 {
     const dm__wnode *wn = bvh->wnodes;
@@ -2472,8 +2420,10 @@ static size_t dm__all_hits(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, 
             int mask = dm__boxw(nd, r, tmin, tmax, te);
             if (mask) {
                 uint32_t i, m = (uint32_t)mask, take = DM__CTZ(m);
+                DM__PREFETCH_CHILD(wn, tris, nd, take);
                 for (m &= m - 1; m; m &= m - 1) {
                     i = DM__CTZ(m);
+                    DM__PREFETCH_CHILD(wn, tris, nd, i);
                     stack[sp].ref = nd->ref[i];
                     stack[sp].count = nd->count[i];
                     stack[sp++].t = te[i];
@@ -2500,6 +2450,12 @@ static const dm_hit *dm__first_hit_from(const dm_hit *h, size_t n, float tmin)
         if (h[i].t >= tmin && (!best || h[i].t < best->t || (h[i].t == best->t && h[i].triangle < best->triangle)))
             best = h + i;
     return best;
+}
+
+/* Any hit in [tmin, tmax]: the first one found ends the search. */
+static int dm__any_hit(const dm_bvh *bvh, const dm__ray_pre *r, float tmin, float tmax)
+{
+    return dm__all_hits(bvh, r, tmin, tmax, NULL, 0) > 0;
 }
 
 static void dm__clear_hit(dm_hit *hit)
