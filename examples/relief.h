@@ -65,7 +65,7 @@
 
    PERFORMANCE
      One thread, 2-core AMD EPYC virtual machine: a 512 x 512 synthesis from a 384 x 384 example
-     with the defaults takes about 0.12 s (about 45% of it in the graph cuts, 10% in the
+     with the defaults takes about 0.14 s (about 45% of it in the graph cuts, 10% in the
      Poisson bands, 8% each in the fill search and the feature patches' sampling), its normal
      map about 1 ms, the emboss baseline about 25 ms.
 

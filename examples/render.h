@@ -151,11 +151,11 @@
 
    PERFORMANCE
      One thread. 1024 x 1024 per-pixel Phong with back-face culling (bench/bench_raster), on the
-     2-core AMD EPYC virtual machine this was written on: the 70k-triangle Stanford bunny in about
-     18 ms a frame, a 1M-triangle sphere in about 57 ms; Mesa llvmpipe on one thread with a GLSL
-     Phong shader took about 27 ms and 114 ms. With few large triangles the balance turns: a
-     180-triangle sphere filling the frame takes about 21 ms here and 10 ms in llvmpipe, which
-     shades 8 pixels per instruction. Each draw shades every covered pixel once, whatever the
+     2-core virtual machine this was written on: the 70k-triangle Stanford bunny in about 20 ms a
+     frame, a 1M-triangle sphere in about 69 ms; Mesa llvmpipe on one thread with a GLSL Phong
+     shader took about 26 ms and 136 ms. With few large triangles the balance turns: llvmpipe
+     shades 8 pixels per instruction, so a sphere of a few hundred triangles filling the frame is
+     about twice as fast there. Each draw shades every covered pixel once, whatever the
      overdraw. The ray marchers are plain per-pixel loops: use them at preview sizes. An 800 x 600
      relief-mapped cube (6 quads of 512^2 and 384^2 maps, 10 + 5 search steps, a shadow search
      per pixel) takes about 115 ms; llvmpipe on one thread with the same GLSL search about 93 ms
