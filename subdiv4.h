@@ -866,6 +866,82 @@ static size_t sd4__cell(sd4__terrain *t, size_t ci, size_t cj, size_t dc, size_t
     return count;
 }
 
+/* The split depth of each refined quad (the smallest d with rho / 2^d <= epsilon, at most
+   max_split; rho its longest edge) into dcell, and of each edge (the larger of its quads') into
+   deh (horizontal, cx x NY) and dev (vertical, NX x cy); returns the largest. */
+static size_t sd4__split_depths(const double *fine, size_t NX, size_t NY, double cell, double epsilon, int max_split,
+                                unsigned char *dcell, unsigned char *deh, unsigned char *dev)
+{
+    size_t cx = NX - 1, cy = NY - 1, i, j, D = 0;
+    for (j = 0; j < cy; j++)
+        for (i = 0; i < cx; i++) {
+            const double *f = fine + j * NX + i;
+            double e[4], rho = 0.0;
+            int k, dep = 0;
+            e[0] = f[1] - f[0];
+            e[1] = f[NX + 1] - f[1];
+            e[2] = f[NX + 1] - f[NX];
+            e[3] = f[NX] - f[0];
+            for (k = 0; k < 4; k++) {
+                double len = sqrt(cell * cell + e[k] * e[k]);
+                if (len > rho) rho = len;
+            }
+            if (epsilon > 0.0)
+                while (rho > epsilon && dep < max_split) { rho *= 0.5; dep++; }
+            dcell[j * cx + i] = (unsigned char)dep;
+            if ((size_t)dep > D) D = (size_t)dep;
+        }
+    for (j = 0; j < NY; j++)
+        for (i = 0; i < cx; i++) {
+            unsigned char a = j > 0 ? dcell[(j - 1) * cx + i] : 0, b = j < cy ? dcell[j * cx + i] : 0;
+            deh[j * cx + i] = a > b ? a : b;
+        }
+    for (j = 0; j < cy; j++)
+        for (i = 0; i < NX; i++) {
+            unsigned char a = i > 0 ? dcell[j * cx + i - 1] : 0, b = i < cx ? dcell[j * cx + i] : 0;
+            dev[j * NX + i] = a > b ? a : b;
+        }
+    return D;
+}
+
+/* the mesh of t into out (t keeps none of it) */
+static void sd4__terrain_hand_over(sd4__terrain *t, const sd4_allocator *al, sd4_mesh *out)
+{
+    out->positions = t->pos;
+    out->vertex_count = t->nv;
+    out->indices = t->idx;
+    out->triangle_count = t->nt;
+    out->face_normals = t->fn;
+    out->allocator = *al;
+    t->pos = NULL;
+    t->idx = NULL;
+    t->fn = NULL;
+}
+
+/* what t still holds */
+static void sd4__terrain_free(const sd4_allocator *al, sd4__terrain *t)
+{
+    sd4__free(al, t->keys);
+    sd4__free(al, t->vals);
+    sd4__free(al, t->pos);
+    sd4__free(al, t->idx);
+    sd4__free(al, t->fn);
+}
+
+/* 1 when the n quads of depths dcell make more than max_tris triangles for certain: every small
+   quad is at least two (a divergent w or a tiny epsilon would otherwise run for minutes before
+   the exact count) */
+static int sd4__least_triangles_above(const unsigned char *dcell, size_t n, size_t max_tris)
+{
+    size_t j, tris = 0;
+    for (j = 0; j < n; j++) {
+        size_t least = (size_t)2 << (2 * dcell[j]);
+        if (least > max_tris - tris) return 1;
+        tris += least;
+    }
+    return 0;
+}
+
 SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
 {
     sd4_allocator al;
@@ -914,45 +990,10 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
     /* (2) the four-point scheme on the heights */
     if ((r = sd4_grid_refine(control, nx, ny, 1, d->omega, levels, &o, fine, NX * NY)) != SD4_OK) goto done;
     if (d->progress && d->progress(d->progress_user, 0.4f)) { r = SD4_CANCELLED; goto done; }
-    /* (3) split depth per refined quad: smallest d with rho / 2^d <= epsilon */
+    /* (3) split depth per refined quad and per edge; a mesh above max_triangles refused early */
     cell = h0 / (double)((size_t)1 << levels);
-    t.D = 0;
-    for (j = 0; j < cy; j++)
-        for (i = 0; i < cx; i++) {
-            const double *f = fine + j * NX + i;
-            double e[4], rho = 0.0;
-            int k, dep = 0;
-            e[0] = f[1] - f[0];
-            e[1] = f[NX + 1] - f[1];
-            e[2] = f[NX + 1] - f[NX];
-            e[3] = f[NX] - f[0];
-            for (k = 0; k < 4; k++) {
-                double len = sqrt(cell * cell + e[k] * e[k]);
-                if (len > rho) rho = len;
-            }
-            if (d->epsilon > 0.0)
-                while (rho > d->epsilon && dep < max_split) { rho *= 0.5; dep++; }
-            dcell[j * cx + i] = (unsigned char)dep;
-            if ((size_t)dep > t.D) t.D = (size_t)dep;
-        }
-    /* every edge takes the larger depth of its quads */
-    for (j = 0; j < NY; j++)
-        for (i = 0; i < cx; i++) {
-            unsigned char a = j > 0 ? dcell[(j - 1) * cx + i] : 0, b = j < cy ? dcell[j * cx + i] : 0;
-            deh[j * cx + i] = a > b ? a : b;
-        }
-    for (j = 0; j < cy; j++)
-        for (i = 0; i < NX; i++) {
-            unsigned char a = i > 0 ? dcell[j * cx + i - 1] : 0, b = i < cx ? dcell[j * cx + i] : 0;
-            dev[j * NX + i] = a > b ? a : b;
-        }
-    /* refuse a mesh above max_triangles before counting it exactly: every small quad is at least
-       two triangles (a divergent w or a tiny epsilon would otherwise run for minutes) */
-    for (j = 0, tris = 0; j < cy * cx; j++) {
-        size_t least = (size_t)2 << (2 * dcell[j]);
-        if (least > max_tris - tris) { r = SD4_ERR_TOO_LARGE; goto done; }
-        tris += least;
-    }
+    t.D = sd4__split_depths(fine, NX, NY, cell, d->epsilon, max_split, dcell, deh, dev);
+    if (sd4__least_triangles_above(dcell, cx * cy, max_tris)) { r = SD4_ERR_TOO_LARGE; goto done; }
     tris = 0;
     /* count triangles and bound the vertices */
     t.fine = fine;
@@ -986,15 +1027,7 @@ SD4DEF sd4_result sd4_terrain_build(const sd4_terrain_desc *d, sd4_mesh *out)
             sd4__cell(&t, i, j, dcell[j * cx + i], dev[j * NX + i], dev[j * NX + i + 1], deh[j * cx + i],
                       deh[(j + 1) * cx + i]);
     if (!sd4__all_finite_f(t.pos, 3 * t.nv) || !sd4__all_finite_f(t.fn, 3 * t.nt)) { r = SD4_ERR_NOT_FINITE; goto done; }
-    out->positions = t.pos;
-    out->vertex_count = t.nv;
-    out->indices = t.idx;
-    out->triangle_count = t.nt;
-    out->face_normals = t.fn;
-    out->allocator = al;
-    t.pos = NULL;
-    t.idx = NULL;
-    t.fn = NULL;
+    sd4__terrain_hand_over(&t, &al, out);
     if (d->progress && d->progress(d->progress_user, 1.0f)) { sd4_free_mesh(out); r = SD4_CANCELLED; }
 done:
     sd4__free(&al, control);
@@ -1002,11 +1035,7 @@ done:
     sd4__free(&al, dcell);
     sd4__free(&al, deh);
     sd4__free(&al, dev);
-    sd4__free(&al, t.keys);
-    sd4__free(&al, t.vals);
-    sd4__free(&al, t.pos);
-    sd4__free(&al, t.idx);
-    sd4__free(&al, t.fn);
+    sd4__terrain_free(&al, &t);
     return r;
 }
 
