@@ -69,7 +69,14 @@
 
    ERRORS
      Functions return sr_result (SR_OK = 0); sr_result_string() names it. Invalid arguments give
-     SR_ERR_INVALID_ARGUMENT and leave the framebuffer untouched. Readers never crash on bad
+     SR_ERR_INVALID_ARGUMENT and leave the framebuffer untouched; among them every draw's camera
+     (the setters return void, so each draw checks it): a NaN or infinite eye, target, field of
+     view, aspect or matrix, eye == target, a field of view (or ortho half height) or aspect that
+     is not positive; a NaN or infinite vertex, model matrix, relief frame, terrain origin,
+     spacing, step or height scale, volume box or step. SR_ERR_NOT_FINITE: finite input whose
+     transform is not (a vertex at 3e38 overflows the camera's matrix; a terrain whose heights
+     times height_scale overflow); nothing is drawn. No float becomes an int unchecked: NaN
+     colours write 0, NaN texture coordinates sample the first texel. Readers never crash on bad
      data and hold no memory after a failure: SR_ERR_TRUNCATED (the data ends early),
      SR_ERR_CORRUPT (a malformed header, chunk order, deflate stream, filter type, palette index,
      a sample above maxval, a NaN or infinity in a PFM), SR_ERR_CHECKSUM (any chunk's CRC-32, or
@@ -215,7 +222,8 @@ typedef enum sr_result {
     SR_ERR_CORRUPT,          /* readers: a malformed header, chunk, deflate stream or sample */
     SR_ERR_CHECKSUM,         /* readers: a PNG chunk's CRC-32 or the zlib stream's Adler-32 is wrong */
     SR_ERR_UNSUPPORTED,      /* readers: not a PNG / PNM / PFM file, or a feature this reader lacks */
-    SR_CANCELLED             /* a progress callback returned nonzero */
+    SR_CANCELLED,            /* a progress callback returned nonzero */
+    SR_ERR_NOT_FINITE        /* finite input whose transform is not (a vertex near FLT_MAX overflows) */
 } sr_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -642,6 +650,7 @@ SRDEF const char *sr_result_string(sr_result r)
     case SR_ERR_CHECKSUM: return "SR_ERR_CHECKSUM";
     case SR_ERR_UNSUPPORTED: return "SR_ERR_UNSUPPORTED";
     case SR_CANCELLED: return "SR_CANCELLED";
+    case SR_ERR_NOT_FINITE: return "SR_ERR_NOT_FINITE";
     }
     return "SR_ERR_?";
 }
@@ -683,8 +692,31 @@ static SR__INLINE float sr__normalize(float v[3])
     if (l > 0.0f) { float s = 1.0f / l; v[0] *= s; v[1] *= s; v[2] *= s; }
     return l;
 }
-static SR__INLINE float sr__clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+/* NaN gives lo: every float that becomes an int here goes through a clamp first (converting NaN,
+   or a float outside int's range, is undefined behaviour) */
+static SR__INLINE float sr__clampf(float x, float lo, float hi) { return x > lo ? (x < hi ? x : hi) : lo; }
 static int sr__finite3(const float *p) { return p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f; }
+static int sr__finite_n(const float *p, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!(p[i] - p[i] == 0.0f)) return 0;
+    return 1;
+}
+
+/* A camera the draws can use: every field finite, a unit forward (eye != target), a positive
+   field of view (or half height) and aspect. Not checked by the camera setters (they return void),
+   so each draw checks it. */
+static int sr__camera_ok(const sr_camera *cam)
+{
+    float f = cam->forward[0] * cam->forward[0] + cam->forward[1] * cam->forward[1] + cam->forward[2] * cam->forward[2];
+    if (!sr__finite_n(cam->view, 16) || !sr__finite_n(cam->proj, 16) || !sr__finite_n(cam->viewproj, 16) ||
+        !sr__finite3(cam->eye) || !sr__finite3(cam->right) || !sr__finite3(cam->up) || !(fabsf(f - 1.0f) < 1e-3f))
+        return 0;
+    if (!(cam->aspect > 0.0f && cam->aspect < 1e30f)) return 0;
+    return cam->orthographic ? cam->half_height > 0.0f && cam->half_height < 1e30f
+                             : cam->tan_half_fovy > 0.0f && cam->tan_half_fovy < 1e30f;
+}
 
 /* r = a * b, column-major 4x4 */
 static void sr__mat_mul(const float a[16], const float b[16], float r[16])
@@ -1001,7 +1033,7 @@ static const sr_light *sr__lights(const sr_light *lights, int count, const sr_ca
 /* bilinear lookup of up to 4 channels; texel centres at (i+0.5)/w */
 static void sr__sample(const sr_image *img, float u, float v, float *out)
 {
-    float x = u * (float)img->width - 0.5f, y = v * (float)img->height - 0.5f;
+    float x = sr__clampf(u * (float)img->width - 0.5f, -1e9f, 1e9f), y = sr__clampf(v * (float)img->height - 0.5f, -1e9f, 1e9f);
     float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy;
     int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1, c, ch = img->channels;
     const float *d = img->data;
@@ -1105,8 +1137,10 @@ static void sr__to_screen(sr__cv *v, float w, float h)
     v->sx = (v->clip[0] * iw * 0.5f + 0.5f) * w;
     v->sy = (0.5f - v->clip[1] * iw * 0.5f) * h;
     v->sz = v->clip[2] * iw * 0.5f + 0.5f;
-    v->fx = (int32_t)floorf(v->sx * SR__SUBPIX + 0.5f);
-    v->fy = (int32_t)floorf(v->sy * SR__SUBPIX + 0.5f);
+    /* inside the guard band |sx|, |sy| < 3 x 16384 px (2^24 in 1/256 px); the clamp only keeps a
+       w near zero (1/w infinite) from becoming a float-to-int overflow */
+    v->fx = (int32_t)floorf(sr__clampf(v->sx * SR__SUBPIX + 0.5f, -67108864.0f, 67108864.0f));
+    v->fy = (int32_t)floorf(sr__clampf(v->sy * SR__SUBPIX + 0.5f, -67108864.0f, 67108864.0f));
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -1557,8 +1591,9 @@ SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_
     sr__cv *cv;
     float *extra;
     int gouraud;
-    if (!fb || !fb->color || !cam || !d) return SR_ERR_INVALID_ARGUMENT;
+    if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam)) return SR_ERR_INVALID_ARGUMENT;
     if ((d->vertex_count && !d->positions) || (d->triangle_count && !d->indices)) return SR_ERR_INVALID_ARGUMENT;
+    if (d->model && !sr__finite_n(d->model, 16)) return SR_ERR_INVALID_ARGUMENT;
     if (d->triangle_count >= (size_t)SR__BACK_BIT || d->vertex_count > (size_t)UINT32_MAX) return SR_ERR_TOO_LARGE;
     if (d->normal_map && !sr__image_ok(d->normal_map, 3)) return SR_ERR_INVALID_ARGUMENT;
     nv = d->vertex_count;
@@ -1616,6 +1651,7 @@ SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_
         o->clip[1] = mvp[1] * p[0] + mvp[5] * p[1] + mvp[9] * p[2] + mvp[13];
         o->clip[2] = mvp[2] * p[0] + mvp[6] * p[1] + mvp[10] * p[2] + mvp[14];
         o->clip[3] = mvp[3] * p[0] + mvp[7] * p[1] + mvp[11] * p[2] + mvp[15];
+        if (!sr__finite_n(o->clip, 4) || (d->model && !sr__finite3(s.wpos + 3 * v))) return SR_ERR_NOT_FINITE;
         o->code = sr__outcode(o->clip);
         if (!(o->code & SR__CLIP_BITS)) sr__to_screen(o, (float)fb->width, (float)fb->height);
         else { o->sx = o->sy = o->sz = o->invw = 0.0f; o->fx = o->fy = 0; }
@@ -1928,7 +1964,11 @@ SRDEF sr_result sr_draw_relief(sr_framebuffer *fb, const sr_camera *cam, const s
     const sr_light *lights;
     float spec_cut;
     int nl, x, y, box[4];
-    if (!fb || !fb->color || !cam || !d || !sr__image_ok(&d->depth, 1) || !(d->depth_scale > 0.0f))
+    if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam) || !sr__image_ok(&d->depth, 1) ||
+        !(d->depth_scale > 0.0f && d->depth_scale < 1e30f))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (!sr__finite3(d->origin) || !sr__finite3(d->axis_u) || !sr__finite3(d->axis_v) || !(d->curvature_u < 1e30f) ||
+        !(d->curvature_v < 1e30f))
         return SR_ERR_INVALID_ARGUMENT;
     if ((d->albedo && !sr__image_ok(d->albedo, 3)) || (d->normal_map && !sr__image_ok(d->normal_map, 3)))
         return SR_ERR_INVALID_ARGUMENT;
@@ -2041,7 +2081,7 @@ static int sr__ray_box(const float o[3], const float dir[3], const float lo[3], 
         }
     }
     if (a < 0.0f) a = 0.0f;
-    if (a > b) return 0;
+    if (a > b || !(b < 1e30f)) return 0; /* no finite exit: a zero or NaN direction, a NaN origin */
     *t0 = a; *t1 = b;
     return 1;
 }
@@ -2053,7 +2093,11 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
     sr_light head;
     const sr_light *lights;
     int nl, x, y;
-    if (!fb || !fb->color || !cam || !d || !d->heights || d->width < 2 || d->height < 2 || !(d->spacing > 0.0f))
+    if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam) || !d->heights || d->width < 2 || d->height < 2 ||
+        !(d->spacing > 0.0f && d->spacing < 1e30f) || !(d->step >= 0.0f && d->step < 1e30f))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (!(d->origin_x - d->origin_x == 0.0f && d->origin_z - d->origin_z == 0.0f && d->base_y - d->base_y == 0.0f &&
+          d->height_scale - d->height_scale == 0.0f))
         return SR_ERR_INVALID_ARGUMENT;
     n = (size_t)d->width * (size_t)d->height;
     for (i = 0; i < n; i++) {
@@ -2066,6 +2110,7 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
     lo[2] = d->origin_z; hi[2] = d->origin_z + d->spacing * (float)(d->height - 1);
     lo[1] = d->base_y + d->height_scale * (d->height_scale >= 0.0f ? hmin : hmax) - 1e-4f;
     hi[1] = d->base_y + d->height_scale * (d->height_scale >= 0.0f ? hmax : hmin) + 1e-4f;
+    if (!sr__finite3(lo) || !sr__finite3(hi)) return SR_ERR_NOT_FINITE; /* the heights' box overflows */
     step = d->step > 0.0f ? d->step : 0.5f * d->spacing;
     lights = sr__lights(d->lights, d->light_count, cam, &head, &nl);
     spec_cut = sr__spec_cut(&d->material);
@@ -2075,7 +2120,7 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
             size_t pi = (size_t)y * (size_t)fb->width + (size_t)x;
             int k, hit = 0;
             sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
-            if (!sr__ray_box(o, dir, lo, hi, &t0, &t1)) continue;
+            if (!sr__ray_box(o, dir, lo, hi, &t0, &t1) || !(t1 + step > t1)) continue; /* a step under t1's ulp never ends */
             prev = t0;
             for (t = t0; t <= t1 + step; t += step) {
                 float tt = t > t1 ? t1 : t;
@@ -2141,7 +2186,7 @@ SRDEF void sr_volume_desc_default(sr_volume_desc *d)
 static float sr__volume_shadow(const sr_volume_desc *d, const float p[3], const float L[3], float step)
 {
     float t0, t1, tau = 0.0f, t;
-    if (!sr__ray_box(p, L, d->box_min, d->box_max, &t0, &t1)) return 1.0f;
+    if (!sr__ray_box(p, L, d->box_min, d->box_max, &t0, &t1) || !(t1 + step > t1)) return 1.0f;
     for (t = t0 + 0.5f * step; t < t1; t += step) {
         float q[3];
         q[0] = p[0] + t * L[0]; q[1] = p[1] + t * L[1]; q[2] = p[2] + t * L[2];
@@ -2210,9 +2255,12 @@ SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const s
     const sr_light *lights;
     int nl, x, y;
     const float *m;
-    if (!fb || !fb->color || !cam || !d || !d->density) return SR_ERR_INVALID_ARGUMENT;
+    if (!fb || !fb->color || !cam || !d || !d->density || !sr__camera_ok(cam)) return SR_ERR_INVALID_ARGUMENT;
     sr__sub(d->box_max, d->box_min, diag);
-    if (!(diag[0] > 0.0f && diag[1] > 0.0f && diag[2] > 0.0f)) return SR_ERR_INVALID_ARGUMENT;
+    if (!(diag[0] > 0.0f && diag[1] > 0.0f && diag[2] > 0.0f) || !sr__finite3(d->box_min) || !sr__finite3(d->box_max) ||
+        !(d->step >= 0.0f && d->step < 1e30f) || !(d->shadow_step >= 0.0f && d->shadow_step < 1e30f))
+        return SR_ERR_INVALID_ARGUMENT;
+    if (!sr__finite3(diag)) return SR_ERR_NOT_FINITE;
     step = d->step > 0.0f ? d->step : sqrtf(sr__dot(diag, diag)) / 256.0f;
     sstep = d->shadow_step > 0.0f ? d->shadow_step : 2.0f * step;
     thr = d->depth_threshold > 0.0f ? d->depth_threshold : 0.5f;
@@ -2228,6 +2276,7 @@ SRDEF sr_result sr_draw_volume(sr_framebuffer *fb, const sr_camera *cam, const s
             sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
             if (!sr__ray_box(o, dir, d->box_min, d->box_max, &t0, &t1)) continue;
             if (D < 1.0f) sr__depth_limit(m, o, dir, D, &t1);
+            if (!(t1 + step > t1)) continue; /* a step under t1's ulp would never end */
             V[0] = -dir[0]; V[1] = -dir[1]; V[2] = -dir[2];
             for (t = t0 + 0.5f * step; t < t1; t += step) {
                 float p[3], sigma, alpha, rgb[3], kd[3], sdir[3] = {0.0f, 0.0f, 1.0f};
@@ -2408,7 +2457,7 @@ static float sr__shell_frame(const sr__shell *S, const float p[3], const float d
 {
     const sr_shell_desc *d = S->d;
     float fx = (p[0] - d->origin[0]) / d->tile, fy = (p[1] - d->origin[1]) / d->tile, len;
-    int i = (int)floorf(fx), j = (int)floorf(fy);
+    int i = (int)floorf(sr__clampf(fx, -1.0f, (float)d->tiles_x)), j = (int)floorf(sr__clampf(fy, -1.0f, (float)d->tiles_y));
     if (i < 0) i = 0;
     if (j < 0) j = 0;
     if (i >= d->tiles_x) i = d->tiles_x - 1;
@@ -2493,7 +2542,8 @@ SRDEF sr_result sr_draw_shell(sr_framebuffer *fb, const sr_camera *cam, const sr
     long covered = 0;
     int x, y;
     if (stats) memset(stats, 0, sizeof *stats);
-    if (!fb || !fb->color || !cam || !d || !sr__shell_init(&S, d, cam, fb->height)) return SR_ERR_INVALID_ARGUMENT;
+    if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam) || !sr__shell_init(&S, d, cam, fb->height))
+        return SR_ERR_INVALID_ARGUMENT;
     S.lights = sr__lights(d->lights, d->light_count, cam, &head, &S.nl);
     for (y = 0; y < fb->height; y++) {
         for (x = 0; x < fb->width; x++) {
@@ -3053,7 +3103,7 @@ SRDEF sr_result sr_draw_mesh_shell(sr_framebuffer *fb, const sr_camera *cam, con
     long covered = 0;
     int x, y;
     if (stats) memset(stats, 0, sizeof *stats);
-    if (!fb || !fb->color || !cam || !d) return SR_ERR_INVALID_ARGUMENT;
+    if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam)) return SR_ERR_INVALID_ARGUMENT;
     if (!sr__mshell_init(&S, d, cam, fb->height, &res)) return res;
     S.lights = sr__lights(d->lights, d->light_count, cam, &head, &S.nl);
     for (y = 0; y < fb->height; y++) {
@@ -4177,7 +4227,7 @@ static const char *sr__glyph(int c)
     static const char *const glyphs[] = {
         "...............",
         "####.##.##.####", ".#.##..#..#.###", "###..#####..###", "###..#.##..####", "#.##.####..#..#",
-        "####..###..####", "####..###.#####", "###..#..#.#..#.", "####.#####.####", "####.####..####",
+        "####..###..####", "####..####.####", "###..#..#.#..#.", "####.#####.####", "####.####..####",
         ".#.#.#####.##.#", "##.#.###.#.###.", ".###..#..#...##", "##.#.##.##.###.", "####..##.#..###",
         "####..##.#..#..", ".###..#.##.#.##", "#.##.#####.##.#", "###.#..#..#.###", "..#..#..##.#.#.",
         "#.##.###.#.##.#", "#..#..#..#..###", "#.########.##.#", "##.#.##.##.##.#", ".#.#.##.##.#.#.",

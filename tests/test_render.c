@@ -1139,6 +1139,250 @@ static void test_sheet_and_errors(void)
     sr_framebuffer_free(&fb);
 }
 
+
+/* ---- non-finite input (issue 21 point 2): a named error, never SR_OK with a blank image -------- */
+
+static uint64_t fb_digest(const sr_framebuffer *fb)
+{
+    uint64_t h = 1469598103934665603ull;
+    size_t i, n = (size_t)fb->width * (size_t)fb->height;
+    const unsigned char *c = (const unsigned char *)fb->color, *z = (const unsigned char *)fb->depth;
+    for (i = 0; i < 16 * n; i++) h = (h ^ c[i]) * 1099511628211ull;
+    for (i = 0; i < 4 * n; i++) h = (h ^ z[i]) * 1099511628211ull;
+    return h;
+}
+
+static float nf_density(void *user, const float p[3]) { (void)user; (void)p; return 1.0f; }
+static void nf_sample(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    (void)user; (void)q;
+    memset(out, 0, sizeof *out);
+}
+
+/* every draw with the camera: the codes, and the framebuffer left as it was */
+static void nf_all_draws(sr_framebuffer *fb, const sr_camera *cam, sr_result want, const char *what)
+{
+    static float h[4] = {0, 0, 0, 0}, img[4] = {0, 0, 0, 0};
+    float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, n[9] = {0, 0, 1, 0, 0, 1, 0, 0, 1}, uv[6] = {0, 0, 1, 0, 0, 1};
+    uint32_t tri[3] = {0, 1, 2};
+    sr_draw_desc d;
+    sr_relief_desc rd;
+    sr_terrain_desc td;
+    sr_volume_desc vd;
+    sr_shell_desc sd;
+    sr_mesh_shell_desc md;
+    uint64_t before = fb_digest(fb);
+    int ok = 1;
+    sr_draw_desc_default(&d);
+    d.positions = p; d.vertex_count = 3; d.indices = tri; d.triangle_count = 1;
+    ok &= T_EQ_INT(sr_draw_mesh(fb, cam, &d), want);
+    sr_relief_desc_default(&rd);
+    rd.depth.width = 2; rd.depth.height = 2; rd.depth.channels = 1; rd.depth.data = img;
+    ok &= T_EQ_INT(sr_draw_relief(fb, cam, &rd), want);
+    sr_terrain_desc_default(&td);
+    td.heights = h; td.width = 2; td.height = 2;
+    ok &= T_EQ_INT(sr_draw_terrain(fb, cam, &td), want);
+    sr_volume_desc_default(&vd);
+    vd.density = nf_density; vd.box_max[0] = vd.box_max[1] = vd.box_max[2] = 1.0f;
+    ok &= T_EQ_INT(sr_draw_volume(fb, cam, &vd), want);
+    sr_shell_desc_default(&sd);
+    sd.sample = nf_sample; sd.tile = 1.0f; sd.tiles_x = sd.tiles_y = 1;
+    ok &= T_EQ_INT(sr_draw_shell(fb, cam, &sd, NULL), want);
+    sr_mesh_shell_desc_default(&md);
+    md.positions = p; md.normals = n; md.uvs = uv; md.vertex_count = 3; md.indices = tri; md.triangle_count = 1;
+    md.height = 0.1f; md.sample = nf_sample;
+    ok &= T_EQ_INT(sr_draw_mesh_shell(fb, cam, &md, NULL), want);
+    ok &= T_CHECK(fb_digest(fb) == before);
+    if (!ok) printf("  note: camera case: %s\n", what);
+}
+
+static void test_not_finite(void)
+{
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_draw_desc d;
+    float eye[3] = {0, 0, 3}, at[3] = {0, 0, 0}, nan = (float)NAN, inf = (float)INFINITY, big = 3e38f;
+    float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, rgb_nan[4] = {0, 0, 0, 1};
+    uint32_t tri[3] = {0, 1, 2};
+    uint8_t px[4 * 4 * 3];
+    uint64_t before;
+    int k, bad;
+    T_EQ_STR(sr_result_string(SR_ERR_NOT_FINITE), "SR_ERR_NOT_FINITE");
+    T_EQ_INT(sr_framebuffer_create(&fb, 4, 4, NULL), SR_OK);
+    /* the good camera draws (so the cases below fail for their own reason) */
+    sr_camera_look_at(&cam, eye, at, NULL, 45, 1, 0.1f, 10);
+    sr_draw_desc_default(&d);
+    d.positions = p; d.vertex_count = 3; d.indices = tri; d.triangle_count = 1;
+    T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_OK);
+    /* bad cameras: NaN / infinite eye, target, fov, aspect, half height; eye == target; fov 0 */
+    for (k = 0; k < 10; k++) {
+        float e[3] = {0, 0, 3}, t[3] = {0, 0, 0}, fov = 45, asp = 1;
+        const char *what[10] = {"eye nan", "eye inf", "target nan", "fov nan", "fov inf", "aspect nan",
+                                "eye == target", "fov 0", "ortho half height nan", "ortho half height 0"};
+        if (k == 0) e[1] = nan;
+        if (k == 1) e[2] = inf;
+        if (k == 2) t[0] = nan;
+        if (k == 3) fov = nan;
+        if (k == 4) fov = inf;
+        if (k == 5) asp = nan;
+        if (k == 6) e[2] = 0;
+        if (k == 7) fov = 0;
+        if (k < 8) sr_camera_look_at(&cam, e, t, NULL, fov, asp, 0.1f, 10);
+        else sr_camera_ortho(&cam, e, t, NULL, k == 8 ? nan : 0.0f, 1, 0.1f, 10);
+        nf_all_draws(&fb, &cam, SR_ERR_INVALID_ARGUMENT, what[k]);
+    }
+    sr_camera_look_at(&cam, eye, at, NULL, 45, 1, 0.1f, 10);
+    before = fb_digest(&fb);
+    /* a vertex at 3e38 (finite) overflows the camera's matrix: SR_ERR_NOT_FINITE, nothing drawn */
+    p[3] = big;
+    T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_ERR_NOT_FINITE);
+    p[3] = -big; p[4] = big;
+    T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_ERR_NOT_FINITE);
+    p[3] = nan; p[4] = 0;
+    T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_ERR_INVALID_ARGUMENT);
+    p[3] = 1;
+    {
+        float model[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        d.model = model;
+        model[5] = nan;
+        T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_ERR_INVALID_ARGUMENT);
+        model[5] = 1e30f; p[4] = 1e10f; /* finite, the product is not */
+        T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_ERR_NOT_FINITE);
+        d.model = NULL; p[4] = 0;
+    }
+    {
+        static float h[4] = {1e38f, 0, 0, 1e38f};
+        sr_terrain_desc td;
+        sr_terrain_desc_default(&td);
+        td.heights = h; td.width = 2; td.height = 2; td.height_scale = 10.0f; /* 1e39: overflows */
+        T_EQ_INT(sr_draw_terrain(&fb, &cam, &td), SR_ERR_NOT_FINITE);
+        td.height_scale = 1.0f; td.origin_x = nan;
+        T_EQ_INT(sr_draw_terrain(&fb, &cam, &td), SR_ERR_INVALID_ARGUMENT);
+        td.origin_x = 0; td.spacing = inf;
+        T_EQ_INT(sr_draw_terrain(&fb, &cam, &td), SR_ERR_INVALID_ARGUMENT);
+    }
+    {
+        sr_volume_desc vd;
+        sr_volume_desc_default(&vd);
+        vd.density = nf_density; vd.box_max[0] = vd.box_max[1] = 1.0f; vd.box_max[2] = inf;
+        T_EQ_INT(sr_draw_volume(&fb, &cam, &vd), SR_ERR_INVALID_ARGUMENT);
+        vd.box_max[2] = 3e38f; vd.box_min[2] = -3e38f; /* finite corners, an infinite diagonal */
+        T_EQ_INT(sr_draw_volume(&fb, &cam, &vd), SR_ERR_NOT_FINITE);
+    }
+    {
+        static float img[4] = {0, 0, 0, 0};
+        sr_relief_desc rd;
+        sr_relief_desc_default(&rd);
+        rd.depth.width = 2; rd.depth.height = 2; rd.depth.channels = 1; rd.depth.data = img;
+        rd.origin[1] = nan;
+        T_EQ_INT(sr_draw_relief(&fb, &cam, &rd), SR_ERR_INVALID_ARGUMENT);
+        rd.origin[1] = 0; rd.axis_u[0] = inf;
+        T_EQ_INT(sr_draw_relief(&fb, &cam, &rd), SR_ERR_INVALID_ARGUMENT);
+    }
+    T_CHECK(fb_digest(&fb) == before);
+    /* NaN attributes are not errors (they are data), but they must not reach an int: NaN uvs on a
+       normal map and NaN colours draw, and the colour converts to 0 */
+    {
+        float uv[6], col[9], nm[4 * 3];
+        sr_image map;
+        for (k = 0; k < 6; k++) uv[k] = nan;
+        for (k = 0; k < 9; k++) col[k] = nan;
+        for (k = 0; k < 12; k++) nm[k] = k % 3 == 2 ? 1.0f : 0.0f;
+        map.width = 2; map.height = 2; map.channels = 3; map.data = nm; map.wrap = 1;
+        p[0] = -1; p[1] = -1; p[3] = 1; p[4] = -1; p[6] = 0; p[7] = 1;
+        d.uvs = uv; d.normal_map = &map; d.colors = col;
+        T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_OK);
+        sr_framebuffer_clear(&fb, rgb_nan, 1.0f);
+        for (k = 0; k < 16; k++) fb.color[4 * k] = nan;
+        sr_framebuffer_to_rgb8(&fb, px, 3);
+        for (k = 0, bad = 0; k < 16; k++) bad += px[3 * k] != 0;
+        T_EQ_INT(bad, 0);
+    }
+    sr_framebuffer_free(&fb);
+}
+
+
+/* ---- the caption font (issue 21 point 6: '6' was drawn as '5'): every glyph against its
+   intended bitmap, written here independently of the header's table, row by row ---------------- */
+
+static const struct { char c; const char *rows[5]; } intended_font[] = {
+    {' ', {"...", "...", "...", "...", "..."}}, {'0', {"###", "#.#", "#.#", "#.#", "###"}},
+    {'1', {".#.", "##.", ".#.", ".#.", "###"}}, {'2', {"###", "..#", "###", "#..", "###"}},
+    {'3', {"###", "..#", ".##", "..#", "###"}}, {'4', {"#.#", "#.#", "###", "..#", "..#"}},
+    {'5', {"###", "#..", "###", "..#", "###"}}, {'6', {"###", "#..", "###", "#.#", "###"}},
+    {'7', {"###", "..#", "..#", ".#.", ".#."}}, {'8', {"###", "#.#", "###", "#.#", "###"}},
+    {'9', {"###", "#.#", "###", "..#", "###"}}, {'A', {".#.", "#.#", "###", "#.#", "#.#"}},
+    {'B', {"##.", "#.#", "##.", "#.#", "##."}}, {'C', {".##", "#..", "#..", "#..", ".##"}},
+    {'D', {"##.", "#.#", "#.#", "#.#", "##."}}, {'E', {"###", "#..", "##.", "#..", "###"}},
+    {'F', {"###", "#..", "##.", "#..", "#.."}}, {'G', {".##", "#..", "#.#", "#.#", ".##"}},
+    {'H', {"#.#", "#.#", "###", "#.#", "#.#"}}, {'I', {"###", ".#.", ".#.", ".#.", "###"}},
+    {'J', {"..#", "..#", "..#", "#.#", ".#."}}, {'K', {"#.#", "#.#", "##.", "#.#", "#.#"}},
+    {'L', {"#..", "#..", "#..", "#..", "###"}}, {'M', {"#.#", "###", "###", "#.#", "#.#"}},
+    {'N', {"##.", "#.#", "#.#", "#.#", "#.#"}}, {'O', {".#.", "#.#", "#.#", "#.#", ".#."}},
+    {'P', {"##.", "#.#", "##.", "#..", "#.."}}, {'Q', {".#.", "#.#", "#.#", "##.", ".##"}},
+    {'R', {"##.", "#.#", "##.", "#.#", "#.#"}}, {'S', {".##", "#..", ".#.", "..#", "##."}},
+    {'T', {"###", ".#.", ".#.", ".#.", ".#."}}, {'U', {"#.#", "#.#", "#.#", "#.#", "###"}},
+    {'V', {"#.#", "#.#", "#.#", "#.#", ".#."}}, {'W', {"#.#", "#.#", "###", "###", "#.#"}},
+    {'X', {"#.#", "#.#", ".#.", "#.#", "#.#"}}, {'Y', {"#.#", "#.#", ".#.", ".#.", ".#."}},
+    {'Z', {"###", "..#", ".#.", "#..", "###"}}, {'.', {"...", "...", "...", "...", ".#."}},
+    {',', {"...", "...", "...", ".#.", "#.."}}, {':', {"...", ".#.", "...", ".#.", "..."}},
+    {';', {"...", ".#.", "...", ".#.", "#.."}}, {'-', {"...", "...", "###", "...", "..."}},
+    {'_', {"...", "...", "...", "...", "###"}}, {'+', {"...", ".#.", "###", ".#.", "..."}},
+    {'=', {"...", "###", "...", "###", "..."}}, {'/', {"..#", "..#", ".#.", "#..", "#.."}},
+    {'|', {".#.", ".#.", ".#.", ".#.", ".#."}}, {'(', {"..#", ".#.", ".#.", ".#.", "..#"}},
+    {')', {"#..", ".#.", ".#.", ".#.", "#.."}}, {'[', {"##.", "#..", "#..", "#..", "##."}},
+    {']', {".##", "..#", "..#", "..#", ".##"}}, {'%', {"#.#", "..#", ".#.", "#..", "#.#"}},
+    {'\'', {".#.", ".#.", "...", "...", "..."}}, {'"', {"#.#", "#.#", "...", "...", "..."}},
+    {'!', {".#.", ".#.", ".#.", "...", ".#."}}, {'?', {"##.", "..#", ".#.", "...", ".#."}},
+    {'<', {"..#", ".#.", "#..", ".#.", "..#"}}, {'>', {"#..", ".#.", "..#", ".#.", "#.."}},
+    {'*', {"...", "#.#", ".#.", "#.#", "..."}}, {'#', {"#.#", "###", "#.#", "###", "#.#"}}};
+
+static void test_font(void)
+{
+    static const char *box[5] = {"###", "#.#", "#.#", "#.#", "###"}; /* a character without a glyph */
+    uint8_t px[2 * 3 * 5], white[3] = {255, 255, 255};
+    sr_image8 img;
+    int c, k, x, y, wrong = 0, wrong_case = 0, glyphs = 0, scale;
+    img.width = 3; img.height = 5; img.channels = 1; img.pixels = px;
+    for (c = 1; c < 256; c++) {
+        const char *const *want = box;
+        char text[2];
+        int up = c >= 'a' && c <= 'z' ? c - 'a' + 'A' : c, bad = 0;
+        for (k = 0; k < (int)(sizeof intended_font / sizeof intended_font[0]); k++)
+            if (intended_font[k].c == up) { want = intended_font[k].rows; glyphs += c == up; }
+        text[0] = (char)c; text[1] = 0;
+        memset(px, 0, sizeof px);
+        sr_draw_text(&img, 0, 0, text, 1, white);
+        for (y = 0; y < 5; y++)
+            for (x = 0; x < 3; x++) bad += (px[y * 3 + x] == 255) != (want[y][x] == '#');
+        if (bad) {
+            printf("  glyph %d '%c' drawn as:", c, c >= 32 && c < 127 ? c : '?');
+            for (y = 0; y < 5; y++) printf(" %c%c%c", px[y * 3] ? '#' : '.', px[y * 3 + 1] ? '#' : '.', px[y * 3 + 2] ? '#' : '.');
+            printf("\n");
+            if (c != up) wrong_case++; else wrong++;
+        }
+    }
+    T_EQ_INT(glyphs, (int)(sizeof intended_font / sizeof intended_font[0]));
+    T_EQ_INT(wrong, 0);
+    T_EQ_INT(wrong_case, 0);
+    /* scale 2 and the advance: "66" at scale 2 is two 6x10 glyphs 8 pixels apart */
+    {
+        uint8_t big[16 * 10];
+        int bad = 0;
+        img.width = 16; img.height = 10; img.pixels = big;
+        memset(big, 0, sizeof big);
+        scale = 2;
+        sr_draw_text(&img, 0, 0, "66", scale, white);
+        for (y = 0; y < 10; y++)
+            for (x = 0; x < 16; x++) {
+                int gx = (x % 8) / 2, on = gx < 3 && intended_font[7].rows[y / 2][gx] == '#';
+                bad += (big[y * 16 + x] == 255) != on;
+            }
+        T_CHECK(intended_font[7].c == '6');
+        T_EQ_INT(bad, 0);
+    }
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1159,5 +1403,7 @@ int main(int argc, char **argv)
     test_png();
     test_determinism();
     test_sheet_and_errors();
+    test_not_finite();
+    test_font();
     return T_END();
 }
