@@ -22,7 +22,7 @@
                  displacement
      --min-quality Q  the simplifier's sliver guard (dm_simplify_options.min_quality, 2 area /
                  longest edge^2, e.g. 0.1; default 0 = none)
-   The pipeline (dispmesh.h): dm_weld when the triangles do not share their vertices (an STL file),
+   The pipeline (dispmesh.h): meshio's mio_weld when the triangles do not share their vertices (an STL file),
    dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
@@ -40,9 +40,12 @@
    with distances as fractions of the original's bounding-box diagonal (see print_result).
    The stage notes say which constraint vetoed how many collapses (enclosure, shell, overlap) and
    whether the target was reached; RESULT's target= is --faces and faces= what was reached.
-   Exit status 0 on success, 1 on bad arguments or unreadable input, 2 when a stage fails or the
-   result is unusable: base triangles without a texel (the map is too coarse for the base; the
-   reconstruction would have holes) or more than 1% of the texels under the base without a hit. */
+   Exit status (as every program in examples/): 0 done; 1 failure: unreadable input, a stage
+   failed, a failed write, or the result is unusable: base triangles without a texel (the map is
+   too coarse for the base; the reconstruction would have holes) or more than 1% of the texels
+   under the base without a hit; 2 usage (a bad argument, named in the message). Every file is
+   written to NAME.tmp and all are renamed once all are complete, so a failed run leaves none of
+   them (and an existing file unchanged). --version prints the version. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -58,6 +61,10 @@
 #include "render.h"
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
+
+#define DISPMESH_VERSION "dispmesh 0.3 (dispmesh.h, meshio.h, render.h)"
 
 /* A mesh this program owns (malloc) or borrows. */
 typedef struct mesh {
@@ -139,7 +146,17 @@ static void stage_end(stage *s, const char *note)
 
 static void stage_fail(stage *s, const char *what, dm_result r)
 {
-    fprintf(stderr, "\ndispmesh: %s failed: %s\n", what ? what : s->name, dm_result_string(r));
+    char context[96];
+    snprintf(context, sizeof context, "%s failed", what ? what : s->name);
+    fprintf(stderr, "\n");
+    cli_result_error("dispmesh", context, dm_result_string(r), 0);
+}
+
+/* "dispmesh: PATH: cannot write it: SR_ERR_IO (meaning): the system's reason" */
+static void write_failed(const char *path, sr_result r, int saved_errno)
+{
+    fprintf(stderr, "\n");
+    cli_result_error("dispmesh", path, sr_result_string(r), r == SR_ERR_IO ? saved_errno : 0);
 }
 
 /* ---- the generated brick ----------------------------------------------------------------------
@@ -256,21 +273,6 @@ static int pm_to_mesh(dm_pm *pm, mesh *m)
     return 1;
 }
 
-/* A strict integer option in [lo, hi]. */
-static int parse_int(const char *opt, const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    long v;
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) {
-        fprintf(stderr, "dispmesh: bad %s '%s' (an integer in %ld..%ld)\n", opt, s, lo, hi);
-        return 0;
-    }
-    *out = v;
-    return 1;
-}
-
 /* Creates the directory part of a prefix when it does not exist (one level). */
 static void make_parent_dir(const char *prefix)
 {
@@ -296,23 +298,21 @@ static char *path_with(const char *prefix, const char *suffix)
     return s;
 }
 
-/* 1 when PREFIX_base.obj can be created (a file made by the probe is removed again). */
+/* 1 when PREFIX_base.obj.tmp can be created (the probe's file is removed again; an existing
+   PREFIX_base.obj is not touched). */
 static int probe_writable(const char *prefix)
 {
-    char *path = path_with(prefix, "_base.obj");
-    struct stat st;
-    int existed;
+    char *path = path_with(prefix, "_base.obj.tmp");
     FILE *f;
     if (!path) { fprintf(stderr, "dispmesh: out of memory\n"); return 0; }
-    existed = stat(path, &st) == 0;
-    f = fopen(path, "a");
+    f = fopen(path, "w");
     if (!f) {
-        fprintf(stderr, "dispmesh: cannot write %s: %s\n", path, strerror(errno));
+        cli_file_error("dispmesh", path, "cannot create it", errno);
         free(path);
         return 0;
     }
     fclose(f);
-    if (!existed) remove(path);
+    remove(path);
     free(path);
     return 1;
 }
@@ -361,19 +361,20 @@ static size_t distinct_uvs(const mesh *base, const dm_param *param, uint32_t *co
 /* ---- writers ---------------------------------------------------------------------------------- */
 
 /* The base as OBJ with its map coordinates (meshio.h writes positions only). */
-static int write_base_obj(const char *path, const mesh *base, const dm_param *param, size_t *uv_count)
+static int write_base_obj(const char *path, const char *tmp, const mesh *base, const dm_param *param, size_t *uv_count)
 {
     uint32_t *cuv = (uint32_t *)malloc(base->nt * 3 * sizeof(uint32_t) + 1);
     float *uv = (float *)malloc(base->nt * 6 * sizeof(float) + 1);
     size_t n = 0, i;
     FILE *f = NULL;
-    int ok = 0;
+    int ok = 0, saved;
     if (!cuv || !uv) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     n = distinct_uvs(base, param, cuv, uv);
     if (n == 0) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     *uv_count = n;
-    f = fopen(path, "w");
-    if (!f) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, strerror(errno)); goto done; }
+    f = fopen(tmp, "w");
+    if (!f) { fprintf(stderr, "\n"); cli_file_error("dispmesh", path, "cannot create it", errno); goto done; }
+    errno = 0;
     fprintf(f, "# dispmesh base mesh: %zu vertices, %zu triangles, %zu map coordinates (%d x %d map)\n",
             base->nv, base->nt, n, param->width, param->height);
     for (i = 0; i < base->nv; i++)
@@ -383,15 +384,16 @@ static int write_base_obj(const char *path, const mesh *base, const dm_param *pa
         fprintf(f, "f %u/%u %u/%u %u/%u\n", base->t[3 * i] + 1, cuv[3 * i] + 1, base->t[3 * i + 1] + 1,
                 cuv[3 * i + 1] + 1, base->t[3 * i + 2] + 1, cuv[3 * i + 2] + 1);
     ok = !ferror(f);
-    if (fclose(f) != 0) ok = 0;
-    if (!ok) fprintf(stderr, "\ndispmesh: error writing %s\n", path);
+    saved = errno;
+    if (fclose(f) != 0 && ok) { ok = 0; saved = errno; }
+    if (!ok) { fprintf(stderr, "\n"); cli_file_error("dispmesh", path, "writing failed", saved); }
 done:
     free(cuv);
     free(uv);
     return ok;
 }
 
-static int write_normal_png(const char *path, const dm_dispmap *map)
+static int write_normal_png(const char *path, const char *tmp, const dm_dispmap *map)
 {
     size_t n = (size_t)map->width * (size_t)map->height, i;
     uint8_t *px = (uint8_t *)malloc(n * 3 + 1);
@@ -404,9 +406,10 @@ static int write_normal_png(const char *path, const dm_dispmap *map)
             if (map->status[i] == DM_TEXEL_EMPTY || !(x == x)) x = 0.0f;
             px[3 * i + (size_t)c] = (uint8_t)(x <= 0.0f ? 0 : x >= 1.0f ? 255 : (int)(x * 255.0f + 0.5f));
         }
-    r = sr_write_png(path, px, map->width, map->height, 3, 1); /* row 0 (v = 0) at the bottom */
+    errno = 0;
+    r = sr_write_png(tmp, px, map->width, map->height, 3, 1); /* row 0 (v = 0) at the bottom */
+    if (r != SR_OK) write_failed(path, r, errno);
     free(px);
-    if (r != SR_OK) fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r));
     return r == SR_OK;
 }
 
@@ -494,7 +497,7 @@ static sr_result view_render(const view *vw, const float *p, size_t nv, const ui
     return r;
 }
 
-static int write_views(const char *path, const run *R, int size, int smooth, double rms)
+static int write_views(const char *path, const char *tmp, const run *R, int size, int smooth, double rms)
 {
     static const float grey[3] = {0.75f, 0.72f, 0.68f}, blue[3] = {0.55f, 0.65f, 0.80f}, warm[3] = {0.80f, 0.68f, 0.55f};
     view vw;
@@ -511,14 +514,15 @@ static int write_views(const char *path, const run *R, int size, int smooth, dou
     if (r == SR_OK)
         r = view_render(&vw, R->dense->positions, R->dense->vertex_count, R->dense->indices, R->dense->triangle_count, smooth,
                         0, warm, &img[2]);
-    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: render: %s\n", sr_result_string(r)); goto done; }
+    if (r != SR_OK) { fprintf(stderr, "\n"); cli_result_error("dispmesh", "rendering the views", sr_result_string(r), 0); goto done; }
     snprintf(cap[0], sizeof cap[0], "ORIGINAL %zu TRIANGLES", R->orig.nt);
     snprintf(cap[1], sizeof cap[1], "BASE %zu TRIANGLES", R->base.nt);
     snprintf(cap[2], sizeof cap[2], "BASE + %dX%d MAP RMS %.3f%%", R->map->width, R->map->height, 100.0 * rms);
     for (i = 0; i < 3; i++) caps[i] = cap[i];
     r = sr_contact_sheet(img, caps, 3, 3, NULL, &sheet);
-    if (r == SR_OK) r = sr_write_png(path, sheet.pixels, sheet.width, sheet.height, 3, 0);
-    if (r != SR_OK) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(r)); goto done; }
+    errno = 0;
+    if (r == SR_OK) r = sr_write_png(tmp, sheet.pixels, sheet.width, sheet.height, 3, 0);
+    if (r != SR_OK) { write_failed(path, r, errno); goto done; }
     ok = 1;
 done:
     for (i = 0; i < 3; i++) free(img[i].pixels);
@@ -544,43 +548,6 @@ static void run_free(run *R)
     if (R->orig_owned) mesh_free(&R->orig);
     mio_free_mesh(&R->loaded);
     memset(R, 0, sizeof *R);
-}
-
-/* Welds an original whose triangles do not share their vertices (an STL file, a triangle soup):
-   dm_simplify refuses those (DM_ERR_NOT_WELDED). A mesh that welding does not change keeps its
-   numbering. 0 on failure (message printed). */
-static int weld_original(run *R)
-{
-    mesh w;
-    size_t used = 0, k;
-    dm_result r;
-    uint8_t *seen;
-    w.p = (float *)malloc(3 * R->orig.nv * sizeof(float) + 1);
-    w.t = (uint32_t *)malloc(3 * R->orig.nt * sizeof(uint32_t) + 1);
-    seen = (uint8_t *)calloc(R->orig.nv + 1, 1);
-    if (!w.p || !w.t || !seen) {
-        free(w.p); free(w.t); free(seen);
-        fprintf(stderr, "dispmesh: out of memory\n");
-        return 0;
-    }
-    w.nt = R->orig.nt;
-    r = dm_weld(R->orig.p, R->orig.nv, R->orig.t, R->orig.nt, NULL, w.p, w.t, &w.nv);
-    for (k = 0; r == DM_OK && k < 3 * R->orig.nt; k++) used += !seen[R->orig.t[k]]++ ? 1 : 0;
-    free(seen);
-    if (r != DM_OK) {
-        free(w.p); free(w.t);
-        fprintf(stderr, "dispmesh: the mesh cannot be welded: %s\n", dm_result_string(r));
-        return 0;
-    }
-    if (w.nv == used) { /* already welded */
-        free(w.p); free(w.t);
-        return 1;
-    }
-    fprintf(stderr, "dispmesh: welded vertices at equal positions: %zu -> %zu vertices\n", used, w.nv);
-    if (R->orig_owned) mesh_free(&R->orig);
-    R->orig = w;
-    R->orig_owned = 1;
-    return 1;
 }
 
 static double triangle_area(const mesh *m, size_t t)
@@ -661,19 +628,91 @@ static int result_usable(const run *R, long res, size_t inside, size_t missed)
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]\n"
-                "                [--min-quality Q]\n"
-                "  writes PREFIX_base.obj PREFIX_disp.pfm PREFIX_normal.png PREFIX_recon.obj PREFIX_views.png\n"
-                "  and prints one RESULT line (defaults: --faces 500 --res 512 -o out/dispmesh --size 400)\n");
+    fprintf(to,
+            "usage: dispmesh IN|--brick [-o PREFIX] [--faces N] [--res R] [--size S] [--no-views] [--both-ways]\n"
+            "                [--fallback] [--min-quality Q]\n"
+            "Paper 000 end to end: a base mesh plus one displacement map, baked from IN and rebuilt from them.\n"
+            "  IN                 a mesh file meshio.h reads (OBJ, OFF, PLY, STL; an STL soup is welded first);\n"
+            "                     a closed manifold works best\n"
+            "  --brick            instead of IN: a generated 2 x 1 x 1 brick with V grooves (496 triangles)\n"
+            "  -o, --output PREFIX  write PREFIX_base.obj, PREFIX_disp.pfm, PREFIX_normal.png, PREFIX_recon.obj\n"
+            "                     and PREFIX_views.png; the directory is created if missing (default out/dispmesh)\n"
+            "  --faces N          base mesh triangles to aim for, 1..1000000000 (default 500)\n"
+            "  --res R            displacement map R x R texels, 8..16384 (default 512)\n"
+            "  --size S           pixels of each of the three views, 16..4096 (default 400)\n"
+            "  --no-views         do not render PREFIX_views.png (default: render it)\n"
+            "  --both-ways        bake the nearest hit either way along the normal (default: the first hit\n"
+            "                     along -normal, right for a base that encloses the original)\n"
+            "  --fallback         where the shell is too thin for an enclosing base, relax the constraint there\n"
+            "                     and bake those triangles both ways (default: off)\n"
+            "  --min-quality Q    the simplifier's sliver guard, 2 area / longest edge^2, in [-1, 0.5]\n"
+            "                     (default 0 = none)\n"
+            "  -h, --help         show this help and exit\n"
+            "  --version          show the version and exit\n"
+            "Prints one RESULT dispmesh line on stdout; progress on stderr.\n"
+            "Exit status: 0 done, 1 failure (unreadable input, a failed stage, an unusable result, a failed\n"
+            "write), 2 usage. The files are written to NAME.tmp and renamed once all are complete: a failed\n"
+            "run leaves none of them behind.\n");
+}
+
+typedef struct options {
+    const char *in, *prefix;
+    long faces, res, size;
+    double min_quality;
+    int brick, views, inward, fallback;
+} options;
+
+/* Returns -1 to go on, or the exit status (0 for --help/--version, 2 for a usage error). */
+static int parse_args(int argc, char **argv, options *o)
+{
+    int i;
+    memset(o, 0, sizeof *o);
+    o->prefix = "out/dispmesh";
+    o->faces = 500; o->res = 512; o->size = 400;
+    o->min_quality = 0.0; /* the library default: no sliver guard */
+    o->views = o->inward = 1;
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = !strcmp(a, "--faces") || !strcmp(a, "--res") || !strcmp(a, "--size") || !strcmp(a, "--min-quality") ||
+                    !strcmp(a, "-o") || !strcmp(a, "--output");
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); return 0; }
+        if (!strcmp(a, "--version")) { printf("%s\n", DISPMESH_VERSION); return 0; }
+        if (takes && !v) return cli_usage_error("dispmesh", "%s needs a value", a);
+        if (takes) i++;
+        if (!strcmp(a, "--brick")) o->brick = 1;
+        else if (!strcmp(a, "--no-views")) o->views = 0;
+        else if (!strcmp(a, "--both-ways")) o->inward = 0;
+        else if (!strcmp(a, "--fallback")) o->fallback = 1;
+        else if (!strcmp(a, "--faces")) {
+            if (!cli_parse_long(v, 1, 1000000000L, &o->faces)) return cli_usage_error("dispmesh", "--faces '%s': not an integer in 1..1000000000", v);
+        } else if (!strcmp(a, "--res")) {
+            if (!cli_parse_long(v, 8, 16384, &o->res)) return cli_usage_error("dispmesh", "--res '%s': not an integer in 8..16384", v);
+        } else if (!strcmp(a, "--size")) {
+            if (!cli_parse_long(v, 16, 4096, &o->size)) return cli_usage_error("dispmesh", "--size '%s': not an integer in 16..4096", v);
+        } else if (!strcmp(a, "--min-quality")) {
+            if (!cli_parse_double(v, -1.0, 0.5, &o->min_quality))
+                return cli_usage_error("dispmesh", "--min-quality '%s': not a number in [-1, 0.5]", v);
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            if (!*v) return cli_usage_error("dispmesh", "%s: an empty prefix", a);
+            o->prefix = v;
+        } else if (a[0] == '-' && a[1] != '\0') return cli_usage_error("dispmesh", "unknown option '%s'", a);
+        else if (o->in) return cli_usage_error("dispmesh", "unexpected argument '%s': one IN only", a);
+        else o->in = a;
+    }
+    if ((o->in != NULL) == (o->brick != 0)) return cli_usage_error("dispmesh", "%s", "give exactly one of IN or --brick");
+    if (strlen(o->prefix) + 16 >= CLI_PATH_MAX) return cli_usage_error("dispmesh", "-o '%s': the prefix is too long", o->prefix);
+    return -1;
 }
 
 int main(int argc, char **argv)
 {
-    const char *in = NULL, *prefix = "out/dispmesh";
-    long faces = 500, res = 512, size = 400;
-    double min_quality = 0.0; /* the library default: no sliver guard */
-    int brick = 0, views = 1, inward = 1, fallback = 0, i, status = 2;
+    options O;
+    const char *in, *prefix;
+    long faces, res, size;
+    double min_quality;
+    int brick, views, inward, fallback, status = parse_args(argc, argv, &O);
     run R;
+    cli_outputs outs;
     stage st;
     dm_result r;
     dm_simplify_options so;
@@ -686,35 +725,12 @@ int main(int argc, char **argv)
     size_t uv_count = 0, inside = 0, missed = 0, k, bytes_base = 0, bytes_free = 0;
     char *path = NULL;
 
+    if (status >= 0) return status;
+    status = 1;
+    in = O.in; prefix = O.prefix; faces = O.faces; res = O.res; size = O.size; min_quality = O.min_quality;
+    brick = O.brick; views = O.views; inward = O.inward; fallback = O.fallback;
     memset(&R, 0, sizeof R);
-    for (i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "--brick") == 0) brick = 1;
-        else if (strcmp(a, "--no-views") == 0) views = 0;
-        else if (strcmp(a, "--both-ways") == 0) inward = 0;
-        else if (strcmp(a, "--fallback") == 0) fallback = 1;
-        else if (strcmp(a, "--faces") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 1, 1000000000L, &faces)) return 1; }
-        else if (strcmp(a, "--min-quality") == 0 && i + 1 < argc) {
-            char *end;
-            min_quality = strtod(argv[++i], &end);
-            if (*end || !(min_quality >= -1.0 && min_quality <= 0.5)) {
-                fprintf(stderr, "dispmesh: --min-quality wants a number in [-1, 0.5], not '%s'\n", argv[i]);
-                return 1;
-            }
-        } else if (strcmp(a, "--res") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 8, 16384, &res)) return 1; }
-        else if (strcmp(a, "--size") == 0 && i + 1 < argc) { if (!parse_int(a, argv[++i], 16, 4096, &size)) return 1; }
-        else if (strcmp(a, "-o") == 0 && i + 1 < argc) {
-            prefix = argv[++i];
-            if (!*prefix) { fprintf(stderr, "dispmesh: empty -o prefix\n"); return 1; }
-        } else if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) { usage(stdout); return 0; }
-        else if (a[0] != '-' && !in) in = a;
-        else { fprintf(stderr, "dispmesh: unexpected argument '%s'\n", a); usage(stderr); return 1; }
-    }
-    if ((in != NULL) == (brick != 0)) {
-        fprintf(stderr, "dispmesh: give exactly one of IN or --brick\n");
-        usage(stderr);
-        return 1;
-    }
+    cli_outputs_init(&outs);
 
     /* the output location, before any work */
     make_parent_dir(prefix);
@@ -722,20 +738,31 @@ int main(int argc, char **argv)
 
     /* 1. the original */
     if (brick) {
-        if (!make_brick(&R.orig)) { fprintf(stderr, "dispmesh: out of memory\n"); return 2; }
+        if (!make_brick(&R.orig)) { fprintf(stderr, "dispmesh: out of memory\n"); return 1; }
         R.orig_owned = 1;
         fprintf(stderr, "dispmesh: generated brick: %zu vertices, %zu triangles\n", R.orig.nv, R.orig.nt);
     } else {
         mio_error err;
-        if (mio_read_file(in, NULL, &R.loaded, &err) != MIO_OK) {
-            fprintf(stderr, "dispmesh: %s: %s\n", in, err.message);
+        mio_result mr;
+        size_t before;
+        errno = 0;
+        if ((mr = mio_read_file(in, NULL, &R.loaded, &err)) != MIO_OK) {
+            cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr),
+                           mr == MIO_ERR_IO ? errno : 0);
             return 1;
         }
+        /* a triangle soup (an STL file) shares no vertex: dm_simplify needs them joined */
+        before = R.loaded.vertex_count;
+        if ((mr = mio_weld(&R.loaded, &err)) != MIO_OK) {
+            cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr), 0);
+            goto done;
+        }
+        if (R.loaded.vertex_count != before)
+            fprintf(stderr, "dispmesh: welded vertices at equal positions: %zu -> %zu vertices\n", before, R.loaded.vertex_count);
         R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
     }
-    if (!weld_original(&R)) goto done;
     diag = bbox_diagonal(&R.orig, lo, hi);
     if (!(diag > 0.0) || !isfinite(diag)) {
         fprintf(stderr, "dispmesh: %s: the mesh has no extent (bounding-box diagonal %g)\n", brick ? "brick" : in, diag);
@@ -750,7 +777,7 @@ int main(int argc, char **argv)
         stage_begin(&st, "bounding shell");
         sho.progress = stage_progress; sho.progress_user = &st;
         r = dm_shell_grow(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &sho, &R.shell);
-        if (r != DM_OK) { stage_fail(&st, "dm_shell_grow", r); status = r == DM_ERR_OUT_OF_MEMORY ? 2 : 1; goto done; }
+        if (r != DM_OK) { stage_fail(&st, "dm_shell_grow", r); goto done; }
         {
             char note[128];
             snprintf(note, sizeof note, "thickness %.3g, %zu of %zu vertices stopped early", (double)R.shell->thickness,
@@ -770,7 +797,7 @@ int main(int argc, char **argv)
     stage_begin(&st, "simplify (shell-constrained)");
     so.progress = stage_progress; so.progress_user = &st;
     r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm, &srep);
-    if (r != DM_OK) { stage_fail(&st, "dm_simplify", r); status = r == DM_ERR_OUT_OF_MEMORY ? 2 : 1; goto done; }
+    if (r != DM_OK) { stage_fail(&st, "dm_simplify", r); goto done; }
     dm_pm_set_level(R.pm, 0);
     if (!pm_to_mesh(R.pm, &R.base) || !fallback_region(&R)) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
     {
@@ -823,7 +850,6 @@ int main(int argc, char **argv)
         stage_fail(&st, "dm_parameterize", r);
         if (r == DM_ERR_MAP_TOO_SMALL)
             fprintf(stderr, "dispmesh: --res %ld is too small for the charts of %zu base triangles\n", res, R.base.nt);
-        status = r == DM_ERR_MAP_TOO_SMALL ? 1 : 2;
         goto done;
     }
     {
@@ -944,32 +970,39 @@ int main(int argc, char **argv)
         mio_error err;
         mio_result mr;
         sr_result wr;
-        if (!(path = path_with(prefix, "_base.obj"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
-        if (!write_base_obj(path, &R.base, R.param, &uvs_written)) goto done;
-        free(path);
-        stage_progress(&st, 0.2f);
-        if (!(path = path_with(prefix, "_disp.pfm"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
-        if ((wr = sr_write_pfm(path, R.map->disp, R.map->width, R.map->height, 1)) != SR_OK) {
-            fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, sr_result_string(wr));
-            goto done;
-        }
-        free(path);
-        stage_progress(&st, 0.4f);
-        if (!(path = path_with(prefix, "_normal.png"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
-        if (!write_normal_png(path, R.map)) goto done;
-        free(path);
-        stage_progress(&st, 0.6f);
-        if (!(path = path_with(prefix, "_recon.obj"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
-        mr = mio_write_obj(path, R.dense->positions, R.dense->vertex_count, R.dense->indices, R.dense->triangle_count, &err);
-        if (mr != MIO_OK) { fprintf(stderr, "\ndispmesh: cannot write %s: %s\n", path, err.message); goto done; }
-        free(path);
-        stage_progress(&st, 0.7f);
-        if (views) {
-            if (!(path = path_with(prefix, "_views.png"))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
-            if (!write_views(path, &R, (int)size, !brick, d_recon.rms)) goto done;
+        static const char *const suffix[5] = {"_base.obj", "_disp.pfm", "_normal.png", "_recon.obj", "_views.png"};
+        const char *tmp[5];
+        int f, saved;
+        for (f = 0; f < (views ? 5 : 4); f++) {
             free(path);
+            if (!(path = path_with(prefix, suffix[f]))) { fprintf(stderr, "\ndispmesh: out of memory\n"); goto done; }
+            if (!(tmp[f] = cli_output_add(&outs, "dispmesh", path))) goto done;
+            errno = 0;
+            switch (f) {
+            case 0: wr = write_base_obj(path, tmp[f], &R.base, R.param, &uvs_written) ? SR_OK : SR_ERR_IO; break;
+            case 1:
+                wr = sr_write_pfm(tmp[f], R.map->disp, R.map->width, R.map->height, 1);
+                if (wr != SR_OK) write_failed(path, wr, errno);
+                break;
+            case 2: wr = write_normal_png(path, tmp[f], R.map) ? SR_OK : SR_ERR_IO; break;
+            case 3:
+                mr = mio_write_obj(tmp[f], R.dense->positions, R.dense->vertex_count, R.dense->indices, R.dense->triangle_count, &err);
+                saved = errno;
+                if (mr != MIO_OK) {
+                    fprintf(stderr, "\n");
+                    cli_read_error("dispmesh", path, err.message, mio_result_string(mr), mio_result_description(mr),
+                                   mr == MIO_ERR_IO ? saved : 0);
+                }
+                wr = mr == MIO_OK ? SR_OK : SR_ERR_IO;
+                break;
+            default: wr = write_views(path, tmp[f], &R, (int)size, !brick, d_recon.rms) ? SR_OK : SR_ERR_IO; break;
+            }
+            if (wr != SR_OK) goto done;
+            stage_progress(&st, 0.2f * (float)(f + 1));
         }
+        free(path);
         path = NULL;
+        if (!cli_outputs_commit(&outs, "dispmesh")) goto done;
         stage_end(&st, views ? NULL : "(views skipped)");
     }
     fprintf(stderr, "dispmesh: wrote %s_{base.obj,disp.pfm,normal.png,recon.obj%s}\n", prefix, views ? ",views.png" : "");
@@ -983,8 +1016,9 @@ int main(int argc, char **argv)
            faces, R.base.nt, fallback_signed, fallback_share, res, d_recon.rms, d_recon.max, d_base.rms, d_base.max, d_same.rms, d_bytes.rms, d_bytes.max, flagged,
            bake_ms, now_ms() - t0);
     fflush(stdout);
-    status = ferror(stdout) ? 2 : 0;
+    status = ferror(stdout) ? 1 : 0;
 done:
+    cli_outputs_discard(&outs); /* after a failure: no file of this run is left */
     free(path);
     run_free(&R);
     return status;

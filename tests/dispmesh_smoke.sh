@@ -6,9 +6,10 @@
 #   flagged <= 0.01; target = 12.
 #   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12.
 #   bad input (missing file, malformed files of our own and, when installed, of assimp-testmodels,
-#   --res 0, a bad number, a mesh without extent, an unwritable prefix, a map too coarse for the base so
-#   that base triangles get no texel): a non-zero exit below 128 (no
-#   signal), a "dispmesh:" message and no sanitizer report.
+#   a mesh without extent, an unwritable prefix, a map too coarse for the base so that base triangles
+#   get no texel): exit 1 (failure); bad arguments (--res 0, a bad number, no input, an unknown
+#   option): exit 2 (usage); each with a "dispmesh:" message, no sanitizer report, no RESULT line
+#   and no PREFIX_* file left.
 # `make test` does not build the examples: the binary is built here with make when it is missing (with
 # the sanitizer flags of `make sanitize` when TEST_SANITIZE=1).
 B="$1"
@@ -103,15 +104,16 @@ check "--faces 8: RESULT says target=8 faces=12 fallback=0 ($result)" [ "$(field
 check "--faces 8: the note says why and names --fallback" grep -q 'shell constraint vetoed every remaining collapse.*--fallback' "$tmp/b8_err.txt"
 
 # ---- bad input --------------------------------------------------------------------------------------
-refuse() { # refuse DESCRIPTION ARGS...: non-zero exit, no signal, a message, no sanitizer report
-  what="$1"; shift
+refuse() { # refuse DESCRIPTION STATUS ARGS...: exit STATUS, a message, no sanitizer report, no x_* file
+  what="$1"; want="$2"; shift 2
+  rm -f "$tmp"/x_*
   "$prog" "$@" >"$tmp/bad_out.txt" 2>"$tmp/bad_err.txt"
   rc=$?
-  if [ $rc -ne 0 ] && [ $rc -lt 128 ] && grep -q 'dispmesh' "$tmp/bad_err.txt" &&
+  if [ $rc -eq "$want" ] && grep -q 'dispmesh' "$tmp/bad_err.txt" && ! ls "$tmp" | grep -q '^x_' &&
      ! grep -q -E 'Sanitizer|runtime error' "$tmp/bad_err.txt" && ! grep -q '^RESULT' "$tmp/bad_out.txt"; then
     ok
   else
-    bad "$what: status $rc; stderr: $(head -c 400 "$tmp/bad_err.txt")"
+    bad "$what: status $rc (expected $want); files: $(ls "$tmp" | grep '^x_' | tr '\n' ' '); stderr: $(head -c 400 "$tmp/bad_err.txt")"
   fi
 }
 printf 'v 0 0 0\nv 1 0 0\n' >"$tmp/two_coords.obj"; printf 'v 1 2\nf 1 2 3\n' >>"$tmp/two_coords.obj"
@@ -120,24 +122,39 @@ printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n' >"$tmp/short.off"
 printf 'v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/nan.obj"
 printf 'v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n' >"$tmp/point.obj"
 : >"$tmp/empty.obj"
-refuse "missing file" "$tmp/does_not_exist.obj" -o "$tmp/x"
-refuse "vertex with two coordinates" "$tmp/two_coords.obj" -o "$tmp/x"
-refuse "face index out of range" "$tmp/index.obj" -o "$tmp/x"
-refuse "truncated OFF" "$tmp/short.off" -o "$tmp/x"
-refuse "NaN coordinate" "$tmp/nan.obj" -o "$tmp/x"
-refuse "mesh without extent" "$tmp/point.obj" -o "$tmp/x"
-refuse "empty file" "$tmp/empty.obj" -o "$tmp/x"
-refuse "--res 0" --brick --res 0 -o "$tmp/x"
-refuse "--faces abc" --brick --faces abc -o "$tmp/x"
-refuse "--res too small for the charts" --brick --faces 496 --res 8 -o "$tmp/x"
-refuse "--res too coarse for the base (triangles without a texel)" --brick --faces 496 --res 32 -o "$tmp/x"
-refuse "--fallback to 8 faces: most texels find no surface (a broken result)" --brick --fallback --faces 8 --res 128 -o "$tmp/x"
-refuse "unwritable prefix" --brick --res 64 -o "$tmp/no/such/dir/x"
-refuse "no input" -o "$tmp/x"
+refuse "missing file" 1 "$tmp/does_not_exist.obj" -o "$tmp/x"
+refuse "vertex with two coordinates" 1 "$tmp/two_coords.obj" -o "$tmp/x"
+refuse "face index out of range" 1 "$tmp/index.obj" -o "$tmp/x"
+refuse "truncated OFF" 1 "$tmp/short.off" -o "$tmp/x"
+refuse "NaN coordinate" 1 "$tmp/nan.obj" -o "$tmp/x"
+refuse "mesh without extent" 1 "$tmp/point.obj" -o "$tmp/x"
+refuse "empty file" 1 "$tmp/empty.obj" -o "$tmp/x"
+refuse "--res 0" 2 --brick --res 0 -o "$tmp/x"
+refuse "--faces abc" 2 --brick --faces abc -o "$tmp/x"
+refuse "--res too small for the charts" 1 --brick --faces 496 --res 8 -o "$tmp/x"
+refuse "--res too coarse for the base (triangles without a texel)" 1 --brick --faces 496 --res 32 -o "$tmp/x"
+refuse "--fallback to 8 faces: most texels find no surface (a broken result)" 1 --brick --fallback --faces 8 --res 128 -o "$tmp/x"
+refuse "unwritable prefix" 1 --brick --res 64 -o "$tmp/no/such/dir/x"
+refuse "no input" 2 -o "$tmp/x"
+refuse "--faces 4294967297" 2 --brick --faces 4294967297 -o "$tmp/x"
+refuse "--min-quality nan" 2 --brick --min-quality nan -o "$tmp/x"
+refuse "--res without a value" 2 --brick -o "$tmp/x" --res
+refuse "an unknown option" 2 --brick --bogus -o "$tmp/x"
+# ---- a write cut short: the file-size limit (ulimit -f, SIGXFSZ ignored, so write() fails with EFBIG as
+# on a full disk) lets the small PREFIX_base.obj through and stops the 64 KB PREFIX_disp.pfm: exit 1
+# naming the cause, no PREFIX_* file and no .tmp left, and a PREFIX_base.obj that existed is unchanged
+printf 'old\n' >"$tmp/w_base.obj"
+sh -c "ulimit -f 8; trap '' XFSZ; exec '$prog' --brick --faces 12 --res 128 -o '$tmp/w'" >"$tmp/w_out.txt" 2>"$tmp/w_err.txt"
+rc=$?
+check "write cut short: exit 1 (status $rc)" [ $rc -eq 1 ]
+check "write cut short: the message names the cause ($(tail -n 1 "$tmp/w_err.txt"))" grep -q 'File too large' "$tmp/w_err.txt"
+check "write cut short: only the old w_base.obj is left, unchanged ($(ls "$tmp" | grep '^w_' | tr '\n' ' '))" \
+  sh -c "[ \"\$(ls '$tmp' | grep '^w_' | grep -v -e '_out.txt' -e '_err.txt')\" = w_base.obj ] && [ \"\$(cat '$tmp/w_base.obj')\" = old ]"
+
 found=0
 for d in /usr/share/assimp/models /usr/share/assimp-testmodels; do
   for f in OFF/invalid.off OBJ/number_formats.obj OBJ/box_UTF16BE.obj OBJ/testline.obj; do
-    if [ -f "$d/$f" ]; then refuse "assimp-testmodels $f" "$d/$f" -o "$tmp/x"; found=$((found + 1)); fi
+    if [ -f "$d/$f" ]; then refuse "assimp-testmodels $f" 1 "$d/$f" -o "$tmp/x"; found=$((found + 1)); fi
   done
   [ $found -gt 0 ] && break
 done
