@@ -95,10 +95,16 @@
        DFM_ERR_NON_MANIFOLD (an edge in more than two triangles, anywhere in the mesh),
        DFM_ERR_UNWELDED (two used vertices at exactly the same position: dfm_weld first),
        DFM_ERR_NOT_POSITIVE_DEFINITE (a singular system the checks above did not catch, e.g. a
-       fitting ROI held by collinear vertices only), DFM_ERR_TOO_LARGE, DFM_ERR_OUT_OF_MEMORY,
-       DFM_CANCELLED. On failure *out is NULL and nothing is leaked.
+       fitting ROI held by collinear vertices only), DFM_ERR_NOT_FINITE (finite positions whose
+       system still overflows after the rescaling of DECISIONS), DFM_ERR_TOO_LARGE, DFM_ERR_OUT_OF_MEMORY, DFM_CANCELLED. On failure *out is NULL and
+       nothing is leaked.
        dfm_deform_solve: DFM_ERR_INVALID_ARGUMENT (NULL), DFM_ERR_BAD_VALUE (a NaN/Inf target or
-       rotation where one is read), DFM_ERR_OUT_OF_MEMORY; the object stays usable.
+       rotation where one is read), DFM_ERR_NOT_FINITE (finite targets, but a displacement or a
+       result overflowed, e.g. targets near 1e308; out is not written), DFM_ERR_OUT_OF_MEMORY;
+       the object stays usable.
+       dfm_roi_geodesic: DFM_ERR_NOT_FINITE when an edge length overflows (coordinates near 1e308).
+       The void helpers (dfm_rotation, dfm_pose_*) compute in doubles what they are given and
+       check nothing: a pose beyond 1e308 is refused by dfm_deform_solve.
      THREAD SAFETY
        No global state. dfm_deform_solve uses the object's workspace: one thread per object at a
        time. Results are deterministic (the same input gives the same bits).
@@ -112,6 +118,12 @@
        most (2^31 - 1) / 9 vertices. The whole mesh is checked for non-manifold edges and unwelded
        vertices, the ROI's neighbourhood for degenerate triangles.
      DECISIONS
+       - A mesh whose largest coordinate (over the vertices in triangles) is above 2^100 or below
+         2^-100 is scaled by a power of two into [0.5, 1) for the setup, and the targets and
+         results of each solve with it (exact, so the methods stay scale-free from 1e-300 to
+         1e300; meshes in between keep their bits): the sums of squares, LRI's normals and
+         FITTING's 3x3 inverses (the sixth power of a ring's size) would overflow from about
+         1e50 and underflow below 1e-50.
        - Displacements, not positions, are the unknowns: at rest the right-hand side is exactly
          zero, so zero motion reproduces the mesh whatever the conditioning (normal equations
          square it), and a mesh far from the origin loses no digits.
@@ -259,8 +271,13 @@
        dfm_chol_factor was given a matrix whose pattern differs from the analysed one. Bad input:
        DFM_ERR_INVALID_ARGUMENT (NULL, wrong kind, non-square), DFM_ERR_BAD_INDEX (row out of range,
        or an upper-triangle entry in a lower matrix, or a mesh index >= vertex count),
-       DFM_ERR_BAD_VALUE (NaN or infinite value or position), DFM_ERR_TOO_LARGE (sizes that
-       overflow size_t or exceed 2^31 - 1 rows), DFM_ERR_OUT_OF_MEMORY, DFM_CANCELLED.
+       DFM_ERR_BAD_VALUE (NaN or infinite value or position, or right-hand side of a solve or
+       vector of dfm_csc_multiply), DFM_ERR_TOO_LARGE (sizes that overflow size_t or exceed
+       2^31 - 1 rows), DFM_ERR_OUT_OF_MEMORY, DFM_CANCELLED. DFM_ERR_NOT_FINITE: every input was
+       finite but a result overflowed (a 1e200 entry squared by dfm_normal_matrix, a product of
+       dfm_csc_multiply, or a solution of dfm_chol_solve,
+       _solve_refined or dfm_constrained_solve beyond 1e308 because of a tiny pivot); the matrix
+       outputs are then freed, and the solves' x holds what was computed (Inf/NaN included).
 
      THREAD SAFETY
        No global state. A factor object may be used by several threads for dfm_chol_solve at once;
@@ -363,7 +380,8 @@ typedef enum dfm_result {
     DFM_ERR_UNCONSTRAINED,         /* a connected part of the ROI touches no fixed or handle vertex */
     DFM_ERR_DEGENERATE_TRIANGLE,   /* a zero-area triangle (or repeated index) touches the ROI */
     DFM_ERR_NON_MANIFOLD,          /* an edge shared by more than two triangles */
-    DFM_ERR_UNWELDED               /* two used vertices at the same position (a triangle soup) */
+    DFM_ERR_UNWELDED,              /* two used vertices at the same position (a triangle soup) */
+    DFM_ERR_NOT_FINITE             /* finite input, but a result overflowed to Inf or NaN */
 } dfm_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -655,6 +673,7 @@ DFMDEF const char *dfm_result_string(dfm_result r)
     case DFM_ERR_DEGENERATE_TRIANGLE: return "DFM_ERR_DEGENERATE_TRIANGLE";
     case DFM_ERR_NON_MANIFOLD: return "DFM_ERR_NON_MANIFOLD";
     case DFM_ERR_UNWELDED: return "DFM_ERR_UNWELDED";
+    case DFM_ERR_NOT_FINITE: return "DFM_ERR_NOT_FINITE";
     }
     return "DFM_ERR_?";
 }
@@ -693,6 +712,15 @@ static void dfm__free(const dfm_allocator *a, void *p)
 }
 
 static int dfm__finite(double x) { return x - x == 0.0; }
+
+/* 1 when every one of the n values is finite */
+static int dfm__all_finite(const double *x, size_t n)
+{
+    double s = 0.0;
+    size_t i;
+    for (i = 0; i < n; i++) s += x[i] - x[i]; /* 0 unless some x[i] is Inf or NaN */
+    return s == 0.0;
+}
 
 /* ---------------------------------------------------------------------------------------------
    Section: CSC basics
@@ -776,6 +804,8 @@ DFMDEF dfm_result dfm_csc_multiply(const dfm_csc *a, const double *x, double *y,
     if ((!x || !y) && nrhs > 0) return DFM_ERR_INVALID_ARGUMENT;
     nr = a->n_rows;
     nc = a->n_cols;
+    if (nrhs > 0 && (nc > ((size_t)-1 >> 4) / nrhs || nr > ((size_t)-1 >> 4) / nrhs)) return DFM_ERR_TOO_LARGE;
+    if (!dfm__all_finite(x, nc * nrhs)) return DFM_ERR_BAD_VALUE;
     for (q = 0; q < nrhs; q++) {
         const double *xq = x + q * nc;
         double *yq = y + q * nr;
@@ -787,7 +817,7 @@ DFMDEF dfm_result dfm_csc_multiply(const dfm_csc *a, const double *x, double *y,
                 if (a->kind == DFM_CSC_SYMMETRIC_LOWER && i != j) yq[j] += a->values[p] * xq[i];
             }
     }
-    return DFM_OK;
+    return dfm__all_finite(y, nr * nrhs) ? DFM_OK : DFM_ERR_NOT_FINITE;
 }
 
 /* Builds a CSC matrix from triplets (row, col, value), summing duplicates, rows sorted. */
@@ -1132,6 +1162,7 @@ DFMDEF dfm_result dfm_normal_matrix(const dfm_csc *a, const double *diagonal, co
         for (q = start; q < nnz; q++) out->values[q] = acc[out->row_index[q]];
         out->col_start[j + 1] = nnz;
     }
+    if (!dfm__all_finite(out->values, nnz)) err = DFM_ERR_NOT_FINITE; /* e.g. a 1e200 entry squared */
 done:
     dfm_csc_free(&full);
     dfm_csc_free(&rows);
@@ -3673,6 +3704,7 @@ DFMDEF dfm_result dfm_chol_solve(const dfm_chol *c, double *x, size_t nrhs)
     if (nrhs == 0) return DFM_OK;
     n = c->n;
     if (nrhs > ((size_t)-1 >> 4) / n) return DFM_ERR_TOO_LARGE;
+    if (!dfm__all_finite(x, n * nrhs)) return DFM_ERR_BAD_VALUE; /* x is left as it was */
     /* room for the supernode block: 4 doubles a row (the AVX solve pads rows to 4) */
     w = (double *)dfm__alloc(&c->al, n * (nrhs < 4 ? nrhs : 4) + 4 * c->max_rows + 4, sizeof(double), &err);
     if (!w) return err;
@@ -3686,7 +3718,7 @@ DFMDEF dfm_result dfm_chol_solve(const dfm_chol *c, double *x, size_t nrhs)
             for (t = 0; t < q; t++) xq[(size_t)c->perm[k] + t * n] = w[k * q + t];
     }
     dfm__free(&c->al, w);
-    return DFM_OK;
+    return dfm__all_finite(x, n * nrhs) ? DFM_OK : DFM_ERR_NOT_FINITE; /* overflow: a tiny pivot */
 }
 
 DFMDEF dfm_result dfm_chol_solve_refined(const dfm_chol *c, const dfm_csc *a, const double *b, double *x,
@@ -3721,6 +3753,8 @@ DFMDEF dfm_result dfm_chol_solve_refined(const dfm_chol *c, const dfm_csc *a, co
         for (i = 0; i < n * nrhs; i++) x[i] += r[i];
     }
     dfm__free(&c->al, r);
+    /* b was finite (the first solve checked it): a non-finite residual or step is an overflow */
+    if (err == DFM_ERR_BAD_VALUE || (err == DFM_OK && !dfm__all_finite(x, n * nrhs))) err = DFM_ERR_NOT_FINITE;
     return err;
 }
 
@@ -3902,6 +3936,9 @@ DFMDEF dfm_result dfm_constrained_solve(const dfm_constrained *c, const double *
     n = c->n;
     nf = c->nfree;
     if (nrhs > ((size_t)-1 >> 4) / n) return DFM_ERR_TOO_LARGE;
+    for (q = 0; q < nrhs; q++)
+        for (k = 0; k < n; k++)
+            if (!dfm__finite(c->free_index[k] < 0 ? fixed_values[q * n + k] : b[q * n + k])) return DFM_ERR_BAD_VALUE;
     w = (double *)dfm__alloc(&c->al, nf * nrhs, sizeof(double), &err);
     if (!w) return err;
     for (q = 0; q < nrhs; q++) {
@@ -3911,6 +3948,7 @@ DFMDEF dfm_result dfm_constrained_solve(const dfm_constrained *c, const double *
         for (k = 0; k < c->ncoup; k++) wq[c->coup_free[k]] -= c->coup_val[k] * fq[c->coup_fixed[k]];
     }
     err = dfm_chol_solve(c->chol, w, nrhs);
+    if (err == DFM_ERR_BAD_VALUE) err = DFM_ERR_NOT_FINITE; /* the moved fixed values overflowed */
     if (err == DFM_OK)
         for (q = 0; q < nrhs; q++) {
             double *xq = x + q * n;
@@ -4282,6 +4320,7 @@ static dfm_result dfm__lsq_factor(dfm__lsq *s, const double *pos, int refine, co
     dfm_chol_options co = dfm_chol_default_options();
     double *coords = NULL;
     size_t u, n = s->bs * s->nu;
+    if (err == DFM_OK && !dfm__all_finite(s->normal.values, s->normal.col_start[n])) err = DFM_ERR_NOT_FINITE;
     if (err != DFM_OK) return err;
     coords = (double *)dfm__alloc(al, s->nu, 3 * sizeof(double), &err);
     s->rhs = (double *)dfm__alloc(al, n, s->nrhs * sizeof(double), &err);
@@ -4460,6 +4499,7 @@ struct dfm_deform {
     double *S;             /* LRI with rigid_steps: 9 per unknown, the local fit's sums */
     int32_t *active;       /* the vertices in some row (unknowns and the known ones read) */
     size_t nactive;
+    int scale_exp;         /* pos = the caller's positions times 2^-scale_exp (dfm__deform_rescale) */
 };
 
 DFMDEF dfm_deform_options dfm_deform_default_options(void)
@@ -4988,6 +5028,25 @@ static dfm_result dfm__deform_mesh(dfm_deform *d, const uint32_t *idx, size_t nt
     return err;
 }
 
+/* Step 2a: the methods are scale-free, but their sums of squares (and FITTING's 3x3 inverses, of
+   the sixth power of a 1-ring's size) are not: a mesh whose largest coordinate M (over vertices in
+   triangles) is above 2^100 or below 2^-100 is scaled by the power of two that brings M into
+   [0.5, 1) (exact), and the solves scale the targets and results back. Meshes in between keep
+   their bits. */
+static void dfm__deform_rescale(dfm_deform *d, const uint32_t *idx, size_t nt)
+{
+    double m = 0.0;
+    size_t t, k;
+    for (t = 0; t < 3 * nt; t++)
+        for (k = 0; k < 3; k++)
+            if (fabs(d->pos[3 * (size_t)idx[t] + k]) > m) m = fabs(d->pos[3 * (size_t)idx[t] + k]);
+    d->scale_exp = 0;
+    if (m > ldexp(1.0, 100) || (m > 0.0 && m < ldexp(1.0, -100))) {
+        (void)frexp(m, &d->scale_exp);
+        for (t = 0; t < 3 * d->nv; t++) d->pos[t] = ldexp(d->pos[t], -d->scale_exp);
+    }
+}
+
 DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count, const uint32_t *indices,
                                    size_t triangle_count, const unsigned char *roi, const unsigned char *handle,
                                    const dfm_deform_options *options, dfm_deform **out)
@@ -5014,6 +5073,7 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
     d->pos = (double *)dfm__alloc(&d->al, vertex_count, 3 * sizeof(double), &err);
     if (err == DFM_OK) {
         memcpy(d->pos, positions, vertex_count * 3 * sizeof(double));
+        dfm__deform_rescale(d, indices, triangle_count);
         err = dfm__deform_mesh(d, indices, triangle_count, roi, handle); /* 2-5 */
     }
     if (err == DFM_OK && dfm__report(&o, 0.05f)) err = DFM_CANCELLED;
@@ -5037,6 +5097,7 @@ DFMDEF dfm_result dfm_deform_setup(const double *positions, size_t vertex_count,
         if (o.weights == DFM_WEIGHTS_UNIFORM && !o.refine_steps) err = dfm__lsq_share(&d->fsys, &d->sys, &d->al);
         else err = dfm__lsq_factor(&d->fsys, d->pos, o.refine_steps, &d->al, &sp);
     }
+    if (err == DFM_ERR_BAD_VALUE) err = DFM_ERR_NOT_FINITE; /* the input was finite (step 1): an overflow */
     if (err == DFM_OK) err = dfm__active_list(d); /* 8 */
     if (err == DFM_OK) {
         d->X = (double *)dfm__alloc(&d->al, vertex_count, 9 * sizeof(double), &err);
@@ -5077,7 +5138,7 @@ static void dfm__known_displacements(const dfm_deform *d, const double *targets,
         v = (size_t)d->active[a];
         if (d->unk[v] >= 0 && !d->soft[v]) continue;
         for (q = 0; q < 3; q++) {
-            double x = targets[3 * v + q] - d->pos[3 * v + q];
+            double x = (d->scale_exp ? ldexp(targets[3 * v + q], -d->scale_exp) : targets[3 * v + q]) - d->pos[3 * v + q];
             if (bs == 1) d->X[q * nv + v] = x;
             else d->X[3 * v + q] = x;
         }
@@ -5313,10 +5374,17 @@ static void dfm__lri_fit_rotations(dfm_deform *d, int first)
     }
 }
 
+/* unknown v's new coordinate q: its position plus its solved displacement, in the caller's scale */
+static double dfm__solved(const dfm_deform *d, size_t v, size_t q)
+{
+    double x = d->pos[3 * v + q] + (d->sys.bs == 1 ? d->X[q * d->nv + v] : d->X[3 * v + q]);
+    return d->scale_exp ? ldexp(x, d->scale_exp) : x;
+}
+
 DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const double *rotations, double *out)
 {
     dfm_result err;
-    size_t a, v, q, nv, bs;
+    size_t a, q, nv, bs;
     int k;
     if (!d || !targets || !out) return DFM_ERR_INVALID_ARGUMENT;
     nv = d->nv;
@@ -5334,12 +5402,14 @@ DFMDEF dfm_result dfm_deform_solve(dfm_deform *d, const double *targets, const d
         dfm__lri_position_rhs(d);
         err = dfm__lsq_solve(&d->sys, d->rowb, d->X, d->opt.refine_steps);
     }
+    if (err == DFM_ERR_BAD_VALUE) err = DFM_ERR_NOT_FINITE; /* the pose was finite: an overflow */
     if (err != DFM_OK) return err;
+    for (a = 0; a < d->nu; a++) /* out is written only when every new position is finite */
+        for (q = 0; q < 3; q++)
+            if (!dfm__finite(dfm__solved(d, (size_t)d->unk_v[a], q))) return DFM_ERR_NOT_FINITE;
     if (out != targets) memcpy(out, targets, 3 * nv * sizeof(double)); /* the known vertices */
-    for (a = 0; a < d->nu; a++) {
-        v = (size_t)d->unk_v[a];
-        for (q = 0; q < 3; q++) out[3 * v + q] = d->pos[3 * v + q] + (bs == 1 ? d->X[q * nv + v] : d->X[3 * v + q]);
-    }
+    for (a = 0; a < d->nu; a++)
+        for (q = 0; q < 3; q++) out[3 * (size_t)d->unk_v[a] + q] = dfm__solved(d, (size_t)d->unk_v[a], q);
     return DFM_OK;
 }
 
@@ -5443,13 +5513,18 @@ DFMDEF dfm_result dfm_roi_geodesic(const double *positions, size_t vertex_count,
                 size_t w = (size_t)g.adj[p];
                 dfm__sub3(positions + 3 * w, positions + 3 * u, e);
                 nd = dv + sqrt(dfm__dot3(e, e));
+                if (!dfm__finite(nd)) { /* an edge (or path) longer than a double holds */
+                    err = DFM_ERR_NOT_FINITE;
+                    n = 0;
+                    break;
+                }
                 if (nd < dist[w]) {
                     dist[w] = nd;
                     dfm__heap_push(hd, hv, &n, nd, (int32_t)w);
                 }
             }
         }
-        for (v = 0; v < vertex_count; v++) mask[v] = dist[v] <= radius;
+        for (v = 0; v < vertex_count && err == DFM_OK; v++) mask[v] = dist[v] <= radius;
     }
     dfm__free(&al, dist);
     dfm__free(&al, hd);

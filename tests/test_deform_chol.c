@@ -925,6 +925,81 @@ static void test_bad_input(void)
     dfm_csc_free(&a);
 }
 
+/* Issue 21 point 2: finite input whose result overflows is DFM_ERR_NOT_FINITE, never DFM_OK with
+   Inf or NaN in the output; a NaN/Inf right-hand side or vector is DFM_ERR_BAD_VALUE (and the
+   solve leaves x as it was). Every case below returned DFM_OK with Inf before. */
+static void test_not_finite(void)
+{
+    dfm_csc a = random_spd(20, 3.0, 7, 0.1), m, d;
+    dfm_chol *c = NULL;
+    dfm_constrained *k = NULL;
+    unsigned char fixed[20] = {0};
+    double x[20], y[20], b[20], fv[20];
+    size_t i, p;
+    int unchanged;
+    /* a 1e200 entry squared by the normal matrix */
+    a.values[a.col_start[4]] = 1e200;
+    T_EQ_INT(dfm_normal_matrix(&a, NULL, NULL, &m), DFM_ERR_NOT_FINITE);
+    T_CHECK(m.col_start == NULL && m.values == NULL); /* freed */
+    a.values[a.col_start[4]] = 1e150; /* 1e300: still finite */
+    T_EQ_INT(dfm_normal_matrix(&a, NULL, NULL, &m), DFM_OK);
+    dfm_csc_free(&m);
+    /* a finite diagonal that overflows the sum */
+    {
+        double dg[20];
+        for (i = 0; i < 20; i++) dg[i] = 1.7e308;
+        a.values[a.col_start[4]] = 1e154;
+        T_EQ_INT(dfm_normal_matrix(&a, dg, NULL, &m), DFM_ERR_NOT_FINITE);
+    }
+    a.values[a.col_start[4]] = 10.0;
+    /* the product overflows; a NaN vector is bad input */
+    for (i = 0; i < 20; i++) x[i] = 1e308;
+    T_EQ_INT(dfm_csc_multiply(&a, x, y, 1), DFM_ERR_NOT_FINITE);
+    x[3] = NAN;
+    T_EQ_INT(dfm_csc_multiply(&a, x, y, 1), DFM_ERR_BAD_VALUE);
+    /* a tiny pivot: the diagonal 1e-300, b = 1e300 gives x = 1e600 */
+    T_EQ_INT(dfm_csc_alloc(20, 20, 20, DFM_CSC_SYMMETRIC_LOWER, NULL, &d), DFM_OK);
+    for (i = 0; i < 20; i++) {
+        d.row_index[i] = (int32_t)i;
+        d.values[i] = i == 5 ? 1e-300 : 2.0;
+        d.col_start[i + 1] = i + 1;
+    }
+    T_EQ_INT(dfm_chol_analyze(&d, NULL, &c), DFM_OK);
+    T_EQ_INT(dfm_chol_factor(c, &d), DFM_OK);
+    for (i = 0; i < 20; i++) b[i] = 1e300;
+    memcpy(x, b, sizeof x);
+    T_EQ_INT(dfm_chol_solve(c, x, 1), DFM_ERR_NOT_FINITE);
+    T_EQ_INT(dfm_chol_solve_refined(c, &d, b, x, 1, 0), DFM_ERR_NOT_FINITE);
+    T_EQ_INT(dfm_chol_solve_refined(c, &d, b, x, 1, 3), DFM_ERR_NOT_FINITE);
+    b[5] = 1e-10; /* x_5 = 1e290: finite */
+    T_EQ_INT(dfm_chol_solve_refined(c, &d, b, x, 1, 3), DFM_OK);
+    for (i = 0; i < 20; i++) x[i] = i == 9 ? INFINITY : 1.0;
+    T_EQ_INT(dfm_chol_solve(c, x, 1), DFM_ERR_BAD_VALUE);
+    for (i = 0, unchanged = 1; i < 20; i++) unchanged &= x[i] == (i == 9 ? INFINITY : 1.0);
+    T_CHECK(unchanged);
+    dfm_chol_free(c);
+    /* constrained: finite fixed values whose coupling overflows the right-hand side */
+    fixed[0] = fixed[1] = 1;
+    T_EQ_INT(dfm_constrained_analyze(&a, fixed, NULL, &k), DFM_OK);
+    T_EQ_INT(dfm_constrained_factor(k, &a), DFM_OK);
+    for (i = 0; i < 20; i++) {
+        b[i] = 1.0;
+        fv[i] = 1.0;
+    }
+    T_EQ_INT(dfm_constrained_solve(k, b, fv, x, 1), DFM_OK);
+    for (p = a.col_start[0]; p < a.col_start[2]; p++) /* the fixed columns' couplings to 1e300 */
+        if ((size_t)a.row_index[p] > 1) a.values[p] = -1e300;
+    T_EQ_INT(dfm_constrained_factor(k, &a), DFM_OK);
+    fv[0] = fv[1] = 1e300;
+    T_EQ_INT(dfm_constrained_solve(k, b, fv, x, 1), DFM_ERR_NOT_FINITE);
+    fv[0] = NAN;
+    T_EQ_INT(dfm_constrained_solve(k, b, fv, x, 1), DFM_ERR_BAD_VALUE);
+    dfm_constrained_free(k);
+    T_EQ_STR(dfm_result_string(DFM_ERR_NOT_FINITE), "DFM_ERR_NOT_FINITE");
+    dfm_csc_free(&d);
+    dfm_csc_free(&a);
+}
+
 /* every allocation failure is reported as OUT_OF_MEMORY and leaks nothing */
 static int run_pipeline(const dfm_allocator *al, const float *pos, size_t nv, const uint32_t *idx, size_t nt)
 {
@@ -1531,6 +1606,7 @@ int main(int argc, char **argv)
     test_constraints();
     test_blocks();
     test_bad_input();
+    test_not_finite();
     test_alloc_failures();
     test_cancel();
     test_amd_quality();

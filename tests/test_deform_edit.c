@@ -967,6 +967,81 @@ static void test_cotan_floor(void)
     free_tube(&m);
 }
 
+/* Issue 21 point 2: the methods are scale-free, so a mesh and pose scaled by 2^k (exact) give the
+   result scaled by 2^k. At 2^400 (2.6e120) and 2^-400 the plain sums of squares overflow or
+   underflow (|u x v|^2 in the cotangents and the degenerate-triangle check, LRI's normals and
+   ARAP sums, FITTING's 3x3 inverse of the sixth power of a ring's size); at 2^90 they do not and
+   the mesh is not rescaled. Without the setup's power-of-two rescaling, 2^400 gave DFM_OK with
+   LRI 0.1 diagonals off (3.6e3 with soft handle and rigid steps), 2^-400 Gram-Schmidt LRI 0.035
+   off, and FITTING refused both. The bound: the same operations on exactly scaled numbers, so
+   the same bits but for rounding of the scaled targets; 1e-12 of the diagonal. A pose near 1e308
+   overflows the displacements: DFM_ERR_NOT_FINITE and out not written. */
+static void test_scale(tube *m)
+{
+    static const int expo[3] = {400, -400, 90};
+    size_t v, i;
+    int k, j;
+    double *tg = (double *)malloc(3 * m->nv * sizeof(double)), *rot = (double *)malloc(9 * m->nv * sizeof(double));
+    double *spos = (double *)malloc(3 * m->nv * sizeof(double)), *stg = (double *)malloc(3 * m->nv * sizeof(double));
+    for (k = 0; k < NCONF; k++) {
+        dfm_deform_options o = conf(k);
+        dfm_result e1, e2;
+        double *a, *b, *saved = m->pos;
+        bend_pose(m, 0.5 * PI, tg, rot);
+        a = deform(m, &o, tg, rot, &e1);
+        T_CHECK(e1 == DFM_OK);
+        for (j = 0; j < 3; j++) {
+            double e = 0.0;
+            for (i = 0; i < 3 * m->nv; i++) {
+                spos[i] = ldexp(m->pos[i], expo[j]);
+                stg[i] = ldexp(tg[i], expo[j]);
+            }
+            m->pos = spos;
+            b = deform(m, &o, stg, rot, &e2);
+            m->pos = saved;
+            T_CHECK_MSG(e2 == DFM_OK, "%s at 2^%d: %s", conf_name[k], expo[j], dfm_result_string(e2));
+            if (a && b) {
+                for (i = 0; i < 3 * m->nv; i++) e = fmax(e, fabs(ldexp(b[i], -expo[j]) - a[i]));
+                T_CHECK_MSG(e / m->diag <= 1e-12, "%s at 2^%d: result off by %.3g diagonals", conf_name[k], expo[j],
+                            e / m->diag);
+            }
+            free(b);
+        }
+        free(a);
+    }
+    /* a finite pose whose displacement overflows */
+    {
+        dfm_deform_options o = conf(0);
+        dfm_deform *d = NULL;
+        double *out = (double *)malloc(3 * m->nv * sizeof(double));
+        T_EQ_INT(dfm_deform_setup(m->pos, m->nv, m->idx, m->nt, m->roi, m->handle, &o, &d), DFM_OK);
+        dfm_pose_identity(m->pos, m->nv, tg, rot);
+        for (v = 0; v < m->nv; v++)
+            if (m->handle[v]) tg[3 * v] = 1.7e308;
+            else if (!m->roi[v]) tg[3 * v] = -1.7e308;
+        for (i = 0; i < 3 * m->nv; i++) out[i] = 7.0;
+        T_EQ_INT(dfm_deform_solve(d, tg, rot, out), DFM_ERR_NOT_FINITE);
+        for (i = 0; i < 3 * m->nv && out[i] == 7.0; i++) continue;
+        T_EQ_SIZE(i, 3 * m->nv); /* not written */
+        dfm_deform_free(d);
+        free(out);
+    }
+    /* an edge longer than a double holds */
+    {
+        unsigned char *seeds = (unsigned char *)calloc(m->nv, 1), *mask = (unsigned char *)malloc(m->nv);
+        memcpy(spos, m->pos, 3 * m->nv * sizeof(double));
+        for (v = 0; v < m->nv; v++) spos[3 * v] = (v & 1) ? 1.5e308 : -1.5e308;
+        seeds[0] = 1;
+        T_EQ_INT(dfm_roi_geodesic(spos, m->nv, m->idx, m->nt, seeds, 1e308, mask, NULL), DFM_ERR_NOT_FINITE);
+        free(seeds);
+        free(mask);
+    }
+    free(tg);
+    free(rot);
+    free(spos);
+    free(stg);
+}
+
 int main(int argc, char **argv)
 {
     tube m;
@@ -976,6 +1051,7 @@ int main(int argc, char **argv)
     test_translation(&m);
     test_rigid_motion(&m);
     test_origin_independence(&m);
+    test_scale(&m);
     test_soft_to_hard(&m);
     test_frame_choice(&m);
     test_bend_quality();
