@@ -12,7 +12,7 @@
        perspective-correct interpolation, GL_LESS depth test, optional culling, flat / Gouraud /
        per-pixel Phong lighting (the fixed-function GL model: ambient + diffuse + Blinn specular,
        directional and point lights), per-vertex colour, object-space normal map, wireframe
-       overlay, a fragment callback, and a fragment-counting mode for coverage tests.
+       overlay (faded out where triangles are too small on screen for it to stay lines), a fragment callback, and a fragment-counting mode for coverage tests.
        It is a deferred ("visibility buffer") rasterizer: each draw first resolves depth,
        triangle and barycentrics per pixel, then shades every covered pixel once.
      - Relief mapping of a height map over a world-space quad (Policarpo et al. 2005: linear
@@ -315,7 +315,10 @@ typedef struct sr_draw_desc {
     sr_material material;
     const sr_image *normal_map; /* object-space normals (3 channels, -1..1) looked up at the uvs */
     int wireframe;              /* nonzero: draw triangle edges over the shading (not on triangles
-                                   cut by the near/far plane or the guard band) */
+                                   cut by the near/far plane or the guard band), faded out on
+                                   triangles whose edges average under 10 pixels (20 wire half
+                                   widths; none under 5: see sr__wire_alpha), so that a dense
+                                   mesh is not solid wire */
     float wire_color[3];
     float wire_width;           /* pixels, 0 = 1 */
     /* optional: replaces lighting; rgb receives the colour */
@@ -1407,12 +1410,20 @@ static void sr__shade_pixel(const sr__shader *s, int x, int y, uint32_t id, floa
     }
 }
 
-/* coverage of the wireframe at a pixel centre: distance to the nearest edge of its triangle */
+/* coverage of the wireframe at a pixel centre: distance to the nearest edge of its triangle,
+   faded out on triangles too small on screen for their edges to stay lines. The wire's share of
+   an equilateral triangle of side L pixels is about 6.9 half / L (half = half the wire width): with
+   L >= 20 half (10 pixels at width 1, a third of it wire) the wire is drawn as it is, below that
+   it fades linearly to nothing at L = 10 half, so that a dense mesh shows its shading instead of
+   a solid wire colour. L is the mean of the three projected edge lengths: a triangle seen edge-on
+   near a silhouette keeps its wire (its long edges stay lines). */
+#define SR__WIRE_FULL 20.0f
+#define SR__WIRE_NONE 10.0f
 static float sr__wire_alpha(const sr__shader *s, int x, int y, uint32_t id)
 {
     const uint32_t *idx = s->d->indices + 3 * (size_t)(id & ~SR__BACK_BIT);
     const sr__cv *v[3];
-    float px = (float)x + 0.5f, py = (float)y + 0.5f, dmin = 1e30f, half;
+    float px = (float)x + 0.5f, py = (float)y + 0.5f, dmin = 1e30f, half, mean = 0.0f;
     int k;
     for (k = 0; k < 3; k++) {
         v[k] = &s->cv[idx[k]];
@@ -1421,12 +1432,15 @@ static float sr__wire_alpha(const sr__shader *s, int x, int y, uint32_t id)
     for (k = 0; k < 3; k++) {
         const sr__cv *a = v[k], *b = v[(k + 1) % 3];
         float ex = b->sx - a->sx, ey = b->sy - a->sy, len = sqrtf(ex * ex + ey * ey), dist;
+        mean += len * (1.0f / 3.0f);
         if (len <= 0.0f) continue;
         dist = fabsf(ex * (py - a->sy) - ey * (px - a->sx)) / len;
         if (dist < dmin) dmin = dist;
     }
     half = (s->d->wire_width > 0.0f ? s->d->wire_width : 1.0f) * 0.5f;
-    return sr__clampf(half + 0.5f - dmin, 0.0f, 1.0f);
+    if (mean >= SR__WIRE_FULL * half) return sr__clampf(half + 0.5f - dmin, 0.0f, 1.0f);
+    return sr__clampf(half + 0.5f - dmin, 0.0f, 1.0f) *
+           sr__clampf((mean / half - SR__WIRE_NONE) / (SR__WIRE_FULL - SR__WIRE_NONE), 0.0f, 1.0f);
 }
 
 /* Per-pixel Phong for a batch of pixels, one step at a time over the whole batch: the steps of

@@ -1383,6 +1383,65 @@ static void test_font(void)
     }
 }
 
+
+/* ---- the wireframe fades out on triangles too small for it (issue 21 point 6) ---------------- */
+
+/* the wire's ink (sum over covered pixels of 1 - colour: white unlit surface, black wire), the
+   covered pixels, and the ink expected on a coarse mesh: half a pixel per pixel of each front
+   triangle's perimeter (the wire is width 1, half of it on each side of an edge) */
+static void wire_ink(const mesh *m, int W, double *ink, double *covered, double *expected)
+{
+    sr_framebuffer fb;
+    sr_camera cam;
+    sr_draw_desc d;
+    float eye[3] = {0.3f, 0.5f, 3.2f}, at[3] = {0, 0, 0};
+    size_t i, t;
+    sr_framebuffer_create(&fb, W, W, NULL);
+    sr_camera_look_at(&cam, eye, at, NULL, 45.0f, 1.0f, 0.1f, 10.0f);
+    sr_draw_desc_default(&d);
+    d.positions = m->p; d.vertex_count = m->nv; d.indices = m->i; d.triangle_count = m->nt;
+    d.shading = SR_SHADE_UNLIT; d.cull = SR_CULL_BACK; d.wireframe = 1;
+    d.material.diffuse[0] = d.material.diffuse[1] = d.material.diffuse[2] = 1.0f;
+    T_EQ_INT(sr_draw_mesh(&fb, &cam, &d), SR_OK);
+    *ink = *covered = *expected = 0.0;
+    for (i = 0; i < (size_t)W * (size_t)W; i++)
+        if (fb.color[4 * i + 3] == 1.0f) { *covered += 1.0; *ink += 1.0 - fb.color[4 * i]; }
+    for (t = 0; t < m->nt; t++) {
+        double sx[3], sy[3], area2;
+        int k;
+        for (k = 0; k < 3; k++) {
+            const float *p = m->p + 3 * (size_t)m->i[3 * t + (size_t)k], *M = cam.viewproj;
+            double cx = M[0] * p[0] + M[4] * p[1] + M[8] * p[2] + M[12], cy = M[1] * p[0] + M[5] * p[1] + M[9] * p[2] + M[13];
+            double cw = M[3] * p[0] + M[7] * p[1] + M[11] * p[2] + M[15];
+            sx[k] = (cx / cw * 0.5 + 0.5) * W;
+            sy[k] = (0.5 - cy / cw * 0.5) * W;
+        }
+        area2 = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
+        if (area2 >= 0.0) continue; /* back-facing (y down) */
+        for (k = 0; k < 3; k++) *expected += 0.5 * hypot(sx[(k + 1) % 3] - sx[k], sy[(k + 1) % 3] - sy[k]);
+    }
+    sr_framebuffer_free(&fb);
+}
+
+static void test_wire_density(void)
+{
+    mesh coarse = uv_sphere(6, 8, 1.0f), dense = uv_sphere(g_small ? 60 : 120, g_small ? 120 : 240, 1.0f);
+    double ink, covered, expected;
+    wire_ink(&coarse, 256, &ink, &covered, &expected);
+    printf("wire on %zu triangles at 256 px: ink %.0f px, expected %.0f, %.1f%% of %.0f covered px\n", coarse.nt, ink, expected,
+           100.0 * ink / covered, covered);
+    /* coarse: every edge drawn as before (corners overlap a little: a few % less than the perimeters) */
+    T_CHECK(ink > 0.85 * expected && ink < 1.05 * expected);
+    wire_ink(&dense, 256, &ink, &covered, &expected);
+    printf("wire on %zu triangles at 256 px: ink %.0f px (%.1f%% of %.0f covered px), unfaded it would be %.0f\n", dense.nt, ink,
+           100.0 * ink / covered, covered, expected);
+    /* dense: the triangles are ~2 px^2, their full wire would cover everything (expected > covered) */
+    T_CHECK(expected > covered);
+    T_CHECK(ink < 0.35 * covered);
+    mesh_free(&coarse);
+    mesh_free(&dense);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1405,5 +1464,6 @@ int main(int argc, char **argv)
     test_sheet_and_errors();
     test_not_finite();
     test_font();
+    test_wire_density();
     return T_END();
 }
