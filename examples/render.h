@@ -357,7 +357,7 @@ typedef struct sr_terrain_desc {
     int width, height;
     float origin_x, origin_z, base_y, spacing, height_scale;
     float step;               /* march step in world units, 0 = spacing / 2 */
-    const float *colors;      /* 3 per sample, or NULL = material diffuse */
+    const float *colors;      /* 3 per sample (bilinear between samples), or NULL = material diffuse */
     const sr_light *lights; int light_count;
     sr_material material;
 } sr_terrain_desc;
@@ -2079,6 +2079,19 @@ static float sr__terrain_y(const sr_terrain_desc *d, float x, float z)
     }
 }
 
+/* the colour at world (x, z), bilinear between the samples' colours (as the heights are), clamped
+   to the grid: a nearest-sample lookup showed every grid cell as a flat block */
+static void sr__terrain_color(const sr_terrain_desc *d, float x, float z, float rgb[3])
+{
+    float gx = sr__clampf((x - d->origin_x) / d->spacing, 0.0f, (float)(d->width - 1));
+    float gz = sr__clampf((z - d->origin_z) / d->spacing, 0.0f, (float)(d->height - 1)), fx = floorf(gx), fz = floorf(gz);
+    int x0 = (int)fx, z0 = (int)fz, x1 = x0 + 1 < d->width ? x0 + 1 : x0, z1 = z0 + 1 < d->height ? z0 + 1 : z0, k;
+    float ax = gx - fx, az = gz - fz;
+    const float *a = d->colors + 3 * ((size_t)z0 * (size_t)d->width + (size_t)x0), *b = d->colors + 3 * ((size_t)z0 * (size_t)d->width + (size_t)x1);
+    const float *c = d->colors + 3 * ((size_t)z1 * (size_t)d->width + (size_t)x0), *e = d->colors + 3 * ((size_t)z1 * (size_t)d->width + (size_t)x1);
+    for (k = 0; k < 3; k++) rgb[k] = (a[k] + (b[k] - a[k]) * ax) * (1.0f - az) + (c[k] + (e[k] - c[k]) * ax) * az;
+}
+
 /* slab test against an axis-aligned box; returns 0 when the ray misses */
 static int sr__ray_box(const float o[3], const float dir[3], const float lo[3], const float hi[3], float *t0, float *t1)
 {
@@ -2165,10 +2178,7 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
                 N[2] = -(sr__terrain_y(d, P[0], P[2] + e) - sr__terrain_y(d, P[0], P[2] - e)) / (2.0f * e);
                 sr__normalize(N);
                 if (d->colors) {
-                    int gx = (int)floorf((P[0] - d->origin_x) / d->spacing + 0.5f), gz = (int)floorf((P[2] - d->origin_z) / d->spacing + 0.5f);
-                    gx = gx < 0 ? 0 : (gx >= d->width ? d->width - 1 : gx);
-                    gz = gz < 0 ? 0 : (gz >= d->height ? d->height - 1 : gz);
-                    memcpy(kd, d->colors + 3 * ((size_t)gz * (size_t)d->width + (size_t)gx), sizeof kd);
+                    sr__terrain_color(d, P[0], P[2], kd);
                 } else {
                     memcpy(kd, d->material.diffuse, sizeof kd);
                 }

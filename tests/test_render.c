@@ -1442,6 +1442,45 @@ static void test_wire_density(void)
     mesh_free(&dense);
 }
 
+
+/* ---- terrain colours are filtered (issue 21 point 6: each grid cell was a flat colour block) ---- */
+
+static void test_terrain_colors(void)
+{
+    enum { N = 33, W = 256 };
+    static float h[N * N], col[3 * N * N];
+    sr_terrain_desc td;
+    sr_framebuffer fb;
+    sr_camera cam;
+    float eye[3] = {16, 10, 16}, at[3] = {16, 0, 16}, up[3] = {0, 0, -1}, maxd = 0.0f;
+    uint32_t seed = 7;
+    int i, x, y, k, pairs = 0;
+    for (i = 0; i < N * N; i++) { h[i] = 0.0f; for (k = 0; k < 3; k++) col[3 * i + k] = frand(&seed); }
+    sr_terrain_desc_default(&td);
+    td.heights = h; td.width = N; td.height = N; td.spacing = 1.0f; td.colors = col;
+    sr_framebuffer_create(&fb, W, W, NULL);
+    sr_camera_ortho(&cam, eye, at, up, 16.0f, 1.0f, 0.1f, 20.0f); /* 8 pixels per sample spacing */
+    T_EQ_INT(sr_draw_terrain(&fb, &cam, &td), SR_OK);
+    /* the head light from straight above on a flat ground: colour = 1.2 kd + 0.3 (ambient 0.2 +
+       diffuse 1, specular 0.3 at N.H = 1), so bilinear colours change by at most 1.2 / 8 per
+       pixel; a nearest-sample lookup jumps by up to 1.2 at each cell edge */
+    for (y = 0; y < W; y++)
+        for (x = 0; x + 1 < W; x++) {
+            const float *a = fb.color + 4 * ((size_t)y * W + (size_t)x), *b = a + 4, *c = y + 1 < W ? a + 4 * W : NULL;
+            if (a[3] != 1.0f || b[3] != 1.0f) continue;
+            for (k = 0; k < 3; k++) {
+                float dx = fabsf(a[k] - b[k]), dy = c && c[3] == 1.0f ? fabsf(a[k] - c[k]) : 0.0f;
+                if (dx > maxd) maxd = dx;
+                if (dy > maxd) maxd = dy;
+            }
+            pairs++;
+        }
+    printf("terrain colours: largest step between adjacent pixels %.3f over %d pairs (bound 1.2 / 8 = 0.15)\n", maxd, pairs);
+    T_CHECK(pairs > W * W / 2);
+    T_CHECK(maxd > 0.02f && maxd <= 0.151f);
+    sr_framebuffer_free(&fb);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1465,5 +1504,6 @@ int main(int argc, char **argv)
     test_not_finite();
     test_font();
     test_wire_density();
+    test_terrain_colors();
     return T_END();
 }
