@@ -28,7 +28,9 @@
                     then each method's result, with captions
    Prints one line a method: "RESULT deform_example method=... init_ms=... frame_ms=...
    edge_distortion=..." and the setup's progress on stderr. Exit status 0, 1 on failure, 2 on a
-   bad argument. */
+   bad argument (named in the message). The PNG and the OBJ files are written to NAME.tmp and
+   renamed once all are complete, so a failed run leaves none of them. --version prints the
+   version. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime under -std=c99 */
 #define DFM_IMPLEMENTATION
 #include "deform.h"
@@ -36,7 +38,10 @@
 #include "meshio.h"
 #define SR_IMPLEMENTATION
 #include "render.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,6 +49,7 @@
 #include <time.h>
 
 #define PI 3.14159265358979323846
+#define DEFORM_VERSION "deform 0.2 (deform.h, meshio.h, render.h)"
 
 typedef struct args {
     const char *mesh, *out, *obj;
@@ -111,11 +117,14 @@ static int make_tube(scene *S, int square)
 
 static int load_mesh(scene *S, const char *path)
 {
+    dfm_result dr;
     mio_mesh m;
     mio_error err;
     size_t i;
-    if (mio_read_file(path, NULL, &m, &err) != MIO_OK) {
-        fprintf(stderr, "deform: %s: %s\n", path, err.message);
+    mio_result r;
+    errno = 0;
+    if ((r = mio_read_file(path, NULL, &m, &err)) != MIO_OK) {
+        cli_read_error("deform", path, err.message, mio_result_string(r), mio_result_description(r), r == MIO_ERR_IO ? errno : 0);
         return 0;
     }
     S->nv = m.vertex_count;
@@ -128,8 +137,13 @@ static int load_mesh(scene *S, const char *path)
         memcpy(S->idx, m.indices, 3 * S->nt * sizeof(uint32_t));
     }
     mio_free_mesh(&m);
+    if (!S->pos || !S->idx || !S->remap) { fprintf(stderr, "deform: out of memory\n"); return 0; }
     /* a triangle soup (STL) is welded first: deform.h refuses unwelded meshes */
-    return S->pos && S->idx && S->remap && dfm_weld(S->pos, S->nv, S->idx, S->nt, S->remap, S->idx, NULL) == DFM_OK;
+    if ((dr = dfm_weld(S->pos, S->nv, S->idx, S->nt, S->remap, S->idx, NULL)) != DFM_OK) {
+        cli_result_error("deform", path, dfm_result_string(dr), 0);
+        return 0;
+    }
+    return 1;
 }
 
 /* ---- selection and pose --------------------------------------------------------------------- */
@@ -277,10 +291,38 @@ static void frame_camera(const scene *S, double *const *res, int nres, int up, s
 
 static int usage(FILE *to, int status)
 {
-    fprintf(to, "usage: deform MESH|--cylinder|--box [--case bend|twist|drag] [--angle DEG] [--shift F]\n"
-                "       [--up x|y|z] [--region top|ball] [--roi F] [--handle F] [--method laplacian|fitting|lri|all]\n"
-                "       [--weights uniform|cotan] [--frames first|elevation] [--ortho polar|none|gs] [--soft W]\n"
-                "       [--rigid K] [--steps K] [--obj PREFIX] [--size S] [-o OUT.png]\n");
+    fprintf(to,
+            "usage: deform MESH|--cylinder|--box [-o OUT.png] [--case bend|twist|drag] [--angle DEG] [--shift F]\n"
+            "       [--up x|y|z] [--region top|ball] [--roi F] [--handle F] [--method laplacian|fitting|lri|all]\n"
+            "       [--weights uniform|cotan] [--frames first|elevation] [--ortho polar|none|gs] [--soft W]\n"
+            "       [--rigid K] [--steps K] [--obj PREFIX] [--size S]\n"
+            "Drags a handle inside a region of interest with deform.h's three methods and renders them side by side.\n"
+            "  MESH               OBJ, OFF, PLY or STL (an STL soup is welded first)\n"
+            "  --cylinder, --box  instead of MESH: a tube of radius 1 and height 8, round or square, with caps\n"
+            "  -o, --output FILE  the PNG to write; the name must end in .png (default deform.png)\n"
+            "  --case C           bend (default), twist or drag\n"
+            "  --angle DEG        bend or twist angle in degrees, -36000..36000 (default 90)\n"
+            "  --shift F          drag: the handle's shift as a share of the height, -10..10 (default 0.25)\n"
+            "  --up A             the height axis x, y or z (default: the bounding box's longest)\n"
+            "  --region R         top (default: the top --roi share of the height; the handle the top --handle\n"
+            "                     share) or ball (geodesic balls of those radii around the highest vertex)\n"
+            "  --roi F            the region's size, (0, 1] (default 0.5 for top, 0.3 for ball)\n"
+            "  --handle F         the handle's size, (0, --roi) (default 0.08 for top, 0.06 for ball)\n"
+            "  --method M         laplacian, fitting, lri or all (default all, side by side)\n"
+            "  --weights W        uniform (default) or cotan\n"
+            "  --frames F         LRI frames: first (default) or elevation\n"
+            "  --ortho O          LRI orthonormalization: polar (default), none or gs\n"
+            "  --soft W           soft handle constraints of weight W > 0 (default 0: hard constraints)\n"
+            "  --rigid K          LRI: K as-rigid-as-possible steps after the solve, 0..100 (default 0)\n"
+            "  --steps K          reach the pose in K steps, 1..1000, each a new setup on the previous result\n"
+            "                     (default 1; one step cannot turn the handle by 180 degrees or more)\n"
+            "  --obj PREFIX       also write PREFIX_<method>.obj for each method (default: none)\n"
+            "  --size S           pixels of each view, 32..4096 (default 360)\n"
+            "  -h, --help         show this help and exit\n"
+            "  --version          show the version and exit\n"
+            "Prints one RESULT deform_example line a method on stdout; progress on stderr.\n"
+            "Exit status: 0 done, 1 failure (unreadable input, a failed setup or solve, a failed write),\n"
+            "2 usage. The files are written to NAME.tmp and renamed once all are complete.\n");
     return status;
 }
 
@@ -297,6 +339,9 @@ static int parse(int argc, char **argv, args *A)
     static const char *cases[] = {"bend", "twist", "drag"}, *ups[] = {"x", "y", "z"}, *regions[] = {"top", "ball"};
     static const char *methods[] = {"laplacian", "fitting", "lri", "all"}, *weights[] = {"uniform", "cotan"};
     static const char *frames[] = {"first", "elevation"}, *orthos[] = {"none", "polar", "gs"};
+    static const char *valued[] = {"-o", "--output", "--obj", "--angle", "--shift", "--roi", "--handle", "--soft", "--size",
+                                   "--steps", "--rigid", "--case", "--up", "--region", "--method", "--weights", "--frames",
+                                   "--ortho"};
     int i;
     memset(A, 0, sizeof *A);
     A->out = "deform.png";
@@ -311,22 +356,28 @@ static int parse(int argc, char **argv, args *A)
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int *slot = NULL, k = -2;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout, 0) - 1;
+        long n;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout, 0);
+        if (!strcmp(a, "--version")) { printf("%s\n", DEFORM_VERSION); return 0; }
         if (!strcmp(a, "--cylinder")) { A->gen = 1; continue; }
         if (!strcmp(a, "--box")) { A->gen = 2; continue; }
-        if (a[0] != '-') { A->mesh = a; continue; }
-        if (!v) return 0;
+        if (a[0] != '-' || !a[1]) {
+            if (A->mesh) return cli_usage_error("deform", "unexpected argument '%s': one MESH only", a);
+            A->mesh = a;
+            continue;
+        }
+        if (!v) return cli_usage_error("deform", pick(a, valued, 18) < 0 ? "unknown option '%s'" : "%s needs a value", a);
         i++;
-        if (!strcmp(a, "-o")) A->out = v;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) A->out = v;
         else if (!strcmp(a, "--obj")) A->obj = v;
-        else if (!strcmp(a, "--angle")) A->angle = atof(v);
-        else if (!strcmp(a, "--shift")) A->shift = atof(v);
-        else if (!strcmp(a, "--roi")) A->roi = atof(v);
-        else if (!strcmp(a, "--handle")) A->handle = atof(v);
-        else if (!strcmp(a, "--soft")) A->soft = atof(v);
-        else if (!strcmp(a, "--size")) A->size = atoi(v);
-        else if (!strcmp(a, "--steps")) A->steps = atoi(v);
-        else if (!strcmp(a, "--rigid")) A->rigid = atoi(v);
+        else if (!strcmp(a, "--angle")) { if (!cli_parse_double(v, -36000.0, 36000.0, &A->angle)) return cli_usage_error("deform", "--angle '%s': not a number of degrees in -36000..36000", v); }
+        else if (!strcmp(a, "--shift")) { if (!cli_parse_double(v, -10.0, 10.0, &A->shift)) return cli_usage_error("deform", "--shift '%s': not a number in -10..10", v); }
+        else if (!strcmp(a, "--roi")) { if (!cli_parse_double(v, 1e-6, 1.0, &A->roi)) return cli_usage_error("deform", "--roi '%s': not a number in (0, 1]", v); }
+        else if (!strcmp(a, "--handle")) { if (!cli_parse_double(v, 1e-6, 1.0, &A->handle)) return cli_usage_error("deform", "--handle '%s': not a number in (0, 1)", v); }
+        else if (!strcmp(a, "--soft")) { if (!cli_parse_double(v, 0.0, 1e12, &A->soft)) return cli_usage_error("deform", "--soft '%s': not a weight in [0, 1e12]", v); }
+        else if (!strcmp(a, "--size")) { if (!cli_parse_long(v, 32, 4096, &n)) return cli_usage_error("deform", "--size '%s': not an integer in 32..4096", v); A->size = (int)n; }
+        else if (!strcmp(a, "--steps")) { if (!cli_parse_long(v, 1, 1000, &n)) return cli_usage_error("deform", "--steps '%s': not an integer in 1..1000", v); A->steps = (int)n; }
+        else if (!strcmp(a, "--rigid")) { if (!cli_parse_long(v, 0, 100, &n)) return cli_usage_error("deform", "--rigid '%s': not an integer in 0..100", v); A->rigid = (int)n; }
         else if (!strcmp(a, "--case")) { slot = &A->kase; k = pick(v, cases, 3); }
         else if (!strcmp(a, "--up")) { slot = &A->up; k = pick(v, ups, 3); }
         else if (!strcmp(a, "--region")) { slot = &A->region; k = pick(v, regions, 2); }
@@ -334,19 +385,19 @@ static int parse(int argc, char **argv, args *A)
         else if (!strcmp(a, "--weights")) { slot = &A->weights; k = pick(v, weights, 2); }
         else if (!strcmp(a, "--frames")) { slot = &A->frames; k = pick(v, frames, 2); }
         else if (!strcmp(a, "--ortho")) { slot = &A->ortho; k = pick(v, orthos, 3); }
-        else return 0;
+        else return cli_usage_error("deform", "unknown option '%s'", a);
         if (slot) {
-            if (k < 0) return 0;
+            if (k < 0) return cli_usage_error("deform", "%s '%s': not one of the names --help lists", a, v);
             *slot = k;
         }
     }
     if (A->roi < 0) A->roi = A->region ? 0.3 : 0.5;
     if (A->handle < 0) A->handle = A->region ? 0.06 : 0.08;
-    if ((A->gen == 0) == (A->mesh == NULL) || !(A->roi > A->handle) || !(A->handle > 0.0) || A->roi > 1.0 ||
-        A->size < 32 || A->size > 4096 || !(A->soft >= 0.0) || A->steps < 1 || A->steps > 1000 ||
-        A->rigid < 0 || A->rigid > 100)
-        return 0;
-    return 1;
+    if ((A->gen == 0) == (A->mesh == NULL)) return cli_usage_error("deform", "%s", "give exactly one of MESH, --cylinder or --box");
+    if (!(A->roi > A->handle)) return cli_usage_error("deform", "--handle %g: not smaller than --roi", A->handle);
+    if (!cli_has_extension(A->out, ".png")) return cli_usage_error("deform", "output '%s': only PNG is written; the name must end in .png", A->out);
+    if (A->obj && strlen(A->obj) + 16 >= CLI_PATH_MAX) return cli_usage_error("deform", "--obj '%s': the prefix is too long", A->obj);
+    return -1;
 }
 
 /* ---- main ------------------------------------------------------------------------------------- */
@@ -372,19 +423,24 @@ static double edge_distortion(const scene *S, const double *out)
     return n ? sqrt(s / (double)n) : 0.0;
 }
 
-static int write_obj(const char *prefix, const char *method, const scene *S, const double *p)
+/* Writes PREFIX_METHOD.obj.tmp (renamed with the other outputs when all are written). */
+static int write_obj(cli_outputs *outs, const char *prefix, const char *method, const scene *S, const double *p)
 {
-    char path[1024];
+    char path[CLI_PATH_MAX];
+    const char *tmp;
     float *fp = (float *)malloc(3 * S->nv * sizeof(float) + 1);
     size_t i;
-    int ok;
-    if (!fp) return 0;
+    mio_error err;
+    mio_result r;
+    if (!fp) { fprintf(stderr, "deform: out of memory\n"); return 0; }
     for (i = 0; i < 3 * S->nv; i++) fp[i] = (float)p[i];
     snprintf(path, sizeof path, "%s_%s.obj", prefix, method);
-    ok = mio_write_obj(path, fp, S->nv, S->idx, S->nt, NULL) == MIO_OK;
+    if (!(tmp = cli_output_add(outs, "deform", path))) { free(fp); return 0; }
+    errno = 0;
+    r = mio_write_obj(tmp, fp, S->nv, S->idx, S->nt, &err);
+    if (r != MIO_OK) cli_read_error("deform", path, err.message, mio_result_string(r), mio_result_description(r), r == MIO_ERR_IO ? errno : 0);
     free(fp);
-    if (!ok) fprintf(stderr, "deform: cannot write %s\n", path);
-    return ok;
+    return r == MIO_OK;
 }
 
 /* rot = the rotation from pose a to pose b at the vertices the solve reads (b a^T) */
@@ -402,7 +458,7 @@ static void step_rotation(size_t nv, const double *ra, const double *rb, double 
 }
 
 /* runs one method in A->steps steps; res receives the result (malloc'd) */
-static int run_method(const scene *S, const args *A, int up, int method, double **res)
+static int run_method(const scene *S, const args *A, int up, int method, double **res, cli_outputs *outs)
 {
     static const char *names[] = {"laplacian", "fitting", "lri"};
     dfm_deform_options o = dfm_deform_default_options();
@@ -449,13 +505,13 @@ static int run_method(const scene *S, const args *A, int up, int method, double 
     }
     fprintf(stderr, "\n");
     if (r != DFM_OK) {
-        fprintf(stderr, "deform: %s: %s\n", names[method], dfm_result_string(r));
+        cli_result_error("deform", names[method], dfm_result_string(r), 0);
         goto done;
     }
     printf("RESULT deform_example method=%s n=%zu steps=%d init_ms=%.1f frame_ms=%.2f edge_distortion=%.4f\n",
            names[method], S->nv, A->steps, 1e3 * t_init / A->steps, 1e3 * t_frame / A->steps,
            edge_distortion(S, *res));
-    ok = !A->obj || write_obj(A->obj, names[method], S, *res);
+    ok = !A->obj || write_obj(outs, A->obj, names[method], S, *res);
 done:
     free(cur);
     free(tg);
@@ -465,7 +521,7 @@ done:
     return ok;
 }
 
-static int render_all(const scene *S, const args *A, int up, double **res, const int *methods, int nm)
+static int render_all(const scene *S, const args *A, int up, double **res, const int *methods, int nm, cli_outputs *outs)
 {
     static const char *names[] = {"LAPLACIAN", "FITTING", "LRI"};
     sr_image8 img[4], sheet;
@@ -474,6 +530,8 @@ static int render_all(const scene *S, const args *A, int up, double **res, const
     double *all[4];
     float *col = (float *)malloc(3 * S->nv * sizeof(float) + 1);
     sr_camera cam;
+    sr_result r;
+    const char *tmp = NULL;
     size_t v;
     int i, ok = col != NULL;
     memset(img, 0, sizeof img);
@@ -491,9 +549,17 @@ static int render_all(const scene *S, const args *A, int up, double **res, const
     caps[0] = cap0;
     snprintf(cap_lri, sizeof cap_lri, "LRI + %d RIGID STEPS", A->rigid);
     for (i = 0; i < nm; i++) caps[i + 1] = methods[i] == 2 && A->rigid > 0 ? cap_lri : names[methods[i]];
-    if (ok) ok = sr_contact_sheet(img, caps, nm + 1, nm + 1, NULL, &sheet) == SR_OK;
-    if (ok) ok = sr_write_png(A->out, sheet.pixels, sheet.width, sheet.height, 3, 0) == SR_OK;
-    if (!ok) fprintf(stderr, "deform: cannot render or write %s\n", A->out);
+    if (!ok) fprintf(stderr, "deform: out of memory or a failed render\n");
+    if (ok && (r = sr_contact_sheet(img, caps, nm + 1, nm + 1, NULL, &sheet)) != SR_OK) {
+        cli_result_error("deform", "the contact sheet", sr_result_string(r), 0);
+        ok = 0;
+    }
+    if (ok && !(tmp = cli_output_add(outs, "deform", A->out))) ok = 0;
+    errno = 0;
+    if (ok && (r = sr_write_png(tmp, sheet.pixels, sheet.width, sheet.height, 3, 0)) != SR_OK) {
+        cli_result_error("deform", A->out, sr_result_string(r), r == SR_ERR_IO ? errno : 0);
+        ok = 0;
+    }
     for (i = 0; i < 4; i++) free(img[i].pixels);
     sr_free(NULL, sheet.pixels);
     free(col);
@@ -507,8 +573,9 @@ int main(int argc, char **argv)
     double *res[3] = {NULL, NULL, NULL};
     int methods[3], nm = 0, i, up, status = 1, p = parse(argc, argv, &A);
     size_t v;
-    if (p < 0) return 0;
-    if (!p) return usage(stderr, 2);
+    cli_outputs outs;
+    if (p >= 0) return p;
+    cli_outputs_init(&outs);
     memset(&S, 0, sizeof S);
     if (!(A.gen ? make_tube(&S, A.gen == 2) : load_mesh(&S, A.mesh))) goto done;
     for (i = 0; i < 3; i++) {
@@ -535,11 +602,12 @@ int main(int argc, char **argv)
     else
         methods[nm++] = A.method;
     for (i = 0; i < nm; i++)
-        if (!run_method(&S, &A, up, methods[i], &res[i])) goto done;
-    if (!render_all(&S, &A, up, res, methods, nm)) goto done;
+        if (!run_method(&S, &A, up, methods[i], &res[i], &outs)) goto done;
+    if (!render_all(&S, &A, up, res, methods, nm, &outs) || !cli_outputs_commit(&outs, "deform")) goto done;
     fprintf(stderr, "deform: wrote %s\n", A.out);
     status = 0;
 done:
+    cli_outputs_discard(&outs); /* after a failure: no file of this run is left */
     for (i = 0; i < 3; i++) free(res[i]);
     free(S.pos);
     free(S.idx);

@@ -27,7 +27,9 @@
      --lod-bias  levels 2^B times coarser than the footprint asks (0): B = 1 halves the samples
                  and about halves the mountain's render time, a little blurrier
    Each panel prints "RESULT grass scene=... wd=... coverage=... render_ms=...". Progress goes to
-   stderr. Exit status 0 on success, 2 on bad arguments, 1 on failure.
+   stderr. Exit status 0 on success, 2 on bad arguments (named in the message), 1 on failure. The
+   PNG is written to OUT.png.tmp and renamed when complete, so a failed run leaves nothing.
+   --version prints the version.
 
    The terrain is drawn by render.h's shell marcher (sr_draw_shell): it clips rays to the grass
    shell between the ground and one tile above it, jumps over the space above the shell, maps
@@ -53,6 +55,10 @@
 #include "render.h"
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
+#include <errno.h>
+#include <limits.h>
 
 #define VARIANTS 4
 #define SAMPLES 7
@@ -514,8 +520,20 @@ static int load_mesh(gmesh *m, const char *path, int cells, float *tile, float *
     uint32_t *cid = NULL, *tri = NULL, *slot = NULL;
     size_t i, nt = 0, nv = 0, ncells;
     int k, ok = 0;
+    mio_result mr;
     memset(m, 0, sizeof(*m));
-    if (mio_read_file(path, NULL, &in, &err) != MIO_OK) { fprintf(stderr, "grass: %s: %s\n", path, err.message); return 0; }
+    errno = 0;
+    if ((mr = mio_read_file(path, NULL, &in, &err)) != MIO_OK) {
+        cli_read_error("grass", path, err.message, mio_result_string(mr), mio_result_description(mr), mr == MIO_ERR_IO ? errno : 0);
+        return 0;
+    }
+    /* an STL soup repeats each position per triangle: one vertex each, so the clusters' means are
+       those of the surface's vertices (a no-op on a welded mesh) */
+    if ((mr = mio_weld(&in, &err)) != MIO_OK) {
+        cli_read_error("grass", path, err.message, mio_result_string(mr), mio_result_description(mr), 0);
+        mio_free_mesh(&in);
+        return 0;
+    }
     for (i = 0; i < in.vertex_count; i++) { /* y up (the files' custom) to z up: (x, y, z) -> (x, -z, y) */
         float y = in.positions[3 * i + 1];
         in.positions[3 * i + 1] = -in.positions[3 * i + 2];
@@ -715,15 +733,32 @@ static int mesh_setup(scene *s, gmesh *g, float *height, const char *kind, int c
 }
 
 #ifndef GRASS_NO_MAIN /* bench/bench_texel.c includes this file for the mountain */
+#define GRASS_VERSION "grass 0.2 (texel.h, subdiv4.h, render.h, meshio.h)"
+
 static double now_ms(void) { return 1e3 * (double)clock() / CLOCKS_PER_SEC; }
 
+/* The contact sheet of the panels, written to PATH.tmp and renamed to PATH when complete. */
 static int write_sheet(const sr_image8 *panels, const char *const *captions, int count, int columns, const char *path)
 {
     sr_image8 sheet;
+    cli_outputs outs;
+    const char *tmp;
+    int saved = 0;
     sr_result r = sr_contact_sheet(panels, captions, count, columns, NULL, &sheet);
-    if (r == SR_OK) r = sr_write_png(path, sheet.pixels, sheet.width, sheet.height, 3, 0);
+    cli_outputs_init(&outs);
+    if (r == SR_OK && !(tmp = cli_output_add(&outs, "grass", path))) { sr_free(NULL, sheet.pixels); return 0; }
+    if (r == SR_OK) {
+        errno = 0;
+        r = sr_write_png(tmp, sheet.pixels, sheet.width, sheet.height, 3, 0);
+        saved = errno;
+    }
     if (sheet.pixels) sr_free(NULL, sheet.pixels);
-    if (r != SR_OK) { fprintf(stderr, "grass: writing %s: %s\n", path, sr_result_string(r)); return 0; }
+    if (r != SR_OK) {
+        cli_result_error("grass", path, sr_result_string(r), r == SR_ERR_IO ? saved : 0);
+        cli_outputs_discard(&outs);
+        return 0;
+    }
+    if (!cli_outputs_commit(&outs, "grass")) return 0;
     if (!quiet) fprintf(stderr, "grass: wrote %s\n", path);
     return 1;
 }
@@ -732,8 +767,10 @@ static int write_sheet(const sr_image8 *panels, const char *const *captions, int
 static int read_wd_map(const char *path, wd_map *m)
 {
     sr_picture pic;
-    sr_result r = sr_read_image(path, NULL, &pic);
-    if (r != SR_OK) { fprintf(stderr, "grass: reading %s: %s\n", path, sr_result_string(r)); return 0; }
+    sr_result r;
+    errno = 0;
+    r = sr_read_image(path, NULL, &pic);
+    if (r != SR_OK) { cli_result_error("grass", path, sr_result_string(r), r == SR_ERR_IO ? errno : 0); return 0; }
     m->w = pic.width; m->h = pic.height;
     m->v = (float *)malloc(sizeof(float) * (size_t)pic.width * (size_t)pic.height);
     if (!m->v || sr_picture_channel(&pic, 0, m->v) != SR_OK) {
@@ -915,82 +952,107 @@ static int scene_mesh(int w, int h, int res, int frames, uint64_t seed, const fl
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: grass [--scene mountain|mesh|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
-                "             [--mesh sphere|hill|FILE [--mesh-cells N]] [--wd A,B,C] [--wd-sun G]\n"
-                "             [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S] [--quiet]\n");
-    if (to != stdout) return;
-    fprintf(to, "  --scene   mountain: the paper's Fig 13 (N x N tiles of 400 blades), one panel per wd;\n"
-                "            mesh: grass over a mesh shell, drier where it faces the sun;\n"
-                "            wither: one patch at wd 0..1; mingle: the paper's Fig 11 (default mountain)\n"
-                "  --mesh    the mesh scene's mesh (implies --scene mesh): sphere (default), hill, or a mesh\n"
-                "            file (OBJ, OFF, PLY, STL; y up), made coarse on N cells across (--mesh-cells, 40)\n"
-                "  --wd-sun  mesh: a tile's wd is wd + G * (its facing toward the sun) / 2, G in [0, 2] (0.9)\n"
-                "  -o        the PNG to write (a contact sheet of the panels)\n"
-                "  --size    panel size (800x600 for mountain, 640x480 for mesh, 320x240 otherwise)\n"
-                "  --res     texel resolution, a power of two in 16..256 (64)\n"
-                "  --tiles   mountain tiles per side (80: 6400 tiles, 2.56M blades)\n"
-                "  --wd      weathering degrees, one panel each, in [0, 1] (0,0.30,0.917; mesh 0.45)\n"
-                "  --wd-map  a grey image (PNG, PGM, PPM, PFM) over the mountain or the mesh's tiles: a\n"
-                "            tile's wd is wd + G * (grey - 0.5) at its centre, instead of the sun term\n"
-                "  --wd-map-gain  G, in [0, 2] (1)\n"
-                "  --lod-bias B  mountain: levels 2^B times coarser than the pixel's footprint asks, 0..3 (0)\n"
-                "  --frames  key frames per TVT, 2..64 (6)\n"
-                "  --seed    terrain and blades (2010)\n"
-                "  --quiet   no progress on stderr\n");
+    fprintf(to,
+            "usage: grass [--scene mountain|mesh|wither|mingle] -o OUT.png [--size WxH] [--res R] [--tiles N]\n"
+            "             [--mesh sphere|hill|FILE [--mesh-cells N]] [--wd A,B,C] [--wd-sun G]\n"
+            "             [--wd-map GREY.png [--wd-map-gain G]] [--lod-bias B] [--frames F] [--seed S] [--quiet]\n"
+            "Paper 002's withering grass (texel.h) over a terrain or a mesh shell, written as a PNG contact sheet.\n"
+            "  --scene S          mountain (default): the paper's Fig 13 (N x N tiles of 400 blades), one panel\n"
+            "                     per wd; mesh: grass over a mesh shell, drier where it faces the sun; wither:\n"
+            "                     one patch at wd 0..1; mingle: the paper's Fig 11\n"
+            "  -o, --output FILE  the PNG to write; the name must end in .png (required)\n"
+            "  --size WxH         panel size, 16..8192 each (default 800x600 for mountain, 640x480 for mesh,\n"
+            "                     320x240 otherwise)\n"
+            "  --res R            texel resolution, a power of two in 16..256 (default 64)\n"
+            "  --tiles N          mountain tiles per side, 1..1000 (default 80: 6400 tiles, 2.56M blades)\n"
+            "  --mesh M           the mesh scene's mesh (implies --scene mesh): sphere (default), hill, or a mesh\n"
+            "                     file (OBJ, OFF, PLY, STL; y up; an STL soup is welded first)\n"
+            "  --mesh-cells N     a file's mesh is made coarse on N cells across, 4..512 (default 40)\n"
+            "  --wd A,B,...       weathering degrees, one panel each, 1 to 8 values in [0, 1]\n"
+            "                     (default 0,0.30,0.917; mesh 0.45)\n"
+            "  --wd-sun G         mesh: a tile's wd is wd + G * (its facing toward the sun) / 2, G in [0, 2]\n"
+            "                     (default 0.9)\n"
+            "  --wd-map FILE      a grey image (PNG, PGM, PPM, PFM) over the mountain or the mesh's tiles: a tile's\n"
+            "                     wd is wd + G * (grey - 0.5) at its centre, instead of the sun term (default: none)\n"
+            "  --wd-map-gain G    the map's G, in [0, 2] (default 1)\n"
+            "  --lod-bias B       mountain: levels 2^B times coarser than the pixel's footprint asks, 0..3 (default 0)\n"
+            "  --frames F         key frames per TVT, 2..64 (default 6)\n"
+            "  --seed S           terrain and blades, a non-negative integer (default 2010)\n"
+            "  --quiet            no progress on stderr (default: progress)\n"
+            "  -h, --help         show this help and exit\n"
+            "  --version          show the version and exit\n"
+            "Prints one RESULT grass line a panel on stdout.\n"
+            "Exit status: 0 done, 1 failure (unreadable input, a failed build or render, a failed write), 2 usage.\n"
+            "The PNG is written to FILE.tmp and renamed when complete: a failed run leaves nothing.\n");
 }
 
 int main(int argc, char **argv)
 {
+    static const char *const valued[] = {"-o", "--output", "--scene", "--size", "--res", "--tiles", "--frames", "--seed",
+                                         "--wd-map", "--mesh", "--mesh-cells", "--wd-sun", "--lod-bias", "--wd-map-gain", "--wd"};
     const char *scene_name = "mountain", *out = NULL, *mesh_kind = "sphere";
-    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, lod_bias = 0, cells = 40, wd_given = 0, i, ok;
+    int w = 0, h = 0, res = 64, tiles = 80, frames = 6, nwd = 3, lod_bias = 0, cells = 40, wd_given = 0, i, k, ok;
     float wd_sun = 0.9f;
     float wds[8] = {0.0f, 0.30f, 0.917f};
+    double d[8];
+    long n;
     uint64_t seed = 2010;
     const char *map_path = NULL;
     wd_map map = {NULL, 0, 0, 1.0f};
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = 0;
+        for (k = 0; k < (int)(sizeof valued / sizeof valued[0]); k++) takes |= !strcmp(a, valued[k]);
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); return 0; }
+        if (!strcmp(a, "--version")) { printf("%s\n", GRASS_VERSION); return 0; }
         if (!strcmp(a, "--quiet")) { quiet = 1; continue; }
-        if (!v) { fprintf(stderr, "grass: %s needs a value\n", a); usage(stderr); return 2; }
-        if (!strcmp(a, "-o")) out = v;
-        else if (!strcmp(a, "--scene")) scene_name = v;
-        else if (!strcmp(a, "--size")) { if (sscanf(v, "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) { fprintf(stderr, "grass: bad --size %s\n", v); return 2; } }
-        else if (!strcmp(a, "--res")) { res = atoi(v); if (res < 16 || res > 256 || (res & (res - 1))) { fprintf(stderr, "grass: --res must be a power of two in 16..256\n"); return 2; } }
-        else if (!strcmp(a, "--tiles")) { tiles = atoi(v); if (tiles < 1 || tiles > 1000) { fprintf(stderr, "grass: bad --tiles %s\n", v); return 2; } }
-        else if (!strcmp(a, "--frames")) { frames = atoi(v); if (frames < 2 || frames > 64) { fprintf(stderr, "grass: --frames must be 2..64\n"); return 2; } }
-        else if (!strcmp(a, "--seed")) seed = (uint64_t)strtoull(v, NULL, 10);
-        else if (!strcmp(a, "--wd-map")) map_path = v;
-        else if (!strcmp(a, "--mesh")) { mesh_kind = v; scene_name = "mesh"; }
-        else if (!strcmp(a, "--mesh-cells")) { cells = atoi(v); if (cells < 4 || cells > 512) { fprintf(stderr, "grass: --mesh-cells must be 4..512\n"); return 2; } }
-        else if (!strcmp(a, "--wd-sun")) {
-            char *end;
-            wd_sun = strtof(v, &end);
-            if (end == v || *end || !(wd_sun >= 0.0f && wd_sun <= 2.0f)) { fprintf(stderr, "grass: --wd-sun must be in [0, 2]\n"); return 2; }
-        }
-        else if (!strcmp(a, "--lod-bias")) { lod_bias = atoi(v); if (lod_bias < 0 || lod_bias > 3 || !(*v >= '0' && *v <= '3') || v[1]) { fprintf(stderr, "grass: --lod-bias must be 0..3\n"); return 2; } }
-        else if (!strcmp(a, "--wd-map-gain")) {
-            char *end;
-            map.gain = strtof(v, &end);
-            if (end == v || *end || !(map.gain >= 0.0f && map.gain <= 2.0f)) { fprintf(stderr, "grass: --wd-map-gain must be in [0, 2]\n"); return 2; }
-        }
-        else if (!strcmp(a, "--wd")) {
-            char *end;
-            const char *p = v;
-            nwd = 0;
-            wd_given = 1;
-            while (*p && nwd < 8) {
-                wds[nwd] = strtof(p, &end);
-                if (end == p || !(wds[nwd] >= 0.0f && wds[nwd] <= 1.0f)) { fprintf(stderr, "grass: --wd values must be in [0, 1]\n"); return 2; }
-                nwd++;
-                p = *end == ',' ? end + 1 : end;
-                if (*end && *end != ',') { fprintf(stderr, "grass: bad --wd %s\n", v); return 2; }
-            }
-        } else { fprintf(stderr, "grass: unknown option %s\n", a); usage(stderr); return 2; }
+        if (!takes) return cli_usage_error("grass", a[0] == '-' ? "unknown option '%s'" : "unexpected argument '%s'", a);
+        if (!v) return cli_usage_error("grass", "%s needs a value", a);
         i++;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) out = v;
+        else if (!strcmp(a, "--scene")) {
+            if (strcmp(v, "mountain") && strcmp(v, "mesh") && strcmp(v, "wither") && strcmp(v, "mingle"))
+                return cli_usage_error("grass", "--scene '%s': not mountain, mesh, wither or mingle", v);
+            scene_name = v;
+        } else if (!strcmp(a, "--size")) {
+            if (!cli_parse_size(v, 16, 8192, 0, &w, &h)) return cli_usage_error("grass", "--size '%s': not WxH with 16 <= W, H <= 8192", v);
+        } else if (!strcmp(a, "--res")) {
+            if (!cli_parse_long(v, 16, 256, &n) || (n & (n - 1))) return cli_usage_error("grass", "--res '%s': not a power of two in 16..256", v);
+            res = (int)n;
+        } else if (!strcmp(a, "--tiles")) {
+            if (!cli_parse_long(v, 1, 1000, &n)) return cli_usage_error("grass", "--tiles '%s': not an integer in 1..1000", v);
+            tiles = (int)n;
+        } else if (!strcmp(a, "--frames")) {
+            if (!cli_parse_long(v, 2, 64, &n)) return cli_usage_error("grass", "--frames '%s': not an integer in 2..64", v);
+            frames = (int)n;
+        } else if (!strcmp(a, "--seed")) {
+            if (!cli_parse_long(v, 0, LONG_MAX, &n)) return cli_usage_error("grass", "--seed '%s': not an integer in 0..%ld", v, LONG_MAX);
+            seed = (uint64_t)n;
+        } else if (!strcmp(a, "--wd-map")) map_path = v;
+        else if (!strcmp(a, "--mesh")) { mesh_kind = v; scene_name = "mesh"; }
+        else if (!strcmp(a, "--mesh-cells")) {
+            if (!cli_parse_long(v, 4, 512, &n)) return cli_usage_error("grass", "--mesh-cells '%s': not an integer in 4..512", v);
+            cells = (int)n;
+        } else if (!strcmp(a, "--wd-sun")) {
+            if (!cli_parse_double(v, 0.0, 2.0, &d[0])) return cli_usage_error("grass", "--wd-sun '%s': not a number in [0, 2]", v);
+            wd_sun = (float)d[0];
+        } else if (!strcmp(a, "--lod-bias")) {
+            if (!cli_parse_long(v, 0, 3, &n)) return cli_usage_error("grass", "--lod-bias '%s': not an integer in 0..3", v);
+            lod_bias = (int)n;
+        } else if (!strcmp(a, "--wd-map-gain")) {
+            if (!cli_parse_double(v, 0.0, 2.0, &d[0])) return cli_usage_error("grass", "--wd-map-gain '%s': not a number in [0, 2]", v);
+            map.gain = (float)d[0];
+        } else { /* --wd */
+            if (!cli_parse_doubles(v, ',', 1, 8, 0.0, 1.0, d, &nwd))
+                return cli_usage_error("grass", "--wd '%s': not 1 to 8 numbers in [0, 1] separated by commas", v);
+            for (k = 0; k < nwd; k++) wds[k] = (float)d[k];
+            wd_given = 1;
+        }
     }
-    if (!out) { fprintf(stderr, "grass: -o OUT.png is required\n"); usage(stderr); return 2; }
-    if (map_path && strcmp(scene_name, "mountain") && strcmp(scene_name, "mesh")) { fprintf(stderr, "grass: --wd-map is for the mountain and the mesh\n"); return 2; }
+    if (!out) return cli_usage_error("grass", "%s", "no output given: -o OUT.png");
+    if (!cli_has_extension(out, ".png")) return cli_usage_error("grass", "output '%s': only PNG is written; the name must end in .png", out);
+    if (map_path && strcmp(scene_name, "mountain") && strcmp(scene_name, "mesh"))
+        return cli_usage_error("grass", "%s", "--wd-map is for the mountain and the mesh scenes");
     if (!strcmp(scene_name, "mountain")) {
         if (!w) { w = 800; h = 600; }
         if (map_path && !read_wd_map(map_path, &map)) return 1;
@@ -1005,12 +1067,9 @@ int main(int argc, char **argv)
     } else if (!strcmp(scene_name, "wither")) {
         if (!w) { w = 320; h = 240; }
         ok = scene_wither(w, h, res, frames, seed, out);
-    } else if (!strcmp(scene_name, "mingle")) {
+    } else {
         if (!w) { w = 320; h = 240; }
         ok = scene_mingle(w, h, res, frames, seed, out);
-    } else {
-        fprintf(stderr, "grass: unknown scene %s (mountain, mesh, wither, mingle)\n", scene_name);
-        return 2;
     }
     return ok ? 0 : 1;
 }

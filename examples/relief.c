@@ -27,8 +27,11 @@
      --normal FILE      also write the normal map as an RGB PNG
      --sheet FILE       also write a contact sheet: example | sketch | fused | normal map | render
    Prints `RESULT relief ...` with the stage timings on stdout; progress goes to stderr.
-   Exit status 0 on success, 2 on bad arguments, 1 on failure (unreadable or invalid input). */
+   Exit status 0 on success, 2 on bad arguments (named in the message), 1 on failure (unreadable
+   or invalid input, a failed write). Every file is written to NAME.tmp and renamed once all are
+   complete, so a failed run leaves none of them. --version prints the version. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,6 +42,10 @@
 #include "relief.h"
 #define SR_IMPLEMENTATION
 #include "render.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
+
+#define RELIEF_VERSION "relief 0.2 (relief.h, render.h)"
 
 typedef struct args {
     const char *example, *sketch, *out, *height_out, *normal_out, *sheet_out;
@@ -55,48 +62,108 @@ static double now_ms(void)
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: relief EXAMPLE SKETCH -o OUT.png [--crop X,Y,N] [--size N] [--white] [--emboss] [--patch P]\n"
-                "              [--emphasis E] [--depth D] [--frame WxH] [--light X,Y,Z] [--no-shadows] [--cylinder]\n"
-                "              [--height FILE.pfm|.png] [--normal FILE.png] [--sheet FILE.png]\n"
-                "  SKETCH: an image, a stroke file (lines: size W H / white|black x,y x,y ... width W), or text:STRING\n");
+    fprintf(to,
+            "usage: relief EXAMPLE SKETCH -o OUT.png [--crop X,Y,N] [--size N] [--white] [--emboss] [--patch P]\n"
+            "              [--emphasis E] [--depth D] [--frame WxH] [--light X,Y,Z] [--no-shadows] [--cylinder]\n"
+            "              [--height FILE.pfm|.png] [--normal FILE.png] [--sheet FILE.png]\n"
+            "Fuses a sketch into an example height map (relief.h) and renders it relief-mapped on a cube.\n"
+            "  EXAMPLE            a height map: PNG (8/16-bit, channel 0), PGM or PFM; or gen:rock (generated)\n"
+            "  SKETCH             an image (channel 0: > 0.75 white stroke = ridge, < 0.25 black = groove), a\n"
+            "                     stroke file (lines: size W H / white|black x,y x,y ... width W), or text:STRING\n"
+            "  -o, --output FILE  the rendering, a PNG; the name must end in .png (required)\n"
+            "  --crop X,Y,N       use the N x N square of EXAMPLE at (X, Y), N >= 8 (default: all of it)\n"
+            "  --size N           output size for stroke files without 'size' and for text:, 16..8192 (default 512)\n"
+            "  --white            text: white (embossed) strokes instead of black (engraved) (default: black)\n"
+            "  --emboss           the distance-transform baseline instead of the synthesis (default: synthesis)\n"
+            "  --patch P          patch size in texels, 4..1024 (default 48)\n"
+            "  --emphasis E       extra stroke relief in example ranges, -10..10, negative = none (default 0.45)\n"
+            "  --depth D          relief depth on the cube of side 2, (0, 2) (default 0.12)\n"
+            "  --frame WxH        rendering size, 16..8192 each (default 800x600)\n"
+            "  --light X,Y,Z      direction toward the light (default 0.6,0.7,0.5)\n"
+            "  --no-shadows       no shadow rays (default: shadows)\n"
+            "  --cylinder         a cylinder with curved silhouettes instead of the cube (default: cube)\n"
+            "  --height FILE      also write the fused height map: .pfm (float) or .png (16-bit) (default: none)\n"
+            "  --normal FILE      also write the normal map as an RGB .png (default: none)\n"
+            "  --sheet FILE       also write a .png contact sheet: example | sketch | fused | normal map | render\n"
+            "                     (default: none)\n"
+            "  -h, --help         show this help and exit\n"
+            "  --version          show the version and exit\n"
+            "Prints one RESULT relief line on stdout; progress on stderr.\n"
+            "Exit status: 0 done, 1 failure (unreadable or invalid input, a failed write), 2 usage.\n"
+            "The files are written to NAME.tmp and renamed once all are complete: a failed run leaves none.\n");
 }
 
+/* an output option's name: one of the extensions (any case) */
+static int check_output(const char *opt, const char *path, const char *ext1, const char *ext2)
+{
+    if (cli_has_extension(path, ext1) || (ext2 && cli_has_extension(path, ext2))) return -1;
+    return cli_usage_error("relief", "%s '%s': the name must end in %s%s%s", opt, path, ext1, ext2 ? " or " : "", ext2 ? ext2 : "");
+}
+
+/* Returns -1 to go on, or the exit status (0 for --help/--version, 2 for a usage error). */
 static int parse_args(int argc, char **argv, args *a)
 {
-    int i, pos = 0;
+    static const char *const valued[] = {"-o", "--output", "--crop", "--size", "--patch", "--emphasis", "--depth",
+                                         "--frame", "--light", "--height", "--normal", "--sheet"};
+    int i, k, pos = 0, st;
+    double d[3];
+    long n;
     memset(a, 0, sizeof *a);
     a->crop[2] = 0; a->size = 512; a->patch = 48; a->fw = 800; a->fh = 600; a->shadows = 1;
     a->emphasis = 0.0f; a->depth = 0.12f;
     a->light[0] = 0.6f; a->light[1] = 0.7f; a->light[2] = 0.5f;
     for (i = 1; i < argc; i++) {
         const char *s = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int need = 1;
-        if (!strcmp(s, "--help") || !strcmp(s, "-h")) { usage(stdout); exit(0); }
-        else if (!strcmp(s, "-o") && v) a->out = v;
-        else if (!strcmp(s, "--crop") && v) { if (sscanf(v, "%d,%d,%d", &a->crop[0], &a->crop[1], &a->crop[2]) != 3 || a->crop[2] < 8) return 0; }
-        else if (!strcmp(s, "--size") && v) { a->size = atoi(v); if (a->size < 16 || a->size > 8192) return 0; }
-        else if (!strcmp(s, "--patch") && v) { a->patch = atoi(v); if (a->patch < 4) return 0; }
-        else if (!strcmp(s, "--emphasis") && v) a->emphasis = (float)atof(v);
-        else if (!strcmp(s, "--depth") && v) { a->depth = (float)atof(v); if (!(a->depth > 0.0f && a->depth < 2.0f)) return 0; }
-        else if (!strcmp(s, "--frame") && v) { if (sscanf(v, "%dx%d", &a->fw, &a->fh) != 2 || a->fw < 16 || a->fh < 16 || a->fw > 8192 || a->fh > 8192) return 0; }
-        else if (!strcmp(s, "--light") && v) { if (sscanf(v, "%f,%f,%f", &a->light[0], &a->light[1], &a->light[2]) != 3) return 0; }
-        else if (!strcmp(s, "--height") && v) a->height_out = v;
-        else if (!strcmp(s, "--normal") && v) a->normal_out = v;
-        else if (!strcmp(s, "--sheet") && v) a->sheet_out = v;
-        else {
-            need = 0;
-            if (!strcmp(s, "--white")) a->white = 1;
-            else if (!strcmp(s, "--emboss")) a->emboss = 1;
-            else if (!strcmp(s, "--no-shadows")) a->shadows = 0;
-            else if (!strcmp(s, "--cylinder")) a->cylinder = 1;
-            else if (s[0] == '-' && s[1]) { fprintf(stderr, "relief: unknown option %s\n", s); return 0; }
-            else if (pos == 0) { a->example = s; pos++; }
-            else if (pos == 1) { a->sketch = s; pos++; }
-            else { fprintf(stderr, "relief: unexpected argument %s\n", s); return 0; }
-        }
+        int need = 0;
+        for (k = 0; k < (int)(sizeof valued / sizeof valued[0]); k++) need |= !strcmp(s, valued[k]);
+        if (!strcmp(s, "--help") || !strcmp(s, "-h")) { usage(stdout); return 0; }
+        if (!strcmp(s, "--version")) { printf("%s\n", RELIEF_VERSION); return 0; }
+        if (need && !v) return cli_usage_error("relief", "%s needs a value", s);
         if (need) i++;
+        if (!strcmp(s, "-o") || !strcmp(s, "--output")) a->out = v;
+        else if (!strcmp(s, "--crop")) {
+            if (!cli_parse_doubles(v, ',', 3, 3, 0.0, 16384.0, d, NULL) || d[0] != floor(d[0]) || d[1] != floor(d[1]) ||
+                d[2] != floor(d[2]) || d[2] < 8.0)
+                return cli_usage_error("relief", "--crop '%s': not X,Y,N (integers, N >= 8)", v);
+            for (k = 0; k < 3; k++) a->crop[k] = (int)d[k];
+        } else if (!strcmp(s, "--size")) {
+            if (!cli_parse_long(v, 16, 8192, &n)) return cli_usage_error("relief", "--size '%s': not an integer in 16..8192", v);
+            a->size = (int)n;
+        } else if (!strcmp(s, "--patch")) {
+            if (!cli_parse_long(v, 4, 1024, &n)) return cli_usage_error("relief", "--patch '%s': not an integer in 4..1024", v);
+            a->patch = (int)n;
+        } else if (!strcmp(s, "--emphasis")) {
+            if (!cli_parse_double(v, -10.0, 10.0, &d[0])) return cli_usage_error("relief", "--emphasis '%s': not a number in -10..10", v);
+            a->emphasis = (float)d[0];
+        } else if (!strcmp(s, "--depth")) {
+            if (!cli_parse_double(v, 0.0, 2.0, &d[0]) || !(d[0] > 0.0 && d[0] < 2.0))
+                return cli_usage_error("relief", "--depth '%s': not a number in (0, 2)", v);
+            a->depth = (float)d[0];
+        } else if (!strcmp(s, "--frame")) {
+            if (!cli_parse_size(v, 16, 8192, 0, &a->fw, &a->fh)) return cli_usage_error("relief", "--frame '%s': not WxH with 16 <= W, H <= 8192", v);
+        } else if (!strcmp(s, "--light")) {
+            if (!cli_parse_doubles(v, ',', 3, 3, -1e6, 1e6, d, NULL) || (d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0))
+                return cli_usage_error("relief", "--light '%s': not X,Y,Z (three finite numbers, not all 0)", v);
+            for (k = 0; k < 3; k++) a->light[k] = (float)d[k];
+        } else if (!strcmp(s, "--height")) a->height_out = v;
+        else if (!strcmp(s, "--normal")) a->normal_out = v;
+        else if (!strcmp(s, "--sheet")) a->sheet_out = v;
+        else if (!strcmp(s, "--white")) a->white = 1;
+        else if (!strcmp(s, "--emboss")) a->emboss = 1;
+        else if (!strcmp(s, "--no-shadows")) a->shadows = 0;
+        else if (!strcmp(s, "--cylinder")) a->cylinder = 1;
+        else if (s[0] == '-' && s[1]) return cli_usage_error("relief", "unknown option '%s'", s);
+        else if (pos == 0) { a->example = s; pos++; }
+        else if (pos == 1) { a->sketch = s; pos++; }
+        else return cli_usage_error("relief", "unexpected argument '%s': EXAMPLE and SKETCH only", s);
     }
-    return a->example && a->sketch && a->out;
+    if (!a->example || !a->sketch) return cli_usage_error("relief", "%s", "give EXAMPLE and SKETCH");
+    if (!a->out) return cli_usage_error("relief", "%s", "no output given: -o OUT.png");
+    if ((st = check_output("-o", a->out, ".png", NULL)) >= 0) return st;
+    if (a->height_out && (st = check_output("--height", a->height_out, ".pfm", ".png")) >= 0) return st;
+    if (a->normal_out && (st = check_output("--normal", a->normal_out, ".png", NULL)) >= 0) return st;
+    if (a->sheet_out && (st = check_output("--sheet", a->sheet_out, ".png", NULL)) >= 0) return st;
+    return -1;
 }
 
 static float lattice(int x, int y, uint32_t seed)
@@ -138,10 +205,11 @@ static int load_map(const char *path, const int crop[3], rl_map *m)
     sr_picture p;
     sr_result r;
     if (!strcmp(path, "gen:rock")) return generate_rock(m);
+    errno = 0;
     r = sr_read_image(path, NULL, &p);
     float *all;
     int y;
-    if (r != SR_OK) { fprintf(stderr, "relief: cannot read %s: %s\n", path, sr_result_string(r)); return 0; }
+    if (r != SR_OK) { cli_result_error("relief", path, sr_result_string(r), r == SR_ERR_IO ? errno : 0); return 0; }
     all = (float *)malloc(sizeof(float) * (size_t)p.width * (size_t)p.height);
     if (!all) { sr_picture_free(&p); return 0; }
     sr_picture_channel(&p, 0, all);
@@ -192,7 +260,7 @@ static int load_strokes(const char *path, int size, rl_map *m)
     char line[4096];
     int lineno = 0, strokes = 0;
     m->data = NULL;
-    if (!f) { fprintf(stderr, "relief: cannot open %s\n", path); return 0; }
+    if (!f) { cli_file_error("relief", path, "cannot open it", errno); return 0; }
     while (fgets(line, sizeof line, f)) {
         char *tok, *save = NULL;
         float px = 0, py = 0, width = 6.0f, pts[2 * 256];
@@ -399,23 +467,29 @@ static sr_result render_cylinder(sr_framebuffer *fb, const face_maps *m, const a
     return r;
 }
 
-static int write_height(const char *path, const rl_map *m)
+/* the result of writing path (through its temporary name tmp), with the cause when it failed */
+static int written(const char *path, sr_result r, int saved_errno)
 {
-    const char *dot = strrchr(path, '.');
+    if (r != SR_OK) cli_result_error("relief", path, sr_result_string(r), r == SR_ERR_IO ? saved_errno : 0);
+    return r == SR_OK;
+}
+
+static int write_height(const char *path, const char *tmp, const rl_map *m)
+{
     size_t n = (size_t)m->width * (size_t)m->height, i;
     sr_result r;
-    if (dot && !strcmp(dot, ".png")) {
+    errno = 0;
+    if (cli_has_extension(path, ".png")) {
         float *h = normalized(m);
         uint16_t *s = (uint16_t *)malloc(sizeof(uint16_t) * n);
-        if (!h || !s) { free(h); free(s); return 0; }
+        if (!h || !s) { free(h); free(s); fprintf(stderr, "relief: out of memory\n"); return 0; }
         for (i = 0; i < n; i++) s[i] = (uint16_t)(h[i] * 65535.0f + 0.5f);
-        r = sr_write_png16(path, s, m->width, m->height, 1, 0);
+        r = sr_write_png16(tmp, s, m->width, m->height, 1, 0);
         free(h); free(s);
     } else {
-        r = sr_write_pfm(path, m->data, m->width, m->height, 1);
+        r = sr_write_pfm(tmp, m->data, m->width, m->height, 1);
     }
-    if (r != SR_OK) fprintf(stderr, "relief: cannot write %s: %s\n", path, sr_result_string(r));
-    return r == SR_OK;
+    return written(path, r, errno);
 }
 
 static uint8_t *grey_rgb(const float *v01, size_t n)
@@ -427,13 +501,14 @@ static uint8_t *grey_rgb(const float *v01, size_t n)
     return p;
 }
 
-static int write_sheet(const char *path, const rl_map *ex, const rl_map *sk, const rl_map *fused, const face_maps *front, sr_framebuffer *fb)
+static int write_sheet(const char *path, const char *tmp, const rl_map *ex, const rl_map *sk, const rl_map *fused, const face_maps *front, sr_framebuffer *fb)
 {
     sr_image8 im[5], sheet;
     static const char *caps[5] = {"example", "sketch", "fused height", "normal map", "relief mapped"};
     float *e = normalized(ex), *f = normalized(fused);
     size_t nf = (size_t)fused->width * (size_t)fused->height;
-    int k, ok;
+    int k, ok, saved = 0;
+    sr_result r = SR_ERR_OUT_OF_MEMORY;
     im[0].width = ex->width; im[0].height = ex->height; im[0].channels = 3; im[0].pixels = e ? grey_rgb(e, (size_t)ex->width * (size_t)ex->height) : NULL;
     im[1].width = sk->width; im[1].height = sk->height; im[1].channels = 3; im[1].pixels = grey_rgb(sk->data, (size_t)sk->width * (size_t)sk->height);
     im[2].width = fused->width; im[2].height = fused->height; im[2].channels = 3; im[2].pixels = f ? grey_rgb(f, nf) : NULL;
@@ -447,12 +522,16 @@ static int write_sheet(const char *path, const rl_map *ex, const rl_map *sk, con
     im[4].width = fb->width; im[4].height = fb->height; im[4].channels = 3; im[4].pixels = (uint8_t *)malloc((size_t)fb->width * (size_t)fb->height * 3);
     if (im[4].pixels) sr_framebuffer_to_rgb8(fb, im[4].pixels, 3);
     ok = im[0].pixels && im[1].pixels && im[2].pixels && im[3].pixels && im[4].pixels &&
-         sr_contact_sheet(im, caps, 5, 0, NULL, &sheet) == SR_OK;
-    if (ok) { ok = sr_write_png(path, sheet.pixels, sheet.width, sheet.height, 3, 0) == SR_OK; sr_free(NULL, sheet.pixels); }
+         (r = sr_contact_sheet(im, caps, 5, 0, NULL, &sheet)) == SR_OK;
+    if (ok) {
+        errno = 0;
+        r = sr_write_png(tmp, sheet.pixels, sheet.width, sheet.height, 3, 0);
+        saved = errno;
+        sr_free(NULL, sheet.pixels);
+    }
     for (k = 0; k < 5; k++) free(im[k].pixels);
     free(e); free(f);
-    if (!ok) fprintf(stderr, "relief: cannot write the sheet %s\n", path);
-    return ok;
+    return written(path, r, saved);
 }
 
 int main(int argc, char **argv)
@@ -465,9 +544,13 @@ int main(int argc, char **argv)
     float *h01 = NULL, *e01 = NULL;
     double t0, t_synth, t_normal, t_render;
     rl_result r;
-    int status = 1, last_pct = -10;
+    int status = parse_args(argc, argv, &a), last_pct = -10;
+    cli_outputs outs;
+    const char *tmp;
+    if (status >= 0) return status;
+    status = 1;
+    cli_outputs_init(&outs);
     memset(&front, 0, sizeof front); memset(&side, 0, sizeof side);
-    if (!parse_args(argc, argv, &a)) { usage(stderr); return 2; }
     if (!load_map(a.example, a.crop, &ex) || !load_sketch(&a, &sk)) goto done;
     o.patch = a.patch;
     if (a.emphasis != 0.0f) o.emphasis = a.emphasis;
@@ -477,7 +560,7 @@ int main(int argc, char **argv)
     r = a.emboss ? rl_emboss(&ex, &sk, &o, &fused) : rl_synthesize(&ex, &sk, &o, &fused);
     t_synth = now_ms() - t0;
     if (!a.emboss) fprintf(stderr, "\rrelief: synthesis done  \n");
-    if (r != RL_OK) { fprintf(stderr, "relief: %s: %s\n", a.emboss ? "emboss" : "synthesis", rl_result_string(r)); goto done; }
+    if (r != RL_OK) { cli_result_error("relief", a.emboss ? "emboss" : "synthesis", rl_result_string(r), 0); goto done; }
     h01 = normalized_rows(&fused, 1);
     e01 = normalized_rows(&ex, 1);
     t0 = now_ms();
@@ -488,25 +571,39 @@ int main(int argc, char **argv)
     t0 = now_ms();
     if ((a.cylinder ? render_cylinder(&fb, &front, &a) : render_cube(&fb, &front, &side, &a)) != SR_OK) { sr_framebuffer_free(&fb); goto done; }
     t_render = now_ms() - t0;
-    if (sr_write_framebuffer_png(&fb, a.out, 0) != SR_OK) { fprintf(stderr, "relief: cannot write %s\n", a.out); sr_framebuffer_free(&fb); goto done; }
     status = 0;
-    if (a.height_out && !write_height(a.height_out, &fused)) status = 1;
-    if (a.normal_out) {
+    if (!(tmp = cli_output_add(&outs, "relief", a.out))) status = 1;
+    else {
+        sr_result wr;
+        errno = 0;
+        wr = sr_write_framebuffer_png(&fb, tmp, 0);
+        if (!written(a.out, wr, errno)) status = 1;
+    }
+    if (!status && a.height_out && (!(tmp = cli_output_add(&outs, "relief", a.height_out)) || !write_height(a.height_out, tmp, &fused)))
+        status = 1;
+    if (!status && a.normal_out) {
         size_t n = (size_t)fused.width * (size_t)fused.height;
         uint8_t *rgb = (uint8_t *)malloc(3 * n);
-        if (!rgb) status = 1;
+        if (!rgb || !(tmp = cli_output_add(&outs, "relief", a.normal_out))) status = 1;
         else { /* the face's rows run up, the PNG's down */
+            sr_result wr;
             rl_normal_to_rgb8(front.normal, n, rgb);
-            if (sr_write_png(a.normal_out, rgb, fused.width, fused.height, 3, 1) != SR_OK) status = 1;
-            free(rgb);
+            errno = 0;
+            wr = sr_write_png(tmp, rgb, fused.width, fused.height, 3, 1);
+            if (!written(a.normal_out, wr, errno)) status = 1;
         }
+        free(rgb);
     }
-    if (a.sheet_out && !write_sheet(a.sheet_out, &ex, &sk, &fused, &front, &fb)) status = 1;
+    if (!status && a.sheet_out &&
+        (!(tmp = cli_output_add(&outs, "relief", a.sheet_out)) || !write_sheet(a.sheet_out, tmp, &ex, &sk, &fused, &front, &fb)))
+        status = 1;
     sr_framebuffer_free(&fb);
+    if (status || !cli_outputs_commit(&outs, "relief")) { status = 1; goto done; }
     printf("RESULT relief example=%dx%d out=%dx%d mode=%s synth_ms=%.1f normal_ms=%.2f render_ms=%.1f frame=%dx%d\n", ex.width, ex.height,
            fused.width, fused.height, a.emboss ? "emboss" : "synth", t_synth, t_normal, t_render, a.fw, a.fh);
     fprintf(stderr, "relief: wrote %s\n", a.out);
 done:
+    cli_outputs_discard(&outs); /* after a failure: no file of this run is left */
     free(ex.data); free(sk.data); rl_map_free(&fused, NULL); free(h01); free(e01);
     free_face(&front); free_face(&side);
     return status;
