@@ -1722,6 +1722,9 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
             continue;
         }
         p = s->head[s->mindeg];
+#ifdef DFM_TEST_AMD_PIVOT
+        DFM_TEST_AMD_PIVOT(s, p); /* test-only: the degree lists checked before each pivot */
+#endif
         dfm__amd_remove(s, p);
         nvp = s->nv[p];
         s->order_pivot[npivots++] = p;
@@ -1736,6 +1739,9 @@ static dfm_result dfm__amd_order(int32_t n, const size_t *adj_start, const int32
         dfm__amd_prune(s, p, pme1, pme2, &lp_nv);                 /* 4 */
         dfm__amd_supervariables(s, pme1, pme2);                   /* 5 */
         dfm__amd_degrees(s, p, pme1, pme2, lp_nv);                /* 6 */
+#ifdef DFM_TEST_AMD_STEP
+        DFM_TEST_AMD_STEP(s, p); /* test-only: the new degrees checked against the quotient graph */
+#endif
         dfm__fill_add(&fl, s->nel - nel0, (int64_t)lp_nv + s->dense_count);
         if (count) { /* the pivot's members, in their order: r + f, r + f - 1, ... */
             int32_t v, c = s->nel - nel0 + lp_nv + s->dense_count;
@@ -3316,7 +3322,10 @@ DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
             for (j = f; j < l; j++) flops_done += (double)(nr - (j - f)) * (double)(nr - (j - f));
             if (flops_done >= next_report) {
                 next_report += chol->flops / 64.0;
-                if (chol->progress(chol->progress_user, (float)(flops_done / (chol->flops > 0 ? chol->flops : 1.0)))) {
+                /* the supernodes' rows include the amalgamation's zeros, which chol->flops (from
+                   the column counts) does not: the share can pass 1 */
+                double done = flops_done / (chol->flops > 0 ? chol->flops : 1.0);
+                if (chol->progress(chol->progress_user, (float)(done < 1.0 ? done : 1.0))) {
                     err = DFM_CANCELLED;
                     goto done;
                 }

@@ -1,6 +1,14 @@
 /* test_deform_chol - deform.h part 1: CSC assembly, AMD, symbolic analysis, supernodal Cholesky,
    solves, constraints, errors. Cross-checks against a dense Cholesky and brute-force symbolic
    elimination; real-mesh checks on the Stanford bunny when glmark2-data is installed. */
+#include <stdint.h>
+/* test-only hooks into AMD (test_amd_degrees): called before each pivot and after each step's
+   degree update, with the quotient graph */
+struct dfm__amd;
+static void amd_audit_pivot(const struct dfm__amd *s, int32_t p);
+static void amd_audit_step(const struct dfm__amd *s, int32_t p);
+#define DFM_TEST_AMD_PIVOT(s, p) amd_audit_pivot(s, p)
+#define DFM_TEST_AMD_STEP(s, p) amd_audit_step(s, p)
 #define DFM_IMPLEMENTATION
 #include "deform.h"
 
@@ -1130,6 +1138,153 @@ static void test_cancel(void)
 
 /* AMD quality: on a 2D grid Laplacian, fill within a sane factor of nested-dissection theory
    and much below the natural order's band */
+/* ---- AMD's degrees against the quotient graph (issue 21 point 8) ----------------------------
+   While on, every pivot and every degree update of AMD is audited from the quotient graph's lists
+   alone (brute force, independent of AMD's w[] bookkeeping):
+   - before a pivot: each live variable in a degree list is in the list of its degree, the lists
+     hold exactly the live variables that are listed, and the pivot has the smallest degree;
+   - after a step, for each variable v of the new element L_p (weights nv):
+       ext(v)  = |(A_v u L_p u U_{e in E_v} L_e) \ v|, the exact external degree,
+       d1(v)   = |A_v \ L_p \ v| + |L_p \ v| + sum_{e in E_v, e != p} |L_e \ L_p|   (ADD 1996 eq. 4.1),
+       d2(v)   = the degree before the step + |L_p \ v|, rest(v) = n - eliminated - nv(v);
+     degree(v) must equal max(0, min(d1, d2, rest)) exactly and be >= ext(v) (the bound). */
+typedef struct amd_audit {
+    int on;
+    size_t cap;
+    int32_t *prev;
+    int64_t *mark, *inlp, stamp;
+    long pivots, updates, bound_exact, list_bad, min_bad, formula_bad, bound_bad;
+} amd_audit;
+static amd_audit audit;
+
+static int32_t audit_w(const dfm__amd *s, int32_t u) { return s->status[u] == DFM__VAR && s->nv[u] > 0 ? s->nv[u] : 0; }
+
+static void amd_audit_pivot(const struct dfm__amd *s, int32_t p)
+{
+    int32_t n = s->n, d, v, listed = 0, walked = 0, dmin = -1;
+    if (!audit.on) return;
+    if (audit.cap < (size_t)n) {
+        audit.cap = (size_t)n;
+        audit.prev = (int32_t *)realloc(audit.prev, audit.cap * sizeof(int32_t));
+        audit.mark = (int64_t *)realloc(audit.mark, audit.cap * sizeof(int64_t));
+        audit.inlp = (int64_t *)realloc(audit.inlp, audit.cap * sizeof(int64_t));
+        memset(audit.mark, 0, audit.cap * sizeof(int64_t));
+        memset(audit.inlp, 0, audit.cap * sizeof(int64_t));
+    }
+    memcpy(audit.prev, s->degree, (size_t)n * sizeof(int32_t));
+    audit.pivots++;
+    for (v = 0; v < n; v++) listed += s->inlist[v] != 0;
+    for (d = 0; d < n; d++)
+        for (v = s->head[d]; v >= 0 && walked <= n; v = s->next[v]) {
+            walked++;
+            if (!s->inlist[v] || s->degree[v] != d || !audit_w(s, v)) audit.list_bad++;
+            if (dmin < 0) dmin = d;
+        }
+    if (walked != listed) audit.list_bad++;
+    if (s->degree[p] != dmin) audit.min_bad++;
+}
+
+static void amd_audit_step(const struct dfm__amd *s, int32_t p)
+{
+    int64_t q, r, t, lp = 0, st;
+    if (!audit.on) return;
+    st = ++audit.stamp;
+    for (q = s->pe[p]; q < s->pe[p] + s->len[p]; q++)
+        if (audit_w(s, s->iw[q])) {
+            audit.inlp[s->iw[q]] = st;
+            lp += audit_w(s, s->iw[q]);
+        }
+    for (q = s->pe[p]; q < s->pe[p] + s->len[p]; q++) {
+        int32_t v = s->iw[q], nvv = audit_w(s, v);
+        int64_t ext = 0, d1 = 0, d2, rest, want, mk;
+        if (!nvv) continue;
+        mk = ++audit.stamp;
+        audit.mark[v] = mk;
+        for (r = s->pe[v]; r < s->pe[v] + s->len[v]; r++) {
+            int32_t e = s->iw[r];
+            int elem = r < s->pe[v] + s->elen[v];
+            int64_t a = elem ? s->pe[e] : r, b = elem ? s->pe[e] + s->len[e] : r + 1;
+            if (elem && s->status[e] != DFM__ELEM) continue;
+            for (t = a; t < b; t++) {
+                int32_t u = s->iw[t], wu = audit_w(s, u);
+                if (!wu || u == v) continue;
+                if (audit.mark[u] != mk) { /* the union: each variable once */
+                    audit.mark[u] = mk;
+                    ext += wu;
+                }
+                if (audit.inlp[u] != st && (!elem || e != p)) d1 += wu; /* |A_v \ L_p|, |L_e \ L_p| */
+            }
+        }
+        d1 += lp - nvv;
+        d2 = (int64_t)audit.prev[v] + lp - nvv;
+        rest = (int64_t)(s->n - s->nel) - nvv;
+        want = d1 < d2 ? d1 : d2;
+        if (rest < want) want = rest;
+        if (want < 0) want = 0;
+        audit.updates++;
+        if (s->degree[v] != want) audit.formula_bad++;
+        if (s->degree[v] < ext) audit.bound_bad++;
+        audit.bound_exact += s->degree[v] == ext;
+    }
+}
+
+/* AMD audited on generated meshes: grids with both diagonal patterns, a tube (periodic), their
+   3x3-block expansions (supervariables of 3 from the start) and random sparse matrices with a
+   wide range of degrees. Planted, one at a time: step 6's d = w + |L_p| without "- nv(v)"; the
+   same in step 3's first visit of an element; step 6's min with d2 dropped; step 4's |A_v|
+   counted unweighted (deg += 1); step 4's |L_e \ L_p| one too large. Each makes formula_bad
+   nonzero here. Elsewhere the first two were caught only by the bunny's fill bound (and the
+   dissection comparison), the fourth and fifth only by the factor digests, the third by nothing. */
+static void test_amd_degrees(void)
+{
+    float *pos;
+    uint32_t *idx;
+    size_t nv, nt, k;
+    long graphs = 0;
+    memset(&audit, 0, sizeof audit);
+    audit.on = 1;
+    for (k = 0; k < 8; k++) {
+        dfm_csc l, a, b;
+        dfm_chol *c = NULL;
+        size_t w = 6 + 5 * k, h = 5 + 3 * k;
+        grid_mesh(w, h, &pos, &idx, &nv, &nt);
+        if (k & 1) /* the other diagonal in every third quad */
+            for (nt = 0; nt < 2 * (w - 1) * (h - 1); nt += 6) {
+                uint32_t *f = idx + 3 * nt, a0 = f[0], b0 = f[1], c0 = f[2], d0 = f[4];
+                if (f[2] == f[4]) continue;
+                f[0] = a0, f[1] = b0, f[2] = d0, f[3] = a0, f[4] = d0, f[5] = c0;
+            }
+        nt = 2 * (w - 1) * (h - 1);
+        T_EQ_INT(dfm_mesh_laplacian(pos, nv, idx, nt, DFM_LAPLACIAN_UNIFORM, NULL, &l), DFM_OK);
+        T_EQ_INT(dfm_chol_analyze(&l, NULL, &c), DFM_OK);
+        dfm_chol_free(c);
+        T_EQ_INT(dfm_block_expand(&l, 3, NULL, NULL, &b), DFM_OK);
+        T_EQ_INT(dfm_chol_analyze(&b, NULL, &c), DFM_OK);
+        dfm_chol_free(c);
+        a = random_spd(40 + 60 * k, 2.0 + (double)k, 100 + k, 1.0);
+        T_EQ_INT(dfm_chol_analyze(&a, NULL, &c), DFM_OK);
+        dfm_chol_free(c);
+        graphs += 3;
+        dfm_csc_free(&l);
+        dfm_csc_free(&b);
+        dfm_csc_free(&a);
+        free(pos);
+        free(idx);
+    }
+    audit.on = 0;
+    printf("AMD audit: %ld graphs, %ld pivots, %ld degree updates (%ld equal to the exact external degree)\n", graphs,
+           audit.pivots, audit.updates, audit.bound_exact);
+    T_CHECK(audit.pivots > 1000 && audit.updates > 1000);
+    T_EQ_INT(audit.list_bad, 0);
+    T_EQ_INT(audit.min_bad, 0);
+    T_EQ_INT(audit.formula_bad, 0);
+    T_EQ_INT(audit.bound_bad, 0);
+    free(audit.prev);
+    free(audit.mark);
+    free(audit.inlp);
+    memset(&audit, 0, sizeof audit);
+}
+
 static void test_amd_quality(void)
 {
     float *pos;
@@ -1610,6 +1765,7 @@ int main(int argc, char **argv)
     test_alloc_failures();
     test_cancel();
     test_amd_quality();
+    test_amd_degrees();
     test_nested_dissection();
     test_bunny();
     test_sort_rows();
