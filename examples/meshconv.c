@@ -10,6 +10,8 @@
    Exit status: 0 done, 1 failure (unreadable input, failed write), 2 usage (bad arguments). */
 #define MIO_IMPLEMENTATION
 #include "meshio.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -43,30 +45,14 @@ static void usage(FILE *to)
             "The output is written to FILE.tmp and renamed when complete: a failed run leaves nothing.\n");
 }
 
-static int usage_error(const char *fmt, const char *what)
-{
-    fprintf(stderr, "meshconv: ");
-    fprintf(stderr, fmt, what);
-    fprintf(stderr, " (see meshconv --help)\n");
-    return 2;
-}
-
 /* The format named by the file's extension, any case; MIO_FORMAT_AUTO if none of the four. */
 static mio_format format_of_extension(const char *path)
 {
-    static const char *const ext[4] = {"obj", "off", "ply", "stl"};
+    static const char *const ext[4] = {".obj", ".off", ".ply", ".stl"};
     static const mio_format fmt[4] = {MIO_FORMAT_OBJ, MIO_FORMAT_OFF, MIO_FORMAT_PLY, MIO_FORMAT_STL};
-    const char *dot = strrchr(path, '.');
-    int k, i;
-    if (!dot || strchr(dot, '/') || strlen(dot) != 4) return MIO_FORMAT_AUTO;
-    for (k = 0; k < 4; k++) {
-        for (i = 0; i < 3; i++) {
-            char c = dot[1 + i];
-            if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
-            if (c != ext[k][i]) break;
-        }
-        if (i == 3) return fmt[k];
-    }
+    int k;
+    for (k = 0; k < 4; k++)
+        if (cli_has_extension(path, ext[k])) return fmt[k];
     return MIO_FORMAT_AUTO;
 }
 
@@ -89,32 +75,30 @@ static int parse_args(int argc, char **argv, args *a)
         if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) { usage(stdout); return 0; }
         if (strcmp(s, "--version") == 0) { printf("%s\n", MESHCONV_VERSION); return 0; }
         if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0) {
-            if (i + 1 >= argc || argv[i + 1][0] == '\0') return usage_error("%s needs a file name", s);
+            if (i + 1 >= argc || argv[i + 1][0] == '\0') return cli_usage_error("meshconv", "%s needs a file name", s);
             a->output = argv[++i];
         } else if (strcmp(s, "--format") == 0) {
-            if (i + 1 >= argc) return usage_error("%s needs obj, off, ply or stl", s);
+            if (i + 1 >= argc) return cli_usage_error("meshconv", "%s needs obj, off, ply or stl", s);
             a->in_format = format_of_name(argv[++i]);
-            if (a->in_format == MIO_FORMAT_AUTO) return usage_error("--format '%s': not obj, off, ply or stl", argv[i]);
+            if (a->in_format == MIO_FORMAT_AUTO) return cli_usage_error("meshconv", "--format '%s': not obj, off, ply or stl", argv[i]);
         } else if (strcmp(s, "--ascii") == 0) a->ascii = 1;
         else if (strcmp(s, "--weld") == 0) a->weld = 1;
-        else if (s[0] == '-' && s[1] != '\0') return usage_error("unknown option '%s'", s);
-        else if (a->input) return usage_error("unexpected argument '%s': one INPUT only", s);
+        else if (s[0] == '-' && s[1] != '\0') return cli_usage_error("meshconv", "unknown option '%s'", s);
+        else if (a->input) return cli_usage_error("meshconv", "unexpected argument '%s': one INPUT only", s);
         else a->input = s;
     }
-    if (!a->input) return usage_error("%s", "no INPUT given");
+    if (!a->input) return cli_usage_error("meshconv", "%s", "no INPUT given");
     if (a->output) {
         a->out_format = format_of_extension(a->output);
         if (a->out_format == MIO_FORMAT_AUTO)
-            return usage_error("output '%s': the name must end in .obj, .off, .ply or .stl (any case)", a->output);
+            return cli_usage_error("meshconv", "output '%s': the name must end in .obj, .off, .ply or .stl (any case)", a->output);
     }
     return -1;
 }
 
 static void report_error(const char *path, mio_result r, const mio_error *err, int saved_errno)
 {
-    fprintf(stderr, "meshconv: %s: %s", path, err->message);
-    if (r == MIO_ERR_IO && saved_errno) fprintf(stderr, ": %s", strerror(saved_errno));
-    fprintf(stderr, " (%s: %s)\n", mio_result_string(r), mio_result_description(r));
+    cli_read_error("meshconv", path, err->message, mio_result_string(r), mio_result_description(r), r == MIO_ERR_IO ? saved_errno : 0);
 }
 
 static mio_result write_mesh(const args *a, const char *path, const mio_mesh *m, mio_error *err)
@@ -131,31 +115,20 @@ static mio_result write_mesh(const args *a, const char *path, const mio_mesh *m,
 /* Writes OUTPUT.tmp, then renames it to OUTPUT; on any failure removes OUTPUT.tmp. Returns 0 or 1. */
 static int write_output(const args *a, const mio_mesh *m)
 {
-    size_t n = strlen(a->output);
-    char *tmp = (char *)malloc(n + 5);
+    cli_outputs outs;
+    const char *tmp;
     mio_error err;
     mio_result r;
-    int saved;
-    if (!tmp) { fprintf(stderr, "meshconv: out of memory\n"); return 1; }
-    memcpy(tmp, a->output, n);
-    memcpy(tmp + n, ".tmp", 5);
+    cli_outputs_init(&outs);
+    if (!(tmp = cli_output_add(&outs, "meshconv", a->output))) return 1;
     errno = 0;
     r = write_mesh(a, tmp, m, &err);
-    saved = errno;
     if (r != MIO_OK) {
-        report_error(a->output, r, &err, saved);
-        remove(tmp);
-        free(tmp);
+        report_error(a->output, r, &err, errno);
+        cli_outputs_discard(&outs);
         return 1;
     }
-    if (rename(tmp, a->output) != 0) {
-        fprintf(stderr, "meshconv: %s: cannot rename %s to it: %s\n", a->output, tmp, strerror(errno));
-        remove(tmp);
-        free(tmp);
-        return 1;
-    }
-    free(tmp);
-    return 0;
+    return cli_outputs_commit(&outs, "meshconv") ? 0 : 1;
 }
 
 static void bounding_box(const mio_mesh *m, float lo[3], float hi[3])

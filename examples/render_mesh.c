@@ -17,6 +17,8 @@
 #include "meshio.h"
 #define SR_IMPLEMENTATION
 #include "render.h"
+#define CLI_IMPLEMENTATION
+#include "cli.h"
 
 #define RENDER_MESH_VERSION "render_mesh 0.2 (meshio.h v0.1, render.h)"
 
@@ -47,63 +49,19 @@ static void usage(FILE *to)
                 "The PNG is written to FILE.tmp and renamed when complete: a failed run leaves nothing.\n");
 }
 
-static int usage_error(const char *fmt, const char *what)
-{
-    fprintf(stderr, "render_mesh: ");
-    fprintf(stderr, fmt, what);
-    fprintf(stderr, " (see render_mesh --help)\n");
-    return 2;
-}
-
-/* A finite float that is the whole of [s, stop) ; stop may be NULL for the end of s. */
-static int parse_float(const char *s, char stop, float *out)
-{
-    char *end;
-    double v;
-    errno = 0;
-    v = strtod(s, &end);
-    if (end == s || *end != stop || errno == ERANGE || !(v - v == 0.0) || fabs(v) > 1e30) return 0;
-    *out = (float)v;
-    return 1;
-}
-
 static int parse_view(const char *s, float *az, float *el)
 {
     static const struct { const char *name; float az, el; } views[] = {
         {"iso", 35.0f, 25.0f}, {"front", 0.0f, 0.0f}, {"back", 180.0f, 0.0f}, {"left", -90.0f, 0.0f},
         {"right", 90.0f, 0.0f}, {"top", 0.0f, 89.9f}, {"bottom", 0.0f, -89.9f}};
     size_t i;
-    const char *comma = strchr(s, ',');
+    double d[2];
     for (i = 0; i < sizeof views / sizeof views[0]; i++)
         if (strcmp(s, views[i].name) == 0) { *az = views[i].az; *el = views[i].el; return 1; }
-    if (!comma || !parse_float(s, ',', az) || !parse_float(comma + 1, '\0', el)) return 0;
-    return *el > -90.0f && *el < 90.0f && fabsf(*az) <= 1e6f;
-}
-
-/* A decimal integer 1..16384 filling [s, stop). */
-static int parse_pixels(const char *s, char stop, int *out, const char **rest)
-{
-    long v = 0;
-    const char *p = s;
-    while (*p >= '0' && *p <= '9' && v <= 16384) v = v * 10 + (*p++ - '0');
-    if (p == s || *p != stop || v < 1 || v > 16384) return 0;
-    *out = (int)v;
-    if (rest) *rest = p;
+    if (!cli_parse_doubles(s, ',', 2, 2, -1e6, 1e6, d, NULL) || !(d[1] > -90.0 && d[1] < 90.0)) return 0;
+    *az = (float)d[0];
+    *el = (float)d[1];
     return 1;
-}
-
-static int parse_size(const char *s, int *W, int *H)
-{
-    const char *rest;
-    if (parse_pixels(s, '\0', W, NULL)) { *H = *W; return 1; }
-    return parse_pixels(s, 'x', W, &rest) && parse_pixels(rest + 1, '\0', H, NULL);
-}
-
-static int has_png_extension(const char *path)
-{
-    size_t n = strlen(path);
-    const char *e = path + (n >= 4 ? n - 4 : 0);
-    return n > 4 && e[0] == '.' && (e[1] == 'p' || e[1] == 'P') && (e[2] == 'n' || e[2] == 'N') && (e[3] == 'g' || e[3] == 'G');
 }
 
 /* Returns -1 to go on, or the exit status (0 for --help/--version, 2 for a usage error). */
@@ -118,59 +76,49 @@ static int parse_args(int argc, char **argv, args *a)
                     strcmp(s, "--size") == 0 || strcmp(s, "--shading") == 0 || strcmp(s, "--up") == 0;
         if (strcmp(s, "-h") == 0 || strcmp(s, "--help") == 0) { usage(stdout); return 0; }
         if (strcmp(s, "--version") == 0) { printf("%s\n", RENDER_MESH_VERSION); return 0; }
-        if (takes && !v) return usage_error("%s needs a value", s);
+        if (takes && !v) return cli_usage_error("render_mesh", "%s needs a value", s);
         if (takes) i++;
         if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0) a->out = v;
         else if (strcmp(s, "--view") == 0) {
-            if (!parse_view(v, &a->az, &a->el)) return usage_error("--view '%s': not a view name or AZ,EL with -90 < EL < 90", v);
+            if (!parse_view(v, &a->az, &a->el)) return cli_usage_error("render_mesh", "--view '%s': not a view name or AZ,EL with -90 < EL < 90", v);
         } else if (strcmp(s, "--size") == 0) {
-            if (!parse_size(v, &a->W, &a->H)) return usage_error("--size '%s': not W or WxH with 1 <= W, H <= 16384", v);
+            if (!cli_parse_size(v, 1, 16384, 1, &a->W, &a->H)) return cli_usage_error("render_mesh", "--size '%s': not W or WxH with 1 <= W, H <= 16384", v);
         } else if (strcmp(s, "--shading") == 0) {
             if (strcmp(v, "phong") == 0) a->shading = SR_SHADE_PHONG;
             else if (strcmp(v, "gouraud") == 0) a->shading = SR_SHADE_GOURAUD;
             else if (strcmp(v, "flat") == 0) a->shading = SR_SHADE_FLAT;
-            else return usage_error("--shading '%s': not phong, gouraud or flat", v);
+            else return cli_usage_error("render_mesh", "--shading '%s': not phong, gouraud or flat", v);
         } else if (strcmp(s, "--up") == 0) {
-            if ((v[0] != 'x' && v[0] != 'y' && v[0] != 'z') || v[1] != '\0') return usage_error("--up '%s': not x, y or z", v);
+            if ((v[0] != 'x' && v[0] != 'y' && v[0] != 'z') || v[1] != '\0') return cli_usage_error("render_mesh", "--up '%s': not x, y or z", v);
             a->up = v[0] - 'x';
         } else if (strcmp(s, "--wire") == 0) a->wire = 1;
         else if (strcmp(s, "--ortho") == 0) a->ortho = 1;
-        else if (s[0] == '-' && s[1] != '\0') return usage_error("unknown option '%s'", s);
-        else if (a->in) return usage_error("unexpected argument '%s': one IN only", s);
+        else if (s[0] == '-' && s[1] != '\0') return cli_usage_error("render_mesh", "unknown option '%s'", s);
+        else if (a->in) return cli_usage_error("render_mesh", "unexpected argument '%s': one IN only", s);
         else a->in = s;
     }
-    if (!a->in) return usage_error("%s", "no input mesh given");
-    if (!a->out) return usage_error("%s", "no output given: -o OUT.png");
-    if (!has_png_extension(a->out)) return usage_error("output '%s': only PNG is written; the name must end in .png", a->out);
+    if (!a->in) return cli_usage_error("render_mesh", "%s", "no input mesh given");
+    if (!a->out) return cli_usage_error("render_mesh", "%s", "no output given: -o OUT.png");
+    if (!cli_has_extension(a->out, ".png")) return cli_usage_error("render_mesh", "output '%s': only PNG is written; the name must end in .png", a->out);
     return -1;
 }
 
 /* Writes the framebuffer to OUT.tmp and renames it to OUT; removes OUT.tmp on failure. 0 or 1. */
 static int write_png(const sr_framebuffer *fb, const char *out)
 {
-    size_t n = strlen(out);
-    char *tmp = (char *)malloc(n + 5);
+    cli_outputs outs;
+    const char *tmp;
     sr_result r;
-    int saved;
-    if (!tmp) { fprintf(stderr, "render_mesh: out of memory\n"); return 1; }
-    memcpy(tmp, out, n);
-    memcpy(tmp + n, ".tmp", 5);
+    cli_outputs_init(&outs);
+    if (!(tmp = cli_output_add(&outs, "render_mesh", out))) return 1;
     errno = 0;
     r = sr_write_framebuffer_png(fb, tmp, 0);
-    saved = errno;
-    if (r == SR_OK && rename(tmp, out) != 0) {
-        fprintf(stderr, "render_mesh: %s: cannot rename %s to it: %s\n", out, tmp, strerror(errno));
-        remove(tmp); free(tmp);
+    if (r != SR_OK) {
+        cli_result_error("render_mesh", out, sr_result_string(r), r == SR_ERR_IO ? errno : 0);
+        cli_outputs_discard(&outs);
         return 1;
     }
-    if (r != SR_OK) {
-        fprintf(stderr, "render_mesh: %s: %s", out, sr_result_string(r));
-        if (r == SR_ERR_IO && saved) fprintf(stderr, ": %s", strerror(saved));
-        fprintf(stderr, "\n");
-        remove(tmp);
-    }
-    free(tmp);
-    return r == SR_OK ? 0 : 1;
+    return cli_outputs_commit(&outs, "render_mesh") ? 0 : 1;
 }
 
 /* The view direction (from the target towards the eye) for azimuth az around the up axis from the
@@ -316,9 +264,7 @@ int main(int argc, char **argv)
     mr = mio_read_file(a.in, NULL, &mesh, &err);
     saved = errno;
     if (mr != MIO_OK) {
-        fprintf(stderr, "render_mesh: %s: %s", a.in, err.message);
-        if (mr == MIO_ERR_IO && saved) fprintf(stderr, ": %s", strerror(saved));
-        fprintf(stderr, " (%s: %s)\n", mio_result_string(mr), mio_result_description(mr));
+        cli_read_error("render_mesh", a.in, err.message, mio_result_string(mr), mio_result_description(mr), mr == MIO_ERR_IO ? saved : 0);
         return 1;
     }
     normalize_mesh(&mesh);
@@ -327,12 +273,14 @@ int main(int argc, char **argv)
     if (!normals) { fprintf(stderr, "render_mesh: out of memory\n"); mio_free_mesh(&mesh); return 1; }
     sr_compute_vertex_normals(mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, normals);
     if ((r = sr_framebuffer_create(&fb, a.W, a.H, NULL)) != SR_OK) {
-        fprintf(stderr, "render_mesh: %dx%d framebuffer: %s\n", a.W, a.H, sr_result_string(r));
+        char context[64];
+        snprintf(context, sizeof context, "%dx%d framebuffer", a.W, a.H);
+        cli_result_error("render_mesh", context, sr_result_string(r), 0);
         free(normals); mio_free_mesh(&mesh); return 1;
     }
     sr_framebuffer_clear(&fb, bg, 1.0f);
     r = draw(&fb, &cam, &mesh, normals, &a);
-    if (r != SR_OK) fprintf(stderr, "render_mesh: %s: drawing failed: %s\n", a.in, sr_result_string(r));
+    if (r != SR_OK) cli_result_error("render_mesh", a.in, sr_result_string(r), 0);
     status = r == SR_OK ? write_png(&fb, a.out) : 1;
     if (status == 0) fprintf(stderr, "render_mesh: %s: %zu triangles -> %s (%dx%d)\n", a.in, mesh.triangle_count, a.out, a.W, a.H);
     sr_framebuffer_free(&fb);

@@ -15,6 +15,13 @@
 #   from the front: y up shows the square end, z up the bar upright, x up the bar across, each
 #   filling >= 85% of the image side with a border; triangles 6e38 and 6e-30 wide draw the same
 #   pixel box as a unit one; pixels read back with python3, skipped without).
+# The other programs (dispmesh, deform, relief, grass, gen_sphere; dispmesh's long runs are in
+# dispmesh_smoke.sh) the same way: --help names each option, --version; bad arguments (nan,
+# 4294967297, 10xabc, a bad name, an unknown option, a missing value, -o x.jpg) exit 2 naming them
+# with no output; a missing or malformed input exits 1 with its cause; a write cut short by
+# ulimit -f exits 1 with "File too large" and leaves no output and no .tmp (relief: its 11 KB
+# render passes the limit and its 37 KB --height does not, and neither is left; an OUT that
+# existed is unchanged); a small good run exits 0 with its files and no .tmp.
 # The binaries are built here with make (with the sanitizer flags of `make sanitize` when
 # TEST_SANITIZE=1; the sizes are small enough that nothing needs shrinking).
 B="$1"
@@ -28,7 +35,7 @@ check() { # check DESCRIPTION CONDITION-COMMAND...
 }
 LC_ALL=C; export LC_ALL
 
-for p in meshconv render_mesh; do
+for p in meshconv render_mesh dispmesh deform relief grass gen_sphere; do
   if [ "${TEST_SANITIZE:-0}" = 1 ]; then
     make -s -C "$top" --no-print-directory B="$B" OPT="-O1 -g" \
       XFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" "$B/$p" >&2
@@ -43,6 +50,7 @@ for p in meshconv render_mesh; do
 done
 case "$B" in /*) bin="$B" ;; *) bin="$top/$B" ;; esac
 MC="$bin/meshconv"; RM="$bin/render_mesh"
+DM="$bin/dispmesh"; DF="$bin/deform"; RL="$bin/relief"; GR="$bin/grass"; GS="$bin/gen_sphere"
 
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/tools_cli.XXXXXX") || { echo "FAIL mktemp"; exit 1; }
 trap 'rm -rf "$tmp"' EXIT
@@ -87,7 +95,7 @@ refuse() {
 }
 
 # ---- --help and --version -------------------------------------------------------------------------
-for p in meshconv render_mesh; do
+for p in meshconv render_mesh dispmesh deform relief grass gen_sphere; do
   prog="$bin/$p"
   run "$p-help" "$prog" --help
   check "$p --help exits 0" [ "$rc" -eq 0 ]
@@ -100,6 +108,24 @@ for o in -o --output --ascii --weld --format --help --version; do
 done
 for o in -o --output --view --up --wire --size --shading --ortho --help --version; do
   check "render_mesh --help lists $o" grep -q -e " $o" "$tmp/render_mesh-help.out"
+done
+for o in --brick -o --output --faces --res --size --no-views --both-ways --fallback --min-quality --help --version; do
+  check "dispmesh --help lists $o" grep -q -e " $o" "$tmp/dispmesh-help.out"
+done
+for o in --cylinder --box -o --output --case --angle --shift --up --region --roi --handle --method --weights --frames \
+         --ortho --soft --rigid --steps --obj --size --help --version; do
+  check "deform --help lists $o" grep -q -e " $o" "$tmp/deform-help.out"
+done
+for o in -o --output --crop --size --white --emboss --patch --emphasis --depth --frame --light --no-shadows --cylinder \
+         --height --normal --sheet --help --version; do
+  check "relief --help lists $o" grep -q -e " $o" "$tmp/relief-help.out"
+done
+for o in --scene -o --output --size --res --tiles --mesh --mesh-cells --wd --wd-sun --wd-map --wd-map-gain --lod-bias \
+         --frames --seed --quiet --help --version; do
+  check "grass --help lists $o" grep -q -e " $o" "$tmp/grass-help.out"
+done
+for o in -f -o --output --help --version; do
+  check "gen_sphere --help lists $o" grep -q -e " $o" "$tmp/gen_sphere-help.out"
 done
 
 # ---- meshconv: usage errors (2) and failures (1) ---------------------------------------------------
@@ -258,6 +284,94 @@ if command -v python3 >/dev/null 2>&1; then
 else
   echo "SKIP render_mesh fitted-view checks: python3 not installed"; skip=$((skip + 23))
 fi
+
+# ---- dispmesh, deform, relief, grass, gen_sphere: usage errors (2) -------------------------------------
+refuse dm-faces 2 "--faces 'abc'" "$DM" --brick --faces abc -o "$tmp/o"
+refuse dm-faces-big 2 "--faces '4294967297'" "$DM" --brick --faces 4294967297 -o "$tmp/o"
+refuse dm-minq 2 "--min-quality 'nan'" "$DM" --brick --min-quality nan -o "$tmp/o"
+refuse dm-unknown 2 "--bogus" "$DM" --brick --bogus -o "$tmp/o"
+refuse dm-missing-value 2 "--res needs a value" "$DM" --brick -o "$tmp/o" --res
+refuse dm-none 2 "IN or --brick" "$DM" -o "$tmp/o"
+refuse df-angle 2 "--angle 'nan'" "$DF" --cylinder --angle nan -o "$tmp/o.png"
+refuse df-angle-trail 2 "--angle '90x'" "$DF" --cylinder --angle 90x -o "$tmp/o.png"
+refuse df-steps 2 "--steps '4294967297'" "$DF" --cylinder --steps 4294967297 -o "$tmp/o.png"
+refuse df-size 2 "--size '10xabc'" "$DF" --cylinder --size 10xabc -o "$tmp/o.png"
+refuse df-case 2 "--case 'foo'" "$DF" --cylinder --case foo -o "$tmp/o.png"
+refuse df-unknown 2 "--bogus" "$DF" --cylinder --bogus 1 -o "$tmp/o.png"
+refuse df-missing-value 2 "--roi needs a value" "$DF" --cylinder -o "$tmp/o.png" --roi
+refuse df-jpg 2 "o.jpg" "$DF" --cylinder -o "$tmp/o.jpg"
+refuse df-none 2 "MESH" "$DF" -o "$tmp/o.png"
+refuse rl-frame 2 "--frame '10xabc'" "$RL" gen:rock text:R -o "$tmp/o.png" --frame 10xabc
+refuse rl-light 2 "--light 'nan,0,1'" "$RL" gen:rock text:R -o "$tmp/o.png" --light nan,0,1
+refuse rl-crop 2 "--crop '1,2'" "$RL" gen:rock text:R -o "$tmp/o.png" --crop 1,2
+refuse rl-patch 2 "--patch '4294967297'" "$RL" gen:rock text:R -o "$tmp/o.png" --patch 4294967297
+refuse rl-unknown 2 "--bogus" "$RL" gen:rock text:R -o "$tmp/o.png" --bogus
+refuse rl-jpg 2 "o.jpg" "$RL" gen:rock text:R -o "$tmp/o.jpg"
+refuse rl-height-jpg 2 "--height" "$RL" gen:rock text:R -o "$tmp/o.png" --height "$tmp/oh.jpg"
+refuse gr-wd 2 "--wd '0.2,nan'" "$GR" --scene wither -o "$tmp/o.png" --wd 0.2,nan
+refuse gr-wd-sun 2 "--wd-sun '0.5abc'" "$GR" --mesh sphere -o "$tmp/o.png" --wd-sun 0.5abc
+refuse gr-wd-sep 2 "--wd '0.2x0.3'" "$GR" --scene wither -o "$tmp/o.png" --wd 0.2x0.3
+refuse gr-size 2 "--size '10xabc'" "$GR" --scene wither -o "$tmp/o.png" --size 10xabc
+refuse gr-res 2 "--res '100'" "$GR" --scene wither -o "$tmp/o.png" --res 100
+refuse gr-scene 2 "--scene 'foo'" "$GR" --scene foo -o "$tmp/o.png"
+refuse gr-seed 2 "--seed '-1'" "$GR" --scene wither -o "$tmp/o.png" --seed -1
+refuse gr-unknown 2 "--bogus" "$GR" --scene wither -o "$tmp/o.png" --bogus
+refuse gr-jpg 2 "o.jpg" "$GR" --scene wither -o "$tmp/o.jpg"
+refuse gr-no-o 2 "-o" "$GR" --scene wither
+refuse gs-f 2 "-f 'abc'" "$GS" -f abc -o "$tmp/o.off"
+refuse gs-f-big 2 "-f '4294967297'" "$GS" -f 4294967297 -o "$tmp/o.off"
+refuse gs-f-zero 2 "-f '0'" "$GS" -f 0 -o "$tmp/o.off"
+refuse gs-jpg 2 "o.jpg" "$GS" -f 3 -o "$tmp/o.jpg"
+refuse gs-unknown 2 "--bogus" "$GS" --bogus
+refuse gs-missing-value 2 "-f needs a value" "$GS" -o "$tmp/o.off" -f
+
+# ---- the same programs: failures (1) with their cause, and writes cut short --------------------------
+refuse dm-missing-input 1 "No such file or directory" "$DM" "$tmp/missing.obj" -o "$tmp/o"
+refuse dm-bad-input 1 "MIO_ERR_INDEX_RANGE" "$DM" "$tmp/bad.obj" -o "$tmp/o"
+refuse df-missing-input 1 "No such file or directory" "$DF" "$tmp/missing.obj" -o "$tmp/o.png"
+refuse df-bad-input 1 "MIO_ERR_INDEX_RANGE" "$DF" "$tmp/bad.obj" -o "$tmp/o.png"
+refuse rl-missing-input 1 "No such file or directory" "$RL" "$tmp/missing.png" text:R -o "$tmp/o.png"
+refuse gr-missing-input 1 "No such file or directory" "$GR" --mesh "$tmp/missing.obj" -o "$tmp/o.png"
+refuse gr-missing-map 1 "No such file or directory" "$GR" --scene mountain --wd-map "$tmp/missing.png" -o "$tmp/o.png"
+refuse gs-no-dir 1 "No such file or directory" "$GS" -f 3 -o "$tmp/nodir/o.off"
+refuse df-no-dir 1 "No such file or directory" "$DF" --cylinder --method laplacian --size 32 -o "$tmp/nodir/o.png"
+# 2 blocks of file size (1 KiB in dash, 2 KiB in bash); SIGXFSZ ignored so write() fails with EFBIG
+refuse gs-efbig 1 "File too large" sh -c "ulimit -f 2; trap '' XFSZ; exec '$GS' -f 30 -o '$tmp/o.off'"
+refuse df-efbig 1 "File too large" sh -c "ulimit -f 2; trap '' XFSZ; exec '$DF' --cylinder --method laplacian --size 32 -o '$tmp/o.png' --obj '$tmp/o'"
+refuse gr-efbig 1 "File too large" sh -c "ulimit -f 2; trap '' XFSZ; exec '$GR' --scene wither --size 64x48 --res 16 --frames 2 --quiet -o '$tmp/o.png'"
+# relief: the 11 KB render passes a 24-block limit (12 KiB in dash, 24 KiB in bash), the 37 KB --height does not
+refuse rl-efbig 1 "File too large" sh -c "ulimit -f 24; trap '' XFSZ; exec '$RL' gen:rock text:R --size 96 --frame 120x90 -o '$tmp/o.png' --height '$tmp/oh.pfm'"
+printf 'old\n' >"$tmp/keep.png"
+run rl-keep sh -c "ulimit -f 24; trap '' XFSZ; exec '$RL' gen:rock text:R --size 96 --frame 120x90 -o '$tmp/keep.png' --height '$tmp/oh.pfm'"
+check "rl-keep: exit 1 (got $rc)" [ "$rc" -eq 1 ]
+check "rl-keep: the existing output is unchanged and no .tmp is left" \
+  sh -c "[ \"\$(cat '$tmp/keep.png')\" = old ] && [ ! -e '$tmp/keep.png.tmp' ] && [ ! -e '$tmp/oh.pfm' ] && [ ! -e '$tmp/oh.pfm.tmp' ]"
+printf 'old\n' >"$tmp/keep.off"
+run gs-keep sh -c "ulimit -f 2; trap '' XFSZ; exec '$GS' -f 30 -o '$tmp/keep.off'"
+check "gs-keep: exit 1 and the existing output unchanged, no .tmp (got $rc)" \
+  sh -c "[ $rc -eq 1 ] && [ \"\$(cat '$tmp/keep.off')\" = old ] && [ ! -e '$tmp/keep.off.tmp' ]"
+
+# ---- the same programs: small good runs ------------------------------------------------------------
+png_ok() { [ "$(od -An -tx1 -N8 "$1" | tr -d ' \n')" = 89504e470d0a1a0a ] && [ ! -e "$1.tmp" ]; }
+run gs-ok "$GS" -f 3 -o "$tmp/g.OFF"
+check "gen_sphere -f 3 -o g.OFF: exit 0, 92 vertices, no .tmp ($(cat "$tmp/gs-ok.err"))" \
+  sh -c "[ $rc -eq 0 ] && sed -n 2p '$tmp/g.OFF' | grep -q '^92 180 0' && [ ! -e '$tmp/g.OFF.tmp' ]"
+run df-ok "$DF" --cylinder --method laplacian --size 32 -o "$tmp/d.png" --obj "$tmp/d"
+check "deform --cylinder -o d.png --obj d: exit 0 ($(tail -n 1 "$tmp/df-ok.err"))" [ "$rc" -eq 0 ]
+check "deform wrote d.png and d_laplacian.obj, no .tmp" sh -c "[ -s '$tmp/d_laplacian.obj' ] && [ ! -e '$tmp/d_laplacian.obj.tmp' ]"
+check "deform's d.png is a PNG" png_ok "$tmp/d.png"
+run rl-ok "$RL" gen:rock text:R --size 96 --frame 120x90 -o "$tmp/r.PNG" --height "$tmp/rh.pfm" --normal "$tmp/rn.png"
+check "relief -o r.PNG --height --normal: exit 0 ($(tail -n 1 "$tmp/rl-ok.err"))" [ "$rc" -eq 0 ]
+check "relief wrote r.PNG, rn.png (PNG) and rh.pfm, no .tmp" sh -c "[ -s '$tmp/rh.pfm' ] && [ ! -e '$tmp/rh.pfm.tmp' ]"
+check "relief's r.PNG is a PNG" png_ok "$tmp/r.PNG"
+check "relief's rn.png is a PNG" png_ok "$tmp/rn.png"
+run gr-ok "$GR" --scene wither --size 32x24 --res 16 --frames 2 --quiet -o "$tmp/w.png"
+check "grass --scene wither -o w.png: exit 0 ($(tail -n 1 "$tmp/gr-ok.err"))" [ "$rc" -eq 0 ]
+check "grass's w.png is a PNG" png_ok "$tmp/w.png"
+# the cube's STL soup (36 corners): dispmesh welds it with mio_weld, as meshconv --weld does
+run dm-stl "$DM" "$tmp/cube.stl" --faces 12 --res 64 --no-views -o "$tmp/dcube"
+check "dispmesh cube.stl: the soup is welded, 36 -> 8 vertices ($(grep welded "$tmp/dm-stl.err"))" \
+  grep -q 'welded vertices at equal positions: 36 -> 8 vertices' "$tmp/dm-stl.err"
 
 echo "TESTCOUNT tools_cli passed=$pass failed=$fail skipped=$skip"
 [ $fail -eq 0 ]
