@@ -169,7 +169,9 @@
      (bench/bench_relief).
 
    LIMITS
-     Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. Up to 2^31 - 1
+     Framebuffers up to 16384 x 16384. Perspective cameras need 0 < znear < zfar. The terrain
+     marcher takes at most 65536 steps a ray (a longer box lengthens the step); a marcher's ray
+     ends where its step no longer moves it (a step under the ulp of its distance). Up to 2^31 - 1
      triangles per draw. Vertices must be finite (checked). One draw is opaque (no blending);
      volumes blend over what is in the framebuffer. A curved relief quad (curvature_u / _v) is
      the tangent plane of a convex bend, approximated by a parabola (for a cylinder cut into
@@ -2143,13 +2145,15 @@ SRDEF sr_result sr_draw_terrain(sr_framebuffer *fb, const sr_camera *cam, const 
     spec_cut = sr__spec_cut(&d->material);
     for (y = 0; y < fb->height; y++)
         for (x = 0; x < fb->width; x++) {
-            float o[3], dir[3], t0, t1, t, prev, P[3], z;
+            float o[3], dir[3], t0, t1, t, prev, P[3], z, st;
             size_t pi = (size_t)y * (size_t)fb->width + (size_t)x;
             int k, hit = 0;
             sr_camera_ray(cam, fb->width, fb->height, (float)x + 0.5f, (float)y + 0.5f, o, dir);
-            if (!sr__ray_box(o, dir, lo, hi, &t0, &t1) || !(t1 + step > t1)) continue; /* a step under t1's ulp never ends */
+            if (!sr__ray_box(o, dir, lo, hi, &t0, &t1)) continue;
+            st = t1 - t0 > 65536.0f * step ? (t1 - t0) / 65536.0f : step; /* at most 65536 steps a ray */
+            if (!(t1 + st > t1)) continue;                                  /* a step under t1's ulp never ends */
             prev = t0;
-            for (t = t0; t <= t1 + step; t += step) {
+            for (t = t0; t <= t1 + st; t += st) {
                 float tt = t > t1 ? t1 : t;
                 float py = o[1] + tt * dir[1];
                 if (py <= sr__terrain_y(d, o[0] + tt * dir[0], o[2] + tt * dir[2])) {
@@ -2498,6 +2502,16 @@ static float sr__shell_frame(const sr__shell *S, const float p[3], const float d
 
 typedef struct sr__shell_ray { float rgb[3], T, layer_T, depth_t; } sr__shell_ray;
 
+/* t += dt, or 0 when that does not move t (a step under t's ulp, far from the eye, or NaN): the
+   ray ends there rather than looping forever */
+static int sr__advance(float *t, float dt)
+{
+    float n = *t + dt;
+    if (!(n > *t)) return 0;
+    *t = n;
+    return 1;
+}
+
 /* Marches one ray over [t0, t1]: above the layer it jumps to where the layer could begin (the
    slope bound), in it the callback's steps (or its empty-space skips) composite front to back,
    and the ground ends the ray. */
@@ -2527,7 +2541,7 @@ static void sr__shell_trace(sr__shell *S, const float o[3], const float dir[3], 
         }
         if (zrel >= S->thickness) { /* above the layer: the nearest it can be */
             float gap = (zrel - S->thickness) / (fabsf(dir[2]) + S->slope * horiz + 1e-6f);
-            t += gap > min_step ? gap : min_step;
+            if (!sr__advance(&t, gap > min_step ? gap : min_step)) return;
             after_empty = 1;
             continue;
         }
@@ -2544,11 +2558,11 @@ static void sr__shell_trace(sr__shell *S, const float o[3], const float dir[3], 
                 float to_border = q.dir[k] > 0.0f ? (1.0f - q.p[k]) / q.dir[k] : q.dir[k] < 0.0f ? -q.p[k] / q.dir[k] : 1e30f;
                 if (to_border + 1.0f / 4096.0f < step) step = to_border + 1.0f / 4096.0f;
             }
-            t += fmaxf(step / per_world, min_step);
+            if (!sr__advance(&t, fmaxf(step / per_world, min_step))) return;
             after_empty = 1;
             continue;
         }
-        t += fmaxf(step / per_world, min_step);
+        if (!sr__advance(&t, fmaxf(step / per_world, min_step))) return;
         after_empty = 0;
         alpha = 1.0f - expf(-s.sigma * step);
         sr__shell_light(S, &s, p, V, gx, gy, c);
@@ -3114,7 +3128,7 @@ static void sr__mshell_trace(sr__mshell *S, const float o[3], const float dir[3]
             after_empty = 1;
             continue;
         }
-        ts += sr__mshell_sample(S, &w, o, dir, ts, V, &after_empty, r);
+        if (!sr__advance(&ts, sr__mshell_sample(S, &w, o, dir, ts, V, &after_empty, r))) return;
     }
 }
 

@@ -1432,9 +1432,9 @@ static void test_wire_density(void)
            100.0 * ink / covered, covered);
     /* coarse: every edge drawn as before (corners overlap a little: a few % less than the perimeters) */
     T_CHECK(ink > 0.85 * expected && ink < 1.05 * expected);
-    wire_ink(&dense, 256, &ink, &covered, &expected);
-    printf("wire on %zu triangles at 256 px: ink %.0f px (%.1f%% of %.0f covered px), unfaded it would be %.0f\n", dense.nt, ink,
-           100.0 * ink / covered, covered, expected);
+    wire_ink(&dense, g_small ? 128 : 256, &ink, &covered, &expected);
+    printf("wire on %zu triangles at %d px: ink %.0f px (%.1f%% of %.0f covered px), unfaded it would be %.0f\n", dense.nt,
+           g_small ? 128 : 256, ink, 100.0 * ink / covered, covered, expected);
     /* dense: the triangles are ~2 px^2, their full wire would cover everything (expected > covered) */
     T_CHECK(expected > covered);
     T_CHECK(ink < 0.35 * covered);
@@ -1481,6 +1481,49 @@ static void test_terrain_colors(void)
     sr_framebuffer_free(&fb);
 }
 
+
+/* ---- marchers end (issue 21 point 4's fuzzing): a step under the ulp of the ray's distance looped
+   forever (terrain: a tiny step; shell: a camera far away), and a long terrain box gets at most
+   65536 steps a ray ---------------------------------------------------------------------------- */
+
+static void march_sample(void *user, const sr_shell_query *q, sr_shell_sample *out)
+{
+    (void)user; (void)q;
+    memset(out, 0, sizeof *out);
+    out->step = 1.0f / 256.0f; /* empty: only the steps end the ray */
+}
+
+static void test_march_ends(void)
+{
+    static float h[16];
+    sr_framebuffer fb, ref;
+    sr_camera cam;
+    sr_terrain_desc td;
+    sr_shell_desc sd;
+    sr_shell_stats st;
+    float eye[3] = {0.5f, 3, 4}, at[3] = {1.5f, 0, 1.5f}, far_eye[3] = {2e6f, 2e6f, 3e6f}, far_at[3] = {2, 2, 0};
+    int i, same = 1;
+    sr_framebuffer_create(&fb, 8, 8, NULL);
+    sr_framebuffer_create(&ref, 8, 8, NULL);
+    for (i = 0; i < 16; i++) h[i] = (float)(i % 3) * 0.1f;
+    sr_terrain_desc_default(&td);
+    td.heights = h; td.width = 4; td.height = 4;
+    sr_camera_look_at(&cam, eye, at, NULL, 50.0f, 1.0f, 0.1f, 20.0f);
+    T_EQ_INT(sr_draw_terrain(&ref, &cam, &td), SR_OK);
+    td.step = 1e-30f; /* 65536 steps of the box's length a ray instead: the same hits, refined the same way */
+    T_EQ_INT(sr_draw_terrain(&fb, &cam, &td), SR_OK);
+    for (i = 0; i < 64; i++) same &= (fb.depth[i] < 1.0f) == (ref.depth[i] < 1.0f) && fabsf(fb.depth[i] - ref.depth[i]) < 1e-4f;
+    T_CHECK(same);
+    sr_shell_desc_default(&sd);
+    sd.sample = march_sample; sd.tile = 1.0f; sd.tiles_x = sd.tiles_y = 4;
+    sr_camera_look_at(&cam, far_eye, far_at, NULL, 1e-4f, 1.0f, 1e5f, 1e7f); /* steps of 1/256 under the ulp of 4e6 */
+    sr_framebuffer_clear(&fb, NULL, 1.0f);
+    T_EQ_INT(sr_draw_shell(&fb, &cam, &sd, &st), SR_OK);
+    T_CHECK(st.samples > 0);
+    sr_framebuffer_free(&fb);
+    sr_framebuffer_free(&ref);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -1505,5 +1548,6 @@ int main(int argc, char **argv)
     test_font();
     test_wire_density();
     test_terrain_colors();
+    test_march_ends();
     return T_END();
 }
