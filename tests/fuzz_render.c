@@ -14,9 +14,10 @@
    1/256 of their box. Every call must return one of the documented codes; after an error (not
    SR_CANCELLED) the framebuffer's colour and depth are bit for bit what they were; no depth is
    ever NaN; with small (finite) numbers no colour is NaN either; every allocation is freed
-   (counted), and at most 64 MB are held. A broken rule calls abort(), which the fuzzer reports. */
+   (counted). A broken rule calls abort(), which the fuzzer reports. */
 #define SR_IMPLEMENTATION
 #include "render.h"
+#include "failalloc.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,33 +56,8 @@ static float fz_unit(fz_in *in) { return (float)fz_byte(in) / 255.0f; }
 
 static void fz_check(int ok) { if (!ok) abort(); }
 
-/* ---- a counting allocator that fails the k-th call and holds at most 64 MB ------------------ */
-
-typedef struct fz_alloc { size_t live; long blocks, calls, fail_at; } fz_alloc;
-
-static void *fz_malloc(void *user, size_t n)
-{
-    fz_alloc *f = (fz_alloc *)user;
-    size_t *p;
-    if (++f->calls == f->fail_at || n > ((size_t)64 << 20) - f->live) return NULL;
-    p = (size_t *)malloc(n + sizeof(size_t) * 2);
-    if (!p) return NULL;
-    p[0] = n;
-    f->live += n;
-    f->blocks++;
-    return p + 2;
-}
-
-static void fz_free(void *user, void *q)
-{
-    fz_alloc *f = (fz_alloc *)user;
-    size_t *p;
-    if (!q) return;
-    p = (size_t *)q - 2;
-    f->live -= p[0];
-    f->blocks--;
-    free(p);
-}
+/* tests/failalloc.h: the allocator that fails the fail_at-th call and counts the live blocks (the
+   inputs' caps keep every allocation small: a 16 x 16 framebuffer, 32 triangles) */
 
 typedef struct fz_prog { long calls, cancel_at; } fz_prog;
 
@@ -151,6 +127,22 @@ static void fz_lights(fz_in *in, fz_scene *s)
         fz_floats(in, l->diffuse, 3);
         fz_floats(in, l->specular, 3);
     }
+}
+
+/* a draw's lights and material */
+static void fz_lighting(fz_in *in, fz_scene *s, const sr_light **lights, int *count, sr_material *m)
+{
+    fz_lights(in, s);
+    *lights = s->lights;
+    *count = s->light_count;
+    fz_material(in, m);
+}
+
+/* the shell marchers' stats are counts within the frame */
+static sr_result fz_stats(sr_result r, const sr_shell_stats *st, const sr_framebuffer *fb)
+{
+    fz_check(st->covered >= 0 && st->covered <= (long)fb->width * fb->height && st->samples >= 0);
+    return r;
 }
 
 /* an image of 1..6 x 1..6 texels with `channels` channels (values in [0, 1], or signed for normals) */
@@ -235,9 +227,7 @@ static sr_result fz_draw_mesh(fz_in *in, fz_scene *s, sr_framebuffer *fb, const 
     d.no_depth_write = (int)((f >> 5) & 1);
     d.wireframe = (int)((f >> 6) & 1);
     if (d.wireframe) { d.wire_width = fz_float(in); fz_floats(in, d.wire_color, 3); }
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
     if (nv <= 32 && (f & 128)) { /* sr_compute_vertex_normals on the same mesh */
         sr_result r = sr_compute_vertex_normals(s->pos, nv, s->idx, nt, s->nrm);
         fz_check(r == SR_OK || r == SR_ERR_INVALID_ARGUMENT);
@@ -266,9 +256,7 @@ static sr_result fz_draw_relief(fz_in *in, fz_scene *s, sr_framebuffer *fb, cons
     d.shadow_search = (int)((f >> 3) & 1);
     if (f & 16) { d.shadow_bias = fz_float(in); d.shadow_light = fz_float(in); }
     if (f & 32) { d.curvature_u = fz_float(in); d.curvature_v = fz_float(in); }
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
     fz_floats(in, o, 3);
     fz_floats(in, dir, 3);
     fz_floats(in, L, 3);
@@ -297,9 +285,7 @@ static sr_result fz_draw_terrain(fz_in *in, fz_scene *s, sr_framebuffer *fb, con
         for (i = 0; i < 3 * d.width * d.height; i++) s->gcol[i] = fz_unit(in);
         d.colors = s->gcol;
     }
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
     return sr_draw_terrain(fb, cam, &d);
 }
 
@@ -325,9 +311,7 @@ static sr_result fz_draw_volume(fz_in *in, fz_scene *s, sr_framebuffer *fb, cons
     if (f & 16) d.step = diag * (float)(1 + fz_byte(in)) / 256.0f;
     if (f & 32) d.shadow_step = diag * (float)(1 + fz_byte(in)) / 256.0f;
     if (f & 64) { d.depth_threshold = fz_unit(in); d.termination = fz_unit(in); }
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
     return sr_draw_volume(fb, cam, &d);
 }
 
@@ -345,7 +329,6 @@ static sr_result fz_draw_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, const
     sr_shell_stats st;
     unsigned f = fz_byte(in);
     int i;
-    sr_result r;
     sr_shell_desc_default(&d);
     if (f & 1) {
         d.nx = (int)(fz_byte(in) % 6); d.ny = (int)(fz_byte(in) % 6);
@@ -362,12 +345,8 @@ static sr_result fz_draw_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, const
     fz_floats(in, d.ground_rgb, 3);
     if (f & 2) { d.termination = fz_unit(in); d.depth_threshold = fz_unit(in); }
     if (f & 4) { d.progress = fz_progress; d.progress_user = g; }
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
-    r = sr_draw_shell(fb, cam, &d, &st);
-    fz_check(st.covered >= 0 && st.covered <= (long)fb->width * fb->height && st.samples >= 0);
-    return r;
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
+    return fz_stats(sr_draw_shell(fb, cam, &d, &st), &st, fb);
 }
 
 static sr_result fz_draw_mesh_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, const sr_camera *cam, fz_prog *g,
@@ -377,7 +356,6 @@ static sr_result fz_draw_mesh_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, 
     sr_shell_stats st;
     unsigned f;
     size_t nv, nt;
-    sr_result r;
     sr_mesh_shell_desc_default(&d);
     nv = fz_mesh(in, s, &nt);
     fz_floats(in, s->nrm, 3 * nv);
@@ -392,12 +370,8 @@ static sr_result fz_draw_mesh_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, 
     if (f & 2) { d.termination = fz_unit(in); d.depth_threshold = fz_unit(in); }
     if (f & 4) { d.progress = fz_progress; d.progress_user = g; }
     d.allocator = a;
-    fz_lights(in, s);
-    d.lights = s->lights; d.light_count = s->light_count;
-    fz_material(in, &d.material);
-    r = sr_draw_mesh_shell(fb, cam, &d, &st);
-    fz_check(st.covered >= 0 && st.covered <= (long)fb->width * fb->height && st.samples >= 0);
-    return r;
+    fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
+    return fz_stats(sr_draw_mesh_shell(fb, cam, &d, &st), &st, fb);
 }
 
 /* text, a contact sheet and the PNG encoder on the framebuffer's pixels */
@@ -440,27 +414,17 @@ static void fz_images(fz_in *in, const sr_framebuffer *fb, const sr_allocator *a
     }
 }
 
-/* FNV-1a of the colour and depth arrays */
-static uint64_t fz_digest(const sr_framebuffer *fb)
-{
-    uint64_t h = 1469598103934665603ull;
-    size_t i, n = (size_t)fb->width * (size_t)fb->height;
-    const unsigned char *c = (const unsigned char *)fb->color, *z = (const unsigned char *)fb->depth;
-    for (i = 0; i < 16 * n; i++) h = (h ^ c[i]) * 1099511628211ull;
-    for (i = 0; i < 4 * n; i++) h = (h ^ z[i]) * 1099511628211ull;
-    return h;
-}
-
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fz_in in;
-    fz_alloc fa;
+    fail_alloc fa;
     fz_prog g;
     sr_allocator a;
     sr_framebuffer fb;
     sr_camera cam;
     static fz_scene s; /* large; zeroed per input */
+    static float before[5 * 16 * 16]; /* the colour and depth before a draw */
     unsigned head, flags;
     int W, H, entry, draws, k;
     size_t i, n;
@@ -475,16 +439,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fa.fail_at = (long)fz_byte(&in);
     memset(&g, 0, sizeof g);
     g.cancel_at = (long)(fz_byte(&in) % 8);
-    a.alloc = fz_malloc; a.free = fz_free; a.user = &fa;
+    a.alloc = fa_alloc; a.free = fa_free; a.user = &fa;
     memset(&s, 0, sizeof s);
     r = sr_framebuffer_create(&fb, W, H, &a);
     fz_check(r == SR_OK || r == SR_ERR_OUT_OF_MEMORY);
-    if (r != SR_OK) { fz_check(fa.blocks == 0); return 0; }
+    if (r != SR_OK) { fz_check(fa.live == 0); return 0; }
     flags = fz_byte(&in);
     fz_camera(&in, &cam, flags);
     draws = 1 + (int)((flags >> 4) & 1); /* a second draw over the first: depth tests against it */
     for (k = 0; k < draws; k++) {
-        uint64_t before = fz_digest(&fb);
+        n = (size_t)W * (size_t)H;
+        memcpy(before, fb.color, 4 * n * sizeof(float));
+        memcpy(before + 4 * n, fb.depth, n * sizeof(float));
         switch (entry) {
         case 0: case 7: r = fz_draw_mesh(&in, &s, &fb, &cam); break;
         case 1: r = fz_draw_relief(&in, &s, &fb, &cam); break;
@@ -495,8 +461,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         default: r = fz_draw_mesh(&in, &s, &fb, &cam); fz_images(&in, &fb, &a); break;
         }
         fz_check(fz_known(r));
-        if (r != SR_OK && r != SR_CANCELLED) fz_check(fz_digest(&fb) == before); /* errors draw nothing */
-        n = (size_t)W * (size_t)H;
+        if (r != SR_OK && r != SR_CANCELLED) /* errors draw nothing */
+            fz_check(memcmp(before, fb.color, 4 * n * sizeof(float)) == 0 && memcmp(before + 4 * n, fb.depth, n * sizeof(float)) == 0);
         for (i = 0; i < n; i++) {
             fz_check(fb.depth[i] == fb.depth[i]);                    /* no NaN depth */
             if (!in.raw) fz_check(fb.color[4 * i] == fb.color[4 * i] && fb.color[4 * i + 1] == fb.color[4 * i + 1] &&
@@ -504,6 +470,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     sr_framebuffer_free(&fb);
-    fz_check(fa.blocks == 0 && fa.live == 0);
+    fz_check(fa.live == 0);
     return 0;
 }

@@ -16,8 +16,8 @@
 #   smooth shading (the default) vs --shading flat on a terrain whose quads are ~6 px wide: the
 #   mean squared difference between horizontally adjacent terrain pixels is less than half the
 #   flat render's (flat quads are blocks with steps at their edges; smooth ones ramp across;
-#   pixels read back with python3, skipped without).
-# The binary is built here with make (with the sanitizer flags of `make sanitize` when
+#   pixels read back by test_render --png-msd, with render.h's PNG reader).
+# The binaries are built here with make (with the sanitizer flags of `make sanitize` when
 # TEST_SANITIZE=1; the sizes are small).
 B="$1"
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -32,12 +32,12 @@ LC_ALL=C; export LC_ALL
 
 if [ "${TEST_SANITIZE:-0}" = 1 ]; then
   make -s -C "$top" --no-print-directory B="$B" OPT="-O1 -g" \
-    XFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" "$B/terrain" >&2
+    XFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" "$B/terrain" "$B/test_render" >&2
 else
-  make -s -C "$top" --no-print-directory B="$B" "$B/terrain" >&2
+  make -s -C "$top" --no-print-directory B="$B" "$B/terrain" "$B/test_render" >&2
 fi
-if [ $? -ne 0 ] || [ ! -x "$B/terrain" ]; then
-  echo "FAIL $B/terrain could not be built (make $B/terrain)"
+if [ $? -ne 0 ] || [ ! -x "$B/terrain" ] || [ ! -x "$B/test_render" ]; then
+  echo "FAIL $B/terrain or $B/test_render could not be built (make $B/terrain $B/test_render)"
   echo "TESTCOUNT terrain_cli passed=0 failed=1 skipped=0"
   exit 1
 fi
@@ -145,51 +145,16 @@ check "33 x 33 points, 2048 triangles at 2 levels without a split ($nv, $nt)" te
 # ---- smooth vs flat shading ------------------------------------------------------------------------
 # msd PNG: the mean squared difference (0..255 units, summed over RGB) between horizontally adjacent
 # pixels that both differ from the sky (the corner pixel), and the number of such pairs
-msd() {
-  python3 - "$1" <<'PY'
-import sys, zlib, struct
-d = open(sys.argv[1], 'rb').read()
-assert d[:8] == b'\x89PNG\r\n\x1a\n'
-pos, idat, w = 8, b'', 0
-while pos < len(d):
-    n, t = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]; pos += 12 + n
-    if t == b'IHDR': w, h, depth, ctype = struct.unpack('>IIBB', body[:10])
-    if t == b'IDAT': idat += body
-bpp = {2: 3, 6: 4}[ctype]; raw = zlib.decompress(idat); stride = w * bpp
-rows, prev, i = [], bytearray(stride), 0
-for y in range(h):
-    f = raw[i]; line = bytearray(raw[i + 1:i + 1 + stride]); i += 1 + stride
-    for x in range(stride):
-        a = line[x - bpp] if x >= bpp else 0; b = prev[x]; c = prev[x - bpp] if x >= bpp else 0
-        if f == 1: line[x] = (line[x] + a) & 255
-        elif f == 2: line[x] = (line[x] + b) & 255
-        elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
-        elif f == 4:
-            p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-            line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-    rows.append(line); prev = line
-bg = rows[0][0:3]
-def sky(r, x): return sum(abs(r[x * bpp + k] - bg[k]) for k in range(3)) <= 24
-s, n = 0, 0
-for r in rows:
-    for x in range(w - 1):
-        if sky(r, x) or sky(r, x + 1): continue
-        s += sum((r[x * bpp + k] - r[(x + 1) * bpp + k]) ** 2 for k in range(3)); n += 1
-print(s // max(n, 1), n)
-PY
-}
-if command -v python3 >/dev/null 2>&1; then
-  look="--preset mountain5 --levels 3 --eps 0 --size 400x300"
-  run smooth "$TR" $look -o "$tmp/smooth.png"
-  run flat "$TR" $look -o "$tmp/flat.png" --shading flat
-  check "smooth and flat renders exit 0 ($(cat "$tmp/smooth.err" "$tmp/flat.err"))" test "$rc" -eq 0 -a -s "$tmp/smooth.png"
-  set -- $(msd "$tmp/smooth.png") $(msd "$tmp/flat.png")
-  echo "terrain 400x300, 64 x 64 quads: adjacent-pixel mean squared difference smooth $1 ($2 pairs), flat $3 ($4 pairs)"
-  check "both renders show the terrain (>= 20000 pixel pairs: $2, $4)" test "$2" -ge 20000 -a "$4" -ge 20000
-  check "smooth shading: adjacent pixels differ less than half as much as flat's blocks ($1 vs $3)" test $(($1 * 2)) -lt "$3"
-else
-  echo "SKIP terrain smooth-shading check: python3 not installed"; skip=$((skip + 3))
-fi
+msd() { "$bin/test_render" --png-msd "$1"; }
+look="--preset mountain5 --levels 3 --eps 0 --size 400x300"
+run smooth "$TR" $look -o "$tmp/smooth.png"
+rc_smooth=$rc
+run flat "$TR" $look -o "$tmp/flat.png" --shading flat
+check "smooth and flat renders exit 0 ($(cat "$tmp/smooth.err" "$tmp/flat.err"))" test "$rc_smooth" -eq 0 -a "$rc" -eq 0
+set -- $(msd "$tmp/smooth.png") $(msd "$tmp/flat.png")
+echo "terrain 400x300, 64 x 64 quads: adjacent-pixel mean squared difference smooth $1 ($2 pairs), flat $3 ($4 pairs)"
+check "both renders show the terrain (>= 20000 pixel pairs: $2, $4)" test "${2:-0}" -ge 20000 -a "${4:-0}" -ge 20000
+check "smooth shading: adjacent pixels differ less than half as much as flat's blocks ($1 vs $3)" test $((${1:-0} * 2)) -lt "${3:-0}"
 
 echo "TESTCOUNT terrain_cli passed=$pass failed=$fail skipped=$skip"
 [ $fail -eq 0 ]

@@ -1,6 +1,7 @@
 /* test_render.c - tests for examples/render.h: coverage (watertightness, fill rule), near-plane
    clipping, depth, perspective-correct interpolation, volume vs mesh silhouettes, relief mapping
-   against analytic intersections, PNG round trip through independent decoders, determinism. */
+   against analytic intersections, PNG round trip through independent decoders, determinism.
+   test_render --png-msd FILE prints a PNG's adjacent-pixel statistic for tests/terrain_cli.sh. */
 #define _POSIX_C_SOURCE 200809L
 #define SR_IMPLEMENTATION
 #include "render.h"
@@ -1524,8 +1525,44 @@ static void test_march_ends(void)
     sr_framebuffer_free(&ref);
 }
 
+
+/* ---- test_render --png-msd FILE (for tests/terrain_cli.sh): the mean squared difference (8-bit
+   units, summed over RGB) between horizontally adjacent pixels that both differ from the corner
+   pixel (the background) by more than 24, and the number of such pairs ------------------------- */
+
+static int png_msd(const char *path)
+{
+    sr_picture pic;
+    long long sum = 0, pairs = 0;
+    int x, y, k, ch;
+    sr_result r = sr_read_image(path, NULL, &pic);
+    if (r != SR_OK || !pic.samples || pic.channels < 3) {
+        fprintf(stderr, "test_render --png-msd %s: %s\n", path, r != SR_OK ? sr_result_string(r) : "not an RGB image");
+        if (r == SR_OK) sr_picture_free(&pic);
+        return 1;
+    }
+    ch = pic.channels;
+    for (y = 0; y < pic.height; y++)
+        for (x = 0; x + 1 < pic.width; x++) {
+            const uint16_t *a = pic.samples + ((size_t)y * (size_t)pic.width + (size_t)x) * (size_t)ch, *b = a + ch;
+            int da = 0, db = 0, d2 = 0;
+            for (k = 0; k < 3; k++) {
+                da += abs((int)a[k] - (int)pic.samples[k]);
+                db += abs((int)b[k] - (int)pic.samples[k]);
+                d2 += ((int)a[k] - (int)b[k]) * ((int)a[k] - (int)b[k]);
+            }
+            if (da <= 24 || db <= 24) continue;
+            sum += d2;
+            pairs++;
+        }
+    printf("%lld %lld\n", pairs ? sum / pairs : 0, pairs);
+    sr_picture_free(&pic);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 3 && strcmp(argv[1], "--png-msd") == 0) return png_msd(argv[2]);
     T_BEGIN(argc, argv);
     g_small = getenv("TEST_SANITIZE") != NULL;
     test_closed_coverage();
