@@ -7,7 +7,9 @@
    SD4_ERR_NOT_FINITE; a divergent terrain (mountain6, w 0.5) is refused with SD4_ERR_TOO_LARGE
    and max_triangles is the exact count; butterfly's search and stencil steps (the SD4_COUNT_OPS
    hook) on fans of 20k / 40k / 80k triangles grow at most 6x; the ZSS stencils reproduce
-   quadratics at the spoke midpoints of regular planar fans of valence 3..200 within 1e-6. */
+   quadratics at the spoke midpoints of regular planar fans of valence 3..200 within 1e-6; every
+   new point of a flipped icosphere with valences 3..12 matches the DLG / ZSS formulas written out
+   here within 1e-6. */
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
@@ -757,6 +759,199 @@ static void test_butterfly_stencil(void)
     printf("butterfly ZSS stencils, K = 3..200: spoke points within %.2g of the quadratic's midpoints (bound 1e-6)\n", worst);
 }
 
+/* ---- butterfly against the formulas, written out independently --------------------------------
+   A closed mesh with valences 3..12: an icosahedron split twice (162 vertices, valences 5 and 6)
+   on the unit sphere with noise, then 150 random edge flips (valences kept in 3..12, no repeated
+   edge, half of them raising high valences), leaving every valence 3..12. Each new point of one butterfly level is recomputed in double from the papers' rules,
+   with each vertex's neighbour ring built here by walking its triangles:
+     both ends of valence 6: 1/2 (a + b) + 1/8 (c + d) - 1/16 (the four wings)   (DLG 1990, w = 1/16)
+     one end v of valence K != 6: 3/4 v + sum_j s_j e_j, e_0 the other end, j counted around v
+       (s_j is symmetric in j and K - j, so the direction does not matter),
+       s_j = (1/4 + cos(2 pi j / K) + 1/2 cos(4 pi j / K)) / K for K >= 5, (5/12, -1/12, -1/12) for
+       K = 3, (3/8, 0, -1/8, 0) for K = 4                                            (ZSS 1996)
+     both ends of valence != 6: the average of the two.
+   Positions are within 2 of the origin and the weights' magnitudes sum to at most 2.6, so the
+   float output is within 2.6 * 2 * 2^-24 + 2^-23 < 5e-7 of the double value; 1e-6 is the bound,
+   while a wrong weight of 1/48 moves a point by about 1e-2. Planted, one at a time in subdiv4.h:
+   K = 3's -1/12 -> -1/8; K = 4's -1/8 -> -1/16; the K >= 5 term 1/2 cos(4 pi j/K) -> cos; the
+   average of two extraordinary ends dropped (p *= 0.5 removed); valence 7 taken as the regular
+   one (!= 6 -> != 7); the regular butterfly's 2w on d -> 2w + 1/64: each fails here, with 15 to
+   432 of the 480 points off. The regular-fan test above misses the dropped average and the 1/64
+   (the plane tests catch those two, with one point each). */
+static uint32_t ring_next(const uint32_t *tri, size_t nt, uint32_t v, uint32_t x)
+{
+    size_t t;
+    int k;
+    for (t = 0; t < nt; t++)
+        for (k = 0; k < 3; k++)
+            if (tri[3 * t + k] == v && tri[3 * t + (k + 1) % 3] == x) return tri[3 * t + (k + 2) % 3];
+    return UINT32_MAX;
+}
+
+static int valence_of(const uint32_t *tri, size_t nt, uint32_t v)
+{
+    size_t t;
+    int k, n = 0;
+    for (t = 0; t < nt; t++)
+        for (k = 0; k < 3; k++) n += tri[3 * t + k] == v;
+    return n;
+}
+
+static int has_edge(const uint32_t *tri, size_t nt, uint32_t a, uint32_t b)
+{
+    return ring_next(tri, nt, a, b) != UINT32_MAX || ring_next(tri, nt, b, a) != UINT32_MAX;
+}
+
+/* the ZSS stencil of v (valence K) for the edge to b, added to p with weight f */
+static void zss_point(const float *pos, const uint32_t *tri, size_t nt, uint32_t v, uint32_t b, double f, double *p)
+{
+    int K = valence_of(tri, nt, v), j, k;
+    uint32_t e = b;
+    double sum = 0.0;
+    for (j = 0; j < K; j++) {
+        double s, x = 2.0 * 3.14159265358979323846 * j / K;
+        if (K == 3) s = j == 0 ? 5.0 / 12.0 : -1.0 / 12.0;
+        else if (K == 4) s = j == 0 ? 3.0 / 8.0 : j == 2 ? -1.0 / 8.0 : 0.0;
+        else s = (0.25 + cos(x) + 0.5 * cos(2.0 * x)) / K;
+        for (k = 0; k < 3; k++) p[k] += f * s * pos[3 * e + k];
+        sum += s;
+        e = ring_next(tri, nt, v, e); /* the next neighbour around v */
+    }
+    for (k = 0; k < 3; k++) p[k] += f * (1.0 - sum) * pos[3 * v + k];
+}
+
+/* the vertex beyond edge (x, y) from the triangle (x, y, z): the third vertex of (y, x, ?) */
+static uint32_t wing(const uint32_t *tri, size_t nt, uint32_t x, uint32_t y) { return ring_next(tri, nt, y, x); }
+
+static void test_butterfly_formula(void)
+{
+    enum { NV = 162, NT = 320, FLIPS = 150 };
+    float pos[3 * NV];
+    uint32_t tri[3 * NT * 4], *t2;
+    size_t nt = 20, nv = 12, i, flips = 0, cases[3] = {0, 0, 0};
+    int lvl, k, kmax, missing, hist[13] = {0};
+    double worst = 0.0;
+    sd4_mesh m;
+    static const uint32_t ico[60] = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2,
+                                     10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11,
+                                     6, 2, 10, 8, 6, 7, 9, 8, 1};
+    const double g = 1.6180339887498949;
+    const double iv[36] = {-1, g, 0, 1, g, 0, -1, -g, 0, 1, -g, 0, 0, -1, g, 0, 1, g,
+                           0, -1, -g, 0, 1, -g, g, 0, -1, g, 0, 1, -g, 0, -1, -g, 0, 1};
+    for (i = 0; i < 36; i++) pos[i] = (float)iv[i];
+    memcpy(tri, ico, sizeof ico);
+    for (lvl = 0; lvl < 2; lvl++) { /* midpoint 4-split, new vertices shared through a search */
+        size_t t, n0 = nt;
+        t2 = (uint32_t *)malloc(sizeof(uint32_t) * 12 * nt);
+        for (t = 0; t < n0; t++) {
+            uint32_t c[3], mid[3];
+            for (k = 0; k < 3; k++) c[k] = tri[3 * t + k];
+            for (k = 0; k < 3; k++) {
+                uint32_t a = c[k], b = c[(k + 1) % 3], v;
+                for (v = 12; v < nv; v++) /* an existing midpoint of (a, b)? */
+                    if (fabsf(pos[3 * v] - 0.5f * (pos[3 * a] + pos[3 * b])) + fabsf(pos[3 * v + 1] - 0.5f * (pos[3 * a + 1] + pos[3 * b + 1])) +
+                            fabsf(pos[3 * v + 2] - 0.5f * (pos[3 * a + 2] + pos[3 * b + 2])) == 0.0f)
+                        break;
+                if (v == nv) {
+                    int q;
+                    for (q = 0; q < 3; q++) pos[3 * nv + q] = 0.5f * (pos[3 * a + q] + pos[3 * b + q]);
+                    nv++;
+                }
+                mid[k] = v;
+            }
+            {
+                uint32_t f[12] = {c[0], mid[0], mid[2], c[1], mid[1], mid[0], c[2], mid[2], mid[1], mid[0], mid[1], mid[2]};
+                memcpy(t2 + 12 * t, f, sizeof f);
+            }
+        }
+        nt *= 4;
+        memcpy(tri, t2, sizeof(uint32_t) * 3 * nt);
+        free(t2);
+    }
+    T_EQ_SIZE(nv, NV);
+    T_EQ_SIZE(nt, NT);
+    for (i = 0; i < nv; i++) { /* onto the unit sphere, with noise */
+        double x = pos[3 * i], y = pos[3 * i + 1], z = pos[3 * i + 2], r = sqrt(x * x + y * y + z * z);
+        double s = (1.0 + 0.08 * (unit_random(i, 11) - 0.5)) / r;
+        pos[3 * i] = (float)(x * s), pos[3 * i + 1] = (float)(y * s), pos[3 * i + 2] = (float)(z * s);
+    }
+    for (i = 0; i < 4000 && flips < FLIPS; i++) { /* random flips: triangle (a, b, c) and (b, a, d) -> (a, d, c), (d, b, c) */
+        size_t t = (size_t)(unit_random(i, 12) * (double)nt) % nt, u;
+        int e = (int)(unit_random(i, 13) * 3.0) % 3;
+        uint32_t a = tri[3 * t + e], b = tri[3 * t + (e + 1) % 3], c = tri[3 * t + (e + 2) % 3], d = wing(tri, nt, a, b);
+        if (d == UINT32_MAX || d == c || has_edge(tri, nt, c, d)) continue;
+        if (valence_of(tri, nt, a) <= 3 || valence_of(tri, nt, b) <= 3 || valence_of(tri, nt, c) >= 12 ||
+            valence_of(tri, nt, d) >= 12)
+            continue;
+        if (valence_of(tri, nt, c) + valence_of(tri, nt, d) < valence_of(tri, nt, a) + valence_of(tri, nt, b) - 1 &&
+            (i & 1)) /* half the flips make high valences higher */
+            continue;
+        for (u = 0; u < nt; u++)
+            if (tri[3 * u] == b && tri[3 * u + 1] == a && tri[3 * u + 2] == d) break;
+        if (u == nt)
+            for (u = 0; u < nt; u++)
+                if ((tri[3 * u] == a && tri[3 * u + 1] == d && tri[3 * u + 2] == b) ||
+                    (tri[3 * u] == d && tri[3 * u + 1] == b && tri[3 * u + 2] == a))
+                    break;
+        if (u == nt) continue;
+        tri[3 * t] = a, tri[3 * t + 1] = d, tri[3 * t + 2] = c;
+        tri[3 * u] = d, tri[3 * u + 1] = b, tri[3 * u + 2] = c;
+        flips++;
+    }
+    for (i = 0; i < nv; i++) hist[valence_of(tri, nt, (uint32_t)i)]++;
+    for (k = 3, kmax = 0, missing = 0; k <= 12; k++) {
+        if (hist[k]) kmax = k;
+        missing += hist[k] == 0;
+    }
+    T_CHECK_MSG(missing == 0, "valences 3..12 present after %zu flips (%d missing)", flips, missing);
+    T_EQ_INT(sd4_butterfly(pos, nv, tri, nt, 1, 1.0 / 16.0, NULL, &m), SD4_OK);
+    T_EQ_SIZE(m.vertex_count, nv + nt * 3 / 2);
+    for (i = nv; i < m.vertex_count; i++) {
+        uint32_t ends[2], a, b, c, d;
+        int ne = 0, Ka, Kb, q;
+        size_t t;
+        double p[3] = {0, 0, 0}, err = 0.0;
+        for (t = 0; t < m.triangle_count && ne < 2; t++) /* the edge's ends: the old vertices of its corner triangles */
+            for (k = 0; k < 3; k++)
+                if (m.indices[3 * t + k] == i) {
+                    for (q = 0; q < 3; q++) {
+                        uint32_t o = m.indices[3 * t + q];
+                        if (o < nv && ne < 2 && (ne == 0 || ends[0] != o)) ends[ne++] = o;
+                    }
+                }
+        if (!T_CHECK(ne == 2)) continue;
+        a = ends[0], b = ends[1];
+        if (ring_next(tri, nt, a, b) == UINT32_MAX) a = ends[1], b = ends[0]; /* (a, b, c) a triangle */
+        c = ring_next(tri, nt, a, b);
+        d = ring_next(tri, nt, b, a);
+        Ka = valence_of(tri, nt, a), Kb = valence_of(tri, nt, b);
+        if (Ka == 6 && Kb == 6) {
+            uint32_t w4[4];
+            w4[0] = wing(tri, nt, b, c), w4[1] = wing(tri, nt, c, a), w4[2] = wing(tri, nt, a, d), w4[3] = wing(tri, nt, d, b);
+            for (q = 0; q < 3; q++) {
+                p[q] = 0.5 * ((double)pos[3 * a + q] + pos[3 * b + q]) + 0.125 * ((double)pos[3 * c + q] + pos[3 * d + q]);
+                for (k = 0; k < 4; k++) p[q] -= pos[3 * w4[k] + q] / 16.0;
+            }
+            cases[0]++;
+        } else if (Ka != 6 && Kb != 6) {
+            zss_point(pos, tri, nt, a, b, 0.5, p);
+            zss_point(pos, tri, nt, b, a, 0.5, p);
+            cases[2]++;
+        } else {
+            if (Ka != 6) zss_point(pos, tri, nt, a, b, 1.0, p);
+            else zss_point(pos, tri, nt, b, a, 1.0, p);
+            cases[1]++;
+        }
+        for (q = 0; q < 3; q++) err = fmax(err, fabs(m.positions[3 * i + q] - p[q]));
+        worst = fmax(worst, err);
+        T_CHECK_MSG(err <= 1e-6, "edge (%u, %u), valences %d and %d: off the formula by %.3g", a, b, Ka, Kb, err);
+    }
+    T_CHECK(cases[0] >= 10 && cases[1] >= 100 && cases[2] >= 100);
+    printf("butterfly formulas on a flipped icosphere (%zu flips, valences 3..%d): %zu regular, %zu one-sided, %zu "
+           "two-sided edges, worst %.2g (bound 1e-6)\n", flips, kmax, cases[0], cases[1], cases[2], worst);
+    sd4_free_mesh(&m);
+}
+
 int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
@@ -764,6 +959,7 @@ int main(int argc, char **argv)
     test_terrain_bounded();
     test_butterfly_valence();
     test_butterfly_stencil();
+    test_butterfly_formula();
     test_curves();
     test_basis();
     test_grids();
