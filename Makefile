@@ -1,5 +1,6 @@
 # Detailed-surface graphics headers: build, demo, tests, benches.
-#   make demo      build the examples and render the default scenes into out/
+#   make demo      build the examples and render the default scenes into out/ (as root: glmark2-data first)
+#   make gallery   make demo, then its pictures made small into docs/ (the README's gallery)
 #   make test      install missing test dependencies (as root), build and run every test
 #   make sanitize  the same tests built with AddressSanitizer + UndefinedBehaviorSanitizer
 #   make fuzz      clang libFuzzer targets, each run for FUZZ_TIME seconds (default 60)
@@ -67,7 +68,7 @@ TOOLS      = $(B)/gen_sphere
 # EXAMPLES, C_TESTS, REF_TESTS, BENCHES and TOOLS and may add rules.
 include $(sort $(wildcard mk/*.mk))
 
-.PHONY: all demo test test-build sanitize fuzz fuzz-build bench bench-build clean
+.PHONY: all demo gallery test test-build sanitize fuzz fuzz-build bench bench-build clean
 .DELETE_ON_ERROR:
 
 all: $(EXAMPLES) $(TOOLS) $(C_TESTS) $(FUZZ_PLAIN) $(REF_TESTS) $(BENCHES)
@@ -79,9 +80,25 @@ $(EXAMPLES): $(B)/%: examples/%.c $(ALLDEPS) | $(B)
 $(B)/gen_sphere: bench/gen_sphere.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
 
+# As root, glmark2-data (the bunny and the asteroid height map) is installed first when missing, as
+# `make test` installs its packages; otherwise the bunny scenes are skipped and named.
 demo: $(EXAMPLES) $(TOOLS)
+	@if [ "$$(id -u)" = 0 ] && command -v dpkg-query >/dev/null 2>&1 && \
+	    ! dpkg-query -W -f='$${Status}' glmark2-data 2>/dev/null | grep -q 'install ok installed'; then \
+	  echo "demo: installing glmark2-data" >&2; \
+	  DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends glmark2-data >/dev/null 2>&1 || \
+	  { apt-get update -q >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends glmark2-data >&2; } || \
+	  echo "demo: could not install glmark2-data: the bunny scenes are skipped" >&2; \
+	fi
 	@mkdir -p $(OUT)
 	@sh examples/demo.sh $(B) $(OUT)
+
+# The README's gallery: `make demo`, then each of its pictures made small (docs/thumbnail.c) as docs/NAME.png.
+gallery: demo $(B)/thumbnail
+	@sh docs/gallery.sh $(B) $(OUT)
+
+$(B)/thumbnail: docs/thumbnail.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
 
 # ---- tests ----------------------------------------------------------------------------------------
 $(B)/test_%: tests/test_%.c $(ALLDEPS) | $(B)
