@@ -10,7 +10,8 @@
 #   - every ```c block is a translation unit that compiles alone with the headers, as C99 and as
 #     C++11 (when a C++ compiler is present), -Wall -Wextra -pedantic -Werror: the usage snippets
 #     are the headers' real API;
-#   - it names every header of the repository (the library headers and examples/*.h).
+#   - it names every header of the repository (the library headers and examples/*.h), and each
+#     has a snippet that includes it.
 B="$1"
 top=$(cd "$(dirname "$0")/.." && pwd)
 readme="$top/README.md"
@@ -87,6 +88,9 @@ for s in "$work"/snippet*.c; do
   fi
 done
 echo "readme_check: $n_snip snippets compiled"
+for h in $(cd "$top" && ls *.h examples/*.h 2>/dev/null); do
+  check "README has a snippet that includes $(basename "$h")" sh -c "cat '$work'/snippet*.c | grep -q -F '#include \"$(basename "$h")\"'"
+done
 
 echo "TESTCOUNT readme_check passed=$pass failed=$fail skipped=$skip"
 [ $fail -eq 0 ]
