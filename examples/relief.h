@@ -49,7 +49,8 @@
    ERRORS
      Functions return rl_result (RL_OK = 0); rl_result_string names it. NULL pointers and bad
      options give RL_ERR_INVALID_ARGUMENT; an empty map RL_ERR_EMPTY; a map of more than 2^26
-     texels or a side above 16384 RL_ERR_TOO_LARGE; a NaN or infinite height RL_ERR_NOT_FINITE;
+     texels or a side above 16384 RL_ERR_TOO_LARGE; a NaN or infinite height RL_ERR_NOT_FINITE (also
+     from rl_synthesize and rl_emboss when finite heights near FLT_MAX overflow the result);
      a sketch without strokes RL_ERR_NO_STROKES; a patch larger than the example
      RL_ERR_PATCH_TOO_LARGE; allocation failure RL_ERR_OUT_OF_MEMORY; a progress callback's
      nonzero return RL_CANCELLED. On any error nothing is allocated and the outputs are zeroed.
@@ -1583,6 +1584,15 @@ static rl_result rl__sketch_features(rl__synth *S, const rl_map *sketch, float *
 }
 
 /* adds emphasis * range * (G(d_white) - G(d_black)), G(d) = exp(-d^2 / (2 w^2)) */
+/* 1 when the n values are finite */
+static int rl__all_finite(const float *x, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (x[i] - x[i] != 0.0f) return 0;
+    return 1;
+}
+
 static rl_result rl__emphasis(const uint8_t *stroke, int w, int h, float amount, float width, const rl_allocator *a, float *out)
 {
     size_t n = (size_t)w * (size_t)h, i;
@@ -1591,10 +1601,11 @@ static rl_result rl__emphasis(const uint8_t *stroke, int w, int h, float amount,
     int pol;
     rl_result r = RL_OK;
     if (!d || !m) { rl__free(a, d); rl__free(a, m); return RL_ERR_OUT_OF_MEMORY; }
-    for (pol = 1; pol <= 2 && r == RL_OK; pol++) {
+    for (pol = 1; pol <= 2 && r == RL_OK && amount != 0.0f; pol++) {
         for (i = 0; i < n; i++) m[i] = stroke[i] == pol;
         r = rl__distance(m, 1, w, h, a, d);
-        for (i = 0; r == RL_OK && i < n; i++) out[i] += (pol == 1 ? amount : -amount) * expf(k * d[i] * d[i]);
+        /* on a stroke (d = 0) the profile is 1 even when a tiny width makes k -infinity */
+        for (i = 0; r == RL_OK && i < n; i++) out[i] += (pol == 1 ? amount : -amount) * (d[i] > 0.0f ? expf(k * d[i] * d[i]) : 1.0f);
     }
     rl__free(a, d);
     rl__free(a, m);
@@ -1741,6 +1752,7 @@ RLDEF rl_result rl_synthesize(const rl_map *example, const rl_map *sketch, const
     if (r == RL_OK) r = rl__fill(&S);                                     /* 3. the rest by best matches */
     if (r == RL_OK && S.o.emphasis > 0.0f)                                /* 4. the strokes' extra relief */
         r = rl__emphasis(S.stroke, S.w, S.h, S.o.emphasis * S.range, S.o.stroke_width, &S.a, S.out);
+    if (r == RL_OK && !rl__all_finite(S.out, n)) r = RL_ERR_NOT_FINITE;       /* heights near FLT_MAX */
     if (r == RL_OK && S.o.seams)
         for (i = 0; i < n; i++) {
             size_t x = i % (size_t)S.w;
@@ -1789,6 +1801,7 @@ RLDEF rl_result rl_emboss(const rl_map *example, const rl_map *sketch, const rl_
         for (x = 0; x < sketch->width; x++)
             out->data[(size_t)y * sketch->width + x] = example->data[(size_t)rl__mirror(y, example->height) * example->width + rl__mirror(x, example->width)];
     r = any ? rl__emphasis(stroke, sketch->width, sketch->height, amount, width, &a, out->data) : RL_ERR_NO_STROKES;
+    if (r == RL_OK && !rl__all_finite(out->data, n)) r = RL_ERR_NOT_FINITE; /* heights near FLT_MAX */
     rl__free(&a, stroke);
     if (r != RL_OK) { rl__free(&a, out->data); out->data = NULL; return r; }
     out->width = sketch->width; out->height = sketch->height;

@@ -578,6 +578,29 @@ static void test_synthesis(void)
         T_EQ_INT(rl_emboss(&example, &sketch, &o, &out), RL_ERR_NOT_FINITE);
         T_CHECK(out.data == NULL);
         make_rock(ex, E);
+        /* issue 21 point 2, found by fuzz_relief: finite input whose result is not finite. A
+           stroke width of 1e-30 squared underflows, so the profile's exponent on a stroke was
+           -inf * 0 = NaN (even with emphasis off); heights of +-3e38 make the range, and with it
+           the emphasis, overflow: RL_ERR_NOT_FINITE instead of RL_OK with NaN/Inf */
+        {
+            rl_synth_options t = rl_synth_default_options();
+            int finite = 1;
+            t.stroke_width = 1e-30f;
+            T_EQ_INT(rl_emboss(&example, &sketch, &t, &out), RL_OK);
+            for (i = 0; i < n && out.data; i++) finite &= isfinite(out.data[i]) != 0;
+            T_CHECK(finite);
+            rl_map_free(&out, NULL);
+            t.emphasis = -1.0f;
+            T_EQ_INT(rl_emboss(&example, &sketch, &t, &out), RL_OK);
+            for (i = 0; i < n && out.data; i++) finite &= isfinite(out.data[i]) != 0;
+            T_CHECK(finite);
+            rl_map_free(&out, NULL);
+            ex[5] = 3e38f;
+            ex[6] = -3e38f;
+            T_EQ_INT(rl_emboss(&example, &sketch, NULL, &out), RL_ERR_NOT_FINITE);
+            T_CHECK(out.data == NULL);
+            make_rock(ex, E);
+        }
     }
     {   /* cancellation at several points, and failing each allocation in turn, on a small case */
         rl_map ex2 = {40, 40, ex}, sk2 = {40, 40, sk};
