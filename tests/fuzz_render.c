@@ -13,8 +13,8 @@
    most 32 vertices and triangles, 6 x 6 maps and grids, 4 x 4 tiles, march steps no finer than
    1/256 of their box. Every call must return one of the documented codes; after an error (not
    SR_CANCELLED) the framebuffer's colour and depth are bit for bit what they were; no depth is
-   ever NaN; with small (finite) numbers no colour is NaN either; every allocation is freed
-   (counted). A broken rule calls abort(), which the fuzzer reports. */
+   ever NaN; with small (finite) numbers no colour is NaN either; the mesh shell takes at most its
+   documented 16384 samples a ray; every allocation is freed (counted). A broken rule calls abort(), which the fuzzer reports. */
 #define SR_IMPLEMENTATION
 #include "render.h"
 #include "failalloc.h"
@@ -354,6 +354,7 @@ static sr_result fz_draw_mesh_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, 
 {
     sr_mesh_shell_desc d;
     sr_shell_stats st;
+    sr_result r;
     unsigned f;
     size_t nv, nt;
     sr_mesh_shell_desc_default(&d);
@@ -371,7 +372,9 @@ static sr_result fz_draw_mesh_shell(fz_in *in, fz_scene *s, sr_framebuffer *fb, 
     if (f & 4) { d.progress = fz_progress; d.progress_user = g; }
     d.allocator = a;
     fz_lighting(in, s, &d.lights, &d.light_count, &d.material);
-    return fz_stats(sr_draw_mesh_shell(fb, cam, &d, &st), &st, fb);
+    r = fz_stats(sr_draw_mesh_shell(fb, cam, &d, &st), &st, fb);
+    fz_check(st.samples <= 16384L * fb->width * fb->height); /* the documented samples a ray */
+    return r;
 }
 
 /* text, a contact sheet and the PNG encoder on the framebuffer's pixels */
