@@ -196,6 +196,9 @@
          DFM_NO_VECTOR_EXTENSIONS  plain C dense kernels instead of GCC/Clang vector types
          DFM_NO_RUNTIME_DISPATCH   never use the AVX / AVX-512 kernels chosen by CPU feature bits
          DFM_NO_AVX512         the AVX kernels at most (same bits either way)
+         DFM_TEST_AMD_PIVOT(s, p), DFM_TEST_AMD_STEP(s, p)  test-only hooks into AMD, called before
+                               each pivot and after each degree update (tests/test_deform_chol.c
+                               audits the degrees through them); undefined: no code
        Run time, dfm_chol_options (zeroed or NULL = defaults; dfm_chol_default_options() resolves):
          ordering       DFM_ORDER_AMD (default), DFM_ORDER_NATURAL, DFM_ORDER_GIVEN (perm below).
          perm           DFM_ORDER_GIVEN: perm[k] = the input row/column eliminated k-th.

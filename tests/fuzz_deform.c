@@ -95,6 +95,9 @@ static FZ_UNUSED void fz_heap_free(void *user, void *q)
     free(p);
 }
 
+/* points a library's allocator struct (alloc, free, user) at the heap */
+#define FZ_HEAP_ALLOCATOR(a, h) ((a).alloc = fz_heap_alloc, (a).free = fz_heap_free, (a).user = (h))
+
 /* progress: done must stay in [0, 1]; the cancel_at-th call (0 = never) cancels */
 typedef struct fz_cancel { long calls, cancel_at; float last; } fz_cancel;
 
@@ -490,9 +493,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fz_cancel c;
     dfm_allocator a;
     unsigned op = fz_begin(&in, data, size, &h, &c);
-    a.alloc = fz_heap_alloc;
-    a.free = fz_heap_free;
-    a.user = &h;
+    FZ_HEAP_ALLOCATOR(a, &h);
     switch (op & 3) {
     case 0: fz_chol(&in, &a, &c); break;
     case 1: fz_laplacian(&in, &a); break;

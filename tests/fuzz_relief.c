@@ -194,9 +194,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fz_cancel c;
     rl_allocator a;
     unsigned op = fz_begin(&in, data, size, &h, &c);
-    a.alloc = fz_heap_alloc;
-    a.free = fz_heap_free;
-    a.user = &h;
+    FZ_HEAP_ALLOCATOR(a, &h);
     switch (op & 3) {
     case 0: fz_synth(&in, &a, &c, 0); break;
     case 1: fz_synth(&in, &a, &c, 1); break;

@@ -387,9 +387,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fz_cancel c;
     tvt_allocator a;
     unsigned op = fz_begin(&in, data, size, &h, &c);
-    a.alloc = fz_heap_alloc;
-    a.free = fz_heap_free;
-    a.user = &h;
+    FZ_HEAP_ALLOCATOR(a, &h);
     switch (op & 3) {
     case 0: fz_grass(&in, &a, &c); break;
     case 1: fz_blades(&in, &a, &c); break;
