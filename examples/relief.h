@@ -385,10 +385,18 @@ RLDEF rl_result rl_normal_map(const float *height, int width, int height_texels,
         const float *row = height + (size_t)y * (size_t)width;
         float *n = out + (size_t)y * (size_t)width * 3;
         for (x = 0; x < width; x++, n += 3) {
-            float hs = k * (row[rl__index(x + d, width, o.wrap)] - row[rl__index(x - d, width, o.wrap)]);
+            const float *east = row + rl__index(x + d, width, o.wrap), *west = row + rl__index(x - d, width, o.wrap);
+            float hs = k * (*east - *west);
             float ht = k * (dn[x] - up[x]);
-            float inv = 1.0f / sqrtf(hs * hs + ht * ht + 1.0f);
-            n[0] = -hs * inv; n[1] = -ht * inv; n[2] = inv;
+            float s2 = hs * hs + ht * ht + 1.0f;
+            if (s2 - s2 == 0.0f) {
+                float inv = 1.0f / sqrtf(s2);
+                n[0] = -hs * inv; n[1] = -ht * inv; n[2] = inv;
+            } else { /* slopes whose squares overflow float (heights near 1e19 and up): in double */
+                double hsd = (double)k * ((double)*east - (double)*west), htd = (double)k * ((double)dn[x] - (double)up[x]);
+                double inv = 1.0 / sqrt(hsd * hsd + htd * htd + 1.0);
+                n[0] = (float)(-hsd * inv); n[1] = (float)(-htd * inv); n[2] = (float)inv;
+            }
         }
     }
     return RL_OK;

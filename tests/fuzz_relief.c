@@ -123,7 +123,7 @@ static void fz_normals_and_skeleton(fz_in *in, const rl_allocator *al)
         for (i = 0; i < n; i++) {
             const float *v = nrm + 3 * i;
             float len = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            fz_check(fz_all_finite_f(v, 3) && fabsf(len - 1.0f) <= 1e-4f && v[2] > 0.0f);
+            fz_check(fz_all_finite_f(v, 3) && fabsf(len - 1.0f) <= 1e-4f && v[2] >= 0.0f); /* z may underflow */
         }
         rl_normal_to_rgb8(nrm, (size_t)n, rgb);
     }

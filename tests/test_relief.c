@@ -105,6 +105,18 @@ static void test_normal_map(void)
             T_CHECK(rgb[0] == 128 && rgb[1] == 128 && rgb[2] == 255);
         }
     }
+    /* issue 21 point 2, found by fuzz_relief: finite heights whose slopes' squares overflow float
+       (a step of 2e25 at strength 1: hs = 2.5e24, hs^2 = inf) gave the normal (-0, 0, 0); it is
+       unit, pointing away from the step */
+    {
+        float step[16 * 8], nn[3 * 16 * 8];
+        int i;
+        for (i = 0; i < 16 * 8; i++) step[i] = (i % 16) < 8 ? -1e25f : 1e25f;
+        T_EQ_INT(rl_normal_map(step, 16, 8, NULL, nn), RL_OK);
+        i = 3 * (3 * 16 + 8);
+        T_CHECK_MSG(fabsf(nn[i] * nn[i] + nn[i + 1] * nn[i + 1] + nn[i + 2] * nn[i + 2] - 1.0f) < 1e-5f && nn[i] < -0.99f,
+                    "normal at the step (%g, %g, %g)", nn[i], nn[i + 1], nn[i + 2]);
+    }
     o.distance = -1;
     T_EQ_INT(rl_normal_map(h, W, H, &o, n), RL_ERR_INVALID_ARGUMENT);
     h[5] = NAN;
