@@ -105,7 +105,7 @@ static void fz_lod(fz_in *in, const tvt_texel *t, const tvt_allocator *al, fz_ca
     unsigned f = fz_u8(in);
     int k;
     o.levels = (int)(f & 3);
-    o.calibration_rays = 1 + (int)(fz_u8(in) % 16);
+    o.calibration_rays = (f & 16) ? (int)fz_u8(in) : 16 + (int)(fz_u8(in) % 16); /* below 16: refused */
     o.extinction = (f & 4) ? fz_f32(in) : 0.0f;
     o.allocator = al;
     o.progress = (f & 8) ? fz_progress : NULL;
@@ -198,8 +198,9 @@ static void fz_grass(fz_in *in, const tvt_allocator *al, fz_cancel *cc)
     if (f & 128) { /* a two-frame TVT, a mingle of two, a shadow, a march */
         tvt_tvt_options to = tvt_tvt_default_options();
         tvt_tvt v;
-        tvt_lod_options lo = tvt_lod_default_options();
-        lo.calibration_rays = 4;
+        tvt_lod_options lo;
+        memset(&lo, 0, sizeof lo); /* zero = defaults for the frames' resolution */
+        lo.calibration_rays = 16; /* the least allowed */
         to.frames = 2 + (int)(fz_u8(in) % 2);
         to.steps_per_frame = 1;
         to.lod = &lo;
@@ -339,7 +340,20 @@ static void fz_shell(fz_in *in, const tvt_allocator *al, fz_cancel *cc)
             size_t prism = fz_u8(in) % (nt + 1);
             float p[3], uvw[3], q[3];
             int in_map, in_unmap;
-            p[0] = fz_f32(in), p[1] = fz_f32(in), p[2] = fz_f32(in);
+            if (fz_u8(in) & 1 || prism >= nt) {
+                p[0] = fz_f32(in), p[1] = fz_f32(in), p[2] = fz_f32(in);
+            } else { /* a point of the prism: barycentric b over the corners raised by w * height */
+                float b[3], w = (float)(fz_u8(in) % 17) / 16.0f, sum;
+                int c, q;
+                b[0] = 1.0f + (float)(fz_u8(in) % 8), b[1] = 1.0f + (float)(fz_u8(in) % 8), b[2] = 1.0f + (float)(fz_u8(in) % 8);
+                sum = b[0] + b[1] + b[2];
+                p[0] = p[1] = p[2] = 0.0f;
+                for (c = 0; c < 3; c++) {
+                    const float *v = pos + 3 * idx[3 * prism + c], *nn = nrm + 3 * idx[3 * prism + c];
+                    float len = sqrtf(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+                    for (q = 0; q < 3; q++) p[q] += b[c] / sum * (v[q] + w * d.height * nn[q] / len);
+                }
+            }
             in_map = tvt_shell_map(&s, prism, p, uvw);
             fz_check(in_map >= -1 && in_map <= 1 && (in_map == -1) == (prism >= nt));
             if (in_map != 1 || s.folded) continue;
