@@ -732,10 +732,6 @@ int main(int argc, char **argv)
     memset(&R, 0, sizeof R);
     cli_outputs_init(&outs);
 
-    /* the output location, before any work */
-    make_parent_dir(prefix);
-    if (!probe_writable(prefix)) return 1;
-
     /* 1. the original */
     if (brick) {
         if (!make_brick(&R.orig)) { fprintf(stderr, "dispmesh: out of memory\n"); return 1; }
@@ -769,6 +765,10 @@ int main(int argc, char **argv)
         status = 1;
         goto done;
     }
+
+    /* the output location, before any work (and only for a usable input: a bad one creates no directory) */
+    make_parent_dir(prefix);
+    if (!probe_writable(prefix)) goto done;
 
     /* 2. the bounding shell */
     {

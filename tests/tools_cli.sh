@@ -326,7 +326,8 @@ refuse gs-unknown 2 "--bogus" "$GS" --bogus
 refuse gs-missing-value 2 "-f needs a value" "$GS" -o "$tmp/o.off" -f
 
 # ---- the same programs: failures (1) with their cause, and writes cut short --------------------------
-refuse dm-missing-input 1 "No such file or directory" "$DM" "$tmp/missing.obj" -o "$tmp/o"
+refuse dm-missing-input 1 "No such file or directory" "$DM" "$tmp/missing.obj" -o "$tmp/odir/o"
+check "dm-missing-input: the prefix's directory is not created for a missing input" [ ! -e "$tmp/odir" ]
 refuse dm-bad-input 1 "MIO_ERR_INDEX_RANGE" "$DM" "$tmp/bad.obj" -o "$tmp/o"
 refuse df-missing-input 1 "No such file or directory" "$DF" "$tmp/missing.obj" -o "$tmp/o.png"
 refuse df-bad-input 1 "MIO_ERR_INDEX_RANGE" "$DF" "$tmp/bad.obj" -o "$tmp/o.png"
