@@ -384,7 +384,7 @@ static void fz_map_pipeline(fz_in *in, unsigned op, const dm_allocator *al, fz_c
             if (fz_u8(in) & 1) {
                 dm_distance_options dop = dm_distance_default_options();
                 dm_distance_report dr;
-                dop.samples_per_side = fz_u8(in) % 64;
+                dop.samples_per_side = 1 + fz_u8(in) % 64; /* 0 would be the default 200000: too slow here */
                 dop.allocator = al;
                 r = dm_surface_distance(tm->positions, tm->vertex_count, tm->indices, tm->triangle_count, orig.pos,
                                         orig.nv, orig.idx, orig.nt, &dop, &dr);
