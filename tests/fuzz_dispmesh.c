@@ -374,6 +374,7 @@ static void fz_map_pipeline(fz_in *in, unsigned op, const dm_allocator *al, fz_c
             if (map->valid[i]) fz_check(isfinite(map->disp[i]) && fz_all_finite_f(map->normal + 3 * i, 3));
         }
         ro.density = (fz_u8(in) & 1) ? fz_f32(in) : 0.0f;
+        if (ro.density > 2.0f && ro.density <= 16.0f) ro.density = 2.0f; /* 16 makes 100k+ vertices: too slow here */
         ro.allocator = al;
         r = dm_reconstruct(map, pa, base.pos, base.nv, base.idx, base.nt, &ro, &tm);
         fz_check(fz_known(r));
