@@ -360,8 +360,8 @@ static void pm_checks(const char *name, const mesh *in, size_t target)
 
 /* ---- open meshes, locks, error bound, constraint -------------------------------------------- */
 
-/* an n x n wavy square sheet over [0,1]^2 */
-static mesh sheet(int n)
+/* an n x n square sheet over [0,1]^2, wavy with amplitude amp (0: flat) */
+static mesh sheet_amp(int n, float amp)
 {
     mesh m;
     int i, j;
@@ -374,7 +374,7 @@ static mesh sheet(int n)
             float *p = m.pos + 3 * ((size_t)j * (n + 1) + i);
             p[0] = (float)i / n;
             p[1] = (float)j / n;
-            p[2] = 0.05f * sinf(6.0f * p[0]) * cosf(5.0f * p[1]);
+            p[2] = amp != 0.0f ? amp * sinf(6.0f * p[0]) * cosf(5.0f * p[1]) : 0.0f;
         }
     for (j = 0; j < n; j++)
         for (i = 0; i < n; i++) {
@@ -385,6 +385,8 @@ static mesh sheet(int n)
         }
     return m;
 }
+
+static mesh sheet(int n) { return sheet_amp(n, 0.05f); }
 
 /* Frames: a tilted plane must simplify with no error (the quadrics are exact on planes up to
    rounding: a float quadric, or one in unnormalised coordinates, would show a noise floor here),
@@ -1072,37 +1074,12 @@ static void lanes_checks(void)
     T_CHECK(mismatched == 0);
 }
 
-/* a flat n x n grid of squares in the unit square, two triangles each */
-static mesh flat_grid(int n)
-{
-    mesh m;
-    int i, j;
-    m.nv = (size_t)(n + 1) * (size_t)(n + 1);
-    m.nt = 2 * (size_t)n * (size_t)n;
-    m.pos = (float *)malloc(3 * m.nv * sizeof(float));
-    m.idx = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t));
-    for (j = 0; j <= n; j++)
-        for (i = 0; i <= n; i++) {
-            float *p = m.pos + 3 * ((size_t)j * (size_t)(n + 1) + (size_t)i);
-            p[0] = (float)i / (float)n;
-            p[1] = (float)j / (float)n;
-            p[2] = 0.0f;
-        }
-    for (j = 0; j < n; j++)
-        for (i = 0; i < n; i++) {
-            uint32_t a = (uint32_t)(j * (n + 1) + i), *t = m.idx + 6 * ((size_t)j * (size_t)n + (size_t)i);
-            t[0] = a; t[1] = a + 1; t[2] = a + (uint32_t)n + 2;
-            t[3] = a; t[4] = a + (uint32_t)n + 2; t[5] = a + (uint32_t)n + 1;
-        }
-    return m;
-}
-
 static void queue_checks(void)
 {
     unsigned long long ops[2];
     int g;
     for (g = 0; g < 2; g++) {
-        mesh m = flat_grid(g ? 200 : 100);
+        mesh m = sheet_amp(g ? 200 : 100, 0.0f);
         dm_simplify_options o = dm_simplify_default_options();
         dm_pm *pm = NULL;
         dm_simplify_report rep;
