@@ -2830,6 +2830,8 @@ typedef struct dm__qem_simp {
     uint32_t *oring;               /* scratch, 3 t: the old triangles of keep and remove (constraint only) */
     uint32_t *ver;                 /* per vertex, candidate version: bumped when its edges change
                                       (a dense array: the stale checks touch nothing else) */
+    uint32_t *slots;               /* per vertex, the words its list fills in adj: its live corners
+                                      and the dropped ones not yet swept out (dm__qem_drop_corner) */
     dm__qem_bucket bucket[DM__QEM_BUCKETS]; /* the candidates: a radix heap */
     uint64_t nonempty[DM__QEM_MASKWORDS];   /* bit i: bucket i > 0 holds entries */
     dm__qem_chunk *free_chunks;    /* free list */
@@ -3162,7 +3164,8 @@ static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
 }
 
 /* DM_COUNT_OPS(n): a test hook (default: nothing) told the comparisons of the candidate queue's
-   front, so that a test can check that they grow linearly with the mesh. */
+   front and the words of the corner lists walked, so that a test can check that they grow
+   linearly with the mesh, whatever its valences. */
 #ifndef DM_COUNT_OPS
 #define DM_COUNT_OPS(n) ((void)0)
 #endif
@@ -3399,12 +3402,41 @@ static void dm__qem_ahead(dm__qem_simp *s, int which, int stage)
     }
 }
 
+/* Drops the corner of the dead triangle `tri` from v's list: only counted here, and swept out
+   (order kept) when the list is next read, so that a vertex of high valence whose triangles die
+   one at a time costs a pass per read of its list, not a pass per triangle. */
+static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
+{
+    (void)tri; /* the sweep finds it dead */
+    s->vx[v].count--;
+}
+
+/* Sweeps the dropped corners out of v's list (those of dead triangles; the others are live). */
+static void dm__qem_sweep(dm__qem_simp *s, uint32_t v)
+{
+    uint32_t *cl, n = s->slots[v], i, j = 0;
+    if (n == s->vx[v].count) return;
+    cl = s->adj + s->vx[v].first;
+    DM_COUNT_OPS(n);
+    for (i = 0; i < n; i++) {
+        uint32_t c = cl[i];
+        cl[j] = c;
+        j += s->alive[c / 3];
+    }
+    s->slots[v] = j;
+}
+
 /* The distinct neighbours of v (alive triangles) into s->nbr; returns the count. */
 static size_t dm__qem_neighbours(dm__qem_simp *s, uint32_t v)
 {
-    uint32_t st = dm__qem_new_stamp(s), i, nc = s->vx[v].count;
-    const uint32_t *cl = s->adj + s->vx[v].first;
+    uint32_t st, i, nc;
+    const uint32_t *cl;
     size_t m = 0;
+    dm__qem_sweep(s, v);
+    st = dm__qem_new_stamp(s);
+    nc = s->vx[v].count;
+    cl = s->adj + s->vx[v].first;
+    DM_COUNT_OPS(nc);
     for (i = 0; i < nc; i++) {
         const uint32_t *t = s->idx + 3 * (size_t)(cl[i] / 3);
         int k;
@@ -3528,6 +3560,9 @@ static size_t dm__qem_check_geometry(dm__qem_simp *s, uint32_t keep, uint32_t re
     const double min_sin2 = DM__QEM_MIN_SIN * DM__QEM_MIN_SIN, min_cos2 = DM__QEM_MIN_COS * DM__QEM_MIN_COS,
                  min_q2 = s->min_quality * s->min_quality;
     for (k = 0; k < 3; k++) pa[k] = ((double)at[k] - s->center[k]) * s->inv_scale;
+    dm__qem_sweep(s, keep);
+    dm__qem_sweep(s, rem);
+    DM_COUNT_OPS((size_t)s->vx[keep].count + s->vx[rem].count);
     for (pass = 0; pass < 2; pass++) {
         uint32_t v = pass ? rem : keep, other = pass ? keep : rem, nc = s->vx[v].count, j0;
         const uint32_t *cl = s->adj + s->vx[v].first;
@@ -3600,6 +3635,8 @@ static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
     size_t m = 0;
     uint32_t j, nk = s->vx[keep].count, nr = s->vx[rem].count;
     const uint32_t *ck = s->adj + s->vx[keep].first, *cr = s->adj + s->vx[rem].first;
+    dm__qem_sweep(s, keep); /* (the sweep keeps first and count) */
+    dm__qem_sweep(s, rem);
     for (j = 0; j < nk; j++, m++) memcpy(s->oring + 3 * m, s->idx + 3 * (size_t)(ck[j] / 3), 3 * sizeof(uint32_t));
     for (j = 0; j < nr; j++) {
         const uint32_t *t = s->idx + 3 * (size_t)(cr[j] / 3);
@@ -3620,6 +3657,9 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem, 
     size_t common = 0, shared = 0, i;
     int both_boundary = (s->vx[keep].flag & s->vx[rem].flag & DM__QEM_V_BOUNDARY) != 0;
     size_t m = 0;
+    dm__qem_sweep(s, keep); /* (the sweep keeps first and count) */
+    dm__qem_sweep(s, rem);
+    DM_COUNT_OPS((size_t)nk + nr);
     /* This is the first touch of the collapse's neighbourhood, cold on a large mesh: the loads
        of its triangles and the records of their vertices go out together first (no branch on
        loaded data in this loop), and the logic below finds them in flight or in cache; unless
@@ -3698,6 +3738,7 @@ static int dm__qem_adj_reserve(dm__qem_simp *s, size_t n)
     while (r < s->adjend) {
         uint32_t owner = s->adj[r], len = s->adj[r + 1];
         dm__qem_vert *ov = &s->vx[owner];
+        if (ov->first == r + 2) dm__qem_sweep(s, owner);
         if (ov->first == r + 2 && ov->count > 0) {
             uint32_t cnt = ov->count;
             memmove(s->adj + w + 2, s->adj + r + 2, cnt * sizeof(uint32_t));
@@ -3714,18 +3755,6 @@ static int dm__qem_adj_reserve(dm__qem_simp *s, size_t n)
     return dm__qem_grow(&s->al, (void **)&s->adj, &s->adjcap, 2 * (s->adjend + n), sizeof(uint32_t));
 }
 
-/* drops the corner of the dead triangle `tri` from v's list (order kept) */
-static void dm__qem_drop_corner(dm__qem_simp *s, uint32_t v, uint32_t tri)
-{
-    uint32_t *cl = s->adj + s->vx[v].first, n = s->vx[v].count, i, j = 0;
-    for (i = 0; i < n; i++) {
-        uint32_t c = cl[i];
-        cl[j] = c;
-        j += c - 3u * tri > 2u; /* c / 3 != tri, without the division */
-    }
-    s->vx[v].count = j;
-}
-
 /* Does the collapse rem -> keep with keep moved to `at`, and records it: keep's new corner list
    (its live corners, then rem's) is appended to adj. 0 on allocation failure. */
 static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const float at[3])
@@ -3734,6 +3763,8 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     uint32_t opp[3], dead[3], nk, nr, j, *out, *ck, *cr, ndead = 0, nmoved = 0;
     size_t nopp = 0, i;
     int k;
+    dm__qem_sweep(s, keep);
+    dm__qem_sweep(s, rem);
     nk = s->vx[keep].count;
     nr = s->vx[rem].count;
     if (!dm__qem_adj_reserve(s, 2 + (size_t)nk + nr)) return 0;
@@ -3786,9 +3817,9 @@ static int dm__qem_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, const 
     }
     out[-1] = (uint32_t)i;
     s->vx[keep].first = (uint32_t)(s->adjend + 2);
-    s->vx[keep].count = (uint32_t)i;
+    s->vx[keep].count = s->slots[keep] = (uint32_t)i;
     s->adjend += 2 + i;
-    s->vx[rem].count = 0;
+    s->vx[rem].count = s->slots[rem] = 0;
     for (i = 0; i < nopp; i++) dm__qem_drop_corner(s, opp[i], dead[i]);
     for (k = 0; k < 3; k++) {
         s->pos[3 * (size_t)keep + k] = at[k];
@@ -4035,6 +4066,7 @@ static void dm__qem_simp_free(dm__qem_simp *s)
     a->free(a->user, s->ring);
     a->free(a->user, s->oring);
     a->free(a->user, s->ver);
+    a->free(a->user, s->slots);
     while (s->blocks) {
         void *next;
         memcpy(&next, s->blocks, sizeof(void *));
@@ -4200,6 +4232,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     DM__QEM_ALLOC(alive, triangle_count, uint8_t);
     DM__QEM_ALLOC(nbr, vertex_count, uint32_t);
     DM__QEM_ALLOC(ver, vertex_count, uint32_t);
+    DM__QEM_ALLOC(slots, vertex_count, uint32_t);
     /* the positions of the vertices used, each once (not once per corner) */
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
     for (t = 0; t < 3 * triangle_count; t++) s->ver[indices[t]] = 1;
@@ -4238,6 +4271,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
     s->live = kept;
     memset(s->vx, 0, vertex_count * sizeof(dm__qem_vert));
     memset(s->ver, 0, vertex_count * sizeof(uint32_t));
+    memset(s->slots, 0, vertex_count * sizeof(uint32_t));
     s->stamp = 0;
     /* counting sort, lists in increasing corner order; counts and cursors in the dense ver and
        nbr arrays (random increments in the 128-byte records miss the cache) */
@@ -4249,7 +4283,7 @@ static dm_result dm__qem_simp_init(dm__qem_simp *s, const float *positions, size
         s->adj[s->adjend] = (uint32_t)v;
         s->adj[s->adjend + 1] = cnt;
         s->vx[v].first = s->nbr[v] = (uint32_t)(s->adjend + 2);
-        s->vx[v].count = cnt;
+        s->vx[v].count = s->slots[v] = cnt;
         s->adjend += 2 + (size_t)cnt;
     }
     for (t = 0; t < 3 * kept; t++) s->adj[s->nbr[s->idx[t]]++] = (uint32_t)t;
@@ -4355,9 +4389,14 @@ static dm_result dm__qem_seed_edges(dm__qem_simp *s, size_t vertex_count)
     uint32_t ea[DM__QEM_BATCH], eb[DM__QEM_BATCH];
     size_t v, nedge;
     for (v = 0, nedge = 0; v < vertex_count; v++) {
-        uint32_t i, j, nc = s->vx[v].count;
+        uint32_t i, nc = s->vx[v].count, st = 0;
         const uint32_t *cl = s->adj + s->vx[v].first;
         if (s->vx[v].flag & DM__QEM_V_FROZEN) continue;
+        DM_COUNT_OPS(2 * (size_t)nc);
+        if (s->vx[v].flag & DM__QEM_V_BOUNDARY) { /* the next vertices marked: nobody's next is unmarked */
+            st = dm__qem_new_stamp(s);
+            for (i = 0; i < nc; i++) s->vx[s->idx[cl[i] - cl[i] % 3 + DM__QEM_NEXT(cl[i] % 3)]].mark = st;
+        }
         for (i = 0; i < 2 * nc; i++) {
             uint32_t ci = cl[i < nc ? i : i - nc], slot = ci % 3, x;
             const uint32_t *t = s->idx + (ci - slot);
@@ -4366,12 +4405,7 @@ static dm_result dm__qem_seed_edges(dm__qem_simp *s, size_t vertex_count)
             } else {
                 if (!(s->vx[v].flag & DM__QEM_V_BOUNDARY)) break;
                 x = t[DM__QEM_PREV(slot)];
-                for (j = 0; j < nc; j++) {
-                    const uint32_t *u = s->idx + 3 * (size_t)(cl[j] / 3);
-                    uint32_t sj = cl[j] % 3;
-                    if (u[DM__QEM_NEXT(sj)] == x) break;
-                }
-                if (j < nc) continue;
+                if (s->vx[x].mark == st) continue;
             }
             if (x < v) continue;
             if (nedge == DM__QEM_BATCH) {

@@ -1092,9 +1092,57 @@ static void queue_checks(void)
         free(m.pos);
         free(m.idx);
     }
-    printf("  flat grids 20000 / 80000 triangles: %llu / %llu front comparisons (%.2f x)\n", ops[0], ops[1],
+    printf("  flat grids 20000 / 80000 triangles: %llu / %llu queue and list steps (%.2f x)\n", ops[0], ops[1],
            (double)ops[1] / (double)(ops[0] ? ops[0] : 1));
-    T_CHECK_MSG(ops[1] <= 6 * ops[0], "front comparisons %llu for 80k triangles, %llu for 20k", ops[1], ops[0]);
+    T_CHECK_MSG(ops[1] <= 6 * ops[0], "queue and list steps %llu for 80k triangles, %llu for 20k", ops[1], ops[0]);
+}
+
+/* A fan of K triangles around vertex 0 (a cone: the rim on the unit circle in z = 0, the centre
+   at z = 0.2), closed or open (one sector missing, the centre on the boundary), simplified to
+   100 triangles: the queue and corner-list steps (DM_COUNT_OPS) at K = 80k are at most 6 times
+   those at 20k (linear, 4x, up to a logarithm; dropping each dead triangle from the centre's
+   list at once, or looking for the centre's boundary neighbour through its whole list once per
+   corner, grew them with K squared). */
+static void valence_checks(void)
+{
+    static const int Ks[3] = {20000, 40000, 80000};
+    unsigned long long ops[3];
+    int closed, k, i;
+    for (closed = 0; closed < 2; closed++) {
+        for (k = 0; k < 3; k++) {
+            int K = Ks[k];
+            mesh m;
+            dm_simplify_options o = dm_simplify_default_options();
+            dm_pm *pm = NULL;
+            dm_simplify_report rep;
+            m.nv = (size_t)K + 1;
+            m.nt = closed ? (size_t)K : (size_t)K - 1;
+            m.pos = (float *)malloc(3 * m.nv * sizeof(float));
+            m.idx = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t));
+            ops[k] = 0;
+            if (!T_CHECK(m.pos && m.idx)) { free(m.pos); free(m.idx); return; }
+            m.pos[0] = 0.0f; m.pos[1] = 0.0f; m.pos[2] = 0.2f;
+            for (i = 0; i < K; i++) {
+                double a = 6.283185307179586 * i / K;
+                m.pos[3 + 3 * i] = (float)cos(a); m.pos[4 + 3 * i] = (float)sin(a); m.pos[5 + 3 * i] = 0.0f;
+            }
+            for (i = 0; i < (int)m.nt; i++) {
+                m.idx[3 * i] = 0; m.idx[3 * i + 1] = (uint32_t)(1 + i); m.idx[3 * i + 2] = (uint32_t)(1 + (i + 1) % K);
+            }
+            o.target_triangles = 100;
+            g_ops = 0;
+            T_CHECK(dm_simplify(m.pos, m.nv, m.idx, m.nt, &o, &pm, &rep) == DM_OK);
+            T_CHECK(rep.reached_target);
+            ops[k] = g_ops;
+            dm_pm_free(pm);
+            free(m.pos);
+            free(m.idx);
+        }
+        printf("  %s fan of 20k / 40k / 80k triangles: %llu / %llu / %llu queue and list steps (80k / 20k = %.2f)\n",
+               closed ? "closed" : "open", ops[0], ops[1], ops[2], (double)ops[2] / (double)(ops[0] ? ops[0] : 1));
+        T_CHECK(ops[0] >= 20000); /* the hook counts: at least a step a triangle */
+        T_CHECK_MSG(ops[2] <= 6 * ops[0], "%s fan: %llu steps at 80k, %llu at 20k", closed ? "closed" : "open", ops[2], ops[0]);
+    }
 }
 
 int main(int argc, char **argv)
@@ -1116,6 +1164,7 @@ int main(int argc, char **argv)
     frame_checks();
     lanes_checks();
     queue_checks();
+    valence_checks();
     error_bound_checks(&sph);
     constraint_checks(&sph);
     relax_checks(&sph);
