@@ -232,17 +232,19 @@
      dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
-     stretch_iterations (0 = 6, negative none). dm_bake_options: max_distance, inward, both_ways.
+     stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance, inward, both_ways.
      dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
      dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
-     samples_per_side (0 = 200000). Each with allocator and progress.
+     samples_per_side (0 = 200000, at most 10^9). Each with allocator and progress.
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (packing: a bit per texel
      more while it runs); dm_dispmap: 46 bytes per
      texel (about 38 more while dm_bake runs) plus a BVH of the original; dm_trimesh: 24 bytes
      per vertex and 16 per triangle (about 2 triangles per covered texel), 52 more per vertex
      while dm_reconstruct runs.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
-     their gutters do not fit the map at any scale.
+     their gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public
+     dm_param and dm_dispmap arrays they read (a caller may have edited them): an index out of
+     range, a missing array, or a NaN or infinite value (a depth beyond 1e18) is DM_ERR_BAD_MAP.
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
      LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE),
      at most 1024 segments along one base edge.
@@ -295,8 +297,10 @@ typedef enum dm_result {
     DM_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
     DM_CANCELLED,            /* the progress callback returned nonzero */
     DM_ERR_MAP_TOO_SMALL,    /* dm_parameterize: the charts and gutters do not fit the map */
-    DM_ERR_NOT_WELDED        /* dm_simplify: a triangle soup (no vertex shared by two triangles,
+    DM_ERR_NOT_WELDED,       /* dm_simplify: a triangle soup (no vertex shared by two triangles,
                                 positions repeated): weld it first (dm_weld) */
+    DM_ERR_BAD_MAP           /* dm_bake, dm_reconstruct: a dm_param or dm_dispmap array holds an
+                                index out of range, a NaN or infinite value, or is missing */
 } dm_result;
 
 /* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
@@ -419,7 +423,7 @@ typedef struct dm_param_options {
     int max_chart_triangles;      /* 0 = 96; clamped to [1, 256] */
     float max_chart_angle;        /* largest angle (degrees) between a triangle's normal and its
                                      chart's mean normal; 0 = 30 */
-    int stretch_iterations;       /* Yoshizawa-Belyaev-Seidel rounds; 0 = 6, negative = none */
+    int stretch_iterations;       /* Yoshizawa-Belyaev-Seidel rounds; 0 = 6, negative = none, at most 1000 */
     const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_param */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -558,7 +562,7 @@ DMDEF void dm_trimesh_free(dm_trimesh *mesh);
    of them and at the end; nonzero cancels (DM_CANCELLED, *out zeroed). A 35k-vertex mesh
    against a 400k-triangle one at 200000 samples a side takes about 2.5 s. */
 typedef struct dm_distance_options {
-    size_t samples_per_side;          /* 0 = 200000 */
+    size_t samples_per_side;          /* 0 = 200000; at most 10^9 (more is DM_ERR_INVALID_ARGUMENT) */
     const dm_allocator *allocator;    /* NULL = malloc/free */
     int (*progress)(void *user, float done);
     void *progress_user;
@@ -874,6 +878,7 @@ DMDEF const char *dm_result_string(dm_result r)
     case DM_CANCELLED: return "DM_CANCELLED";
     case DM_ERR_MAP_TOO_SMALL: return "DM_ERR_MAP_TOO_SMALL";
     case DM_ERR_NOT_WELDED: return "DM_ERR_NOT_WELDED";
+    case DM_ERR_BAD_MAP: return "DM_ERR_BAD_MAP";
     }
     return "DM_ERR_?";
 }
@@ -1923,10 +1928,13 @@ static int dm__prepare_ray(const float org[3], const float dir[3], float sign, d
     r->dir[0] = d0;
     r->dir[1] = d1;
     r->dir[2] = d2;
-    /* 1/d with tiny components replaced by +-1e-20 (so that 0 * inv is 0, never NaN) */
-    r->inv[0] = 1.0f / (a0 < 1e-20f ? (d0 < 0.0f ? -1e-20f : 1e-20f) : d0);
-    r->inv[1] = 1.0f / (a1 < 1e-20f ? (d1 < 0.0f ? -1e-20f : 1e-20f) : d1);
-    r->inv[2] = 1.0f / (a2 < 1e-20f ? (d2 < 0.0f ? -1e-20f : 1e-20f) : d2);
+    /* 1/d with zero and subnormal components replaced by +-1e-37: inv stays finite, so 0 * inv
+       is 0, never NaN, and a slab the ray runs inside spans +-1e37 or more (an infinity once a
+       product overflows), beyond any hit distance the coordinates allow (a 1e-20 here missed
+       hits beyond t = 1e20 on axis-parallel rays) */
+    r->inv[0] = 1.0f / (a0 < 1e-37f ? (d0 < 0.0f ? -1e-37f : 1e-37f) : d0);
+    r->inv[1] = 1.0f / (a1 < 1e-37f ? (d1 < 0.0f ? -1e-37f : 1e-37f) : d1);
+    r->inv[2] = 1.0f / (a2 < 1e-37f ? (d2 < 0.0f ? -1e-37f : 1e-37f) : d2);
     /* a wide node is lo[3][W] then hi[3][W]: the near plane is lo when the ray goes up */
     r->near_off[0] = r->inv[0] >= 0.0f ? 0 : 3 * DM__W;
     r->near_off[1] = r->inv[1] >= 0.0f ? DM__W : 4 * DM__W;
@@ -5572,7 +5580,7 @@ static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *opti
     max_tris = o.max_chart_triangles ? o.max_chart_triangles : 96;
     max_tris = max_tris < 1 ? 1 : max_tris > 256 ? 256 : max_tris;
     r->W = W; r->H = H; r->g = g; r->max_tris = max_tris;
-    r->rounds = o.stretch_iterations == 0 ? 6 : o.stretch_iterations < 0 ? 0 : o.stretch_iterations;
+    r->rounds = o.stretch_iterations == 0 ? 6 : o.stretch_iterations < 0 ? 0 : o.stretch_iterations > 1000 ? 1000 : o.stretch_iterations;
     if (W < 1 || H < 1 || W > 16384 || H > 16384 || g < 0 || g > 1024 || !(o.max_chart_angle >= 0.0f) ||
         o.max_chart_angle > 180.0f)
         return DM_ERR_INVALID_ARGUMENT;
@@ -5581,7 +5589,7 @@ static dm_result dm__pz_read_options(dm__pz_run *r, const dm_param_options *opti
     if (res != DM_OK) return res;
     if (o.triangle_weight)
         for (t = 0; t < r->nt; t++)
-            if (!(o.triangle_weight[t] >= 0.0f) || o.triangle_weight[t] > 1e30f) return DM_ERR_INVALID_ARGUMENT;
+            if (!(o.triangle_weight[t] >= 0.0f) || o.triangle_weight[t] > FLT_MAX) return DM_ERR_INVALID_ARGUMENT;
     return DM_OK;
 }
 
@@ -6448,6 +6456,51 @@ typedef struct dm__bk_run {
 } dm__bk_run;
 
 /* the options and both meshes checked, the parameterization matched to the base */
+/* 1 if every x[i] is finite and |x[i]| <= lim */
+static int dm__finite_within(const float *x, size_t n, float lim)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!(fabsf(x[i]) <= lim)) return 0;
+    return 1;
+}
+
+/* The public dm_param arrays, as dm_bake and dm_reconstruct read them: present, every index in
+   range (or the documented none), every coordinate finite and in the map. */
+static dm_result dm__check_param(const dm_param *p, size_t base_triangle_count)
+{
+    size_t n, i, nt = p->triangle_count;
+    if (p->triangle_count != base_triangle_count) return DM_ERR_INVALID_ARGUMENT;
+    if (p->width < 1 || p->height < 1 || p->width > 16384 || p->height > 16384) return DM_ERR_BAD_MAP;
+    n = (size_t)p->width * (size_t)p->height;
+    if (!p->uv || !p->chart || !p->twin || !p->texel_triangle || !p->texel_bary || !p->nbr || !p->nbr_rot)
+        return DM_ERR_BAD_MAP;
+    if (!dm__finite_within(p->uv, 6 * nt, 2.0f) || !dm__finite_within(p->texel_bary, 2 * n, 1e3f)) return DM_ERR_BAD_MAP;
+    for (i = 0; i < nt; i++)
+        if (p->chart[i] >= p->chart_count) return DM_ERR_BAD_MAP;
+    for (i = 0; i < 3 * nt; i++)
+        if (p->twin[i] >= nt && p->twin[i] != DM_NO_HIT) return DM_ERR_BAD_MAP;
+    for (i = 0; i < n; i++)
+        if (p->texel_triangle[i] >= nt && p->texel_triangle[i] != DM_NO_HIT) return DM_ERR_BAD_MAP;
+    for (i = 0; i < 4 * n; i++)
+        if ((p->nbr[i] >= n && p->nbr[i] != UINT32_MAX) || p->nbr_rot[i] > 3) return DM_ERR_BAD_MAP;
+    return DM_OK;
+}
+
+/* The dm_dispmap arrays dm_reconstruct reads: present, of the dm_param's size, finite, and the
+   depths within the coordinates' limit. */
+static dm_result dm__check_map(const dm_dispmap *m, const dm_param *p)
+{
+    size_t n;
+    if (m->width != p->width || m->height != p->height) return DM_ERR_INVALID_ARGUMENT;
+    n = (size_t)m->width * (size_t)m->height;
+    if (!m->pos || !m->nrm || !m->disp || !m->normal || !m->valid || !m->status) return DM_ERR_BAD_MAP;
+    if (!dm__finite_within(m->disp, n, 1e18f) || !dm__finite_within(m->nrm, 3 * n, 2.0f) ||
+        !dm__finite_within(m->normal, 3 * n, 2.0f) || !dm__finite_within(m->pos, 3 * n, 1e18f))
+        return DM_ERR_BAD_MAP;
+    return DM_OK;
+}
+
 static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
 {
     dm_result res;
@@ -6458,8 +6511,7 @@ static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
     if (res != DM_OK) return res;
     res = dm__check_mesh(r->opos, r->onv, r->oidx, r->ont);
     if (res != DM_OK) return res;
-    if (r->param->triangle_count != r->bnt) return DM_ERR_INVALID_ARGUMENT;
-    return DM_OK;
+    return dm__check_param(r->param, r->bnt);
 }
 
 /* the map (its arrays owned by it) and the temporaries */
@@ -6935,11 +6987,11 @@ static dm_result dm__rc_check(dm__rc_run *r, const dm_reconstruct_options *optio
     if (options) r->o = *options;
     if (!(r->o.density >= 0.0f) || r->o.density > 16.0f) return DM_ERR_INVALID_ARGUMENT;
     if (r->o.density == 0.0f) r->o.density = 1.0f;
-    if (r->map->width != r->param->width || r->map->height != r->param->height) return DM_ERR_INVALID_ARGUMENT;
     res = dm__check_mesh(r->bpos, r->bnv, r->bidx, r->bnt);
     if (res != DM_OK) return res;
-    if (r->param->triangle_count != r->bnt || r->bnv >= DM_NO_HIT) return DM_ERR_INVALID_ARGUMENT;
-    return DM_OK;
+    if (r->bnv >= DM_NO_HIT) return DM_ERR_INVALID_ARGUMENT;
+    res = dm__check_param(r->param, r->bnt);
+    return res != DM_OK ? res : dm__check_map(r->map, r->param);
 }
 
 /* length in texels of half-edge c of base triangle t in its chart */
@@ -7362,6 +7414,8 @@ DMDEF dm_distance_options dm_distance_default_options(void)
     return o;
 }
 
+#define DM__MAX_SAMPLES 1000000000u /* dm_distance_options.samples_per_side */
+
 DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t *ai, size_t ant, const float *bp,
                                     size_t bnv, const uint32_t *bi, size_t bnt, const dm_distance_options *options,
                                     dm_distance_report *out)
@@ -7384,6 +7438,7 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     if (res != DM_OK) return res;
     if (options) opt = *options;
     else memset(&opt, 0, sizeof opt);
+    if (opt.samples_per_side > DM__MAX_SAMPLES) return DM_ERR_INVALID_ARGUMENT; /* (counts stay far from overflow) */
     samples = opt.samples_per_side ? opt.samples_per_side : 200000;
     memset(&cnt, 0, sizeof cnt);
     cnt.opt = &opt;

@@ -217,6 +217,7 @@ CLIDEF const char *cli_result_meaning(const char *name)
         {"DM_ERR_BAD_POSITION", "a coordinate is NaN, infinite or beyond 1e18"},
         {"DM_ERR_MAP_TOO_SMALL", "the charts and their gutters do not fit in the map"},
         {"DM_ERR_NOT_WELDED", "a triangle soup: no vertex is shared by two triangles"},
+        {"DM_ERR_BAD_MAP", "a parameterization or map array holds an index out of range or a NaN"},
         /* deform.h */
         {"DFM_ERR_INVALID_ARGUMENT", "missing data or a matrix of the wrong kind"},
         {"DFM_ERR_BAD_INDEX", "an index out of range"},
