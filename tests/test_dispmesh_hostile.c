@@ -136,23 +136,18 @@ static dm_result try_reconstruct(pipeline *p)
     return r;
 }
 
-/* sets *word to bad, checks that both calls (or only reconstruct) refuse it, restores */
-#define BAD_U32(word, bad, both)                                                                        \
+/* sets word (of type T) to bad, checks that dm_reconstruct (and dm_bake when both) refuse it
+   with DM_ERR_BAD_MAP, restores it */
+#define BAD_VALUE(T, word, bad, both)                                                                   \
     do {                                                                                                \
-        uint32_t keep_ = (word);                                                                        \
-        (word) = (bad);                                                                                 \
-        if (both) T_CHECK_MSG(try_bake(&p) == DM_ERR_BAD_MAP, "bake accepted %s = %u", #word, (unsigned)(bad)); \
-        T_CHECK_MSG(try_reconstruct(&p) == DM_ERR_BAD_MAP, "reconstruct accepted %s = %u", #word, (unsigned)(bad)); \
-        (word) = keep_;                                                                                 \
-    } while (0)
-#define BAD_F(word, bad, both)                                                                          \
-    do {                                                                                                \
-        float keep_ = (word);                                                                           \
+        T keep_ = (word);                                                                               \
         (word) = (bad);                                                                                 \
         if (both) T_CHECK_MSG(try_bake(&p) == DM_ERR_BAD_MAP, "bake accepted %s = %g", #word, (double)(bad)); \
         T_CHECK_MSG(try_reconstruct(&p) == DM_ERR_BAD_MAP, "reconstruct accepted %s = %g", #word, (double)(bad)); \
         (word) = keep_;                                                                                 \
     } while (0)
+#define BAD_U32(word, bad, both) BAD_VALUE(uint32_t, word, bad, both)
+#define BAD_F(word, bad, both) BAD_VALUE(float, word, bad, both)
 
 static void public_arrays(void)
 {

@@ -1074,23 +1074,29 @@ static void lanes_checks(void)
     T_CHECK(mismatched == 0);
 }
 
+/* m simplified to target (it must reach it): the DM_COUNT_OPS steps it took; frees m */
+static unsigned long long counted_simplify(mesh *m, size_t target)
+{
+    dm_simplify_options o = dm_simplify_default_options();
+    dm_pm *pm = NULL;
+    dm_simplify_report rep;
+    o.target_triangles = target;
+    g_ops = 0;
+    T_CHECK(dm_simplify(m->pos, m->nv, m->idx, m->nt, &o, &pm, &rep) == DM_OK);
+    T_CHECK(rep.reached_target);
+    dm_pm_free(pm);
+    free(m->pos);
+    free(m->idx);
+    return g_ops;
+}
+
 static void queue_checks(void)
 {
     unsigned long long ops[2];
     int g;
     for (g = 0; g < 2; g++) {
         mesh m = sheet_amp(g ? 200 : 100, 0.0f);
-        dm_simplify_options o = dm_simplify_default_options();
-        dm_pm *pm = NULL;
-        dm_simplify_report rep;
-        o.target_triangles = m.nt / 50;
-        g_ops = 0;
-        T_CHECK(dm_simplify(m.pos, m.nv, m.idx, m.nt, &o, &pm, &rep) == DM_OK);
-        T_CHECK(rep.reached_target);
-        ops[g] = g_ops;
-        dm_pm_free(pm);
-        free(m.pos);
-        free(m.idx);
+        ops[g] = counted_simplify(&m, m.nt / 50);
     }
     printf("  flat grids 20000 / 80000 triangles: %llu / %llu queue and list steps (%.2f x)\n", ops[0], ops[1],
            (double)ops[1] / (double)(ops[0] ? ops[0] : 1));
@@ -1112,9 +1118,6 @@ static void valence_checks(void)
         for (k = 0; k < 3; k++) {
             int K = Ks[k];
             mesh m;
-            dm_simplify_options o = dm_simplify_default_options();
-            dm_pm *pm = NULL;
-            dm_simplify_report rep;
             m.nv = (size_t)K + 1;
             m.nt = closed ? (size_t)K : (size_t)K - 1;
             m.pos = (float *)malloc(3 * m.nv * sizeof(float));
@@ -1129,14 +1132,7 @@ static void valence_checks(void)
             for (i = 0; i < (int)m.nt; i++) {
                 m.idx[3 * i] = 0; m.idx[3 * i + 1] = (uint32_t)(1 + i); m.idx[3 * i + 2] = (uint32_t)(1 + (i + 1) % K);
             }
-            o.target_triangles = 100;
-            g_ops = 0;
-            T_CHECK(dm_simplify(m.pos, m.nv, m.idx, m.nt, &o, &pm, &rep) == DM_OK);
-            T_CHECK(rep.reached_target);
-            ops[k] = g_ops;
-            dm_pm_free(pm);
-            free(m.pos);
-            free(m.idx);
+            ops[k] = counted_simplify(&m, 100);
         }
         printf("  %s fan of 20k / 40k / 80k triangles: %llu / %llu / %llu queue and list steps (80k / 20k = %.2f)\n",
                closed ? "closed" : "open", ops[0], ops[1], ops[2], (double)ops[2] / (double)(ops[0] ? ops[0] : 1));
