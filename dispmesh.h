@@ -6455,7 +6455,6 @@ typedef struct dm__bk_run {
     float maxd;                               /* search distance */
 } dm__bk_run;
 
-/* the options and both meshes checked, the parameterization matched to the base */
 /* 1 if every x[i] is finite and |x[i]| <= lim */
 static int dm__finite_within(const float *x, size_t n, float lim)
 {
@@ -6501,6 +6500,7 @@ static dm_result dm__check_map(const dm_dispmap *m, const dm_param *p)
     return DM_OK;
 }
 
+/* the options and both meshes checked, the parameterization matched to the base */
 static dm_result dm__bk_check(dm__bk_run *r, const dm_bake_options *options)
 {
     dm_result res;
