@@ -117,6 +117,8 @@
        180 degrees; larger turns need several solves, each set up on the previous result. At
        most (2^31 - 1) / 9 vertices. The whole mesh is checked for non-manifold edges and unwelded
        vertices, the ROI's neighbourhood for degenerate triangles.
+       The same bits whatever the compiler's FMA contraction setting, except under clang's
+       -ffp-contract=fast (see part 2's LIMITS).
      DECISIONS
        - A mesh whose largest coordinate (over the vertices in triangles) is above 2^100 or below
          2^-100 is scaled by a power of two into [0.5, 1) for the setup, and the targets and
@@ -300,6 +302,10 @@
        Fiduccia-Mattheyses), so it reaches METIS's fill only within about 10% on meshes. Single
        threaded; the dense kernels use no FMA (one rounding for the product, one for the sum, on
        every path), so their peak is half that of an FMA BLAS of the same width.
+       The bits do not depend on the compiler's FMA contraction (GCC in any dialect, C or C++, with
+       any -ffp-contract; clang at its default): the implementation turns contraction off for its
+       own code and restores the user's setting after it. Clang's -ffp-contract=fast ignores that
+       pragma: there every factor's and solve's last bits differ (still the same on every run).
 
      DECISIONS
        - The ordering is AMD as in the 1996 paper (ties broken as in the authors' reference code:
@@ -647,6 +653,19 @@ DFMDEF const char *dfm_result_string(dfm_result r);
 #define DFM_FREE(p) free(p)
 #else
 #error "deform.h: define both DFM_MALLOC and DFM_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -2954,21 +2973,12 @@ __attribute__((target("avx"))) static size_t dfm__gemm_cols_avx(size_t m, size_t
 #if !defined(DFM_NO_AVX512)
 #define DFM__AVX512 1
 typedef double dfm__v8 __attribute__((vector_size(64)));
-/* AVX-512F has FMA instructions: GCC contracts a * b + c into one in GNU C and in C++ modes
-   (clang: the pragma below), which would change the bits */
-#if defined(__clang__)
-#define DFM__NO_CONTRACT
-#else
-#define DFM__NO_CONTRACT , optimize("fp-contract=off")
-#endif
-
-/* One 16 x 4 tile over the whole inner dimension: a steps by astep, b by bstep per t */
-__attribute__((target("avx512f") DFM__NO_CONTRACT)) static inline void dfm__tile16x4_avx512(
+/* AVX-512F has FMA instructions: the contraction pragmas at the top of the implementation keep
+   a * b + c in two roundings here too.
+   One 16 x 4 tile over the whole inner dimension: a steps by astep, b by bstep per t */
+__attribute__((target("avx512f"))) static inline void dfm__tile16x4_avx512(
     size_t p, const double *a, size_t astep, const double *bb, size_t bstep, double *C, size_t ldc, int assign)
 {
-#ifdef __clang__
-#pragma STDC FP_CONTRACT OFF /* clang: no fused multiply-adds here either */
-#endif
     size_t t, q;
     dfm__v8 z = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, acc[8];
     for (q = 0; q < 8; q++) acc[q] = z;
@@ -3002,11 +3012,9 @@ __attribute__((target("avx512f") DFM__NO_CONTRACT)) static inline void dfm__tile
    dfm__gemm_ws(p) doubles) and enough reuse, each chunk of B and each strip of A is first
    copied into contiguous tile order (packing, as BLAS does), so the tiles stream unit-stride
    memory whatever the leading dimensions; the sums are the same either way. */
-__attribute__((target("avx512f") DFM__NO_CONTRACT)) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p,
-                                                                                 const double *A, size_t lda,
-                                                                                 const double *B, size_t ldb,
-                                                                                 double *C, size_t ldc, int assign,
-                                                                                 double *ws)
+__attribute__((target("avx512f"))) static void dfm__gemm_nt_avx512(size_t m, size_t k, size_t p, const double *A,
+                                                                   size_t lda, const double *B, size_t ldb,
+                                                                   double *C, size_t ldc, int assign, double *ws)
 {
     size_t i, j, t, q, j0, jc = p > 0 ? (DFM__GEMM_L2 / p) & ~(size_t)3 : k;
     int pack = ws != NULL && m >= 64 && k >= 8 && p >= 8;
@@ -3113,13 +3121,9 @@ __attribute__((target("avx"))) static size_t dfm__trsm_rows_avx(size_t m, size_t
 
 #ifdef DFM__AVX512
 /* the same on strips of 32 rows, four 8-lane vectors */
-__attribute__((target("avx512f") DFM__NO_CONTRACT)) static size_t dfm__trsm_rows_avx512(size_t m, size_t jb,
-                                                                                     const double *D, double *X,
-                                                                                     size_t ld)
+__attribute__((target("avx512f"))) static size_t dfm__trsm_rows_avx512(size_t m, size_t jb, const double *D,
+                                                                       double *X, size_t ld)
 {
-#ifdef __clang__
-#pragma STDC FP_CONTRACT OFF
-#endif
     size_t i, c, t;
     for (i = 0; i + 32 <= m; i += 32)
         for (c = 0; c < jb; c++) {
@@ -5648,6 +5652,11 @@ DFMDEF void dfm_pose_bend(const double *positions, size_t vertex_count, const un
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* DFM_IMPLEMENTATION_DONE */
 #endif /* DFM_IMPLEMENTATION */
