@@ -3245,109 +3245,157 @@ static void dfm__scatter_update(size_t m, size_t k, const double *U, const int32
     }
 }
 
-DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
+/* The factorization's workspace: the linked lists of descendants waiting for each supernode
+   (link_head / link_next), each factored supernode's first row not yet applied (pos), the target's
+   relative row map (relmap, rel), one descendant's update (upd) and the gemm's packing (ws). */
+typedef struct dfm__factor_ws {
+    int32_t *link_head, *link_next, *relmap, *rel;
+    size_t *pos;
+    double *upd, *ws;
+} dfm__factor_ws;
+
+static void dfm__factor_ws_free(const dfm_allocator *al, dfm__factor_ws *w)
 {
+    dfm__free(al, w->link_head);
+    dfm__free(al, w->link_next);
+    dfm__free(al, w->pos);
+    dfm__free(al, w->relmap);
+    dfm__free(al, w->rel);
+    dfm__free(al, w->upd);
+    dfm__free(al, w->ws);
+}
+
+static dfm_result dfm__factor_ws_alloc(const dfm_chol *chol, dfm__factor_ws *w)
+{
+    const dfm_allocator *al = &chol->al;
     dfm_result err = DFM_OK;
-    dfm_allocator *al;
-    size_t s, ns, t;
-    int32_t *link_head = NULL, *link_next = NULL, *relmap = NULL, *rel = NULL;
-    size_t *pos = NULL;
-    double *upd = NULL, *ws = NULL, flops_done = 0.0, next_report;
-    if (!chol) return DFM_ERR_INVALID_ARGUMENT;
-    al = &chol->al;
-    chol->factored = 0;
-    chol->failed_column = -1;
-    err = dfm__validate_pattern(a);
+    size_t s, ns = chol->nsuper, widest = 0;
+    memset(w, 0, sizeof *w);
+    w->link_head = (int32_t *)dfm__alloc(al, ns, sizeof(int32_t), &err);
+    w->link_next = (int32_t *)dfm__alloc(al, ns, sizeof(int32_t), &err);
+    w->pos = (size_t *)dfm__alloc(al, ns, sizeof(size_t), &err);
+    w->relmap = (int32_t *)dfm__alloc(al, chol->n, sizeof(int32_t), &err);
+    w->rel = (int32_t *)dfm__alloc(al, chol->max_rows + 1, sizeof(int32_t), &err);
+    w->upd = (double *)dfm__alloc(al, chol->max_update, sizeof(double), &err);
+    for (s = 0; s < ns; s++) /* the widest supernode: the gemm's largest inner dimension */
+        if ((size_t)(chol->sup_first[s + 1] - chol->sup_first[s]) > widest)
+            widest = (size_t)(chol->sup_first[s + 1] - chol->sup_first[s]);
+    if (dfm__gemm_ws(widest) > 0) w->ws = (double *)dfm__alloc(al, dfm__gemm_ws(widest), sizeof(double), &err);
+    if (err == DFM_OK)
+        for (s = 0; s < ns; s++) w->link_head[s] = -1;
+    return err;
+}
+
+/* a's pattern and kind must be the analysed ones, its values finite */
+static dfm_result dfm__factor_check(const dfm_chol *chol, const dfm_csc *a)
+{
+    dfm_result err = dfm__validate_pattern(a);
     if (err != DFM_OK) return err;
     if (a->kind != DFM_CSC_SYMMETRIC_LOWER || a->n_cols != chol->n || a->col_start[a->n_cols] != chol->nnz_a ||
         dfm__pattern_hash(a) != chol->pattern_hash)
         return DFM_ERR_PATTERN_MISMATCH;
-    err = dfm__validate_values(a);
-    if (err != DFM_OK) return err;
-    ns = chol->nsuper;
-    link_head = (int32_t *)dfm__alloc(al, ns, sizeof(int32_t), &err);
-    link_next = (int32_t *)dfm__alloc(al, ns, sizeof(int32_t), &err);
-    pos = (size_t *)dfm__alloc(al, ns, sizeof(size_t), &err);
-    relmap = (int32_t *)dfm__alloc(al, chol->n, sizeof(int32_t), &err);
-    rel = (int32_t *)dfm__alloc(al, chol->max_rows + 1, sizeof(int32_t), &err);
-    upd = (double *)dfm__alloc(al, chol->max_update, sizeof(double), &err);
-    for (s = 0, t = 0; s < ns; s++) /* t: the widest supernode, the gemm's largest inner dimension */
-        if ((size_t)(chol->sup_first[s + 1] - chol->sup_first[s]) > t) t = (size_t)(chol->sup_first[s + 1] - chol->sup_first[s]);
-    if (dfm__gemm_ws(t) > 0) ws = (double *)dfm__alloc(al, dfm__gemm_ws(t), sizeof(double), &err);
-    if (err != DFM_OK) goto done;
-    for (s = 0; s < ns; s++) link_head[s] = -1;
-    next_report = chol->flops / 64.0;
-    for (s = 0; s < ns; s++) {
-        size_t f = (size_t)chol->sup_first[s], l = (size_t)chol->sup_first[s + 1], nc = l - f;
-        const int32_t *rs = chol->rows + chol->sup_rowptr[s];
-        size_t nr = chol->sup_rowptr[s + 1] - chol->sup_rowptr[s], j, r;
-        double *Ls = chol->values + chol->sup_valptr[s];
-        int32_t d, dnext;
-        long fail;
-        /* assemble A's columns of this supernode */
-        memset(Ls, 0, nr * nc * sizeof(double));
-        for (t = chol->amap_start[f]; t < chol->amap_start[l]; t++) chol->values[chol->amap_dst[t]] += a->values[chol->amap_src[t]];
-        for (r = 0; r < nr; r++) relmap[rs[r]] = (int32_t)r;
-        /* subtract the update of every descendant with rows in [f, l) */
-        for (d = link_head[s]; d != -1; d = dnext) {
-            const int32_t *rd = chol->rows + chol->sup_rowptr[d];
-            size_t nrd = chol->sup_rowptr[d + 1] - chol->sup_rowptr[d];
-            size_t ncd = (size_t)(chol->sup_first[d + 1] - chol->sup_first[d]);
-            const double *Ld = chol->values + chol->sup_valptr[d];
-            size_t p0 = pos[d], p1 = p0, m, k;
-            dnext = link_next[d];
-            while (p1 < nrd && (size_t)rd[p1] < l) p1++;
-            m = nrd - p0;
-            k = p1 - p0;
-            if (m == nr && k == nc && (size_t)rd[p0] == f) {
-                /* the descendant's rows are exactly this supernode's: update in place */
-                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0, ws);
-            } else {
-                dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, upd, m, 1, ws);
-                dfm__scatter_update(m, k, upd, rd + p0, relmap, rel, Ls, nr);
-            }
-            pos[d] = p1;
-            if (p1 < nrd) {
-                int32_t target = chol->col_super[rd[p1]];
-                link_next[d] = link_head[target];
-                link_head[target] = d;
-            }
+    return dfm__validate_values(a);
+}
+
+/* A's columns of supernode s into its block (zeroed first), and relmap for its rows */
+static void dfm__assemble_supernode(dfm_chol *chol, const dfm_csc *a, size_t s, int32_t *relmap)
+{
+    size_t f = (size_t)chol->sup_first[s], l = (size_t)chol->sup_first[s + 1], t, r;
+    const int32_t *rs = chol->rows + chol->sup_rowptr[s];
+    size_t nr = chol->sup_rowptr[s + 1] - chol->sup_rowptr[s];
+    memset(chol->values + chol->sup_valptr[s], 0, nr * (l - f) * sizeof(double));
+    for (t = chol->amap_start[f]; t < chol->amap_start[l]; t++) chol->values[chol->amap_dst[t]] += a->values[chol->amap_src[t]];
+    for (r = 0; r < nr; r++) relmap[rs[r]] = (int32_t)r;
+}
+
+/* Factored supernode d has applied its rows before p: it waits next in the list of the supernode
+   that holds its row p (if any). */
+static void dfm__link_to_next(const dfm_chol *chol, dfm__factor_ws *w, size_t d, size_t p)
+{
+    w->pos[d] = p;
+    if (p < chol->sup_rowptr[d + 1] - chol->sup_rowptr[d]) {
+        int32_t target = chol->col_super[chol->rows[chol->sup_rowptr[d] + p]];
+        w->link_next[d] = w->link_head[target];
+        w->link_head[target] = (int32_t)d;
+    }
+}
+
+/* Subtracts from supernode s the update L_d,rows L_d,cols^T of every descendant d with rows in s's
+   columns (left-looking), and moves each on to its next target. */
+static void dfm__apply_descendants(dfm_chol *chol, size_t s, dfm__factor_ws *w)
+{
+    size_t f = (size_t)chol->sup_first[s], l = (size_t)chol->sup_first[s + 1], nc = l - f;
+    size_t nr = chol->sup_rowptr[s + 1] - chol->sup_rowptr[s];
+    double *Ls = chol->values + chol->sup_valptr[s];
+    int32_t d, dnext;
+    for (d = w->link_head[s]; d != -1; d = dnext) {
+        const int32_t *rd = chol->rows + chol->sup_rowptr[d];
+        size_t nrd = chol->sup_rowptr[d + 1] - chol->sup_rowptr[d];
+        size_t ncd = (size_t)(chol->sup_first[d + 1] - chol->sup_first[d]);
+        const double *Ld = chol->values + chol->sup_valptr[d];
+        size_t p0 = w->pos[d], p1 = p0, m, k;
+        dnext = w->link_next[d];
+        while (p1 < nrd && (size_t)rd[p1] < l) p1++;
+        m = nrd - p0;
+        k = p1 - p0;
+        if (m == nr && k == nc && (size_t)rd[p0] == f) {
+            /* the descendant's rows are exactly this supernode's: update in place */
+            dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, Ls, nr, 0, w->ws);
+        } else {
+            dfm__gemm(m, k, ncd, Ld + p0, nrd, Ld + p0, nrd, w->upd, m, 1, w->ws);
+            dfm__scatter_update(m, k, w->upd, rd + p0, w->relmap, w->rel, Ls, nr);
         }
-        fail = dfm__panel_chol(nr, nc, Ls, nr, ws);
+        dfm__link_to_next(chol, w, (size_t)d, p1);
+    }
+}
+
+/* Counts supernode s's work and reports every 1/64 of the total; nonzero when the user cancels. */
+static int dfm__factor_progress(const dfm_chol *chol, size_t s, double *flops_done, double *next_report)
+{
+    size_t f = (size_t)chol->sup_first[s], l = (size_t)chol->sup_first[s + 1], j;
+    size_t nr = chol->sup_rowptr[s + 1] - chol->sup_rowptr[s];
+    double done;
+    for (j = f; j < l; j++) *flops_done += (double)(nr - (j - f)) * (double)(nr - (j - f));
+    if (*flops_done < *next_report) return 0;
+    *next_report += chol->flops / 64.0;
+    /* the supernodes' rows include the amalgamation's zeros, which chol->flops (from the column
+       counts) does not: the share can pass 1 */
+    done = *flops_done / (chol->flops > 0 ? chol->flops : 1.0);
+    return chol->progress(chol->progress_user, (float)(done < 1.0 ? done : 1.0)) != 0;
+}
+
+/* Left-looking supernodal factorization: each supernode in order is assembled from A, updated by
+   its descendants, factored as a dense panel, then queued for its first ancestor. */
+DFMDEF dfm_result dfm_chol_factor(dfm_chol *chol, const dfm_csc *a)
+{
+    dfm__factor_ws w;
+    dfm_result err;
+    size_t s;
+    double flops_done = 0.0, next_report;
+    if (!chol) return DFM_ERR_INVALID_ARGUMENT;
+    chol->factored = 0;
+    chol->failed_column = -1;
+    err = dfm__factor_check(chol, a);
+    if (err != DFM_OK) return err;
+    err = dfm__factor_ws_alloc(chol, &w);
+    next_report = chol->flops / 64.0;
+    for (s = 0; err == DFM_OK && s < chol->nsuper; s++) {
+        size_t f = (size_t)chol->sup_first[s], nc = (size_t)chol->sup_first[s + 1] - f;
+        size_t nr = chol->sup_rowptr[s + 1] - chol->sup_rowptr[s];
+        long fail;
+        dfm__assemble_supernode(chol, a, s, w.relmap);
+        dfm__apply_descendants(chol, s, &w);
+        fail = dfm__panel_chol(nr, nc, chol->values + chol->sup_valptr[s], nr, w.ws);
         if (fail >= 0) {
             chol->failed_column = (long long)chol->perm[f + (size_t)fail];
             err = DFM_ERR_NOT_POSITIVE_DEFINITE;
-            goto done;
-        }
-        pos[s] = nc;
-        if (nc < nr) {
-            int32_t target = chol->col_super[rs[nc]];
-            link_next[s] = link_head[target];
-            link_head[target] = (int32_t)s;
-        }
-        if (chol->progress) {
-            for (j = f; j < l; j++) flops_done += (double)(nr - (j - f)) * (double)(nr - (j - f));
-            if (flops_done >= next_report) {
-                next_report += chol->flops / 64.0;
-                /* the supernodes' rows include the amalgamation's zeros, which chol->flops (from
-                   the column counts) does not: the share can pass 1 */
-                double done = flops_done / (chol->flops > 0 ? chol->flops : 1.0);
-                if (chol->progress(chol->progress_user, (float)(done < 1.0 ? done : 1.0))) {
-                    err = DFM_CANCELLED;
-                    goto done;
-                }
-            }
+        } else {
+            dfm__link_to_next(chol, &w, s, nc);
+            if (chol->progress && dfm__factor_progress(chol, s, &flops_done, &next_report)) err = DFM_CANCELLED;
         }
     }
-    chol->factored = 1;
-done:
-    dfm__free(al, link_head);
-    dfm__free(al, link_next);
-    dfm__free(al, pos);
-    dfm__free(al, relmap);
-    dfm__free(al, rel);
-    dfm__free(al, upd);
-    dfm__free(al, ws);
+    if (err == DFM_OK) chol->factored = 1;
+    dfm__factor_ws_free(&chol->al, &w);
     return err;
 }
 
