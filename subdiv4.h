@@ -147,6 +147,9 @@
      size is known from the split depths before anything is made, so a divergent w (heights that
      grow level by level, every quad then split to the cap) is refused at once with
      SD4_ERR_TOO_LARGE instead of filling the memory.
+     The bits do not depend on the compiler's FMA contraction (dialect, C or C++, -ffp-contract):
+     the implementation turns it off for its own code and restores the user's setting after it,
+     except under clang's -ffp-contract=fast, which ignores that pragma (the last bits may differ).
 
    REFERENCES
      N. Dyn, J. A. Gregory, D. Levin, "A 4-point interpolatory subdivision scheme for curve
@@ -334,6 +337,19 @@ SD4DEF const char *sd4_result_string(sd4_result r);
 #define SD4_FREE(p) free(p)
 #else
 #error "subdiv4.h: define both SD4_MALLOC and SD4_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -1474,6 +1490,11 @@ SD4DEF sd4_result sd4_butterfly(const float *positions, size_t vertex_count, con
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* SD4_IMPLEMENTATION_DONE */
 #endif /* SD4_IMPLEMENTATION */
