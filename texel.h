@@ -257,6 +257,9 @@
      Tiling over a terrain is the renderer's: it maps a world point to its tile and to texel
      coordinates (see RENDERING, or MESH SHELL over a mesh) and calls the functions below with
      each tile's own wd.
+     The bits do not depend on the compiler's FMA contraction (dialect, C or C++, -ffp-contract):
+     the implementation turns it off for its own code and restores the user's setting after it,
+     except under clang's -ffp-contract=fast, which ignores that pragma (the last bits may differ).
 
    REFERENCES
      Jiao Shao-Hui, Yang Gang, Heng Pheng-Ann, Wu En-Hua, "Realistic grass withering simulation
@@ -723,6 +726,19 @@ TVTDEF const char *tvt_result_string(tvt_result r);
 #define TVT_FREE(p) free(p)
 #else
 #error "texel.h: define both TVT_MALLOC and TVT_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -3341,6 +3357,11 @@ TVTDEF const char *tvt_result_string(tvt_result r)
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* TVT_IMPLEMENTATION_DONE */
 #endif /* TVT_IMPLEMENTATION */
