@@ -75,6 +75,9 @@
      1024 texels; the example must hold one patch (RL_ERR_PATCH_TOO_LARGE otherwise), and feature
      patches need example feature points 0.71 patch + 2 texels from its border (a rotated patch
      must fit): an example too small for that gets fill patches only.
+     The bits do not depend on the compiler's FMA contraction (dialect, C or C++, -ffp-contract):
+     the implementation turns it off for its own code and restores the user's setting after it,
+     except under clang's -ffp-contract=fast, which ignores that pragma (the last bits may differ).
 
    DECISIONS (where the thesis is silent or wrong)
      - Sketch: > 0.75 is a white stroke, < 0.25 a black one. Its skeleton is the ridge line (PPA,
@@ -269,6 +272,19 @@ RLDEF const char *rl_result_string(rl_result r);
 #define RL_FREE(p) free(p)
 #else
 #error "relief.h: define both RL_MALLOC and RL_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -1818,6 +1834,11 @@ RLDEF rl_result rl_emboss(const rl_map *example, const rl_map *sketch, const rl_
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* RL_IMPLEMENTATION_DONE */
 #endif /* RL_IMPLEMENTATION */
