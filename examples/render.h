@@ -182,6 +182,10 @@
      samples (width x height x channels). PNG ancillary chunks are skipped, so gamma, colour
      profiles and a grey / RGB tRNS colour key are not applied: samples are as stored (height
      maps want exactly that); a palette's tRNS does become an alpha channel.
+     The pixels do not depend on the compiler's FMA contraction (dialect, C or C++,
+     -ffp-contract): the implementation turns it off for its own code and restores the user's
+     setting after it, except under clang's -ffp-contract=fast, which ignores that pragma (edge
+     pixels and shades may then differ).
 
    REFERENCES
      Pineda, "A parallel algorithm for polygon rasterization", SIGGRAPH 1988 (edge functions).
@@ -625,6 +629,19 @@ SRDEF sr_result sr_contact_sheet(const sr_image8 *images, const char *const *cap
 #define SR_FREE(p) free(p)
 #else
 #error "render.h: define both SR_MALLOC and SR_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -4356,6 +4373,11 @@ SRDEF sr_result sr_contact_sheet(const sr_image8 *images, const char *const *cap
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* SR_IMPLEMENTATION_DONE */
 #endif /* SR_IMPLEMENTATION */
