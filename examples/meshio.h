@@ -107,6 +107,10 @@
      the file. Data after the last expected element (OFF, PLY, ascii STL) is MIO_ERR_SYNTAX.
      Out-of-range positive OBJ indices are found after the whole file is read (forward references
      are legal), and reported at the line of the largest one.
+     The bits do not depend on the compiler's FMA contraction (dialect, C or C++, -ffp-contract):
+     the implementation turns it off for its own code and restores the user's setting after it,
+     except under clang's -ffp-contract=fast, which ignores that pragma (the STL writer's facet
+     normals may then differ in the last bits).
 
    REFERENCES
      Wavefront Technologies, "Object Files (.obj)", Advanced Visualizer manual, appendix B1 (1991).
@@ -278,6 +282,19 @@ MIODEF const char *mio_format_string(mio_format f);
 #define MIO_FREE(p) free(p)
 #else
 #error "meshio.h: define both MIO_MALLOC and MIO_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
 #endif
 
 #ifdef __cplusplus
@@ -2047,6 +2064,11 @@ MIODEF mio_result mio_weld(mio_mesh *mesh, mio_error *err)
 
 #ifdef __cplusplus
 }
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
 #endif
 #endif /* MIO_IMPLEMENTATION_DONE */
 #endif /* MIO_IMPLEMENTATION */
