@@ -1750,6 +1750,10 @@ int main(int argc, char **argv)
 {
     T_BEGIN(argc, argv);
     (void)sanitize_mode;
+    if (argc > 1 && strcmp(argv[1], "--digests") == 0) { /* only those (tests/fp_contract.sh) */
+        test_factor_digests();
+        return T_END();
+    }
     test_laplacian_values();
     test_random_vs_dense();
     test_orderings();

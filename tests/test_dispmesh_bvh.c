@@ -890,6 +890,15 @@ int main(int argc, char **argv)
         mesh_free(&soup);
         return rc;
     }
+    if (argc > 1 && strcmp(argv[1], "--watertight") == 0) { /* only that (tests/fp_contract.sh) */
+        test_watertight("sphere f3", &s3);
+        test_watertight("sphere f16", &s16);
+        mesh_free(&s3);
+        mesh_free(&s7);
+        mesh_free(&s16);
+        mesh_free(&soup);
+        return T_END();
+    }
     if (sanitize) printf("note: TEST_SANITIZE is set: 2,000 brute-force rays per mesh instead of 10,000\n");
     test_brute_force("sphere f7", &s7, sanitize ? 2000 : 10000);
     test_brute_force("soup", &soup, sanitize ? 2000 : 10000);
