@@ -136,8 +136,11 @@
      dm_shell_collapsed, given to dm_simplify as in HOW TO USE, keep the base inside it.
      METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
      `thickness`, and stops for good when its next offset point would come closer to the
-     original than 90% of its offset (the offset surface would run into another part). The
-     paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
+     original than 90% of its offset (the offset surface would run into another part). That
+     test runs on its own hierarchy: the triangles cut into fragments about a thickness long
+     (at most 4 per triangle + 1024), each node bounded by a box and by a slab (mean normal,
+     interval of n.x), so that long thin triangles fanning around a vertex cost time linear in
+     their number, not quadratic. The paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
@@ -174,7 +177,8 @@
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
-     MEMORY. About 60 bytes per original vertex, a copy of the original and its BVH.
+     MEMORY. About 60 bytes per original vertex, a copy of the original and its BVH; while
+     dm_shell_grow runs, about 100 bytes per fragment besides.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
@@ -7791,6 +7795,244 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     return DM_OK;
 }
 
+/* The growth test asks whether a point comes within r of the original. Boxes over its triangles
+   answer that slowly where long thin triangles fan around a vertex: each box reaches from the
+   centre to the rim, and every one near the query point holds it, so the work grows with the
+   square of the valence. So the test has its own hierarchy: the triangles split (halving the
+   longest edge) into fragments about as long as the thickest query, within a budget of four per
+   triangle plus 1024, and every node carries, beside its box, a slab: the area-weighted mean
+   normal n of its fragments and the interval of n.x over them. A point offset from the surface
+   lies above the nearby nodes' slabs by about its offset and falls away from the far ones by
+   their boxes. The answer is the exact distance test on the original triangles, as
+   dm_bvh_closest_point takes it. */
+typedef struct dm__sh_slab {
+    float n[3], lo, hi;
+} dm__sh_slab;
+
+typedef struct dm__sh_near {
+    dm_bvh *bvh;       /* over the fragments */
+    dm__sh_slab *slab; /* per node of bvh */
+    uint32_t *tri;     /* fragment -> triangle of the original */
+    double slack;      /* covers the rounding of the fragments' corners to float */
+} dm__sh_near;
+
+#define DM__SH_SPLIT_DEPTH 6 /* at most 64 fragments a triangle */
+
+/* The fragments of triangle (a, b, c), halving the longest edge until no edge is longer than
+   len (sqrt(len2)): their count, and their corners into out (9 floats each) unless it is NULL. */
+static size_t dm__sh_split(const double *a, const double *b, const double *c, double len2, int depth, float *out)
+{
+    const double *p[3];
+    double e[3], m[3];
+    size_t n;
+    int k, j, longest = 0;
+    p[0] = a; p[1] = b; p[2] = c;
+    for (j = 0; j < 3; j++) {
+        const double *u = p[j], *v = p[(j + 1) % 3];
+        e[j] = (u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]) + (u[2] - v[2]) * (u[2] - v[2]);
+        if (e[j] > e[longest]) longest = j;
+    }
+    if (!(e[longest] > len2) || depth >= DM__SH_SPLIT_DEPTH) {
+        if (out)
+            for (j = 0; j < 3; j++)
+                for (k = 0; k < 3; k++) out[3 * j + k] = (float)p[j][k];
+        return 1;
+    }
+    a = p[longest]; b = p[(longest + 1) % 3]; c = p[(longest + 2) % 3]; /* a b is the longest edge */
+    for (k = 0; k < 3; k++) m[k] = 0.5 * (a[k] + b[k]);
+    n = dm__sh_split(a, m, c, len2, depth + 1, out);
+    return n + dm__sh_split(m, b, c, len2, depth + 1, out ? out + 9 * n : NULL);
+}
+
+/* every triangle's fragments at length len: their count (stops counting past limit), and into
+   out (when not NULL) their corners, with their triangles into tri */
+static size_t dm__sh_fragments(const dm__sh_run *r, double len, size_t limit, float *out, uint32_t *tri)
+{
+    size_t t, n = 0;
+    for (t = 0; t < r->nt && n <= limit; t++) {
+        double p[3][3];
+        size_t m, j;
+        int c, k;
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++) p[c][k] = r->pos[3 * (size_t)r->idx[3 * t + (size_t)c] + (size_t)k];
+        m = dm__sh_split(p[0], p[1], p[2], len * len, 0, out ? out + 9 * n : NULL);
+        if (tri)
+            for (j = 0; j < m; j++) tri[n + j] = (uint32_t)t;
+        n += m;
+    }
+    return n;
+}
+
+/* The fragment length: the thickness, or longer when the fragments would exceed the budget
+   (started where the sum of longest edges, or of areas, says it must be). */
+static double dm__sh_fragment_length(const dm__sh_run *r, size_t budget)
+{
+    double len = r->sh->thickness, sum_long = 0.0, sum_area = 0.0;
+    size_t t;
+    for (t = 0; t < r->nt; t++) {
+        double p[3][3], e[3], x[3], l2 = 0.0;
+        int c, k;
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++) p[c][k] = r->pos[3 * (size_t)r->idx[3 * t + (size_t)c] + (size_t)k];
+        for (c = 0; c < 3; c++) {
+            double d2 = 0.0;
+            for (k = 0; k < 3; k++) d2 += (p[(c + 1) % 3][k] - p[c][k]) * (p[(c + 1) % 3][k] - p[c][k]);
+            if (d2 > l2) l2 = d2;
+        }
+        for (k = 0; k < 3; k++) { e[k] = p[1][k] - p[0][k]; x[k] = p[2][k] - p[0][k]; }
+        sum_long += sqrt(l2);
+        {
+            double cr[3];
+            dm__cross3(e, x, cr);
+            sum_area += 0.5 * sqrt(dm__dot3(cr, cr));
+        }
+    }
+    if (2.0 * sum_long / (double)budget > len) len = 2.0 * sum_long / (double)budget;
+    if (sqrt(2.0 * sum_area / (double)budget) > len) len = sqrt(2.0 * sum_area / (double)budget);
+    if (!(len > 0.0)) len = r->diag > 0.0 ? r->diag : 1.0;
+    while (dm__sh_fragments(r, len, budget, NULL, NULL) > budget && len < 4.0 * r->diag) len *= 2.0;
+    return len;
+}
+
+/* the slabs, children before parents: a leaf's from its fragments' corners, an inner node's
+   normal from its children's area sums and its interval from the fragments below it (their
+   blocks are a contiguous run) */
+static dm_result dm__sh_slabs(dm__sh_run *r, dm__sh_near *nr)
+{
+    const dm_bvh *bvh = nr->bvh;
+    size_t ns = bvh->node_slots, i;
+    double *area = (double *)dm__take(&r->sc, 3 * ns, sizeof(double));
+    uint32_t *run = (uint32_t *)dm__take(&r->sc, 2 * ns, sizeof(uint32_t));
+    if (!area || !run) return dm__scratch_fail(&r->sc);
+    for (i = ns; i-- > 0;) {
+        const dm__node *n = &bvh->nodes[i];
+        double s[3] = {0.0, 0.0, 0.0}, len, lo = DBL_MAX, hi = -DBL_MAX, nn[3];
+        size_t b;
+        int k;
+        if (i == 1) continue; /* the padding slot */
+        if (n->count) {
+            run[2 * i] = n->first >> 2;
+            run[2 * i + 1] = (n->first >> 2) + ((n->count + 3) >> 2);
+            for (b = run[2 * i]; b < run[2 * i + 1]; b++) {
+                int l;
+                for (l = 0; l < 4; l++) {
+                    double u[3], v[3], cr[3];
+                    const dm__tri4 *q = &bvh->blocks[b];
+                    if (q->id[l] == DM_NO_HIT) continue;
+                    for (k = 0; k < 3; k++) {
+                        u[k] = (double)q->v[3 + k][l] - q->v[k][l];
+                        v[k] = (double)q->v[6 + k][l] - q->v[k][l];
+                    }
+                    dm__cross3(u, v, cr);
+                    for (k = 0; k < 3; k++) s[k] += cr[k];
+                }
+            }
+        } else {
+            uint32_t c0 = n->first, c1 = n->first + 1;
+            run[2 * i] = run[2 * c0] < run[2 * c1] ? run[2 * c0] : run[2 * c1];
+            run[2 * i + 1] = run[2 * c0 + 1] > run[2 * c1 + 1] ? run[2 * c0 + 1] : run[2 * c1 + 1];
+            for (k = 0; k < 3; k++) s[k] = area[3 * c0 + k] + area[3 * c1 + k];
+        }
+        for (k = 0; k < 3; k++) area[3 * i + k] = s[k];
+        len = sqrt(dm__dot3(s, s));
+        for (k = 0; k < 3; k++) nr->slab[i].n[k] = (float)(len > 0.0 ? s[k] / len : 0.0);
+        for (k = 0; k < 3; k++) nn[k] = nr->slab[i].n[k]; /* the interval is of the float normal's n.x */
+        for (b = run[2 * i]; b < run[2 * i + 1]; b++) {
+            const dm__tri4 *q = &bvh->blocks[b];
+            int l, c;
+            for (l = 0; l < 4; l++)
+                for (c = 0; c < 3 && q->id[l] != DM_NO_HIT; c++) {
+                    double d = nn[0] * q->v[3 * c][l] + nn[1] * q->v[3 * c + 1][l] + nn[2] * q->v[3 * c + 2][l];
+                    if (d < lo) lo = d;
+                    if (d > hi) hi = d;
+                }
+        }
+        /* widened by the fragments' corner rounding (|n|_1 <= sqrt 3 times the slack) */
+        nr->slab[i].lo = len > 0.0 ? (float)(lo - 2.0 * nr->slack) : 0.0f;
+        nr->slab[i].hi = len > 0.0 ? (float)(hi + 2.0 * nr->slack) : 0.0f;
+    }
+    return DM_OK;
+}
+
+/* the growth test's hierarchy over the original (above) */
+static dm_result dm__sh_near_build(dm__sh_run *r, dm__sh_near *nr)
+{
+    size_t budget = 4 * r->nt + 1024, nf, i;
+    double len = dm__sh_fragment_length(r, budget), ext = 0.0;
+    float *fp;
+    uint32_t *fi;
+    dm_bvh_options bo;
+    dm_result res;
+    int k;
+    memset(nr, 0, sizeof *nr);
+    nf = dm__sh_fragments(r, len, (size_t)-1, NULL, NULL);
+    nr->tri = (uint32_t *)dm__take(&r->sc, nf, sizeof(uint32_t));
+    fp = (float *)dm__alloc_array(&r->a, 9 * nf, sizeof(float), &r->sc.overflow); /* the BVH copies them */
+    fi = (uint32_t *)dm__alloc_array(&r->a, 3 * nf, sizeof(uint32_t), &r->sc.overflow);
+    if (!fp || !fi || !nr->tri) {
+        if (fp) r->a.free(r->a.user, fp);
+        if (fi) r->a.free(r->a.user, fi);
+        return dm__scratch_fail(&r->sc);
+    }
+    dm__sh_fragments(r, len, (size_t)-1, fp, nr->tri);
+    for (i = 0; i < 3 * nf; i++) fi[i] = (uint32_t)i;
+    for (k = 0; k < 3; k++) {
+        if (fabs(r->lo[k]) > ext) ext = fabs(r->lo[k]);
+        if (fabs(r->hi[k]) > ext) ext = fabs(r->hi[k]);
+    }
+    nr->slack = 8.0 * FLT_EPSILON * ext; /* a fragment's float corners lie this close to its triangle */
+    memset(&bo, 0, sizeof bo);
+    bo.allocator = r->opt.allocator;
+    res = dm_bvh_build(fp, 3 * nf, fi, nf, &bo, &nr->bvh);
+    r->a.free(r->a.user, fp);
+    r->a.free(r->a.user, fi);
+    if (res != DM_OK) return res;
+    nr->slab = (dm__sh_slab *)dm__take(&r->sc, nr->bvh->node_slots, sizeof(dm__sh_slab));
+    if (!nr->slab) return dm__scratch_fail(&r->sc);
+    return dm__sh_slabs(r, nr);
+}
+
+/* Does q come closer than rad to the original: is there a triangle t with (float)sqrt(d2) < rad,
+   d2 its squared distance (dm__triangle_d2)? That is dm_bvh_closest_point's answer with
+   max_distance rad, compared with rad. */
+static int dm__sh_near_hit(const dm__sh_near *nr, const float *pos, const uint32_t *idx, const float qf[3], float rad)
+{
+    const dm_bvh *bvh = nr->bvh;
+    uint32_t stack[DM__STACK + 2], ni = 0;
+    double q[3], reach = (double)rad + nr->slack, reach2 = reach * reach;
+    size_t sp = 0;
+    int k;
+    for (k = 0; k < 3; k++) q[k] = qf[k];
+    stack[sp++] = 0;
+    while (sp) {
+        const dm__node *n;
+        const dm__sh_slab *s;
+        double d;
+        ni = stack[--sp];
+        n = &bvh->nodes[ni];
+        s = &nr->slab[ni];
+        DM_COUNT_OPS(1);
+        if (dm__box_d2(n, q) > reach2) continue;
+        d = s->n[0] * q[0] + s->n[1] * q[1] + s->n[2] * q[2];
+        if (d - s->hi > reach || s->lo - d > reach) continue;
+        if (n->count) {
+            uint32_t i;
+            for (i = n->first; i < n->first + n->count; i++) {
+                uint32_t f = bvh->blocks[i >> 2].id[i & 3];
+                float tri[9];
+                double u, v;
+                DM_COUNT_OPS(1);
+                dm__load_triangle(pos, idx, nr->tri[f], tri);
+                if ((float)sqrt(dm__triangle_d2(q, tri, &u, &v)) < rad) return 1;
+            }
+        } else { /* the depth is below DM__STACK (dm__build) */
+            stack[sp++] = n->first + 1;
+            stack[sp++] = n->first;
+        }
+    }
+    return 0;
+}
+
 /* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
    normal; a vertex whose next offset point comes closer to another part of the original than
    90% of its offset would make the offset surface run into itself, and stops. Then the shell's
@@ -7802,6 +8044,12 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
     uint8_t *stopped = r->stopped;
     int steps = r->opt.steps == 0 ? 8 : r->opt.steps > 256 ? 256 : r->opt.steps, step, k;
     size_t v, nv = r->nv;
+    dm__sh_near nr;
+    dm_result res = dm__sh_near_build(r, &nr);
+    if (res != DM_OK) {
+        dm_bvh_free(nr.bvh);
+        return res;
+    }
     for (v = 0; v < nv; v++) {
         sh->offset[v] = 0.0f;
         stopped[v] = sh->normals[3 * v] == 0.0f && sh->normals[3 * v + 1] == 0.0f && sh->normals[3 * v + 2] == 0.0f;
@@ -7810,18 +8058,21 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
         float h = sh->thickness * (float)step / (float)steps;
         for (v = 0; v < nv; v++) {
             float q[3];
-            dm_closest cl;
             if (stopped[v]) continue;
             for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
-            if (dm_bvh_closest_point(r->in->bvh, q, 0.9f * h, &cl) && cl.distance < 0.9f * h) {
+            if (dm__sh_near_hit(&nr, pos, r->idx, q, 0.9f * h)) {
                 stopped[v] = 1;
                 sh->stopped_vertices++;
             } else {
                 sh->offset[v] = h;
             }
         }
-        if (r->opt.progress && r->opt.progress(r->opt.progress_user, (float)step / (float)steps)) return DM_CANCELLED;
+        if (r->opt.progress && r->opt.progress(r->opt.progress_user, (float)step / (float)steps)) {
+            dm_bvh_free(nr.bvh);
+            return DM_CANCELLED;
+        }
     }
+    dm_bvh_free(nr.bvh);
     for (v = 0; v < nv; v++)
         for (k = 0; k < 3; k++) sh->positions[3 * v + (size_t)k] = pos[3 * v + (size_t)k] + sh->offset[v] * sh->normals[3 * v + (size_t)k];
     return DM_OK;

@@ -10,7 +10,12 @@
      vertices whose closest feature is on a boundary are excluded and counted), every sampled
      base point inside the shell, the bake rays' first hits front-facing, no bake ray (153 per
      triangle) going out and in again (the bunny: at most 1 in 10000); the face count reached;
+   - a fan of K long thin triangles around a cone's apex (K = 20k, 40k, 80k): the growth's
+     proximity steps (DM_COUNT_OPS: nodes and triangles visited) at 80k are at most 6 times those
+     at 20k, and at 20k every vertex's offsets agree with a brute-force distance to all triangles;
    - bad input, allocation failure at every point, cancel, determinism. */
+static unsigned long long g_ops; /* proximity and queue steps (DM_COUNT_OPS) */
+#define DM_COUNT_OPS(n) (g_ops += (unsigned long long)(n))
 #define DM_IMPLEMENTATION
 #include "dispmesh.h"
 #define MIO_IMPLEMENTATION
@@ -522,6 +527,83 @@ static void test_alloc_fail(void)
 
 static int cancel_now(void *u, float done) { (void)done; return ++*(int *)u >= 2; }
 
+/* squared distance from q to the nearest triangle of m, by brute force in double */
+static double brute_d2(const mesh *m, const float q[3])
+{
+    double best = DBL_MAX, p[3];
+    size_t t;
+    int k;
+    for (k = 0; k < 3; k++) p[k] = q[k];
+    for (t = 0; t < m->nt; t++) {
+        float tri[9];
+        double u, v, d2;
+        for (k = 0; k < 9; k++) tri[k] = m->p[3 * m->t[3 * t + (size_t)(k / 3)] + (size_t)(k % 3)];
+        d2 = dm__triangle_d2(p, tri, &u, &v);
+        if (d2 < best) best = d2;
+    }
+    return best;
+}
+
+/* A fan of K triangles around the apex of a flat cone (the rim on the unit circle in z = 0, the
+   apex at z = 0.2): every box of a long thin triangle reaches from the apex to the rim, so a
+   box hierarchy alone visits a share of all K triangles for each rim vertex (quadratic). */
+static mesh make_fan(int K)
+{
+    mesh m;
+    int i;
+    m.nv = (size_t)K + 1;
+    m.nt = (size_t)K;
+    m.p = (float *)malloc(3 * m.nv * sizeof(float));
+    m.t = (uint32_t *)malloc(3 * m.nt * sizeof(uint32_t));
+    if (!m.p || !m.t) { free(m.p); free(m.t); m.p = NULL; m.t = NULL; m.nv = m.nt = 0; return m; }
+    m.p[0] = 0.0f; m.p[1] = 0.0f; m.p[2] = 0.2f;
+    for (i = 0; i < K; i++) {
+        double a = 6.283185307179586 * i / K;
+        m.p[3 + 3 * i] = (float)cos(a); m.p[4 + 3 * i] = (float)sin(a); m.p[5 + 3 * i] = 0.0f;
+        m.t[3 * i] = 0; m.t[3 * i + 1] = (uint32_t)(1 + i); m.t[3 * i + 2] = (uint32_t)(1 + (i + 1) % K);
+    }
+    return m;
+}
+
+static void test_valence(void)
+{
+    static const int Ks[3] = {20000, 40000, 80000};
+    unsigned long long ops[3];
+    int k;
+    for (k = 0; k < 3; k++) {
+        mesh m = make_fan(Ks[k]);
+        dm_shell *sh = NULL;
+        ops[k] = 0;
+        if (!T_CHECK(m.p != NULL)) return;
+        g_ops = 0;
+        T_CHECK(dm_shell_grow(m.p, m.nv, m.t, m.nt, NULL, &sh) == DM_OK);
+        ops[k] = g_ops;
+        if (sh && k == 0) { /* each vertex's offsets against the brute-force distance, every 50th vertex */
+            size_t v, wrong = 0, checked = 0;
+            for (v = 0; v < m.nv; v += 50) {
+                int step, kk;
+                for (step = 1; step <= 8; step++) {
+                    float h = sh->thickness * (float)step / 8.0f, q[3];
+                    int near;
+                    for (kk = 0; kk < 3; kk++) q[kk] = m.p[3 * v + (size_t)kk] + h * sh->normals[3 * v + (size_t)kk];
+                    near = (float)sqrt(brute_d2(&m, q)) < 0.9f * h;
+                    checked++;
+                    if (near) { wrong += sh->offset[v] >= h; break; } /* stopped before this step */
+                    wrong += sh->offset[v] < h; /* not stopped: grown at least this far */
+                }
+            }
+            printf("  fan of 20000: %zu of %zu offset steps differ from the brute force\n", wrong, checked);
+            T_CHECK(checked > 1000 && wrong == 0);
+        }
+        dm_shell_free(sh);
+        mesh_free(&m);
+    }
+    printf("  fan of 20k / 40k / 80k triangles: %llu / %llu / %llu proximity steps (80k / 20k = %.2f)\n", ops[0], ops[1],
+           ops[2], (double)ops[2] / (double)(ops[0] ? ops[0] : 1));
+    T_CHECK(ops[0] >= 20000);
+    T_CHECK_MSG(ops[2] <= 6 * ops[0], "%llu steps at 80k, %llu at 20k", ops[2], ops[0]);
+}
+
 static void test_cancel_and_determinism(const mesh *m)
 {
     dm_shell_options so;
@@ -599,6 +681,7 @@ int main(int argc, char **argv)
     test_bad_input(&sphere);
     test_alloc_fail();
     test_cancel_and_determinism(&sphere);
+    test_valence();
     {
         const char *bunny = "/usr/share/glmark2/models/bunny.obj";
         mio_mesh mm;
