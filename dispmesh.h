@@ -19,8 +19,7 @@
      Every call returns a dm_result (DM_OK = 0; dm_result_string() names it). Check each one.
      A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it.
 
-   THE PARTS (each described below under the same headings: options, memory, errors, thread
-   safety, limits)
+   THE PARTS (each below under the same headings: options, memory, errors, thread safety, limits)
      PART 1  BVH ray caster: dm_bvh_build, dm_bvh_intersect, _occluded, _intersect_line, batches,
              dm_bvh_closest_point, dm_bvh_refit.
      PART 2  Simplification with progressive-mesh records: dm_simplify, dm_pm_*, dm_weld.
@@ -30,26 +29,23 @@
              dm_bake, dm_reconstruct, dm_coverage_weights, dm_surface_distance.
 
    COMMON TO ALL PARTS
-     Meshes are float xyz positions (3 per vertex) and uint32 indices (3 per triangle,
-     counter-clockwise front faces). Compile-time options: DM_STATIC (all functions static),
-     DM_MALLOC/DM_FREE (the default allocator; define both or neither), DM_USE_SSE2 (x86) and
-     DM_USE_AVX2 (needs -mavx2; implies SSE2): opt-in SIMD box and triangle tests,
-     bit-identical to the portable path and recommended where available. Run-time options are
-     structs whose zero value (or NULL) means the defaults (dm_<call>_default_options() spells
-     them out); every allocating call takes a dm_allocator (NULL = DM_MALLOC/DM_FREE) and
-     objects that outlive the call keep it for their free; every long call takes a progress
-     callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input gets
-     a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no triangles
-     (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN, infinite or
-     huge (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes that
-     overflow (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out
-     is NULL and nothing is left allocated. No global state; every call is re-entrant and
-     deterministic (the same input gives the same bits; ties go to the lower index). Do not
-     build with -ffast-math. FMA contraction changes nothing (dialect, C or C++, -ffp-contract):
-     the implementation turns it off for its own code and restores the user's setting after it;
-     the exception is clang's -ffp-contract=fast, which ignores that pragma: there the watertight
-     ray test lets rays through shared edges (108 of 20484 aimed at a sphere's vertices and edge
-     midpoints) and the bits of simplify, parameterize, bake and reconstruct change.
+     Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-
+     clockwise front faces). Compile time: DM_STATIC (static functions), DM_MALLOC/DM_FREE (the
+     default allocator; both or neither), DM_USE_SSE2 (x86), DM_USE_AVX2 (needs -mavx2; implies
+     SSE2): SIMD box and triangle tests, bit-identical to the portable path, recommended where
+     available. Run-time options are structs whose zero value (or NULL) means the defaults
+     (dm_<call>_default_options() spells them out); allocating calls take a dm_allocator (NULL =
+     DM_MALLOC/DM_FREE) that objects outliving the call keep for their free; long calls take a
+     progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input
+     gets a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no triangles
+     (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN, infinite or huge
+     (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes that overflow
+     (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out is NULL and
+     nothing is left allocated. No global state; every call is re-entrant and deterministic (the
+     same input gives the same bits; ties go to the lower index). Do not build with -ffast-math.
+     FMA contraction changes nothing (C or C++, any -ffp-contract): the implementation turns it
+     off for its own code and restores the user's setting, except under clang's -ffp-contract=
+     fast, which ignores that pragma (rays can then slip through shared edges; bits change).
 
    PART 1: BVH RAY CASTER
      WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
@@ -71,10 +67,8 @@
      MEMORY. About 120 bytes per triangle allocated, 70 touched (dm_bvh_get_info reports it);
      queries never allocate (a ray keeps a 10 KB stack).
      ERRORS. As above for dm_bvh_build and dm_bvh_refit (which needs the same triangle count).
-     THREAD SAFETY. A built BVH may be queried from any number of threads; refit and free must
-     run alone.
-     LIMITS. At most 2^30 - 1 triangles; coordinates up to 1e18. Watertight whatever the FMA
-     contraction setting, except under clang's -ffp-contract=fast (see above).
+     THREAD SAFETY. A built BVH may be queried from any number of threads; refit and free run alone.
+     LIMITS. At most 2^30 - 1 triangles; coordinates up to 1e18; FMA as in COMMON.
 
    PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*, dm_weld)
      WHAT. Edge collapses in order of quadric error (Garland-Heckbert 1997), recorded as a
@@ -97,11 +91,10 @@
      the queue at the new cost.
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no new degenerate or
      flipped triangle; boundary vertices stay on boundary edges; locked and frozen vertices keep
-     their positions bit for bit. The error of a collapse is the area-weighted RMS distance from
-     the new position to the planes merged into it (mesh units); the report's error is the
-     largest. Level k of the progressive mesh is bit for bit the mesh after the (split_count -
-     k)-th collapse; triangles keep their input order. dm_pm_merged_vertices gives, for a base
-     vertex, the sorted input vertices merged into it (a partition of all input vertices).
+     their positions bit for bit. A collapse's error is the area-weighted RMS distance from the
+     new position to the planes merged into it (mesh units; the report gives the largest). Level
+     k is bit for bit the mesh after the (split_count - k)-th collapse, triangles in input order.
+     dm_pm_merged_vertices gives a base vertex's sorted input vertices (a partition of them all).
      OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error
      (no collapse above it, mesh units; 0 none; neither: until no collapse passes the checks);
      flags (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes);
@@ -119,28 +112,26 @@
      the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
      ERRORS. As in COMMON; a negative or NaN target_error, a NaN min_quality or one above 0.5
      is DM_ERR_INVALID_ARGUMENT; a triangle soup (no vertex in two triangles) with repeated
-     positions is DM_ERR_NOT_WELDED. Vetoes or checks that stop above the target still give
-     DM_OK (report.reached_target = 0). Triangles with a repeated index are dropped (counted);
-     duplicate vertices are different vertices (a seam between them is two boundaries);
-     isolated vertices are in no level.
+     positions is DM_ERR_NOT_WELDED. Stopping above the target still gives DM_OK (report.
+     reached_target = 0). Triangles with a repeated index are dropped (counted); duplicate
+     vertices are different vertices (a seam between them is two boundaries); isolated ones are
+     in no level.
      THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads;
      dm_pm_set_level and dm_pm_get_mesh must run alone on it.
      LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles, and 3 triangles + 2 vertices
      below about 4.0e9. Attributes (normals, UVs) are not simplified.
 
    PART 3: BOUNDING SHELL AND PAPER 000'S CONSTRAINTS
-     WHAT. The base must lie outside the original (so that every ray that meets the displaced
-     surface meets the base first) but near it, inside a shell grown from it (Cohen et al.'s
-     simplification envelopes), and each texel must get one depth (no height-field overlap,
-     the paper's Fig 4.1.3). dm_shell_grow grows the shell; dm_shell_constraint and
-     dm_shell_collapsed, given to dm_simplify as in HOW TO USE, keep the base inside it.
+     WHAT. The base must lie outside the original (every ray that meets the displaced surface
+     meets the base first) but inside a shell grown from it (Cohen et al.'s simplification
+     envelopes), and each texel must get one depth (no overlap, the paper's Fig 4.1.3).
+     dm_shell_grow grows the shell; dm_shell_constraint and dm_shell_collapsed keep the base in it.
      METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
      `thickness`, and stops for good when its next offset point would come closer to the
-     original than 90% of its offset (the offset surface would run into another part). That
-     test runs on its own hierarchy: the triangles cut into fragments about a thickness long
-     (at most 4 per triangle + 1024), each node bounded by a box and by a slab (mean normal,
-     interval of n.x), so that long thin triangles fanning around a vertex cost time linear in
-     their number, not quadratic. The paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
+     original than 90% of its offset (it would run into another part). That test runs on the
+     triangles cut into fragments about a thickness long, each node bounded by a box and a slab
+     (mean normal, interval of n.x), so a vertex of high valence costs time linear in it. The
+     paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
@@ -148,9 +139,8 @@
           2005). Each asks keep to lie outside one plane; the proposed position is projected on
           those half-spaces (Dykstra, in the metric of the collapse's quadric plus its mean
           eigenvalue: where the error grows least, without sliding far along flat parts) and
-          checked again (DM_COLLAPSE_MOVE, or a veto). Against Sander et al.'s progressive hulls,
-          which enclose each previous level and so pile up the offsets, this encloses the
-          original itself.
+          checked again (DM_COLLAPSE_MOVE, or a veto). It encloses the original itself, not the
+          previous level (Sander et al.'s progressive hulls), so offsets do not pile up.
        2. Shell: keep within the offset grown at its closest point of the original; along each
           ray of 3., the depth to the original no more than the offset grown at the hit.
        3. Overlap: from overlap_samples points of each new triangle and the middle and quarter
@@ -160,20 +150,17 @@
           angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums).
           A miss is a violation unless the original is open.
      The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
-     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED), and keeps
-     that answer for the call in full: a candidate the simplifier queues again at the cost there
-     needs no more.
+     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED) and keeps
+     that answer for the call in full.
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
-     the constraint vetoes every remaining collapse above the face count. With opt.relax =
-     dm_shell_relax, dm_simplify then relaxes it: a candidate that fails 1-3 is still allowed when,
-     from each overlap sample, the nearest crossing of the original along the line (either way,
-     within the thickness) faces the way the base does, so that a bake both ways finds one depth
-     (a second relax leaves only the simplifier's own checks). Candidates that pass 1-3 stay
-     exact. dm_shell_fallback_triangles gives the base triangles at relaxed keeps: bake them both
-     ways (dm_bake_options.both_ways; their displacement is signed). The relaxed region is not
-     confined to the thin parts: once the constraints are stuck everywhere, every later collapse
-     is relaxed; the part of it where the base ends up inside the original is where the baked
-     depth is negative.
+     the constraint vetoes every collapse left above the face count. With opt.relax =
+     dm_shell_relax, dm_simplify then relaxes it: a candidate failing 1-3 passes when, from each
+     overlap sample, the nearest crossing of the original along the line (either way, within the
+     thickness) faces the way the base does, so that a bake both ways finds one depth (a second
+     relax leaves only the simplifier's checks). dm_shell_fallback_triangles gives the base
+     triangles at relaxed keeps: bake them both ways (dm_bake_options.both_ways; signed depth).
+     Once the constraints are stuck everywhere, every later collapse is relaxed; where the base
+     ends up inside the original, the baked depth is negative.
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
@@ -186,69 +173,61 @@
      own vertex normals (without it, normals come from the one-ring).
 
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
-     WHAT. The base mesh (from Part 2 or anywhere) laid out in one width x height map,
-     displacement and the original's normals baked into it, the surface sample grid other
-     headers filter on, and the dense mesh rebuilt from base + map.
+     WHAT. A base mesh laid out in one width x height map, the displacement and the original's
+     normals baked into it, the surface sample grid other headers filter on, the dense mesh again.
      PARAMETERIZATION. Charts that are topological disks grow breadth first (a triangle joins
-     within max_chart_angle of the chart's mean normal, up to max_chart_triangles). Each chart's
+     within max_chart_angle of the chart's mean normal, up to max_chart_triangles). A chart's
      boundary is fixed at its projection on the chart's plane (or on a circle by arc length when
-     that is not a simple counter-clockwise loop), the interior is Floater's mean value
-     parameterization, then Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional
-     targets (triangle_weight, default each triangle's area; dm_coverage_weights gives the
-     original's area over each base triangle, so texels go where the original's surface is). A
-     round is kept only when the stretch drops and nothing flips; a chart with no flip-free
-     layout becomes lone triangles. Charts are turned to their smallest box (12 angles) and packed
-     at the largest scale that fits: in shelves of boxes, then, larger where it fits, by their
-     footprints (each row's extent grown by half the gutter) in a bitmap, largest first, each in
-     the quarter turn whose lowest free place keeps its top lowest (holes are filled). dm_param
-     reports utilization, L2 and max stretch (Sander et al. 2001), and the share of triangles
-     whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many small charts with seams
-     instead of its one global chart (its text omits the cut), so every neighbour lookup goes
-     through nbr.
+     that is not a simple counter-clockwise loop), its interior is Floater's mean value map, then
+     Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional targets (triangle_weight,
+     default each triangle's area; dm_coverage_weights gives the original's area over each base
+     triangle, so texels go where the original's surface is), each kept only when the stretch
+     drops and nothing flips; a chart with no flip-free layout becomes lone triangles. Charts are
+     turned to their smallest box (12 angles) and packed at the largest scale that fits: shelves
+     of boxes, then, larger where it fits, their footprints (rows grown by half the gutter) in a
+     bitmap, largest first, each in the quarter turn whose lowest free place keeps its top
+     lowest. dm_param reports utilization, L2 and max stretch (Sander et al. 2001), and the share
+     of triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
+     seams, not its one global chart (its text omits the cut); neighbour lookups go through nbr.
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a
      shared edge): the base point p and the interpolated angle-weighted base normal n; the line
-     p - t n for |t| <= max_distance (default 5% of the original's diagonal) gives disp = t (world
-     units, positive inward) and the original's interpolated vertex normal at the hit. inward
-     takes the paper's rule (the first hit along -n, for a base that encloses the original);
-     otherwise, and on both_ways triangles, the nearest crossing either way. A texel with no
-     crossing, or whose depth lies more than 8 texel sizes off the median of its neighbours in
-     the chart (a ray that slipped past a thin part to another sheet), is DM_TEXEL_MISS (valid =
-     0). Gutter texels within 2 texels of a chart (a square
-     of half-side 2 around the centre meets one of its triangles) are DM_TEXEL_BORDER: baked the
-     same way from the nearest such triangle's plane extended, so that bilinear filtering (and
-     the first mip level) anywhere inside a chart reads real samples. MISS and the other, EMPTY,
-     texels get push-pull filled values (Gortler et al. 1996) for filtering only.
-     SURFACE SAMPLE GRID. dm_dispmap holds, per texel: pos, nrm, disp, area (the base area the
-     texel stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y
-     (the dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the
-     adjacent texel (rot 0). Across a seam, the texel's centre is carried over the nearest
-     chart-boundary edge into the twin triangle's chart and nbr is the nearest texel there;
-     UINT32_MAX at the mesh's own boundary. nbr_rot = r: a step along direction d here continues
-     as d turned r quarter turns counter-clockwise in the neighbour's axes; to step back, go along
-     -(d turned r). Links are chosen so that the walk back lands where it started; where one
-     texel cannot serve two charts that step into it (chart corners), nbr is the texel itself
-     with a half turn (a mirror, as a clamped filter sees it).
-     RECONSTRUCTION. Each base triangle is tessellated at the map's resolution, as a GPU
-     tessellator does: a barycentric grid of level sqrt(2 x its uv area in texels) inside, as
-     many points along each base edge as its longer uv side has texels (shared by every
-     triangle on the edge), strips between. A vertex is its base point moved along the base
-     normal by the map's bilinear depth, averaged over the triangles sharing it, with the
-     map's normal. A closed manifold base gives a closed manifold result with no T-junction;
-     nothing is dropped at depth breaks (a steep fin, as a GPU draws the same map). Vertex v <
+     p - t n, |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world
+     units, positive inward) and the original's interpolated normal at the hit: the first hit
+     along -n with inward (the paper's rule, for a base that encloses the original), otherwise and
+     on both_ways triangles the nearest crossing either way. No crossing, or a depth more than 8
+     texel sizes off the median of its chart neighbours (a ray that slipped past a thin part), is
+     DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart are DM_TEXEL_BORDER,
+     baked from the nearest such triangle's plane extended, so that bilinear filtering (and the
+     first mip level) reads real samples. MISS and EMPTY texels get push-pull filled values
+     (Gortler et al. 1996) for filtering only.
+     SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
+     stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
+     dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent
+     texel (rot 0); across a seam, the texel's centre is carried over the nearest chart-boundary
+     edge into the twin triangle's chart and nbr is the nearest texel there; UINT32_MAX at the
+     mesh's boundary. nbr_rot = r: a step along d here continues as d turned r quarter turns
+     counter-clockwise in the neighbour's axes; to step back, go along -(d turned r). The walk
+     back lands where it started; where one texel cannot serve two charts (chart corners), nbr
+     is the texel itself with a half turn (a mirror, as a clamped filter sees it).
+     RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric
+     grid of level sqrt(2 x its uv area in texels) inside, as many points along each base edge
+     as its longer uv side has texels (shared by the triangles on the edge), strips between. A
+     vertex is its base point moved along the base normal by the map's bilinear depth, averaged
+     over the triangles sharing it, with the map's normal. A closed manifold base gives a closed
+     manifold result with no T-junction; nothing is dropped at depth breaks. Vertex v <
      base_vertex_count is base vertex v; face_base gives each triangle's base triangle.
      dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
      dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
-     stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance, inward, both_ways.
-     dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
+     stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance,
+     inward, both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
      dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
      samples_per_side (0 = 200000, at most 10^9). Each with allocator and progress.
-     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (packing: a bit per texel
-     more while it runs); dm_dispmap: 46 bytes per
-     texel (about 38 more while dm_bake runs) plus a BVH of the original; dm_trimesh: 24 bytes
-     per vertex and 16 per triangle (about 2 triangles per covered texel), 52 more per vertex
-     while dm_reconstruct runs.
+     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
+     packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of
+     the original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per
+     covered texel), 52 more per vertex while dm_reconstruct runs.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
      their gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public
      dm_param and dm_dispmap arrays they read (a caller may have edited them): an index out of
@@ -258,23 +237,18 @@
      at most 1024 segments along one base edge.
 
    REFERENCES
-     S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
-     I. Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007.
-     T. Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013. C. Ericson, "Real-Time Collision
-     Detection", 2005, 5.1.5. J. Bikker, tinybvh (2024-2025). H. Dammertz, J. Hanika, A. Keller,
-     "Shallow Bounding Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", EGSR 2008.
-     M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997.
-     H. Hoppe, "Progressive Meshes", SIGGRAPH 1996. T. Dey, H. Edelsbrunner, S. Guha, D.
-     Nekhayev, "Topology Preserving Edge Contraction", 1999. P. Lindstrom, G. Turk, "Fast and
-     Memory Efficient Polygonal Simplification", IEEE Vis 1998. J. Cohen et al., "Simplification
-     Envelopes", SIGGRAPH 1996. P. Sander et al., "Silhouette Clipping" (progressive hulls),
-     SIGGRAPH 2000. J. A. Baerentzen, H. Aanaes, "Signed Distance Computation Using the Angle
-     Weighted Pseudonormal", TVCG 2005. M. S. Floater, "Mean value coordinates", CAGD 2003.
-     S. Yoshizawa, A. Belyaev, H.-P. Seidel, "A fast and simple stretch-minimizing mesh
-     parameterization", SMI 2004. P. Sander, J. Snyder, S. Gortler, H. Hoppe, "Texture mapping
-     progressive meshes", SIGGRAPH 2001. S. Gortler et al., "The Lumigraph", SIGGRAPH 1996
-     (push-pull). G. Thurmer, C. Wüthrich, "Computing vertex normals from polygonal facets", JGT
-     1998. */
+     Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald, SAH-based BVH
+     construction, RT 2007. Ize, Robust BVH ray traversal, JCGT 2013. Ericson, Real-Time Collision
+     Detection 5.1.5, 2005. Bikker, tinybvh, 2024. Dammertz, Hanika, Keller, Shallow BVHs for SIMD
+     ray tracing, EGSR 2008. Garland, Heckbert, Quadric error metrics, SIGGRAPH 1997. Hoppe,
+     Progressive meshes, SIGGRAPH 1996. Dey, Edelsbrunner, Guha, Nekhayev, Topology preserving
+     edge contraction, 1999. Lindstrom, Turk, Fast and memory efficient simplification, Vis 1998.
+     Cohen et al., Simplification envelopes, SIGGRAPH 1996. Sander et al., Silhouette clipping
+     (progressive hulls), SIGGRAPH 2000. Baerentzen, Aanaes, Angle weighted pseudonormal, TVCG
+     2005. Floater, Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev, Seidel, Stretch-
+     minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture mapping
+     progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH 1996.
+     Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
