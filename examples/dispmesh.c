@@ -1,6 +1,6 @@
 /* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
 
-   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--fallback]
+   usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--strict]
                   [--min-quality Q]
      IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
      --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
@@ -13,15 +13,18 @@
      --both-ways bake with the nearest hit either way along the normal; the default is the paper's
                  rule, the first hit along -normal (dm_bake_options.inward), right for a base that
                  encloses the original, as the shell constraint makes it
-     --fallback  where the shell constraint stops above --faces (the shell too thin for an enclosing
-                 base), relax it there (dm_shell_relax): the base may cross the original, and its
-                 triangles there are baked both ways. RESULT's fallback_region= is the share of
-                 the original's area over them (by the coverage weights), fallback= the share
-                 where the base then lies inside the original (texels of negative depth, each
-                 triangle's share of its weight), the part of the surface that needs the signed
-                 displacement
-     --min-quality Q  the simplifier's sliver guard (dm_simplify_options.min_quality, 2 area /
-                 longest edge^2, e.g. 0.1; default 0 = none)
+     --strict    the paper's constraints only: stop where they veto every collapse left. By
+                 default, where the shell constraint stops above --faces (the shell too thin for
+                 an enclosing base) it is relaxed there (dm_shell_relax): the base may cross the
+                 original, and its triangles there are baked both ways. RESULT's
+                 fallback_region= is the share of the original's area over them (by the coverage
+                 weights), fallback= the share where the base then lies inside the original
+                 (texels of negative depth, each triangle's share of its weight), the part of the
+                 surface that needs the signed displacement. --fallback names the default.
+     --min-quality Q  the constrained simplifier's sliver guard (dm_simplify_options.min_quality,
+                 2 area / longest edge^2; default 0.05: without it, the constraint's vetoes leave
+                 knots of slivers that the parameterization stretches; the unconstrained
+                 reference base never has one)
    The pipeline (dispmesh.h): meshio's mio_weld when the triangles do not share their vertices (an STL file),
    dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
@@ -630,7 +633,7 @@ static void usage(FILE *to)
 {
     fprintf(to,
             "usage: dispmesh IN|--brick [-o PREFIX] [--faces N] [--res R] [--size S] [--no-views] [--both-ways]\n"
-            "                [--fallback] [--min-quality Q]\n"
+            "                [--strict] [--min-quality Q]\n"
             "Paper 000 end to end: a base mesh plus one displacement map, baked from IN and rebuilt from them.\n"
             "  IN                 a mesh file meshio.h reads (OBJ, OFF, PLY, STL; an STL soup is welded first);\n"
             "                     a closed manifold works best\n"
@@ -643,10 +646,11 @@ static void usage(FILE *to)
             "  --no-views         do not render PREFIX_views.png (default: render it)\n"
             "  --both-ways        bake the nearest hit either way along the normal (default: the first hit\n"
             "                     along -normal, right for a base that encloses the original)\n"
-            "  --fallback         where the shell is too thin for an enclosing base, relax the constraint there\n"
-            "                     and bake those triangles both ways (default: off)\n"
-            "  --min-quality Q    the simplifier's sliver guard, 2 area / longest edge^2, in [-1, 0.5]\n"
-            "                     (default 0 = none)\n"
+            "  --strict           the paper's constraints only, even where they stop above --faces (default:\n"
+            "                     where the shell is too thin for an enclosing base, relax the constraint there\n"
+            "                     and bake those triangles both ways; --fallback names that default)\n"
+            "  --min-quality Q    the constrained simplifier's sliver guard, 2 area / longest edge^2, in [-1, 0.5]\n"
+            "                     (default 0.05; 0 = none)\n"
             "  -h, --help         show this help and exit\n"
             "  --version          show the version and exit\n"
             "Prints one RESULT dispmesh line on stdout; progress on stderr.\n"
@@ -669,8 +673,8 @@ static int parse_args(int argc, char **argv, options *o)
     memset(o, 0, sizeof *o);
     o->prefix = "out/dispmesh";
     o->faces = 500; o->res = 512; o->size = 400;
-    o->min_quality = 0.0; /* the library default: no sliver guard */
-    o->views = o->inward = 1;
+    o->min_quality = 0.05; /* the constrained run's sliver guard (the library's default is none) */
+    o->views = o->inward = o->fallback = 1;
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int takes = !strcmp(a, "--faces") || !strcmp(a, "--res") || !strcmp(a, "--size") || !strcmp(a, "--min-quality") ||
@@ -683,6 +687,7 @@ static int parse_args(int argc, char **argv, options *o)
         else if (!strcmp(a, "--no-views")) o->views = 0;
         else if (!strcmp(a, "--both-ways")) o->inward = 0;
         else if (!strcmp(a, "--fallback")) o->fallback = 1;
+        else if (!strcmp(a, "--strict")) o->fallback = 0;
         else if (!strcmp(a, "--faces")) {
             if (!cli_parse_long(v, 1, 1000000000L, &o->faces)) return cli_usage_error("dispmesh", "--faces '%s': not an integer in 1..1000000000", v);
         } else if (!strcmp(a, "--res")) {
@@ -816,7 +821,8 @@ int main(int argc, char **argv)
                 !srep.vetoed ? "no edge left passes the simplifier's own checks"
                 : fallback ? "the relaxed constraint still vetoed the rest"
                            : "the shell constraint vetoed every remaining collapse (see the counts above; the shell is too "
-                             "thin there for an enclosing base); --fallback relaxes it there and bakes those parts both ways");
+                             "thin there for an enclosing base); without --strict it is relaxed there and those parts are "
+                             "baked both ways");
 
     /* 4. the map's layout, texels where the original's area is */
     R.weights = (float *)malloc(R.base.nt * sizeof(float) + 1);
@@ -900,8 +906,7 @@ int main(int argc, char **argv)
     /* the unconstrained simplifier at the base's triangle count; its progressive mesh then gives the
        equal-bytes mesh */
     memset(&so, 0, sizeof so);
-    so.target_triangles = R.base.nt;
-    so.min_quality = (float)min_quality;
+    so.target_triangles = R.base.nt; /* the library's defaults: no sliver guard */
     stage_begin(&st, "simplify (unconstrained)");
     so.progress = stage_progress; so.progress_user = &st;
     r = dm_simplify(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, &so, &R.pm_free, NULL);

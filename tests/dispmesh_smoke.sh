@@ -96,12 +96,12 @@ else
 fi
 
 # ---- a target the paper's constraints cannot reach: the brick's box has 12 faces -----------------
-"$prog" --brick --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"
+"$prog" --brick --strict --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"
 rc=$?
 result=$(grep '^RESULT dispmesh ' "$tmp/b8_out.txt" | tail -n 1)
-check "--faces 8 exits 0 (status $rc)" [ $rc -eq 0 ]
-check "--faces 8: RESULT says target=8 faces=12 fallback=0 ($result)" [ "$(field target) $(field faces) $(field fallback)" = "8 12 0.0000" ]
-check "--faces 8: the note says why and names --fallback" grep -q 'shell constraint vetoed every remaining collapse.*--fallback' "$tmp/b8_err.txt"
+check "--strict --faces 8 exits 0 (status $rc)" [ $rc -eq 0 ]
+check "--strict --faces 8: RESULT says target=8 faces=12 fallback=0 ($result)" [ "$(field target) $(field faces) $(field fallback)" = "8 12 0.0000" ]
+check "--strict --faces 8: the note says why and what the default does" grep -q 'shell constraint vetoed every remaining collapse.*without --strict' "$tmp/b8_err.txt"
 
 # ---- bad input --------------------------------------------------------------------------------------
 refuse() { # refuse DESCRIPTION STATUS ARGS...: exit STATUS, a message, no sanitizer report, no x_* file
@@ -134,6 +134,7 @@ refuse "--faces abc" 2 --brick --faces abc -o "$tmp/x"
 refuse "--res too small for the charts" 1 --brick --faces 496 --res 8 -o "$tmp/x"
 refuse "--res too coarse for the base (triangles without a texel)" 1 --brick --faces 496 --res 32 -o "$tmp/x"
 refuse "--fallback to 8 faces: most texels find no surface (a broken result)" 1 --brick --fallback --faces 8 --res 128 -o "$tmp/x"
+refuse "--faces 8 (the fallback is the default): the same broken result" 1 --brick --faces 8 --res 128 -o "$tmp/x"
 refuse "unwritable prefix" 1 --brick --res 64 -o "$tmp/no/such/dir/x"
 refuse "no input" 2 -o "$tmp/x"
 refuse "--faces 4294967297" 2 --brick --faces 4294967297 -o "$tmp/x"
