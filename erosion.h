@@ -1,0 +1,1264 @@
+/* erosion.h - v0.1 - MIT licence or public domain (see end of file)
+   Wind erosion and weathering of displacement-mapped surfaces and height fields (paper 000, part B:
+   Chuang et al., NSC 96-2628-E-009-160-MY3, section 4.2).
+
+   HOW TO USE (in ten lines)
+       // in exactly one C or C++ file, #define ERO_IMPLEMENTATION before #include "erosion.h"
+       ero_grid g = ero_heightfield_grid(512, 512, height, 0.01f, 1);   // 5.12 x 5.12, tiling
+       // or ero_surface_grid(w, h, pos, nrm, disp, area, valid, nbr, nbr_rot): a displacement map
+       ero_options o = ero_default_options();
+       o.wind[0] = 1; o.wind[2] = -0.5f;                     // the direction the wind blows toward
+       ero_material soft = {1, 4, 0, 0};                     // eps_min, eps_max (medium, ambient: auto)
+       ero_report total;
+       ero_erode(&g, NULL, &soft, 1, 10, &o, NULL, &total);  // 10 steps; height[] is weathered
+       printf("eroded %g deposited %g\n", total.eroded, total.deposited);
+
+   WHAT
+     Each step computes, for every valid sample x, the erosion height H(x) = W_f(x) / R(x) (paper eq.
+     4.2.2-1) from the current surface, low-pass filters it, and adds it to the displacement; the
+     surface's normals and curvature are recomputed at the start of the next step. Windward samples
+     wear, leeward ones feel the ambient wind only, concave ones fill (deposition), harder
+     materials resist. Two domains, one code path:
+       ERO_SURFACE      a surface sample grid (dispmesh.h's dm_dispmap): per texel the base point
+                        pos, the unit base normal nrm, disp = depth along -nrm (world units,
+                        positive inward), area (the base area the texel stands for), valid, and the
+                        +x, -x, +y, -y neighbours nbr across chart seams (UINT32_MAX = none) with
+                        nbr_rot (a step along d continues as d turned nbr_rot quarter turns
+                        counter-clockwise in the neighbour's axes). The surface is pos - disp nrm.
+       ERO_HEIGHTFIELD  a height field: disp is the height (up, +z), texel (x, y) at (x s, y s) for
+                        the spacing s; neighbours are the grid's, optionally wrapping around.
+     The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i;
+     (+-s, 0, h_j - h_i) for a height field, exact under circular shifts); every filter, normal and
+     curvature then runs through the same walk over neighbours, which never sees a seam.
+
+   MODEL (paper section 4.2.2; its W_f and R are on pages the text lacks: the forms below are chosen)
+     Lengths are world units. L = sqrt(sum of the valid texels' area) is the grid's scale; the
+     texel size is h = sqrt(mean valid area) (the spacing s for a height field), which converts
+     world radii to texels (dispmesh.h's area-proportional layout keeps texels nearly equal, so one
+     kernel serves the map).
+     Surface: normal n = (Tx x Ty) normalised, oriented along nrm, with T the central differences of
+       the surface over the neighbours (one-sided at a border); mean curvature
+       kappa = the mean over the axes of -n . 2 (E+ / |E+| + E- / |E-|) / (|E+| + |E-|), E the
+       offsets to the two neighbours (the second difference for uneven spacing, which seams have;
+       positive on convex parts).
+     Averages: n and kappa are box-averaged over normal_radius (the paper's "average normal" and
+       "average curvature"): the separable box [-r, r] with each texel weighted by its overlap, so
+       the same world radius covers the same area at any resolution.
+     Wind force (windward test on the averaged normal n_a, wind unit w, exposure e = -n_a . w):
+       windward (e > 0): W_f = force * e + ambient   (force 1.0 as in the paper; the cosine makes
+                         W_f continuous across the terminator; ERO_CONSTANT_WINDWARD gives the
+                         literal constant force)
+       leeward  (e <= 0): W_f = ambient, the ambient term only (paper: "H = ambientW").
+     Resistance: R(c) = (1-c)^2 eps_max + 2c(1-c) eps_medium + c^2 eps_min, a quadratic Bezier in the
+       normalised curvature c = min(|kappa_a| curvature_length, 1): flat samples resist most, sharp
+       edges least (so wind rounds edges), and R decreases monotonically in c exactly when
+       eps_min <= eps_medium <= eps_max (the paper's [y0, y2] bound on eps_medium). Leeward samples
+       divide by R as well (H = ambient / R), so a harder material also resists ambient wear;
+       ERO_LEEWARD_LITERAL gives the paper's H = ambient.
+     Material correction (the paper's): eps_medium = 0 means (eps_min + eps_max) / 2, one outside
+       [eps_min, eps_max] is clamped to it; ambient = 0 means 1.05 eps_min / (eps_max - eps_min),
+       one at or below the paper's bound eps_min / (eps_max - eps_min) is raised to 1.05 times it.
+       Corrections are counted in ero_report.corrected; ero_resolve_material shows the result.
+     Deposition: concave samples (kappa_a < 0) get a negative H, dust filling the hollow:
+       H = (W_f / R) ((1 - t) - deposit_ratio t),  t = min(-kappa_a curvature_length / deposit_ramp, 1)
+       for kappa_a < 0, else t = 0. The ramp (default 0.2 of the normalised curvature) replaces
+       the paper's sign switch so that a flat sample's rounding noise cannot flip it between
+       erosion and deposition.
+     Filter and update: H is low-pass filtered by a separable Gaussian of sigma filter_sigma
+       (truncated at 3 sigma, renormalised where it meets a border or an invalid texel), then
+       disp += rate * H (height -= rate * H). Across a seam the second pass reads the first
+       pass's result along the axis that continues this texel's x, so the filter is separable on
+       every chart.
+     Deposition bound: ERO_SURFACE keeps disp >= 0 (bound_value = 0: the surface never rises above
+       the base, which must enclose it for ray-cast rendering); bound = ERO_BOUND_VALUE sets
+       another (signed) lower bound, ERO_BOUND_NONE none. ERO_HEIGHTFIELD is unbounded by default;
+       ERO_BOUND_VALUE keeps height <= bound_value.
+     Invalid texels (valid = 0) are not eroded and not read by the filters; those within two
+       texels (in the image) of valid ones take the mean change of their already-set image
+       neighbours, so that a bilinear reader (a GPU, dm_reconstruct) sees the change up to a
+       chart's border (ERO_KEEP_INVALID turns this off).
+
+   REPORT
+     Per step (and summed): eroded and deposited volume, the sums over valid texels of the volume
+     each texel's column sweeps (area times the change, with the base normal's spread over depth:
+     exact for the column between the old and new depth), the largest |change|, the corrected
+     material count. The state is just the map: stopping after k steps and calling again for the
+     rest gives the same bits as one call.
+
+   OPTIONS
+     Compile time: ERO_STATIC (all functions static), ERO_MALLOC(sz)/ERO_FREE(p) (both or none).
+     ero_options (zero = default; ero_default_options() gives them, ero_resolve_options the
+     grid-derived lengths):
+       wind[3]          the direction the wind blows toward (required, nonzero)
+       force (1)        the directed wind's strength
+       rate             world units of depth per unit H per step (1e-3 L)
+       normal_radius    averaging radius of normals and curvature, world units (L / 256)
+       filter_sigma     the low-pass filter's sigma, world units (L / 512)
+       curvature_length the radius of curvature that normalises to c = 1, world units (L / 32)
+       deposit_ratio (0.5; negative = no deposition), deposit_ramp (0.2)
+       flags            ERO_CONSTANT_WINDWARD, ERO_LEEWARD_LITERAL, ERO_KEEP_INVALID
+       bound, bound_value   the deposition bound (see MODEL)
+       allocator (NULL = ERO_MALLOC/ERO_FREE), progress (per step; nonzero cancels), user.
+
+   MEMORY
+     ero_erode allocates once per call: 40 bytes per texel for a height field, 76 for a surface grid
+     (positions, normals, curvature, two filter intermediates per axis, H, column coefficients, the
+     regular-run lengths), freed before it returns. The maps are the caller's.
+
+   ERRORS
+     Functions return ero_result (ERO_OK = 0); ero_result_string() names it.
+       ERO_ERR_INVALID_ARGUMENT  a NULL pointer (grid, disp, a surface array), an unknown domain;
+       ERO_ERR_BAD_SIZE          width or height < 1;
+       ERO_ERR_TOO_LARGE         width * height overflows or exceeds 2^32 - 2 texels;
+       ERO_ERR_BAD_SPACING       a height field's spacing <= 0 or not finite;
+       ERO_ERR_BAD_MAP           a NaN or infinite value in disp (any texel) or in pos, nrm, area (valid
+                                 texels), a zero normal, a negative area;
+       ERO_ERR_BAD_INDEX         a neighbour index >= width * height (other than UINT32_MAX), a rotation > 3;
+       ERO_ERR_BAD_WIND          a zero, NaN or infinite wind vector;
+       ERO_ERR_BAD_MATERIAL      eps_min <= 0, eps_min >= eps_max, a NaN, a material id >= count;
+       ERO_ERR_BAD_STEPS         steps < 1;
+       ERO_ERR_BAD_PARAMETER     a negative or non-finite option, a radius beyond 255 texels;
+       ERO_ERR_OUT_OF_MEMORY     the allocator returned NULL;
+       ERO_CANCELLED             the progress callback returned nonzero.
+     A change that would leave float's range (huge maps, eps_min near 0) leaves the texel as it
+     was. Everything is checked before the first step; on any error but ERO_CANCELLED the maps are
+     untouched; cancelled, they hold the steps completed (report.steps), a valid state to resume.
+
+   THREAD SAFETY
+     No global state; every function is re-entrant. The same input gives the same bits on every
+     run: sums in a fixed order relative to each texel, so a circular shift of a wrapped height
+     field shifts the result bit for bit.
+
+   LIMITS
+     Up to 2^32 - 2 texels; filter and averaging radii up to 255 texels. One wind for all samples
+     per call (the paper's simplification; vary it between calls). At most 256 materials (ids are
+     bytes). The bits do not depend on the compiler's FMA contraction: the implementation turns it
+     off for its own code and restores the user's setting after it, except under clang's
+     -ffp-contract=fast, which ignores that pragma.
+
+   REFERENCES
+     J.-H. Chuang et al., final report of NSC 96-2628-E-009-160-MY3 (NCTU, 2010), section 4.2: wind
+       erosion through the displacement map, H = W_f / R.
+     N. S. Chepil, W. S. Woodruff, F. H. Siddoway, "A wind erosion equation", SSSA J. 29, 1965.
+     D. W. Fryrear et al., RWEQ: Revised Wind Erosion Equation, USDA technical bulletin 1, 1998. */
+#ifndef ERO_EROSION_H
+#define ERO_EROSION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef ERO_STATIC
+#if defined(__GNUC__) || defined(__clang__)
+#define ERODEF static __attribute__((unused))
+#else
+#define ERODEF static
+#endif
+#else
+#define ERODEF extern
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum ero_result {
+    ERO_OK = 0,
+    ERO_ERR_INVALID_ARGUMENT, /* NULL pointer, unknown domain */
+    ERO_ERR_BAD_SIZE,         /* width or height < 1 */
+    ERO_ERR_TOO_LARGE,        /* width * height overflows */
+    ERO_ERR_BAD_SPACING,      /* height-field spacing <= 0 or not finite */
+    ERO_ERR_BAD_MAP,          /* NaN / Inf in a map, zero normal, negative area */
+    ERO_ERR_BAD_INDEX,        /* neighbour index or rotation out of range */
+    ERO_ERR_BAD_WIND,         /* zero or non-finite wind */
+    ERO_ERR_BAD_MATERIAL,     /* eps_min >= eps_max, eps_min <= 0, NaN, id out of range */
+    ERO_ERR_BAD_STEPS,        /* steps < 1 */
+    ERO_ERR_BAD_PARAMETER,    /* negative / non-finite option, radius too large */
+    ERO_ERR_OUT_OF_MEMORY,    /* the allocator returned NULL */
+    ERO_CANCELLED             /* the progress callback returned nonzero */
+} ero_result;
+
+enum { ERO_SURFACE = 1, ERO_HEIGHTFIELD = 2 };
+enum { ERO_BOUND_DEFAULT = 0, ERO_BOUND_NONE = 1, ERO_BOUND_VALUE = 2 };
+enum { ERO_CONSTANT_WINDWARD = 1 << 0, ERO_LEEWARD_LITERAL = 1 << 1, ERO_KEEP_INVALID = 1 << 2 };
+enum { ERO_CORRECTED_MEDIUM = 1 << 0, ERO_CORRECTED_AMBIENT = 1 << 1 };
+
+/* alloc returns NULL on failure; free accepts NULL. user is passed back unchanged. */
+typedef struct ero_allocator {
+    void *(*alloc)(void *user, size_t size);
+    void (*free)(void *user, void *ptr);
+    void *user;
+} ero_allocator;
+
+/* The map to erode, n = width * height texels (see WHAT). Only disp is written. */
+typedef struct ero_grid {
+    int domain;               /* ERO_SURFACE or ERO_HEIGHTFIELD */
+    int width, height;
+    float *disp;              /* n: surface depth along -nrm (positive inward) / height (up) */
+    const uint8_t *valid;     /* n, 1 = simulated; NULL = all */
+    /* ERO_SURFACE */
+    const float *pos;         /* 3n: base point */
+    const float *nrm;         /* 3n: base normal, unit */
+    const float *area;        /* n: base area the texel stands for */
+    const uint32_t *nbr;      /* 4n: +x, -x, +y, -y neighbour, UINT32_MAX = none */
+    const uint8_t *nbr_rot;   /* 4n: quarter turns counter-clockwise into the neighbour's axes */
+    /* ERO_HEIGHTFIELD */
+    float spacing;            /* world units between texels, > 0 */
+    int wrap;                 /* 1: neighbours wrap around (a tile stays tileable) */
+} ero_grid;
+
+/* One material. eps_medium = 0 and ambient = 0 mean "computed" (see MODEL). */
+typedef struct ero_material {
+    float eps_min, eps_max;   /* resistance range, 0 < eps_min < eps_max */
+    float eps_medium;         /* the Bezier's middle control value */
+    float ambient;            /* ambientW */
+} ero_material;
+
+typedef struct ero_options {
+    float wind[3];
+    float force, rate, normal_radius, filter_sigma, curvature_length;
+    float deposit_ratio, deposit_ramp;
+    int flags;
+    int bound;
+    float bound_value;
+    const ero_allocator *allocator;
+    int (*progress)(void *user, float done);
+    void *user;
+} ero_options;
+
+typedef struct ero_report {
+    double eroded;            /* volume removed (world units^3) */
+    double deposited;         /* volume added */
+    float max_change;         /* largest |change| of disp / height */
+    int steps;                /* steps completed */
+    size_t corrected;         /* materials whose eps_medium or ambient were corrected */
+} ero_report;
+
+ERODEF const char *ero_result_string(ero_result r);
+ERODEF ero_options ero_default_options(void);
+ERODEF ero_grid ero_heightfield_grid(int width, int height, float *h, float spacing, int wrap);
+ERODEF ero_grid ero_surface_grid(int width, int height, const float *pos, const float *nrm, float *disp,
+                                 const float *area, const uint8_t *valid, const uint32_t *nbr,
+                                 const uint8_t *nbr_rot);
+
+/* Runs `steps` erosion steps on g->disp.
+   material: n ids (NULL = all 0); materials/material_count: the table (NULL, 0 = one soft
+   material {1, 4}); per_step: `steps` reports or NULL; total: the sum or NULL (both filled for
+   the steps done, also when cancelled). */
+ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const ero_material *materials,
+                            size_t material_count, int steps, const ero_options *options,
+                            ero_report *per_step, ero_report *total);
+
+/* The options with every zero replaced by its value for grid g (lengths from L). */
+ERODEF ero_result ero_resolve_options(const ero_grid *g, const ero_options *options, ero_options *out);
+
+/* The material after the paper's correction; returns ERO_CORRECTED_* flags, or -1 if invalid. */
+ERODEF int ero_resolve_material(const ero_material *in, ero_material *out);
+
+/* Paints id into material (width x height) where the mask (mask_w x mask_h, `channels` floats per
+   pixel, the first read) is >= threshold, the mask stretched over the map (nearest pixel). */
+ERODEF ero_result ero_paint_mask(uint8_t *material, int width, int height, const float *mask, int mask_w,
+                                 int mask_h, int channels, float threshold, uint8_t id);
+
+/* Paints id where the surface point (pos - disp nrm; (x s, y s, h)) lies within radius of centre. */
+ERODEF ero_result ero_paint_sphere(const ero_grid *g, uint8_t *material, const float centre[3], float radius,
+                                   uint8_t id);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* ERO_EROSION_H */
+
+#ifdef ERO_IMPLEMENTATION
+#ifndef ERO_IMPLEMENTATION_DONE
+#define ERO_IMPLEMENTATION_DONE
+
+#include <string.h>
+#include <math.h>
+
+#if defined(ERO_MALLOC) && defined(ERO_FREE)
+/* both given */
+#elif !defined(ERO_MALLOC) && !defined(ERO_FREE)
+#include <stdlib.h>
+#define ERO_MALLOC(sz) malloc(sz)
+#define ERO_FREE(p) free(p)
+#else
+#error "erosion.h: define both ERO_MALLOC and ERO_FREE, or neither"
+#endif
+
+/* FMA contraction off from here to the end of the implementation, the user's setting restored
+   after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
+   pragmas); other compilers: nothing. */
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define ERO__NONE 0xFFFFFFFFu
+#define ERO__MAXR 255
+
+/* ================================================================================================
+   the run: the domain, the resolved parameters, the scratch planes
+   ================================================================================================ */
+
+typedef struct ero__run {
+    int hf, wrap, W, H;
+    size_t n;
+    float s;                               /* height-field spacing */
+    float *disp;
+    const uint8_t *valid;
+    const float *pos, *nrm, *area;
+    const uint32_t *nbr;
+    const uint8_t *nbr_rot;
+    const uint8_t *mat;
+    ero_material mats[256];
+    size_t corrected;
+    ero_options o;
+    float wind[3];
+    int has_rot;
+    int box_r, gau_r;
+    float box_w[ERO__MAXR + 2], gau_w[ERO__MAXR + 1];
+    float box_sum, gau_sum;
+    const ero_allocator *al;
+    void *block;
+    float *P;                              /* 3n surface points (surface only) */
+    float *g[4];                           /* normal xyz, curvature; then their averages */
+    float *ax[4], *ay[4];                  /* first filter pass along own x / own y */
+    float *hh;                             /* H, then the filtered change */
+    float *q1, *q2;                        /* column volume coefficients (surface only) */
+    uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
+} ero__run;
+
+static int ero__finite(float v) { return v == v && v - v == 0.0f; }
+static int ero__valid(const ero__run *r, uint32_t i) { return !r->valid || r->valid[i]; }
+
+static void *ero__alloc(const ero_allocator *a, size_t n)
+{
+    return a ? a->alloc(a->user, n) : ERO_MALLOC(n);
+}
+static void ero__free(const ero_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a) a->free(a->user, p);
+    else ERO_FREE(p);
+}
+
+/* the neighbour of texel i = (x, y) along d (0 +x, 1 -x, 2 +y, 3 -y), the quarter turns into its axes */
+static uint32_t ero__nb_xy(const ero__run *r, uint32_t i, uint32_t x, uint32_t y, int d, int *rot)
+{
+    uint32_t W = (uint32_t)r->W, H = (uint32_t)r->H;
+    *rot = 0;
+    if (!r->hf) {
+        uint32_t j = r->nbr[4 * (size_t)i + (size_t)d];
+        if (j != ERO__NONE) *rot = r->nbr_rot[4 * (size_t)i + (size_t)d];
+        return j;
+    }
+    switch (d) {
+    case 0: return x + 1 < W ? i + 1 : r->wrap ? i + 1 - W : ERO__NONE;
+    case 1: return x > 0 ? i - 1 : r->wrap ? i + W - 1 : ERO__NONE;
+    case 2: return y + 1 < H ? i + W : r->wrap ? x : ERO__NONE;
+    default: return y > 0 ? i - W : r->wrap ? i + (H - 1) * W : ERO__NONE;
+    }
+}
+
+static uint32_t ero__nb(const ero__run *r, uint32_t i, int d, int *rot)
+{
+    if (!r->hf) return ero__nb_xy(r, i, 0, 0, d, rot);
+    return ero__nb_xy(r, i, i % (uint32_t)r->W, i / (uint32_t)r->W, d, rot);
+}
+
+/* direction d turned `rot` quarter turns counter-clockwise (+x -> +y -> -x -> -y) */
+static int ero__turn(int d, int rot)
+{
+    static const int to_angle[4] = {0, 2, 1, 3}; /* d -> angle index; the table is its own inverse */
+    return to_angle[(to_angle[d] + rot) & 3];
+}
+
+/* one step of a walk: the next usable texel (UINT32_MAX if none), the direction in its axes */
+static uint32_t ero__step(const ero__run *r, uint32_t i, int *d, int *turns)
+{
+    int rot;
+    uint32_t j = ero__nb(r, i, *d, &rot);
+    if (j == ERO__NONE || j == i || !ero__valid(r, j)) return ERO__NONE;
+    *d = ero__turn(*d, rot);
+    *turns += rot;
+    return j;
+}
+
+/* ================================================================================================
+   checking the input
+   ================================================================================================ */
+
+static ero_result ero__check_grid(const ero_grid *g, size_t *n_out)
+{
+    size_t n, i;
+    if (!g || !g->disp) return ERO_ERR_INVALID_ARGUMENT;
+    if (g->domain != ERO_SURFACE && g->domain != ERO_HEIGHTFIELD) return ERO_ERR_INVALID_ARGUMENT;
+    if (g->width < 1 || g->height < 1) return ERO_ERR_BAD_SIZE;
+    if ((size_t)g->width > ((size_t)0xFFFFFFFEu) / (size_t)g->height) return ERO_ERR_TOO_LARGE;
+    n = (size_t)g->width * (size_t)g->height;
+    if (n > ((size_t)-1) / 96) return ERO_ERR_TOO_LARGE;
+    if (g->domain == ERO_HEIGHTFIELD) {
+        if (!ero__finite(g->spacing) || g->spacing <= 0.0f) return ERO_ERR_BAD_SPACING;
+    } else {
+        if (!g->pos || !g->nrm || !g->area || !g->nbr || !g->nbr_rot) return ERO_ERR_INVALID_ARGUMENT;
+        for (i = 0; i < 4 * n; i++)
+            if ((g->nbr[i] >= n && g->nbr[i] != ERO__NONE) || g->nbr_rot[i] > 3) return ERO_ERR_BAD_INDEX;
+    }
+    for (i = 0; i < n; i++) {
+        if (!ero__finite(g->disp[i])) return ERO_ERR_BAD_MAP;
+        if (g->domain == ERO_SURFACE && (!g->valid || g->valid[i])) {
+            const float *p = g->pos + 3 * i, *q = g->nrm + 3 * i;
+            if (!ero__finite(p[0]) || !ero__finite(p[1]) || !ero__finite(p[2])) return ERO_ERR_BAD_MAP;
+            if (!ero__finite(q[0]) || !ero__finite(q[1]) || !ero__finite(q[2])) return ERO_ERR_BAD_MAP;
+            if (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1e-12f) return ERO_ERR_BAD_MAP;
+            if (!ero__finite(g->area[i]) || g->area[i] < 0.0f) return ERO_ERR_BAD_MAP;
+        }
+    }
+    *n_out = n;
+    return ERO_OK;
+}
+
+static int ero__nonneg(float v) { return ero__finite(v) && v >= 0.0f; }
+
+static ero_result ero__check_options(const ero_options *o)
+{
+    double w2;
+    if (!ero__finite(o->wind[0]) || !ero__finite(o->wind[1]) || !ero__finite(o->wind[2])) return ERO_ERR_BAD_WIND;
+    w2 = (double)o->wind[0] * o->wind[0] + (double)o->wind[1] * o->wind[1] + (double)o->wind[2] * o->wind[2];
+    if (!(w2 > 1e-30)) return ERO_ERR_BAD_WIND;
+    if (!ero__nonneg(o->force) || !ero__nonneg(o->rate) || !ero__nonneg(o->normal_radius) ||
+        !ero__nonneg(o->filter_sigma) || !ero__nonneg(o->curvature_length) || !ero__finite(o->deposit_ratio) ||
+        !ero__nonneg(o->deposit_ramp) || !ero__finite(o->bound_value))
+        return ERO_ERR_BAD_PARAMETER;
+    if (o->bound < ERO_BOUND_DEFAULT || o->bound > ERO_BOUND_VALUE) return ERO_ERR_BAD_PARAMETER;
+    return ERO_OK;
+}
+
+ERODEF int ero_resolve_material(const ero_material *in, ero_material *out)
+{
+    ero_material m;
+    int flags = 0;
+    double bound;
+    if (!in) return -1;
+    m = *in;
+    if (!ero__finite(m.eps_min) || !ero__finite(m.eps_max) || !ero__finite(m.eps_medium) || !ero__finite(m.ambient))
+        return -1;
+    if (!(m.eps_min > 0.0f) || !(m.eps_min < m.eps_max)) return -1;
+    if (m.eps_medium == 0.0f) m.eps_medium = 0.5f * (m.eps_min + m.eps_max);
+    else if (m.eps_medium < m.eps_min || m.eps_medium > m.eps_max) {
+        m.eps_medium = m.eps_medium < m.eps_min ? m.eps_min : m.eps_max;
+        flags |= ERO_CORRECTED_MEDIUM;
+    }
+    bound = (double)m.eps_min / ((double)m.eps_max - (double)m.eps_min);
+    if (m.ambient == 0.0f || (double)m.ambient <= bound) {
+        if (m.ambient != 0.0f) flags |= ERO_CORRECTED_AMBIENT;
+        m.ambient = (float)(1.05 * bound);
+        while ((double)m.ambient <= bound) m.ambient = nextafterf(m.ambient, 3.4e38f); /* above it in float too */
+    }
+    if (!ero__finite(m.ambient)) return -1;
+    if (out) *out = m;
+    return flags;
+}
+
+static ero_result ero__check_materials(ero__run *r, const uint8_t *material, const ero_material *mats, size_t count)
+{
+    size_t i;
+    if (!mats || count == 0) {
+        ero_material soft;
+        soft.eps_min = 1.0f; soft.eps_max = 4.0f; soft.eps_medium = 0.0f; soft.ambient = 0.0f;
+        count = 1;
+        ero_resolve_material(&soft, &r->mats[0]);
+    } else {
+        if (count > 256) return ERO_ERR_BAD_MATERIAL;
+        for (i = 0; i < count; i++) {
+            int f = ero_resolve_material(&mats[i], &r->mats[i]);
+            if (f < 0) return ERO_ERR_BAD_MATERIAL;
+            if (f) r->corrected++;
+        }
+    }
+    r->mat = material;
+    if (material)
+        for (i = 0; i < r->n; i++)
+            if (material[i] >= count) return ERO_ERR_BAD_MATERIAL;
+    return ERO_OK;
+}
+
+/* ================================================================================================
+   options and kernels
+   ================================================================================================ */
+
+ERODEF ero_options ero_default_options(void)
+{
+    ero_options o;
+    memset(&o, 0, sizeof o);
+    o.force = 1.0f;
+    o.deposit_ratio = 0.5f;
+    o.deposit_ramp = 0.2f;
+    return o; /* lengths 0: derived from the grid (ero_resolve_options) */
+}
+
+/* the texel size h and the scale L of a checked grid */
+static void ero__scales(const ero_grid *g, size_t n, double *h, double *L)
+{
+    size_t i, nv = 0;
+    double a = 0.0;
+    if (g->domain == ERO_HEIGHTFIELD) {
+        *h = g->spacing;
+        *L = g->spacing * sqrt((double)n);
+        return;
+    }
+    for (i = 0; i < n; i++)
+        if (!g->valid || g->valid[i]) { a += g->area[i]; nv++; }
+    *h = nv && a > 0.0 ? sqrt(a / (double)nv) : 1.0;
+    *L = a > 0.0 ? sqrt(a) : 1.0;
+}
+
+static ero_options ero__resolve(const ero_options *in, double L)
+{
+    ero_options o = *in;
+    if (o.force == 0.0f) o.force = 1.0f;
+    if (o.rate == 0.0f) o.rate = (float)(1e-3 * L);
+    if (o.normal_radius == 0.0f) o.normal_radius = (float)(L / 256.0);
+    if (o.filter_sigma == 0.0f) o.filter_sigma = (float)(L / 512.0);
+    if (o.curvature_length == 0.0f) o.curvature_length = (float)(L / 32.0);
+    if (o.deposit_ratio == 0.0f) o.deposit_ratio = 0.5f;
+    if (o.deposit_ramp == 0.0f) o.deposit_ramp = 0.2f;
+    return o;
+}
+
+ERODEF ero_result ero_resolve_options(const ero_grid *g, const ero_options *options, ero_options *out)
+{
+    size_t n;
+    double h, L;
+    ero_result e = ero__check_grid(g, &n);
+    ero_options o = options ? *options : ero_default_options();
+    if (!out) return ERO_ERR_INVALID_ARGUMENT;
+    if (e != ERO_OK) return e;
+    if ((e = ero__check_options(&o)) != ERO_OK) return e;
+    ero__scales(g, n, &h, &L);
+    *out = ero__resolve(&o, L);
+    return ERO_OK;
+}
+
+/* the box (fractional end taps) and Gaussian kernels, in texels of size h */
+static ero_result ero__kernels(ero__run *r, double h)
+{
+    double rb = r->o.normal_radius / h, sg = r->o.filter_sigma / h;
+    int k;
+    if (rb > ERO__MAXR || 3.0 * sg > ERO__MAXR) return ERO_ERR_BAD_PARAMETER;
+    r->box_r = rb < 0.5 ? 0 : (int)floor(rb + 0.5);
+    r->box_w[0] = 1.0f;
+    for (k = 1; k <= r->box_r; k++) r->box_w[k] = (float)(rb - k + 0.5 < 1.0 ? rb - k + 0.5 : 1.0);
+    if (r->box_r > 0 && r->box_w[r->box_r] <= 0.0f) r->box_r--;
+    r->gau_r = sg < 1e-3 ? 0 : (int)ceil(3.0 * sg);
+    for (k = 0; k <= r->gau_r; k++) r->gau_w[k] = (float)exp(-0.5 * k * k / (sg * sg > 0 ? sg * sg : 1.0));
+    r->box_sum = r->box_w[0];
+    for (k = 1; k <= r->box_r; k++) { r->box_sum += r->box_w[k]; r->box_sum += r->box_w[k]; }
+    r->gau_sum = r->gau_w[0];
+    for (k = 1; k <= r->gau_r; k++) { r->gau_sum += r->gau_w[k]; r->gau_sum += r->gau_w[k]; }
+    return ERO_OK;
+}
+
+/* ================================================================================================
+   scratch
+   ================================================================================================ */
+
+static ero_result ero__scratch(ero__run *r)
+{
+    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 4 + 2), bytes, k;
+    float *f;
+    bytes = planes * n * sizeof(float) + 4 * n;
+    r->block = ero__alloc(r->al, bytes);
+    if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
+    f = (float *)r->block;
+    for (k = 0; k < 4; k++) { r->g[k] = f; f += n; }
+    for (k = 0; k < 4; k++) { r->ax[k] = f; f += n; }
+    r->hh = f; f += n;
+    if (!r->hf) {
+        r->P = f; f += 3 * n;
+        for (k = 0; k < 4; k++) { r->ay[k] = f; f += n; }
+        r->q1 = f; f += n;
+        r->q2 = f; f += n;
+    } else {
+        for (k = 0; k < 4; k++) r->ay[k] = r->ax[k];
+    }
+    r->reg = (uint8_t *)f;
+    return ERO_OK;
+}
+
+/* reg[4i + d]: how many steps along d from i stay on the image grid (i +- 1, i +- W), unrotated
+   and valid, capped at 255: where it covers a kernel, the filters index directly */
+static void ero__regular_runs(ero__run *r)
+{
+    long W = r->W, H = r->H, x, y;
+    int rot;
+    for (y = 0; y < H; y++)
+        for (x = 0; x < W; x++) { /* -x and -y: from the low side */
+            uint32_t i = (uint32_t)(y * W + x);
+            uint8_t *g = r->reg + 4 * (size_t)i;
+            uint32_t j = ero__nb_xy(r, i, (uint32_t)x, (uint32_t)y, 1, &rot);
+            g[1] = (uint8_t)(x > 0 && j == i - 1 && rot == 0 && ero__valid(r, j) ? (g[-4 + 1] < 255 ? g[-4 + 1] + 1 : 255) : 0);
+            j = ero__nb_xy(r, i, (uint32_t)x, (uint32_t)y, 3, &rot);
+            g[3] = (uint8_t)(y > 0 && j == i - (uint32_t)W && rot == 0 && ero__valid(r, j)
+                                 ? (r->reg[4 * (size_t)j + 3] < 255 ? r->reg[4 * (size_t)j + 3] + 1 : 255) : 0);
+        }
+    for (y = H - 1; y >= 0; y--)
+        for (x = W - 1; x >= 0; x--) {
+            uint32_t i = (uint32_t)(y * W + x);
+            uint8_t *g = r->reg + 4 * (size_t)i;
+            uint32_t j = ero__nb_xy(r, i, (uint32_t)x, (uint32_t)y, 0, &rot);
+            g[0] = (uint8_t)(x + 1 < W && j == i + 1 && rot == 0 && ero__valid(r, j) ? (g[4] < 255 ? g[4] + 1 : 255) : 0);
+            j = ero__nb_xy(r, i, (uint32_t)x, (uint32_t)y, 2, &rot);
+            g[2] = (uint8_t)(y + 1 < H && j == i + (uint32_t)W && rot == 0 && ero__valid(r, j)
+                                 ? (r->reg[4 * (size_t)j + 2] < 255 ? r->reg[4 * (size_t)j + 2] + 1 : 255) : 0);
+        }
+}
+
+/* ================================================================================================
+   geometry: surface points, offsets to neighbours, normals, curvature
+   ================================================================================================ */
+
+static void ero__points(ero__run *r)
+{
+    size_t i;
+    if (r->hf) return;
+    for (i = 0; i < r->n; i++) {
+        float d = r->disp[i];
+        r->P[3 * i + 0] = r->pos[3 * i + 0] - d * r->nrm[3 * i + 0];
+        r->P[3 * i + 1] = r->pos[3 * i + 1] - d * r->nrm[3 * i + 1];
+        r->P[3 * i + 2] = r->pos[3 * i + 2] - d * r->nrm[3 * i + 2];
+    }
+}
+
+/* the offset from texel i to its neighbour j along d: of the surface (base = 0) or of the base */
+static void ero__offset(const ero__run *r, uint32_t i, uint32_t j, int d, int base, float e[3])
+{
+    if (r->hf) {
+        e[0] = d == 0 ? r->s : d == 1 ? -r->s : 0.0f;
+        e[1] = d == 2 ? r->s : d == 3 ? -r->s : 0.0f;
+        e[2] = base ? 0.0f : r->disp[j] - r->disp[i];
+    } else {
+        const float *a = base ? r->pos : r->P;
+        e[0] = a[3 * (size_t)j + 0] - a[3 * (size_t)i + 0];
+        e[1] = a[3 * (size_t)j + 1] - a[3 * (size_t)i + 1];
+        e[2] = a[3 * (size_t)j + 2] - a[3 * (size_t)i + 2];
+    }
+}
+
+static void ero__base_normal(const ero__run *r, uint32_t i, float n[3])
+{
+    if (r->hf) { n[0] = 0.0f; n[1] = 0.0f; n[2] = 1.0f; return; }
+    n[0] = r->nrm[3 * (size_t)i + 0];
+    n[1] = r->nrm[3 * (size_t)i + 1];
+    n[2] = r->nrm[3 * (size_t)i + 2];
+}
+
+static inline void ero__cross(const float a[3], const float b[3], float c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+static inline float ero__dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* the tangent along one axis from the offsets to its + and - neighbours (have: bit 0 +, bit 1 -);
+   0 when neither exists */
+static inline int ero__tangent(const float ep[3], const float em[3], int have, float t[3])
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        t[k] = have == 3 ? 0.5f * (ep[k] - em[k]) : have == 1 ? ep[k] : have == 2 ? -em[k] : 0.0f;
+    return have != 0;
+}
+
+/* the normal curvature along one axis from the offsets to its two neighbours, unevenly spaced
+   ones included (the three-point second difference): -n . 2 (E+ / a + E- / b) / (a + b) */
+static inline float ero__second(const float ep[3], const float em[3], const float n[3])
+{
+    float a = sqrtf(ero__dot(ep, ep)), b = sqrtf(ero__dot(em, em));
+    if (a <= 0.0f || b <= 0.0f) return 0.0f;
+    float k = -2.0f * (ero__dot(ep, n) * b + ero__dot(em, n) * a) / (a * b * (a + b)); /* one division */
+    return ero__finite(k) ? k : 0.0f; /* lengths beyond float's range: no curvature */
+}
+
+/* a texel's normal (oriented along the base normal nb) and mean curvature from the offsets e to
+   its neighbours (have: bit d set where neighbour d exists), into out[0..3] */
+static inline void ero__texel_geometry(float e[4][3], int have, const float nb[3], float *g0, float *g1, float *g2, float *g3)
+{
+    float tx[3], ty[3], c[3], n[3], len, kappa = 0.0f;
+    int axes = 0;
+    n[0] = nb[0]; n[1] = nb[1]; n[2] = nb[2];
+    if (ero__tangent(e[0], e[1], have & 3, tx) && ero__tangent(e[2], e[3], (have >> 2) & 3, ty)) {
+        ero__cross(tx, ty, c);
+        len = sqrtf(ero__dot(c, c));
+        if (len > 0.0f) {
+            float inv = (ero__dot(c, nb) < 0.0f ? -1.0f : 1.0f) / len;
+            n[0] = c[0] * inv; n[1] = c[1] * inv; n[2] = c[2] * inv;
+        }
+    }
+    if ((have & 3) == 3) { kappa += ero__second(e[0], e[1], n); axes++; }
+    if ((have & 12) == 12) { kappa += ero__second(e[2], e[3], n); axes++; }
+    if (axes) kappa /= (float)axes;
+    if (!ero__finite(n[0]) || !ero__finite(n[1]) || !ero__finite(n[2])) { n[0] = nb[0]; n[1] = nb[1]; n[2] = nb[2]; }
+    *g0 = n[0]; *g1 = n[1]; *g2 = n[2]; *g3 = kappa;
+}
+
+/* normal and mean curvature of the surface at every valid texel, into g[0..3]; texels whose four
+   neighbours are the grid's (the regular-run table) gather them without a lookup */
+static void ero__geometry(ero__run *r)
+{
+    size_t i, W = (size_t)r->W;
+    static const float up[3] = {0.0f, 0.0f, 1.0f};
+    for (i = 0; i < r->n; i++) {
+        float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3];
+        const uint8_t *reg = r->reg + 4 * i;
+        int d, have = 0, rot;
+        if (!ero__valid(r, (uint32_t)i)) { r->g[0][i] = r->g[1][i] = r->g[2][i] = r->g[3][i] = 0.0f; continue; }
+        if (reg[0] && reg[1] && reg[2] && reg[3]) {
+            const size_t j[4] = {i + 1, i - 1, i + W, i - W};
+            if (r->hf) {
+                const float *h = r->disp, s = r->s;
+                e[0][0] = s; e[1][0] = -s; e[2][1] = s; e[3][1] = -s;
+                for (d = 0; d < 4; d++) e[d][2] = h[j[d]] - h[i];
+                ero__texel_geometry(e, 15, up, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+            } else {
+                const float *P = r->P;
+                for (d = 0; d < 4; d++) {
+                    e[d][0] = P[3 * j[d] + 0] - P[3 * i + 0];
+                    e[d][1] = P[3 * j[d] + 1] - P[3 * i + 1];
+                    e[d][2] = P[3 * j[d] + 2] - P[3 * i + 2];
+                }
+                ero__texel_geometry(e, 15, r->nrm + 3 * i, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+            }
+            continue;
+        }
+        for (d = 0; d < 4; d++) {
+            uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
+            if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
+            ero__offset(r, (uint32_t)i, j, d, 0, e[d]);
+            have |= 1 << d;
+        }
+        ero__base_normal(r, (uint32_t)i, nb);
+        ero__texel_geometry(e, have, nb, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+    }
+}
+
+/* the column volume coefficients (surface): a texel's column between depths t0 and t1 holds
+   area (t1 - t0 + q1 (t1^2 - t0^2) / 2 + q2 (t1^3 - t0^3) / 3), from
+   det(Bu - t Nu, Bv - t Nv, n) / det(Bu, Bv, n) = 1 + q1 t + q2 t^2 (B base, N normal differences) */
+static void ero__columns(ero__run *r)
+{
+    size_t i;
+    if (r->hf) return;
+    for (i = 0; i < r->n; i++) {
+        float eb[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, en[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, bu[3], bv[3], nu[3], nv[3], c[3], n[3], a0, a1, a2;
+        int d, have = 0, rot;
+        r->q1[i] = r->q2[i] = 0.0f;
+        if (!ero__valid(r, (uint32_t)i)) continue;
+        for (d = 0; d < 4; d++) {
+            uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
+            int k;
+            if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
+            ero__offset(r, (uint32_t)i, j, d, 1, eb[d]);
+            for (k = 0; k < 3; k++) en[d][k] = r->nrm[3 * (size_t)j + (size_t)k] - r->nrm[3 * i + (size_t)k];
+            have |= 1 << d;
+        }
+        if (!ero__tangent(eb[0], eb[1], have & 3, bu) || !ero__tangent(eb[2], eb[3], (have >> 2) & 3, bv)) continue;
+        ero__tangent(en[0], en[1], have & 3, nu);
+        ero__tangent(en[2], en[3], (have >> 2) & 3, nv);
+        ero__base_normal(r, (uint32_t)i, n);
+        ero__cross(bu, bv, c);
+        a0 = ero__dot(c, n);
+        if (fabsf(a0) < 1e-30f) continue;
+        ero__cross(nu, bv, c);
+        a1 = -ero__dot(c, n);
+        ero__cross(bu, nv, c);
+        a1 -= ero__dot(c, n);
+        ero__cross(nu, nv, c);
+        a2 = ero__dot(c, n);
+        r->q1[i] = a1 / a0;
+        r->q2[i] = a2 / a0;
+        if (!ero__finite(r->q1[i]) || !ero__finite(r->q2[i])) r->q1[i] = r->q2[i] = 0.0f; /* beyond float's range */
+    }
+}
+
+/* ================================================================================================
+   the seam-aware separable filter
+   ================================================================================================ */
+
+/* sum over the taps along axis a (0 x, 1 y) from texel i, renormalised; pick: per visited texel,
+   the planes to read (src when turns are even, alt when odd) */
+static void ero__taps(const ero__run *r, uint32_t i, int axis, float *const *src, float *const *alt, int C,
+                      const float *w, int R, float wfull, float *out)
+{
+    const uint8_t *reg = r->reg + 4 * (size_t)i;
+    int c, k;
+    if (reg[2 * axis] >= R && reg[2 * axis + 1] >= R) { /* a regular stretch: direct indices */
+        size_t st = axis ? (size_t)r->W : 1;
+        for (c = 0; c < C; c++) {
+            const float *f = src[c];
+            float acc = w[0] * f[i];
+            for (k = 1; k <= R; k++) {
+                acc += w[k] * f[i + (size_t)k * st];
+                acc += w[k] * f[i - (size_t)k * st];
+            }
+            out[c] = acc / wfull;
+        }
+        return;
+    } else { /* walk both ways, across seams */
+        uint32_t jp = i, jm = i;
+        int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0;
+        float acc[4], ws = w[0];
+        for (c = 0; c < C; c++) acc[c] = w[0] * src[c][i];
+        for (k = 1; k <= R; k++) {
+            if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
+            if (jp != ERO__NONE) {
+                float *const *f = (tp & 1) ? alt : src;
+                for (c = 0; c < C; c++) acc[c] += w[k] * f[c][jp];
+                ws += w[k];
+            }
+            if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
+            if (jm != ERO__NONE) {
+                float *const *f = (tm & 1) ? alt : src;
+                for (c = 0; c < C; c++) acc[c] += w[k] * f[c][jm];
+                ws += w[k];
+            }
+        }
+        for (c = 0; c < C; c++) out[c] = acc[c] / ws;
+    }
+}
+
+/* the taps of a regular stretch of cnt texels from i0 along a stride (1 or W), all of them inside
+   the grid: the same sums in the same order as ero__taps, eight texels at a time */
+static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, size_t st, const float *w, int R, float wfull)
+{
+    size_t x = 0;
+    int j, k;
+    for (; x + 8 <= cnt; x += 8) {
+        const float *p = f + i0 + x;
+        float acc[8];
+        for (j = 0; j < 8; j++) acc[j] = w[0] * p[j];
+        for (k = 1; k <= R; k++) {
+            const float *up = p + (size_t)k * st, *dn = p - (size_t)k * st;
+            float wk = w[k];
+            for (j = 0; j < 8; j++) {
+                acc[j] += wk * up[j];
+                acc[j] += wk * dn[j];
+            }
+        }
+        for (j = 0; j < 8; j++) out[i0 + x + (size_t)j] = acc[j] / wfull;
+    }
+    for (; x < cnt; x++) {
+        const float *p = f + i0 + x;
+        float acc = w[0] * p[0];
+        for (k = 1; k <= R; k++) {
+            acc += w[k] * p[(size_t)k * st];
+            acc += w[k] * p[-(ptrdiff_t)((size_t)k * st)];
+        }
+        out[i0 + x] = acc / wfull;
+    }
+}
+
+/* one filter pass along `axis` of every texel: src (even turns) / alt (odd turns) into out;
+   regular stretches of each row go to ero__taps_run, the rest walk */
+static void ero__pass(const ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
+                      const float *w, int R, float wfull)
+{
+    size_t W = (size_t)r->W, y, x, c;
+    float v[4];
+    for (y = 0; y < (size_t)r->H; y++) {
+        size_t row = y * W;
+        for (x = 0; x < W;) {
+            size_t i = row + x, e = x;
+            while (e < W && ero__valid(r, (uint32_t)(row + e)) && r->reg[4 * (row + e) + 2 * (size_t)axis] >= R &&
+                   r->reg[4 * (row + e) + 2 * (size_t)axis + 1] >= R)
+                e++;
+            if (e > x) {
+                for (c = 0; c < (size_t)C; c++) ero__taps_run(src[c], out[c], i, e - x, axis ? W : 1, w, R, wfull);
+                x = e;
+                continue;
+            }
+            if (!ero__valid(r, (uint32_t)i)) for (c = 0; c < (size_t)C; c++) out[c][i] = 0.0f;
+            else {
+                ero__taps(r, (uint32_t)i, axis, src, alt, C, w, R, wfull, v);
+                for (c = 0; c < (size_t)C; c++) out[c][i] = v[c];
+            }
+            x++;
+        }
+    }
+}
+
+/* the planes src (C of them) filtered along each texel's x then y, into dst (may be src):
+   pass 1 along own x (and, with rotated seams, along own y), pass 2 along own y over the
+   values that continue this texel's x */
+static void ero__filter(ero__run *r, float **src, float **dst, int C, const float *w, int R, float wfull)
+{
+    size_t i;
+    int c;
+    if (R == 0) {
+        if (dst != src) for (c = 0; c < C; c++) memcpy(dst[c], src[c], r->n * sizeof(float));
+        return;
+    }
+    ero__pass(r, 0, src, src, r->ax, C, w, R, wfull);
+    if (r->has_rot) ero__pass(r, 1, src, src, r->ay, C, w, R, wfull);
+    ero__pass(r, 1, r->ax, r->ay, dst, C, w, R, wfull);
+    if (r->valid) /* invalid texels keep their values */
+        for (i = 0; i < r->n; i++)
+            if (!r->valid[i] && dst != src) for (c = 0; c < C; c++) dst[c][i] = src[c][i];
+}
+
+/* ================================================================================================
+   the model: H = W_f / R
+   ================================================================================================ */
+
+static float ero__resistance(const ero_material *m, float c)
+{
+    float u = 1.0f - c;
+    return u * u * m->eps_max + 2.0f * c * u * m->eps_medium + c * c * m->eps_min;
+}
+
+static void ero__erosion_heights(ero__run *r)
+{
+    size_t i;
+    float lc = r->o.curvature_length;
+    for (i = 0; i < r->n; i++) {
+        const ero_material *m = &r->mats[r->mat ? r->mat[i] : 0];
+        float n[3], len, e, c, res, wf, hx, t = 0.0f, kap;
+        if (!ero__valid(r, (uint32_t)i)) { r->hh[i] = 0.0f; continue; }
+        n[0] = r->g[0][i]; n[1] = r->g[1][i]; n[2] = r->g[2][i];
+        kap = r->g[3][i];
+        len = sqrtf(ero__dot(n, n));
+        e = len > 0.0f ? -ero__dot(n, r->wind) / len : 0.0f;
+        c = fabsf(kap) * lc;
+        if (c > 1.0f) c = 1.0f;
+        res = ero__resistance(m, c);
+        if (e > 0.0f) {
+            wf = ((r->o.flags & ERO_CONSTANT_WINDWARD) ? r->o.force : r->o.force * e) + m->ambient;
+            hx = wf / res;
+        } else {
+            hx = (r->o.flags & ERO_LEEWARD_LITERAL) ? m->ambient : m->ambient / res;
+        }
+        if (kap < 0.0f && r->o.deposit_ratio >= 0.0f) {
+            t = r->o.deposit_ramp > 0.0f ? -kap * lc / r->o.deposit_ramp : 1.0f;
+            if (t > 1.0f) t = 1.0f;
+            hx = hx * ((1.0f - t) - r->o.deposit_ratio * t);
+        }
+        r->hh[i] = ero__finite(hx) ? hx : 0.0f; /* beyond float's range (eps_min ~ 0): no change */
+    }
+}
+
+/* ================================================================================================
+   applying the change, the report, the invalid texels
+   ================================================================================================ */
+
+static inline double ero__column(const ero__run *r, size_t i, float t0, float t1)
+{
+    double a = t0, b = t1;
+    if (r->hf) return (double)r->s * r->s * (b - a);
+    return r->area[i] * ((b - a) + r->q1[i] * (b * b - a * a) / 2.0 + r->q2[i] * (b * b * b - a * a * a) / 3.0);
+}
+
+/* the deposition bound (see MODEL): disp >= bound for a surface, height <= bound for a height field */
+static float ero__bounded(const ero__run *r, float d)
+{
+    float bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : 0.0f;
+    if (r->o.bound == ERO_BOUND_NONE || (r->o.bound == ERO_BOUND_DEFAULT && r->hf)) return d;
+    if (r->hf) return d > bv ? bv : d;
+    return d < bv ? bv : d;
+}
+
+static void ero__apply(ero__run *r, ero_report *rep)
+{
+    size_t i;
+    float rate = r->o.rate;
+    for (i = 0; i < r->n; i++) {
+        float d0 = r->disp[i], d1, ch;
+        double vol;
+        if (!ero__valid(r, (uint32_t)i)) continue;
+        if (r->hf) { /* height: erosion lowers it */
+            d1 = ero__bounded(r, d0 - rate * r->hh[i]);
+            if (!ero__finite(d1)) d1 = d0;
+            ch = d0 - d1;
+            vol = ero__column(r, i, -d0, -d1);
+        } else {
+            d1 = ero__bounded(r, d0 + rate * r->hh[i]);
+            if (!ero__finite(d1)) d1 = d0;
+            ch = d1 - d0;
+            vol = ero__column(r, i, d0, d1);
+        }
+        r->disp[i] = d1;
+        r->hh[i] = d1 - d0;
+        if (!(vol - vol == 0.0)) vol = 0.0; /* not finite: beyond float's range, unreported */
+        if (vol > 0.0) rep->eroded += vol;
+        else rep->deposited -= vol;
+        if (fabsf(ch) > rep->max_change) rep->max_change = fabsf(ch);
+    }
+}
+
+/* invalid texels within two image texels of valid ones take the mean change of the image
+   neighbours set before them (ring 1 from valid texels, ring 2 from ring 1); g[0] marks the ring */
+static void ero__extend_invalid(ero__run *r)
+{
+    long W = r->W, H = r->H, x, y, dx, dy;
+    int ring;
+    float *mark = r->g[0];
+    size_t i;
+    if (!r->valid || (r->o.flags & ERO_KEEP_INVALID)) return;
+    for (i = 0; i < r->n; i++) mark[i] = r->valid[i] ? 0.0f : -1.0f;
+    for (ring = 1; ring <= 2; ring++) {
+        for (y = 0; y < H; y++)
+            for (x = 0; x < W; x++) {
+                double s = 0.0;
+                int cnt = 0;
+                i = (size_t)(y * W + x);
+                if (mark[i] >= 0.0f) continue;
+                for (dy = -1; dy <= 1; dy++)
+                    for (dx = -1; dx <= 1; dx++) {
+                        long xx = x + dx, yy = y + dy;
+                        size_t j;
+                        if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+                        j = (size_t)(yy * W + xx);
+                        if (mark[j] >= 0.0f && mark[j] < (float)ring) { s += r->hh[j]; cnt++; }
+                    }
+                if (cnt) { r->hh[i] = (float)(s / cnt); mark[i] = -2.0f - (float)ring; }
+            }
+        for (i = 0; i < r->n; i++) /* this ring becomes readable by the next */
+            if (mark[i] <= -3.0f) mark[i] = (float)ring;
+    }
+    for (i = 0; i < r->n; i++)
+        if (mark[i] >= 1.0f) {
+            float d = ero__bounded(r, r->disp[i] + r->hh[i]);
+            if (ero__finite(d)) r->disp[i] = d;
+        }
+}
+
+/* ================================================================================================
+   the step and the run
+   ================================================================================================ */
+
+/* one time step (paper section 4.2.3, steps 1-5) */
+static void ero__time_step(ero__run *r, ero_report *rep)
+{
+    float *one[1];
+    ero__points(r);                                                   /* 5. (of the last step) surface */
+    ero__geometry(r);                                                 /*    normals, curvature */
+    ero__filter(r, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum);    /*    their averages */
+    ero__erosion_heights(r);                                          /* 1-2. H into the erosion map */
+    one[0] = r->hh;
+    ero__filter(r, one, one, 1, r->gau_w, r->gau_r, r->gau_sum);      /* 3. low-pass filter */
+    memset(rep, 0, sizeof *rep);
+    ero__apply(r, rep);                                               /* 4. add it to the map */
+    ero__extend_invalid(r);
+}
+
+static ero_result ero__setup(ero__run *r, const ero_grid *g, const uint8_t *material, const ero_material *materials,
+                             size_t material_count, int steps, const ero_options *options)
+{
+    ero_result e;
+    double h, L, wl;
+    size_t i;
+    ero_options o = options ? *options : ero_default_options();
+    memset(r, 0, sizeof *r);
+    if ((e = ero__check_grid(g, &r->n)) != ERO_OK) return e;
+    if ((e = ero__check_options(&o)) != ERO_OK) return e;
+    if (steps < 1) return ERO_ERR_BAD_STEPS;
+    r->hf = g->domain == ERO_HEIGHTFIELD;
+    r->wrap = g->wrap != 0;
+    r->W = g->width;
+    r->H = g->height;
+    r->s = g->spacing;
+    r->disp = g->disp;
+    r->valid = g->valid;
+    r->pos = g->pos; r->nrm = g->nrm; r->area = g->area; r->nbr = g->nbr; r->nbr_rot = g->nbr_rot;
+    if ((e = ero__check_materials(r, material, materials, material_count)) != ERO_OK) return e;
+    ero__scales(g, r->n, &h, &L);
+    r->o = ero__resolve(&o, L);
+    wl = sqrt((double)o.wind[0] * o.wind[0] + (double)o.wind[1] * o.wind[1] + (double)o.wind[2] * o.wind[2]);
+    for (i = 0; i < 3; i++) r->wind[i] = (float)(o.wind[i] / wl);
+    if ((e = ero__kernels(r, h)) != ERO_OK) return e;
+    if (!r->hf)
+        for (i = 0; i < 4 * r->n && !r->has_rot; i++) r->has_rot = r->nbr[i] != ERO__NONE && r->nbr_rot[i] != 0;
+    r->al = o.allocator;
+    return ERO_OK;
+}
+
+ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const ero_material *materials,
+                            size_t material_count, int steps, const ero_options *options, ero_report *per_step,
+                            ero_report *total)
+{
+    ero__run r;
+    ero_report rep, sum;
+    ero_result e;
+    int s;
+    memset(&sum, 0, sizeof sum);
+    if (total) *total = sum;
+    if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
+    if ((e = ero__scratch(&r)) != ERO_OK) return e;
+    ero__regular_runs(&r);
+    ero__columns(&r);
+    sum.corrected = r.corrected;
+    for (s = 0; s < steps; s++) {
+        if (r.o.progress && r.o.progress(r.o.user, (float)s / (float)steps)) { e = ERO_CANCELLED; break; }
+        ero__time_step(&r, &rep);
+        rep.steps = 1;
+        rep.corrected = r.corrected;
+        if (per_step) per_step[s] = rep;
+        sum.eroded += rep.eroded;
+        sum.deposited += rep.deposited;
+        if (rep.max_change > sum.max_change) sum.max_change = rep.max_change;
+        sum.steps++;
+    }
+    if (e == ERO_OK && r.o.progress) r.o.progress(r.o.user, 1.0f);
+    if (total) *total = sum;
+    ero__free(r.al, r.block);
+    return e;
+}
+
+/* ================================================================================================
+   grids, painting, names
+   ================================================================================================ */
+
+ERODEF ero_grid ero_heightfield_grid(int width, int height, float *h, float spacing, int wrap)
+{
+    ero_grid g;
+    memset(&g, 0, sizeof g);
+    g.domain = ERO_HEIGHTFIELD;
+    g.width = width;
+    g.height = height;
+    g.disp = h;
+    g.spacing = spacing;
+    g.wrap = wrap;
+    return g;
+}
+
+ERODEF ero_grid ero_surface_grid(int width, int height, const float *pos, const float *nrm, float *disp,
+                                 const float *area, const uint8_t *valid, const uint32_t *nbr, const uint8_t *nbr_rot)
+{
+    ero_grid g;
+    memset(&g, 0, sizeof g);
+    g.domain = ERO_SURFACE;
+    g.width = width;
+    g.height = height;
+    g.pos = pos; g.nrm = nrm; g.disp = disp; g.area = area; g.valid = valid; g.nbr = nbr; g.nbr_rot = nbr_rot;
+    return g;
+}
+
+ERODEF ero_result ero_paint_mask(uint8_t *material, int width, int height, const float *mask, int mask_w, int mask_h,
+                                 int channels, float threshold, uint8_t id)
+{
+    long x, y;
+    if (!material || !mask || channels < 1) return ERO_ERR_INVALID_ARGUMENT;
+    if (width < 1 || height < 1 || mask_w < 1 || mask_h < 1) return ERO_ERR_BAD_SIZE;
+    if ((size_t)width > ((size_t)0xFFFFFFFEu) / (size_t)height) return ERO_ERR_TOO_LARGE;
+    for (y = 0; y < height; y++)
+        for (x = 0; x < width; x++) {
+            long mx = (long)(((double)x + 0.5) * mask_w / width), my = (long)(((double)y + 0.5) * mask_h / height);
+            float v = mask[((size_t)my * (size_t)mask_w + (size_t)mx) * (size_t)channels];
+            if (v >= threshold) material[(size_t)y * (size_t)width + (size_t)x] = id;
+        }
+    return ERO_OK;
+}
+
+ERODEF ero_result ero_paint_sphere(const ero_grid *g, uint8_t *material, const float centre[3], float radius, uint8_t id)
+{
+    size_t n, i;
+    ero_result e = ero__check_grid(g, &n);
+    if (e != ERO_OK) return e;
+    if (!material || !centre) return ERO_ERR_INVALID_ARGUMENT;
+    if (!ero__finite(radius) || radius < 0.0f || !ero__finite(centre[0]) || !ero__finite(centre[1]) ||
+        !ero__finite(centre[2]))
+        return ERO_ERR_BAD_PARAMETER;
+    for (i = 0; i < n; i++) {
+        double p[3], d2 = 0.0;
+        int k;
+        if (g->domain == ERO_HEIGHTFIELD) {
+            p[0] = (double)(i % (size_t)g->width) * g->spacing;
+            p[1] = (double)(i / (size_t)g->width) * g->spacing;
+            p[2] = g->disp[i];
+        } else
+            for (k = 0; k < 3; k++) p[k] = (double)g->pos[3 * i + (size_t)k] - (double)g->disp[i] * g->nrm[3 * i + (size_t)k];
+        for (k = 0; k < 3; k++) d2 += (p[k] - centre[k]) * (p[k] - centre[k]);
+        if (d2 <= (double)radius * radius) material[i] = id;
+    }
+    return ERO_OK;
+}
+
+ERODEF const char *ero_result_string(ero_result r)
+{
+    switch (r) {
+    case ERO_OK: return "ERO_OK";
+    case ERO_ERR_INVALID_ARGUMENT: return "ERO_ERR_INVALID_ARGUMENT";
+    case ERO_ERR_BAD_SIZE: return "ERO_ERR_BAD_SIZE";
+    case ERO_ERR_TOO_LARGE: return "ERO_ERR_TOO_LARGE";
+    case ERO_ERR_BAD_SPACING: return "ERO_ERR_BAD_SPACING";
+    case ERO_ERR_BAD_MAP: return "ERO_ERR_BAD_MAP";
+    case ERO_ERR_BAD_INDEX: return "ERO_ERR_BAD_INDEX";
+    case ERO_ERR_BAD_WIND: return "ERO_ERR_BAD_WIND";
+    case ERO_ERR_BAD_MATERIAL: return "ERO_ERR_BAD_MATERIAL";
+    case ERO_ERR_BAD_STEPS: return "ERO_ERR_BAD_STEPS";
+    case ERO_ERR_BAD_PARAMETER: return "ERO_ERR_BAD_PARAMETER";
+    case ERO_ERR_OUT_OF_MEMORY: return "ERO_ERR_OUT_OF_MEMORY";
+    case ERO_CANCELLED: return "ERO_CANCELLED";
+    }
+    return "ERO_ERR_?";
+}
+
+#ifdef __cplusplus
+}
+#endif
+#if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
+#pragma float_control(pop)
+#elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
+#pragma GCC pop_options
+#endif
+#endif /* ERO_IMPLEMENTATION_DONE */
+#endif /* ERO_IMPLEMENTATION */
+/*
+------------------------------------------------------------------------------
+This software is available under 2 licences -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT Licence
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright law, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication in favor of the public domain for the benefit
+of our descendants and successors in perpetuity of all present and future
+rights to this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+*/

@@ -1,0 +1,2 @@
+# erosion.h (issue 17): the tests
+C_TESTS += $(B)/test_erosion
