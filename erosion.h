@@ -69,8 +69,9 @@
        disp += rate * H (height -= rate * H). Across a seam the second pass reads the first
        pass's result along the axis that continues this texel's x, so the filter is separable on
        every chart.
-     Deposition bound: ERO_SURFACE keeps disp >= 0 (bound_value = 0: the surface never rises above
-       the base, which must enclose it for ray-cast rendering); bound = ERO_BOUND_VALUE sets
+     Deposition bound: ERO_SURFACE keeps disp >= 0 (bound_value = 0: deposition never raises the
+       surface above the base, which must enclose it for ray-cast rendering; a texel already above
+       it, as a base that crosses the original leaves, may erode but not rise); bound = ERO_BOUND_VALUE sets
        another (signed) lower bound, ERO_BOUND_NONE none. ERO_HEIGHTFIELD is unbounded by default;
        ERO_BOUND_VALUE keeps height <= bound_value.
      Invalid texels (valid = 0) are not eroded and not read by the filters; those within two
@@ -967,13 +968,20 @@ static inline double ero__column(const ero__run *r, size_t i, float t0, float t1
     return r->area[i] * ((b - a) + r->q1[i] * (b * b - a * a) / 2.0 + r->q2[i] * (b * b * b - a * a * a) / 3.0);
 }
 
-/* the deposition bound (see MODEL): disp >= bound for a surface, height <= bound for a height field */
-static float ero__bounded(const ero__run *r, float d)
+/* the deposition bound (see MODEL): disp >= bound for a surface, height <= bound for a height
+   field, for the new value d of a texel that was d0; a texel already beyond the bound may erode
+   back toward it but not deposit further */
+static float ero__bounded(const ero__run *r, float d0, float d)
 {
     float bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : 0.0f;
     if (r->o.bound == ERO_BOUND_NONE || (r->o.bound == ERO_BOUND_DEFAULT && r->hf)) return d;
-    if (r->hf) return d > bv ? bv : d;
-    return d < bv ? bv : d;
+    if (r->hf) {
+        float lim = d0 > bv ? d0 : bv;
+        return d > lim ? lim : d;
+    } else {
+        float lim = d0 < bv ? d0 : bv;
+        return d < lim ? lim : d;
+    }
 }
 
 static void ero__apply(ero__run *r, ero_report *rep)
@@ -985,12 +993,12 @@ static void ero__apply(ero__run *r, ero_report *rep)
         double vol;
         if (!ero__valid(r, (uint32_t)i)) continue;
         if (r->hf) { /* height: erosion lowers it */
-            d1 = ero__bounded(r, d0 - rate * r->hh[i]);
+            d1 = ero__bounded(r, d0, d0 - rate * r->hh[i]);
             if (!ero__finite(d1)) d1 = d0;
             ch = d0 - d1;
             vol = ero__column(r, i, -d0, -d1);
         } else {
-            d1 = ero__bounded(r, d0 + rate * r->hh[i]);
+            d1 = ero__bounded(r, d0, d0 + rate * r->hh[i]);
             if (!ero__finite(d1)) d1 = d0;
             ch = d1 - d0;
             vol = ero__column(r, i, d0, d1);
@@ -1036,7 +1044,7 @@ static void ero__extend_invalid(ero__run *r)
     }
     for (i = 0; i < r->n; i++)
         if (mark[i] >= 1.0f) {
-            float d = ero__bounded(r, r->disp[i] + r->hh[i]);
+            float d = ero__bounded(r, r->disp[i], r->disp[i] + r->hh[i]);
             if (ero__finite(d)) r->disp[i] = d;
         }
 }

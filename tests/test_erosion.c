@@ -162,6 +162,48 @@ static void test_pit_ridge(void)
     free(h); free(h0);
 }
 
+/* ---- the deposition bound: disp >= 0 on a surface; a texel above the base erodes, never rises ---- */
+
+static void test_bound(void)
+{
+    const float u[3] = {1, 0, 0}, v[3] = {0, 1, 0};
+    const float s = 1.0f / 64;
+    plane_grid p = make_plane(64, 64, s, u, v, 0.0f);
+    ero_grid g = plane_ero(&p);
+    ero_options o = ero_default_options();
+    float mn = 1e30f, *d0;
+    int x, y, i;
+    for (y = 0; y < 64; y++) /* a pit, 0.02 deep, in a surface at the base (disp 0) */
+        for (x = 0; x < 64; x++) {
+            double r2 = ((x - 32) * (x - 32) + (y - 32) * (y - 32)) * (double)s * s;
+            p.disp[y * 64 + x] = (float)(0.02 * exp(-r2 / (2 * 0.08 * 0.08)));
+        }
+    d0 = copy_floats(p.disp, 64 * 64);
+    o.wind[2] = 1.0f; /* leeward everywhere: ambient wear on the flat, strong deposition in the pit */
+    o.normal_radius = 2 * s; o.filter_sigma = s; o.rate = 0.05f; o.deposit_ratio = 3.0f; o.curvature_length = 0.5f;
+    o.bound = ERO_BOUND_NONE;
+    T_CHECK(ero_erode(&g, NULL, NULL, 0, 20, &o, NULL, NULL) == ERO_OK);
+    for (i = 0; i < 64 * 64; i++) mn = p.disp[i] < mn ? p.disp[i] : mn;
+    T_CHECK_MSG(mn < 0.0f, "unbounded, the pit should overfill above the base: smallest disp %g", mn);
+    printf("  note: deposition bound: smallest disp after 20 steps unbounded %.3g", mn);
+    memcpy(p.disp, d0, 64 * 64 * sizeof(float));
+    free(d0);
+    o.bound = ERO_BOUND_DEFAULT;
+    T_CHECK(ero_erode(&g, NULL, NULL, 0, 20, &o, NULL, NULL) == ERO_OK);
+    for (mn = 1e30f, i = 0; i < 64 * 64; i++) mn = p.disp[i] < mn ? p.disp[i] : mn;
+    printf(", bounded %.3g (bound 0)\n", mn);
+    T_CHECK(mn >= 0.0f);
+    o.wind[2] = -1.0f; o.deposit_ratio = 0.0f; o.curvature_length = 0.0f;
+    /* a flat surface 0.01 above its base (disp < 0), facing the wind: erodes as if unbounded */
+    for (i = 0; i < 64 * 64; i++) p.disp[i] = -0.01f;
+    d0 = copy_floats(p.disp, 64 * 64);
+    o.rate = 1e-3f;
+    T_CHECK(ero_erode(&g, NULL, NULL, 0, 2, &o, NULL, NULL) == ERO_OK);
+    T_CHECK(p.disp[32 * 64 + 32] > d0[32 * 64 + 32] && p.disp[32 * 64 + 32] < 0.0f);
+    free(d0);
+    plane_free(&p);
+}
+
 /* ---- 4: harder erodes less, monotone in eps (four bands painted from a mask) ------------------ */
 
 static void test_materials(void)
@@ -570,6 +612,7 @@ int main(int argc, char **argv)
     T_BEGIN(argc, argv);
     test_flat_patches();
     test_pit_ridge();
+    test_bound();
     test_materials();
     test_tiling();
     if (T_CHECK(make_torus_map(&t, 256))) {
