@@ -16,7 +16,7 @@ status=0
 for mesh in "$@"; do
   for prog in "$B"/bench_*; do
     [ -x "$prog" ] || continue
-    case "$(basename "$prog")" in bench_texel|bench_relief|bench_deform) continue ;; esac # run once below
+    case "$(basename "$prog")" in bench_texel|bench_relief|bench_deform|bench_erosion) continue ;; esac # run once below
     echo "bench: $(basename "$prog") $mesh" >&2
     if ! "$prog" "$mesh" | sed "s|^RESULT |RESULT $(basename "$mesh") |" >>"$tmp"; then
       echo "bench: $(basename "$prog") failed on $mesh" >&2
@@ -37,6 +37,7 @@ once() {
 # the benches that take no mesh (their own fixed inputs), and the cases beyond one run per mesh
 once texel bench_texel
 once asteroid bench_relief
+once erosion bench_erosion                                                         # height field + the bunny's map, 1024^2 and 4096^2
 bunny=/usr/share/glmark2/models/bunny.obj
 if [ -f "$bunny" ]; then
   once bunny_x1 bench_deform "$bunny" --refine 1                                  # deform.h, 139k vertices
