@@ -977,124 +977,166 @@ static int mio__word_is(const unsigned char *w, size_t n, const char *s) { retur
 
 #define MIO__HERR(code, ...) mio__fail(c, code, line, (size_t)(ls - c->data), __VA_ARGS__)
 
-/* Parses the header up to and including the "end_header" line. On success *body is the first
-   byte of the data and *body_line its line number. */
-static mio_result mio__ply_header(mio__ctx *c, mio__ply *ply, const unsigned char **body, size_t *body_line)
+/* the header's "element" and "property" lines up to end_header, counted so that the tables
+   are sized by the header's bytes (>= 9 bytes per entry) */
+static void mio__ply_count_lines(const unsigned char *p, const unsigned char *end, size_t *elem_lines, size_t *prop_lines)
 {
-    const unsigned char *p = c->data, *end = c->data + c->size;
-    size_t line = 1, elem_lines = 0, prop_lines = 0;
     const unsigned char *q;
-    int have_format = 0;
-    ply->vertex_elem = ply->face_elem = (size_t)-1;
-    if (c->size < 4 || memcmp(p, "ply", 3) != 0 || (p[3] != '\n' && p[3] != '\r'))
-        return mio__fail(c, MIO_ERR_SYNTAX, 1, 0, "missing 'ply' magic line");
-    /* size the tables by counting "element" and "property" lines up to end_header, so that
-       their size is bounded by the header's bytes (>= 9 bytes per entry) */
+    *elem_lines = *prop_lines = 0;
     for (q = p; q < end;) {
         const unsigned char *ls = q, *w[6];
         size_t wl[6];
         while (q < end && *q != '\n') q++;
         if (mio__words(ls, q, w, wl) > 0) {
             if (mio__word_is(w[0], wl[0], "end_header")) break;
-            if (mio__word_is(w[0], wl[0], "element")) elem_lines++;
-            if (mio__word_is(w[0], wl[0], "property")) prop_lines++;
+            if (mio__word_is(w[0], wl[0], "element")) (*elem_lines)++;
+            if (mio__word_is(w[0], wl[0], "property")) (*prop_lines)++;
         }
         if (q < end) q++;
     }
+}
+
+/* a "format" line of n words w at line `line` starting at ls */
+static mio_result mio__ply_format_line(mio__ctx *c, mio__ply *ply, const unsigned char **w, const size_t *wl, size_t n,
+                                       size_t line, const unsigned char *ls)
+{
+    if (n < 2) return MIO__HERR(MIO_ERR_SYNTAX, "format line needs a format name");
+    if (mio__word_is(w[1], wl[1], "ascii")) ply->format = MIO__PLY_ASCII;
+    else if (mio__word_is(w[1], wl[1], "binary_little_endian")) ply->format = MIO__PLY_LE;
+    else if (mio__word_is(w[1], wl[1], "binary_big_endian")) ply->format = MIO__PLY_BE;
+    else return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown PLY format");
+    return MIO_OK;
+}
+
+/* an "element NAME COUNT" line: the next element (the first "vertex" and "face" ones are the mesh's) */
+static mio_result mio__ply_element_line(mio__ctx *c, mio__ply *ply, const unsigned char **w, const size_t *wl, size_t n,
+                                        size_t elem_lines, size_t line, const unsigned char *ls)
+{
+    mio__ply_elem *e = &ply->elems[ply->elem_count];
+    long long count = 0;
+    int overflow = 0;
+    if (ply->elem_count >= elem_lines) return MIO__HERR(MIO_ERR_SYNTAX, "header changed while parsing");
+    if (n != 3) return MIO__HERR(MIO_ERR_SYNTAX, "element line needs a name and a count");
+    if (mio__parse_int(w[2], w[2] + wl[2], &count, &overflow) != wl[2] || count < 0)
+        return MIO__HERR(MIO_ERR_SYNTAX, "bad element count");
+    if (overflow) return MIO__HERR(MIO_ERR_TOO_LARGE, "element count too large");
+    e->count = (unsigned long long)count;
+    e->first_prop = ply->prop_count;
+    e->prop_count = 0;
+    e->line = line;
+    e->kind = MIO__ELEM_OTHER;
+    if (mio__word_is(w[1], wl[1], "vertex") && ply->vertex_elem == (size_t)-1) {
+        e->kind = MIO__ELEM_VERTEX;
+        ply->vertex_elem = ply->elem_count;
+    } else if (mio__word_is(w[1], wl[1], "face") && ply->face_elem == (size_t)-1) {
+        e->kind = MIO__ELEM_FACE;
+        ply->face_elem = ply->elem_count;
+    }
+    ply->elem_count++;
+    return MIO_OK;
+}
+
+/* "property list COUNT_TYPE TYPE NAME" of element e: the face's first vertex_indices (or
+   vertex_index) list is the faces' role */
+static mio_result mio__ply_list_property(mio__ctx *c, const mio__ply *ply, const mio__ply_elem *e, mio__ply_prop *pr,
+                                         const unsigned char **w, const size_t *wl, size_t n, size_t line,
+                                         const unsigned char *ls)
+{
+    size_t k;
+    int seen = 0;
+    if (n != 5) return MIO__HERR(MIO_ERR_SYNTAX, "list property needs count type, item type and name");
+    pr->count_type = (unsigned char)mio__ply_type(w[2], wl[2]);
+    pr->type = (unsigned char)mio__ply_type(w[3], wl[3]);
+    if (pr->count_type == MIO__T_NONE || pr->type == MIO__T_NONE) return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown property type");
+    if (!mio__ply_is_int(pr->count_type)) return MIO__HERR(MIO_ERR_UNSUPPORTED, "list count type must be an integer type");
+    if (e->kind != MIO__ELEM_FACE || !(mio__word_is(w[4], wl[4], "vertex_indices") || mio__word_is(w[4], wl[4], "vertex_index")))
+        return MIO_OK;
+    for (k = 0; k < e->prop_count; k++) if (ply->props[e->first_prop + k].role == MIO__ROLE_FACE) seen = 1;
+    if (seen) return MIO_OK;
+    if (!mio__ply_is_int(pr->type)) return MIO__HERR(MIO_ERR_UNSUPPORTED, "face index type must be an integer type");
+    pr->role = MIO__ROLE_FACE;
+    return MIO_OK;
+}
+
+/* "property TYPE NAME" of element e: the vertex's x, y and z are the positions' roles */
+static mio_result mio__ply_scalar_property(mio__ctx *c, const mio__ply *ply, const mio__ply_elem *e, mio__ply_prop *pr,
+                                           const unsigned char **w, const size_t *wl, size_t n, size_t line,
+                                           const unsigned char *ls)
+{
+    const unsigned char *name = w[2];
+    size_t k;
+    int role;
+    if (n != 3) return MIO__HERR(MIO_ERR_SYNTAX, "property line needs a type and a name");
+    pr->count_type = MIO__T_NONE;
+    pr->type = (unsigned char)mio__ply_type(w[1], wl[1]);
+    if (pr->type == MIO__T_NONE) return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown property type");
+    if (e->kind != MIO__ELEM_VERTEX || wl[2] != 1 || !(*name == 'x' || *name == 'y' || *name == 'z')) return MIO_OK;
+    role = MIO__ROLE_X + (*name - 'x');
+    for (k = 0; k < e->prop_count; k++)
+        if (ply->props[e->first_prop + k].role == role) return MIO__HERR(MIO_ERR_SYNTAX, "duplicate vertex property");
+    pr->role = (unsigned char)role;
+    return MIO_OK;
+}
+
+/* a "property" line: the next property of the last element */
+static mio_result mio__ply_property_line(mio__ctx *c, mio__ply *ply, const unsigned char **w, const size_t *wl, size_t n,
+                                         size_t prop_lines, size_t line, const unsigned char *ls)
+{
+    mio__ply_prop *pr = &ply->props[ply->prop_count];
+    mio__ply_elem *e;
+    mio_result r;
+    if (ply->elem_count == 0) return MIO__HERR(MIO_ERR_SYNTAX, "property before any element");
+    if (ply->prop_count >= prop_lines) return MIO__HERR(MIO_ERR_SYNTAX, "header changed while parsing");
+    e = &ply->elems[ply->elem_count - 1];
+    pr->role = MIO__ROLE_SKIP;
+    r = n >= 2 && mio__word_is(w[1], wl[1], "list") ? mio__ply_list_property(c, ply, e, pr, w, wl, n, line, ls)
+                                                     : mio__ply_scalar_property(c, ply, e, pr, w, wl, n, line, ls);
+    if (r != MIO_OK) return r;
+    e->prop_count++;
+    ply->prop_count++;
+    return MIO_OK;
+}
+
+/* Parses the header up to and including the "end_header" line. On success *body is the first
+   byte of the data and *body_line its line number. */
+static mio_result mio__ply_header(mio__ctx *c, mio__ply *ply, const unsigned char **body, size_t *body_line)
+{
+    const unsigned char *p = c->data, *end = c->data + c->size;
+    size_t line = 1, elem_lines, prop_lines;
+    int have_format = 0;
+    ply->vertex_elem = ply->face_elem = (size_t)-1;
+    if (c->size < 4 || memcmp(p, "ply", 3) != 0 || (p[3] != '\n' && p[3] != '\r'))
+        return mio__fail(c, MIO_ERR_SYNTAX, 1, 0, "missing 'ply' magic line");
+    mio__ply_count_lines(p, end, &elem_lines, &prop_lines);
     ply->elems = (mio__ply_elem *)mio__alloc(c, (elem_lines + 1) * sizeof *ply->elems);
     ply->props = (mio__ply_prop *)mio__alloc(c, (prop_lines + 1) * sizeof *ply->props);
     if (!ply->elems || !ply->props) return mio__oom(c, 1, 0);
     while (p < end && *p != '\n') p++;
     for (;;) {
-        const unsigned char *ls, *le, *w[6];
+        const unsigned char *ls, *w[6];
         size_t wl[6], n;
+        mio_result r = MIO_OK;
         if (p >= end) return mio__fail(c, MIO_ERR_TRUNCATED, line, (size_t)(p - c->data), "header ends without end_header");
         p++; /* past '\n' */
         line++;
         ls = p;
         while (p < end && *p != '\n') p++;
-        le = p;
-        n = mio__words(ls, le, w, wl);
+        n = mio__words(ls, p, w, wl);
         if (n == 0) continue;
         if (mio__word_is(w[0], wl[0], "end_header")) {
-            if (p >= end) { *body = end; }
-            else *body = p + 1;
+            *body = p >= end ? end : p + 1;
             *body_line = line + 1;
             break;
-        } else if (mio__word_is(w[0], wl[0], "format")) {
-            if (n < 2) return MIO__HERR(MIO_ERR_SYNTAX, "format line needs a format name");
-            if (mio__word_is(w[1], wl[1], "ascii")) ply->format = MIO__PLY_ASCII;
-            else if (mio__word_is(w[1], wl[1], "binary_little_endian")) ply->format = MIO__PLY_LE;
-            else if (mio__word_is(w[1], wl[1], "binary_big_endian")) ply->format = MIO__PLY_BE;
-            else return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown PLY format");
+        }
+        if (mio__word_is(w[0], wl[0], "format")) {
+            r = mio__ply_format_line(c, ply, w, wl, n, line, ls);
             have_format = 1;
         } else if (mio__word_is(w[0], wl[0], "element")) {
-            mio__ply_elem *e = &ply->elems[ply->elem_count];
-            long long count = 0;
-            int overflow = 0;
-            if (ply->elem_count >= elem_lines) return MIO__HERR(MIO_ERR_SYNTAX, "header changed while parsing");
-            if (n != 3) return MIO__HERR(MIO_ERR_SYNTAX, "element line needs a name and a count");
-            if (mio__parse_int(w[2], w[2] + wl[2], &count, &overflow) != wl[2] || count < 0)
-                return MIO__HERR(MIO_ERR_SYNTAX, "bad element count");
-            if (overflow) return MIO__HERR(MIO_ERR_TOO_LARGE, "element count too large");
-            e->count = (unsigned long long)count;
-            e->first_prop = ply->prop_count;
-            e->prop_count = 0;
-            e->line = line;
-            e->kind = MIO__ELEM_OTHER;
-            if (mio__word_is(w[1], wl[1], "vertex") && ply->vertex_elem == (size_t)-1) {
-                e->kind = MIO__ELEM_VERTEX;
-                ply->vertex_elem = ply->elem_count;
-            } else if (mio__word_is(w[1], wl[1], "face") && ply->face_elem == (size_t)-1) {
-                e->kind = MIO__ELEM_FACE;
-                ply->face_elem = ply->elem_count;
-            }
-            ply->elem_count++;
+            r = mio__ply_element_line(c, ply, w, wl, n, elem_lines, line, ls);
         } else if (mio__word_is(w[0], wl[0], "property")) {
-            mio__ply_prop *pr = &ply->props[ply->prop_count];
-            mio__ply_elem *e;
-            const unsigned char *name;
-            size_t name_len;
-            if (ply->elem_count == 0) return MIO__HERR(MIO_ERR_SYNTAX, "property before any element");
-            if (ply->prop_count >= prop_lines) return MIO__HERR(MIO_ERR_SYNTAX, "header changed while parsing");
-            e = &ply->elems[ply->elem_count - 1];
-            pr->role = MIO__ROLE_SKIP;
-            if (n >= 2 && mio__word_is(w[1], wl[1], "list")) {
-                if (n != 5) return MIO__HERR(MIO_ERR_SYNTAX, "list property needs count type, item type and name");
-                pr->count_type = (unsigned char)mio__ply_type(w[2], wl[2]);
-                pr->type = (unsigned char)mio__ply_type(w[3], wl[3]);
-                if (pr->count_type == MIO__T_NONE || pr->type == MIO__T_NONE) return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown property type");
-                if (!mio__ply_is_int(pr->count_type)) return MIO__HERR(MIO_ERR_UNSUPPORTED, "list count type must be an integer type");
-                name = w[4];
-                name_len = wl[4];
-                if (e->kind == MIO__ELEM_FACE && (mio__word_is(name, name_len, "vertex_indices") || mio__word_is(name, name_len, "vertex_index"))) {
-                    size_t k;
-                    int seen = 0;
-                    for (k = 0; k < e->prop_count; k++) if (ply->props[e->first_prop + k].role == MIO__ROLE_FACE) seen = 1;
-                    if (!seen) {
-                        if (!mio__ply_is_int(pr->type)) return MIO__HERR(MIO_ERR_UNSUPPORTED, "face index type must be an integer type");
-                        pr->role = MIO__ROLE_FACE;
-                    }
-                }
-            } else {
-                if (n != 3) return MIO__HERR(MIO_ERR_SYNTAX, "property line needs a type and a name");
-                pr->count_type = MIO__T_NONE;
-                pr->type = (unsigned char)mio__ply_type(w[1], wl[1]);
-                if (pr->type == MIO__T_NONE) return MIO__HERR(MIO_ERR_UNSUPPORTED, "unknown property type");
-                name = w[2];
-                name_len = wl[2];
-                if (e->kind == MIO__ELEM_VERTEX && name_len == 1 && (*name == 'x' || *name == 'y' || *name == 'z')) {
-                    size_t k;
-                    int role = MIO__ROLE_X + (*name - 'x');
-                    for (k = 0; k < e->prop_count; k++)
-                        if (ply->props[e->first_prop + k].role == role) return MIO__HERR(MIO_ERR_SYNTAX, "duplicate vertex property");
-                    pr->role = (unsigned char)role;
-                }
-            }
-            e->prop_count++;
-            ply->prop_count++;
-        }
-        /* "comment", "obj_info" and lines with unknown keywords are ignored */
+            r = mio__ply_property_line(c, ply, w, wl, n, prop_lines, line, ls);
+        } /* "comment", "obj_info" and lines with unknown keywords are ignored */
+        if (r != MIO_OK) return r;
     }
     if (!have_format) return mio__fail(c, MIO_ERR_SYNTAX, 2, 0, "missing format line");
     return MIO_OK;

@@ -1614,112 +1614,126 @@ static void sr__shading_pass(const sr__shader *s, sr__raster *r)
     }
 }
 
-SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_draw_desc *d)
+/* sr_draw_mesh's arguments: the pointers, the model matrix, the sizes, the normal map, every
+   index in range and every position finite */
+static sr_result sr__draw_check(const sr_framebuffer *fb, const sr_camera *cam, const sr_draw_desc *d)
 {
-    sr_allocator a;
-    sr__raster r;
-    sr__shader s;
-    sr_light head;
-    float mvp[16];
-    size_t v, t, nv, per_vertex, bytes;
-    unsigned char *mem;
-    sr__cv *cv;
-    float *extra;
-    int gouraud;
+    size_t v, t;
     if (!fb || !fb->color || !cam || !d || !sr__camera_ok(cam)) return SR_ERR_INVALID_ARGUMENT;
     if ((d->vertex_count && !d->positions) || (d->triangle_count && !d->indices)) return SR_ERR_INVALID_ARGUMENT;
     if (d->model && !sr__finite_n(d->model, 16)) return SR_ERR_INVALID_ARGUMENT;
     if (d->triangle_count >= (size_t)SR__BACK_BIT || d->vertex_count > (size_t)UINT32_MAX) return SR_ERR_TOO_LARGE;
     if (d->normal_map && !sr__image_ok(d->normal_map, 3)) return SR_ERR_INVALID_ARGUMENT;
-    nv = d->vertex_count;
     for (t = 0; t < 3 * d->triangle_count; t++)
-        if (d->indices[t] >= nv) return SR_ERR_INVALID_ARGUMENT;
-    for (v = 0; v < nv; v++)
+        if (d->indices[t] >= d->vertex_count) return SR_ERR_INVALID_ARGUMENT;
+    for (v = 0; v < d->vertex_count; v++)
         if (!sr__finite3(d->positions + 3 * v)) return SR_ERR_INVALID_ARGUMENT;
-    if (d->triangle_count == 0) return SR_OK;
+    return SR_OK;
+}
 
-    a = fb->allocator;
-    gouraud = d->shading == SR_SHADE_GOURAUD && !d->fragment;
-    per_vertex = sizeof(sr__cv) + (d->model ? 6 * sizeof(float) : 0) + (gouraud ? 6 * sizeof(float) : 0);
-    if (nv > ((size_t)-1) / per_vertex) return SR_ERR_TOO_LARGE;
-    bytes = nv * per_vertex;
-    if (fb->scratch_size < bytes) { /* kept between draws: no page faults for a fresh block every frame */
-        if (fb->scratch) a.free(a.user, fb->scratch);
-        fb->scratch_size = 0;
-        fb->scratch = sr__alloc(&a, bytes);
-        if (!fb->scratch) return SR_ERR_OUT_OF_MEMORY;
-        fb->scratch_size = bytes;
+/* the framebuffer's scratch block, at least bytes long (kept between draws: no page faults for
+   a fresh block every frame) */
+static sr_result sr__draw_scratch(sr_framebuffer *fb, size_t bytes)
+{
+    sr_allocator a = fb->allocator;
+    if (fb->scratch_size >= bytes) return SR_OK;
+    if (fb->scratch) a.free(a.user, fb->scratch);
+    fb->scratch_size = 0;
+    fb->scratch = sr__alloc(&a, bytes);
+    if (!fb->scratch) return SR_ERR_OUT_OF_MEMORY;
+    fb->scratch_size = bytes;
+    return SR_OK;
+}
+
+/* the shader's state; with a model matrix, the world positions and normals into extra (6 per
+   vertex) and mvp = viewproj x model; returns where the next per-vertex block starts */
+static float *sr__draw_shader(sr__shader *s, const sr_camera *cam, const sr_draw_desc *d, sr__cv *cv, float *extra,
+                              sr_light *head, float mvp[16])
+{
+    size_t v, nv = d->vertex_count;
+    memset(s, 0, sizeof *s);
+    s->d = d;
+    s->cam = cam;
+    s->cv = cv;
+    s->lights = sr__lights(d->lights, d->light_count, cam, head, &s->light_count);
+    s->spec_cut = sr__spec_cut(&d->material);
+    s->wpos = d->positions;
+    s->wnrm = d->normals;
+    if (!d->model) {
+        memcpy(mvp, cam->viewproj, 16 * sizeof(float));
+        return extra;
     }
-    mem = (unsigned char *)fb->scratch;
-    cv = (sr__cv *)mem;
-    extra = (float *)(mem + nv * sizeof(sr__cv));
-
-    memset(&s, 0, sizeof s);
-    s.d = d;
-    s.cam = cam;
-    s.cv = cv;
-    s.lights = sr__lights(d->lights, d->light_count, cam, &head, &s.light_count);
-    s.spec_cut = sr__spec_cut(&d->material);
-    s.wpos = d->positions;
-    s.wnrm = d->normals;
-    if (d->model) {
-        float *wp = extra, *wn = extra + 3 * nv;
-        s.has_model = 1;
-        sr__normal_matrix(d->model, s.nmat);
-        for (v = 0; v < nv; v++) {
-            sr__mat_point(d->model, d->positions + 3 * v, wp + 3 * v);
-            if (d->normals) { sr__mat3_vec(s.nmat, d->normals + 3 * v, wn + 3 * v); sr__normalize(wn + 3 * v); }
-        }
-        s.wpos = wp;
-        s.wnrm = d->normals ? wn : NULL;
-        extra += 6 * nv;
-        sr__mat_mul(cam->viewproj, d->model, mvp);
-    } else {
-        memcpy(mvp, cam->viewproj, sizeof mvp);
-    }
-
-    /* vertex stage */
+    s->has_model = 1;
+    sr__normal_matrix(d->model, s->nmat);
     for (v = 0; v < nv; v++) {
+        sr__mat_point(d->model, d->positions + 3 * v, extra + 3 * v);
+        if (d->normals) { sr__mat3_vec(s->nmat, d->normals + 3 * v, extra + 3 * nv + 3 * v); sr__normalize(extra + 3 * nv + 3 * v); }
+    }
+    s->wpos = extra;
+    s->wnrm = d->normals ? extra + 3 * nv : NULL;
+    sr__mat_mul(cam->viewproj, d->model, mvp);
+    return extra + 6 * nv;
+}
+
+/* the vertex stage: clip coordinates, outcodes and screen positions; SR_ERR_NOT_FINITE when a
+   transformed vertex overflows */
+static sr_result sr__draw_vertices(const sr_framebuffer *fb, const sr__shader *s, const float mvp[16], sr__cv *cv)
+{
+    const sr_draw_desc *d = s->d;
+    size_t v;
+    for (v = 0; v < d->vertex_count; v++) {
         const float *p = d->positions + 3 * v;
         sr__cv *o = &cv[v];
         o->clip[0] = mvp[0] * p[0] + mvp[4] * p[1] + mvp[8] * p[2] + mvp[12];
         o->clip[1] = mvp[1] * p[0] + mvp[5] * p[1] + mvp[9] * p[2] + mvp[13];
         o->clip[2] = mvp[2] * p[0] + mvp[6] * p[1] + mvp[10] * p[2] + mvp[14];
         o->clip[3] = mvp[3] * p[0] + mvp[7] * p[1] + mvp[11] * p[2] + mvp[15];
-        if (!sr__finite_n(o->clip, 4) || (d->model && !sr__finite3(s.wpos + 3 * v))) return SR_ERR_NOT_FINITE;
+        if (!sr__finite_n(o->clip, 4) || (d->model && !sr__finite3(s->wpos + 3 * v))) return SR_ERR_NOT_FINITE;
         o->code = sr__outcode(o->clip);
         if (!(o->code & SR__CLIP_BITS)) sr__to_screen(o, (float)fb->width, (float)fb->height);
         else { o->sx = o->sy = o->sz = o->invw = 0.0f; o->fx = o->fy = 0; }
     }
-    if (gouraud) {
-        s.gouraud = extra;
-        for (v = 0; v < nv; v++) {
-            float *g = extra + 6 * v, N[3], V[3];
-            const float *P = s.wpos + 3 * v;
-            const float *kd = d->colors ? d->colors + 3 * v : d->material.diffuse;
-            const float *ka = d->colors ? d->colors + 3 * v : d->material.ambient;
-            int side, k, l;
-            if (s.wnrm) memcpy(N, s.wnrm + 3 * v, sizeof N);
-            else { N[0] = 0.0f; N[1] = 0.0f; N[2] = 1.0f; }
-            if (cam->orthographic) { V[0] = -cam->forward[0]; V[1] = -cam->forward[1]; V[2] = -cam->forward[2]; }
-            else sr__view_dir(cam->eye, P, V);
-            for (side = 0; side < 2; side++) {
-                float *o = g + 3 * side;
-                memcpy(o, d->material.emission, 3 * sizeof(float));
-                for (l = 0; l < s.light_count; l++) sr__shade_light(&d->material, kd, ka, &s.lights[l], P, N, V, 1.0f, s.spec_cut, o);
-                for (k = 0; k < 3; k++) N[k] = -N[k];
-            }
+    return SR_OK;
+}
+
+/* Gouraud shading: each vertex's colour lit from both sides into g (6 per vertex) */
+static void sr__draw_gouraud(sr__shader *s, float *g)
+{
+    const sr_draw_desc *d = s->d;
+    const sr_camera *cam = s->cam;
+    size_t v;
+    s->gouraud = g;
+    for (v = 0; v < d->vertex_count; v++) {
+        float N[3], V[3];
+        const float *P = s->wpos + 3 * v;
+        const float *kd = d->colors ? d->colors + 3 * v : d->material.diffuse;
+        const float *ka = d->colors ? d->colors + 3 * v : d->material.ambient;
+        int side, k, l;
+        if (s->wnrm) memcpy(N, s->wnrm + 3 * v, sizeof N);
+        else { N[0] = 0.0f; N[1] = 0.0f; N[2] = 1.0f; }
+        if (cam->orthographic) { V[0] = -cam->forward[0]; V[1] = -cam->forward[1]; V[2] = -cam->forward[2]; }
+        else sr__view_dir(cam->eye, P, V);
+        for (side = 0; side < 2; side++) {
+            float *o = g + 6 * v + 3 * side;
+            memcpy(o, d->material.emission, 3 * sizeof(float));
+            for (l = 0; l < s->light_count; l++) sr__shade_light(&d->material, kd, ka, &s->lights[l], P, N, V, 1.0f, s->spec_cut, o);
+            for (k = 0; k < 3; k++) N[k] = -N[k];
         }
     }
+}
 
-    /* visibility pass */
-    memset(&r, 0, sizeof r);
-    r.fb = fb;
-    r.count_mode = d->shading == SR_SHADE_COUNT;
-    r.depth_test = !d->no_depth_test;
-    r.depth_write = !d->no_depth_write;
-    r.cull = d->cull;
-    r.minx = fb->width; r.miny = fb->height; r.maxx = -1; r.maxy = -1;
+/* the visibility pass: every triangle not outside one clip plane rasterized (clipped where it
+   crosses one) into the depth and id buffers */
+static void sr__draw_visibility(sr__raster *r, sr_framebuffer *fb, const sr_draw_desc *d, const sr__cv *cv)
+{
+    size_t t;
+    memset(r, 0, sizeof *r);
+    r->fb = fb;
+    r->count_mode = d->shading == SR_SHADE_COUNT;
+    r->depth_test = !d->no_depth_test;
+    r->depth_write = !d->no_depth_write;
+    r->cull = d->cull;
+    r->minx = fb->width; r->miny = fb->height; r->maxx = -1; r->maxy = -1;
     for (t = 0; t < d->triangle_count; t++) {
         const uint32_t *idx = d->indices + 3 * t;
         const sr__cv *tv[3];
@@ -1727,10 +1741,33 @@ SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_
         tv[0] = &cv[idx[0]]; tv[1] = &cv[idx[1]]; tv[2] = &cv[idx[2]];
         c0 = tv[0]->code; c1 = tv[1]->code; c2 = tv[2]->code;
         if (c0 & c1 & c2 & 63u) continue;
-        if ((c0 | c1 | c2) & SR__CLIP_BITS) sr__clip_tri(&r, tv, (c0 | c1 | c2) & SR__CLIP_BITS, (uint32_t)t);
-        else sr__raster_tri(&r, tv[0], tv[1], tv[2], NULL, (uint32_t)t);
+        if ((c0 | c1 | c2) & SR__CLIP_BITS) sr__clip_tri(r, tv, (c0 | c1 | c2) & SR__CLIP_BITS, (uint32_t)t);
+        else sr__raster_tri(r, tv[0], tv[1], tv[2], NULL, (uint32_t)t);
     }
-    /* shading pass */
+}
+
+SRDEF sr_result sr_draw_mesh(sr_framebuffer *fb, const sr_camera *cam, const sr_draw_desc *d)
+{
+    sr__raster r;
+    sr__shader s;
+    sr_light head;
+    float mvp[16], *extra;
+    size_t nv, per_vertex;
+    sr__cv *cv;
+    int gouraud;
+    sr_result res = sr__draw_check(fb, cam, d);
+    if (res != SR_OK || d->triangle_count == 0) return res;
+    nv = d->vertex_count;
+    gouraud = d->shading == SR_SHADE_GOURAUD && !d->fragment;
+    per_vertex = sizeof(sr__cv) + (d->model ? 6 * sizeof(float) : 0) + (gouraud ? 6 * sizeof(float) : 0);
+    if (nv > ((size_t)-1) / per_vertex) return SR_ERR_TOO_LARGE;
+    if ((res = sr__draw_scratch(fb, nv * per_vertex)) != SR_OK) return res;
+    cv = (sr__cv *)fb->scratch;                                       /* per vertex: clip and screen */
+    extra = (float *)((unsigned char *)fb->scratch + nv * sizeof(sr__cv)); /* then world, then Gouraud */
+    extra = sr__draw_shader(&s, cam, d, cv, extra, &head, mvp);
+    if ((res = sr__draw_vertices(fb, &s, mvp, cv)) != SR_OK) return res;
+    if (gouraud) sr__draw_gouraud(&s, extra);
+    sr__draw_visibility(&r, fb, d, cv);
     if (!r.count_mode) sr__shading_pass(&s, &r);
     return SR_OK;
 }
