@@ -50,8 +50,10 @@
                          literal constant force)
        leeward  (e <= 0): W_f = ambient, the ambient term only (paper: "H = ambientW").
      Resistance: R(c) = (1-c)^2 eps_max + 2c(1-c) eps_medium + c^2 eps_min, a quadratic Bezier in the
-       normalised curvature c = min(|kappa_a| curvature_length, 1): flat samples resist most, sharp
-       edges least (so wind rounds edges), and R decreases monotonically in c exactly when
+       normalised convex curvature c = min(max(kappa_a, 0) curvature_length, 1): flat samples resist
+       most, sharp convex edges least (so wind rounds edges); with |kappa_a| a shallow hollow would
+       erode faster than the flat around it and deepen (unstable: texel-scale pits grow within ten
+       steps), so hollows are left to deposition. R decreases monotonically in c exactly when
        eps_min <= eps_medium <= eps_max (the paper's [y0, y2] bound on eps_medium). Leeward samples
        divide by R as well (H = ambient / R), so a harder material also resists ambient wear;
        ERO_LEEWARD_LITERAL gives the paper's H = ambient.
@@ -93,8 +95,9 @@
        wind[3]          the direction the wind blows toward (required, nonzero)
        force (1)        the directed wind's strength
        rate             world units of depth per unit H per step (1e-3 L)
-       normal_radius    averaging radius of normals and curvature, world units (L / 256)
-       filter_sigma     the low-pass filter's sigma, world units (L / 512)
+       normal_radius    averaging radius of normals and curvature, world units (L / 128)
+       filter_sigma     the low-pass filter's sigma, world units (L / 256: narrower lets
+                        texel-scale noise of the curvature grow over steps at large rates)
        curvature_length the radius of curvature that normalises to c = 1, world units (L / 32)
        deposit_ratio (0.5; negative = no deposition), deposit_ramp (0.2)
        flags            ERO_CONSTANT_WINDWARD, ERO_LEEWARD_LITERAL, ERO_KEEP_INVALID
@@ -454,7 +457,7 @@ ERODEF int ero_resolve_material(const ero_material *in, ero_material *out)
     if (!ero__finite(m.eps_min) || !ero__finite(m.eps_max) || !ero__finite(m.eps_medium) || !ero__finite(m.ambient))
         return -1;
     if (!(m.eps_min > 0.0f) || !(m.eps_min < m.eps_max)) return -1;
-    if (m.eps_medium == 0.0f) m.eps_medium = 0.5f * (m.eps_min + m.eps_max);
+    if (m.eps_medium == 0.0f) m.eps_medium = (float)(0.5 * ((double)m.eps_min + (double)m.eps_max)); /* no overflow */
     else if (m.eps_medium < m.eps_min || m.eps_medium > m.eps_max) {
         m.eps_medium = m.eps_medium < m.eps_min ? m.eps_min : m.eps_max;
         flags |= ERO_CORRECTED_MEDIUM;
@@ -528,8 +531,8 @@ static ero_options ero__resolve(const ero_options *in, double L)
     ero_options o = *in;
     if (o.force == 0.0f) o.force = 1.0f;
     if (o.rate == 0.0f) o.rate = (float)(1e-3 * L);
-    if (o.normal_radius == 0.0f) o.normal_radius = (float)(L / 256.0);
-    if (o.filter_sigma == 0.0f) o.filter_sigma = (float)(L / 512.0);
+    if (o.normal_radius == 0.0f) o.normal_radius = (float)(L / 128.0);
+    if (o.filter_sigma == 0.0f) o.filter_sigma = (float)(L / 256.0);
     if (o.curvature_length == 0.0f) o.curvature_length = (float)(L / 32.0);
     if (o.deposit_ratio == 0.0f) o.deposit_ratio = 0.5f;
     if (o.deposit_ramp == 0.0f) o.deposit_ramp = 0.2f;
@@ -939,7 +942,7 @@ static void ero__erosion_heights(ero__run *r)
         kap = r->g[3][i];
         len = sqrtf(ero__dot(n, n));
         e = len > 0.0f ? -ero__dot(n, r->wind) / len : 0.0f;
-        c = fabsf(kap) * lc;
+        c = kap > 0.0f ? kap * lc : 0.0f; /* convex only: see MODEL */
         if (c > 1.0f) c = 1.0f;
         res = ero__resistance(m, c);
         if (e > 0.0f) {
