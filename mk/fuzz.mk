@@ -7,3 +7,6 @@ FUZZ_FMTS += texel relief dispmesh
 # the targets that include fuzz_deform.c's helpers rebuild when it changes
 $(B)/fuzz_texel $(B)/fuzz/fuzz_texel $(B)/fuzz_relief $(B)/fuzz/fuzz_relief \
   $(B)/fuzz_dispmesh $(B)/fuzz/fuzz_dispmesh: tests/fuzz_deform.c
+# erosion.h (issue 17): grids, maps, materials and options from the bytes
+FUZZ_FMTS += erosion
+$(B)/fuzz_erosion $(B)/fuzz/fuzz_erosion: tests/fuzz_deform.c
