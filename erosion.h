@@ -38,9 +38,9 @@
      kernel serves the map).
      Surface: normal n = (Tx x Ty) normalised, oriented along nrm, with T the central differences of
        the surface over the neighbours (one-sided at a border); mean curvature
-       kappa = the mean over the axes of -n . 2 (E+ / |E+| + E- / |E-|) / (|E+| + |E-|), E the
-       offsets to the two neighbours (the second difference for uneven spacing, which seams have;
-       positive on convex parts).
+       kappa = the mean over the axes of -2 n . (E+ + E-) / (|E+|^2 + |E-|^2), E the offsets to
+       the two neighbours (each offset's normal part is -kappa |E|^2 / 2, so uneven spacing, which
+       seams have, needs no special case; positive on convex parts).
      Averages: n and kappa are box-averaged over normal_radius (the paper's "average normal" and
        "average curvature"): the separable box [-r, r] with each texel weighted by its overlap, so
        the same world radius covers the same area at any resolution.
@@ -134,6 +134,9 @@
      field shifts the result bit for bit.
 
    LIMITS
+     Steps are explicit (the paper's): the windward term moves slopes like an advection, so a rate
+     much above a tenth of a texel per step lets ripples across slopes grow from step to step; a
+     smaller rate (more steps) or a wider filter_sigma keeps them down.
      Up to 2^32 - 2 texels; filter and averaging radii up to 255 texels. One wind for all samples
      per call (the paper's simplification; vary it between calls). At most 256 materials (ids are
      bytes). The bits do not depend on the compiler's FMA contraction: the implementation turns it
@@ -684,13 +687,14 @@ static inline int ero__tangent(const float ep[3], const float em[3], int have, f
     return have != 0;
 }
 
-/* the normal curvature along one axis from the offsets to its two neighbours, unevenly spaced
-   ones included (the three-point second difference): -n . 2 (E+ / a + E- / b) / (a + b) */
+/* the normal curvature along one axis from the offsets E+, E- to its two neighbours, unevenly
+   spaced ones included: each offset's normal part is -kappa |E|^2 / 2 on a surface of normal
+   curvature kappa, so kappa = -2 n . (E+ + E-) / (|E+|^2 + |E-|^2) (no square root) */
 static inline float ero__second(const float ep[3], const float em[3], const float n[3])
 {
-    float a = sqrtf(ero__dot(ep, ep)), b = sqrtf(ero__dot(em, em));
-    if (a <= 0.0f || b <= 0.0f) return 0.0f;
-    float k = -2.0f * (ero__dot(ep, n) * b + ero__dot(em, n) * a) / (a * b * (a + b)); /* one division */
+    float q = ero__dot(ep, ep) + ero__dot(em, em), k;
+    if (!(q > 0.0f)) return 0.0f;
+    k = -2.0f * (ero__dot(ep, n) + ero__dot(em, n)) / q;
     return ero__finite(k) ? k : 0.0f; /* lengths beyond float's range: no curvature */
 }
 

@@ -83,6 +83,26 @@ if [ -f /usr/share/glmark2/models/bunny.obj ]; then
 else
   echo "demo: /usr/share/glmark2/models/bunny.obj not found (apt-get install glmark2-data): grass bunny skipped"
 fi
+# erosion.h: paper 000 part B's wind erosion through the displacement map: its Fig 5.2.1, a torus of one
+# material after 1 and 10 steps with the wind source marked (before | 1 | 10); the bunny weathered; a
+# height map (a generated ridge field, tileable) weathered with a hard band painted from a mask
+"$B/erode" --torus --steps 10 --wind -1,0,-0.3 --rate 0.02 --res 256 --size 320 -o "$OUT/erosion_fig5-2-1_torus"
+rendered=$((rendered + 1))
+if [ -f /usr/share/glmark2/models/bunny.obj ]; then
+  "$B/erode" /usr/share/glmark2/models/bunny.obj --steps 10 --wind -1,-0.3,-0.5 --rate 0.004 --res 256 --size 320 \
+    -o "$OUT/erosion_bunny"
+  rendered=$((rendered + 1))
+else
+  echo "demo: /usr/share/glmark2/models/bunny.obj not found (apt-get install glmark2-data): erosion bunny skipped"
+fi
+awk 'BEGIN { n = 256; printf "P2\n%d %d\n65535\n", n, n; for (y = 0; y < n; y++) { for (x = 0; x < n; x++) {
+  h = 0.5 + 0.25 * sin(6.2832 * 3 * x / n) * cos(6.2832 * 2 * y / n) + 0.1 * sin(6.2832 * (9 * x + 4 * y) / n);
+  printf "%d ", int(h * 65535) } printf "\n" } }' > "$OUT/erosion_terrain_in.pgm"
+awk 'BEGIN { n = 64; printf "P2\n%d %d\n255\n", n, n; for (y = 0; y < n; y++) { for (x = 0; x < n; x++) printf "%d ", (x >= 24 && x < 40) * 255; printf "\n" } }' \
+  > "$OUT/erosion_terrain_mask.pgm"
+"$B/erode" "$OUT/erosion_terrain_in.pgm" --steps 20 --wind 1,0.4,-0.6 --wrap --rate 0.0015 --height-scale 0.15 \
+  --material "$OUT/erosion_terrain_mask.pgm" --render-steps 20 --size 320 -o "$OUT/erosion_terrain"
+rendered=$((rendered + 1))
 for h in dispmesh.h erosion.h texel.h subdiv4.h deform.h; do
   [ -f "$h" ] || echo "demo: $h does not exist yet: its scenes are not rendered"
 done

@@ -4,3 +4,5 @@ C_TESTS += $(B)/test_erosion
 BENCHES += $(B)/bench_erosion
 $(B)/bench_erosion: bench/bench_erosion.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) -DNDEBUG -DBENCH_FLAGS='"$(CC) $(CFLAGS_ALL) -DNDEBUG"' $< -o $@ -lm
+# the example program
+EXAMPLES += $(B)/erode

@@ -374,5 +374,54 @@ run dm-stl "$DM" "$tmp/cube.stl" --faces 12 --res 64 --no-views -o "$tmp/dcube"
 check "dispmesh cube.stl: the soup is welded, 36 -> 8 vertices ($(grep welded "$tmp/dm-stl.err"))" \
   grep -q 'welded vertices at equal positions: 36 -> 8 vertices' "$tmp/dm-stl.err"
 
+# ---- erode (erosion.h, issue 17): usage errors (2), failures (1), a small good run on each domain ----
+if [ "${TEST_SANITIZE:-0}" = 1 ]; then
+  make -s -C "$top" --no-print-directory B="$B" OPT="-O1 -g" \
+    XFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" "$B/erode" >&2
+else
+  make -s -C "$top" --no-print-directory B="$B" "$B/erode" >&2
+fi
+ER="$bin/erode"
+if [ -x "$ER" ]; then
+  run er-help "$ER" --help
+  check "erode --help: exit 0" [ "$rc" -eq 0 ]
+  for o in --steps --wind --material --hard --soft --res --faces --height-scale --wrap --rate --render-steps --size --marker -o --torus; do
+    check "erode --help lists $o" grep -q -e " $o" "$tmp/er-help.out"
+  done
+  run er-version "$ER" --version
+  check "erode --version: exit 0 and a line" sh -c "[ $rc -eq 0 ] && grep -q '^erode ' '$tmp/er-version.out'"
+  # a 32 x 32 PGM height map (P5, maxval 255): a ramp with a ridge
+  awk 'BEGIN { printf "P2\n32 32\n255\n"; for (y = 0; y < 32; y++) { for (x = 0; x < 32; x++) printf "%d ", (x * 4 + (x == 16) * 60) % 256; printf "\n" } }' >"$tmp/hm.pgm"
+  refuse er-nosteps 2 "--steps" "$ER" "$tmp/hm.pgm" --wind 1,0,-1 -o "$tmp/o1"
+  refuse er-steps0 2 "--steps" "$ER" "$tmp/hm.pgm" --steps 0 --wind 1,0,-1 -o "$tmp/o1"
+  refuse er-stepsnan 2 "nan" "$ER" "$tmp/hm.pgm" --steps nan --wind 1,0,-1 -o "$tmp/o1"
+  refuse er-windzero 2 "zero" "$ER" "$tmp/hm.pgm" --steps 2 --wind 0,0,0 -o "$tmp/o1"
+  refuse er-wind2 2 "--wind" "$ER" "$tmp/hm.pgm" --steps 2 --wind 1,0 -o "$tmp/o1"
+  refuse er-hard 2 "--hard" "$ER" "$tmp/hm.pgm" --steps 2 --wind 1,0,-1 --hard 4,4 -o "$tmp/o1"
+  refuse er-unknown 2 "--bogus" "$ER" "$tmp/hm.pgm" --steps 2 --wind 1,0,-1 --bogus -o "$tmp/o1"
+  refuse er-noprefix 2 "-o" "$ER" "$tmp/hm.pgm" --steps 2 --wind 1,0,-1
+  refuse er-render 2 "--render-steps" "$ER" "$tmp/hm.pgm" --steps 2 --wind 1,0,-1 --render-steps 3 -o "$tmp/o1"
+  refuse er-missing 1 "No such file" "$ER" "$tmp/none.pgm" --steps 2 --wind 1,0,-1 -o "$tmp/o1"
+  refuse er-badmesh 1 "bad.obj" "$ER" "$tmp/bad.obj" --steps 2 --wind 1,0,-1 -o "$tmp/o1"
+  run er-hf "$ER" "$tmp/hm.pgm" --steps 3 --wind 1,0,-1 --wrap --size 64 -o "$tmp/hf/e"
+  check "erode hm.pgm --steps 3: exit 0 ($(tail -n 1 "$tmp/er-hf.err"))" [ "$rc" -eq 0 ]
+  check "erode wrote e_map.pfm, e.obj, and PNGs e_map.png (16-bit) and e_render.png, no .tmp" \
+    sh -c "[ -s '$tmp/hf/e_map.pfm' ] && [ -s '$tmp/hf/e.obj' ] && ! ls '$tmp/hf' | grep -q tmp"
+  check "erode's e_render.png is a PNG" png_ok "$tmp/hf/e_render.png"
+  check "erode's e_map.png is a 16-bit grey PNG" sh -c "png_ok() { :; }; [ \"\$(od -An -tx1 -j24 -N2 '$tmp/hf/e_map.png' | tr -d ' \n')\" = 1000 ]"
+  check "erode prints RESULT erosion domain=heightfield res=32x32 steps=3" \
+    grep -q '^RESULT erosion domain=heightfield res=32x32 steps=3 ' "$tmp/er-hf.out"
+  run er-torus "$ER" --torus --steps 2 --wind -1,0,-0.3 --res 64 --size 64 -o "$tmp/tor/t"
+  check "erode --torus --res 64 --steps 2: exit 0 ($(tail -n 1 "$tmp/er-torus.err"))" [ "$rc" -eq 0 ]
+  check "erode --torus prints RESULT erosion domain=surface with eroded > 0" \
+    sh -c "grep '^RESULT erosion domain=surface res=64x64 steps=2 ' '$tmp/er-torus.out' | grep -q -v 'eroded=0 '"
+  printf 'old\n' >"$tmp/hf/k_map.pfm"
+  run er-keep sh -c "ulimit -f 8; trap '' XFSZ; exec '$ER' '$tmp/hm.pgm' --steps 1 --wind 1,0,-1 --size 64 -o '$tmp/hf/k'"
+  check "erode under ulimit -f: exit 1, the existing k_map.pfm unchanged, no .tmp (got $rc)" \
+    sh -c "[ $rc -eq 1 ] && [ \"\$(cat '$tmp/hf/k_map.pfm')\" = old ] && ! ls '$tmp/hf' | grep -q 'k.*tmp'"
+else
+  bad "erode could not be built (make $B/erode)"
+fi
+
 echo "TESTCOUNT tools_cli passed=$pass failed=$fail skipped=$skip"
 [ $fail -eq 0 ]
