@@ -229,6 +229,15 @@ static void test_materials(void)
     for (k = 0; k < 3; k++) ok &= ch[k + 1] < ch[k] && ch[k + 1] > 0.0;
     T_CHECK_MSG(ok, "erosion not decreasing in eps");
     T_NEAR(ch[0] / ch[1], 2.0, 1e-3); /* eps scaled by 2: W_f / R halves */
+    { /* a region: a sphere of radius 0.25 around the flat field's point (0.5, 0.5, h) paints pi r^2 / s^2 texels */
+        const float c[3] = {0.5f, 0.5f, h[(N / 2) * N + N / 2]};
+        size_t painted = 0, k2;
+        memset(mat, 0, N * N);
+        T_CHECK(ero_paint_sphere(&g, mat, c, 0.25f, 3) == ERO_OK);
+        for (k2 = 0; k2 < (size_t)N * N; k2++) painted += mat[k2] == 3;
+        T_NEAR((double)painted, 3.14159265 * 0.25 * 0.25 * N * N, 0.02 * 3.14159265 * 0.25 * 0.25 * N * N);
+        T_CHECK(mat[(N / 2) * N + N / 2] == 3 && mat[0] == 0);
+    }
     free(h); free(mat);
 }
 
