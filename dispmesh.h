@@ -211,7 +211,9 @@
      is the texel itself with a half turn (a mirror, as a clamped filter sees it).
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric
      grid of level sqrt(2 x its uv area in texels) inside, as many points along each base edge
-     as its longer uv side has texels (shared by the triangles on the edge), strips between. A
+     as its longer uv side has texels (shared by the triangles on the edge), strips between; its
+     triangles are then made Delaunay in the map by edge flips, border fixed (the strips' and
+     corners' slivers made the surface's normals jump at base edges). A
      vertex is its base point moved along the base normal by the map's bilinear depth, averaged
      over the triangles sharing it, with the map's normal. A closed manifold base gives a closed
      manifold result with no T-junction; nothing is dropped at depth breaks. Vertex v <
@@ -227,7 +229,8 @@
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
      packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of
      the original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per
-     covered texel), 52 more per vertex while dm_reconstruct runs.
+     covered texel), 60 more per vertex and 64 per triangle of the largest base triangle's
+     tessellation while dm_reconstruct runs.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
      their gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public
      dm_param and dm_dispmap arrays they read (a caller may have edited them): an index out of
@@ -6968,7 +6971,14 @@ typedef struct dm__rc_run {
     uint32_t *tri_level;  /* per triangle: the level of its barycentric grid */
     uint32_t *tri_first;  /* per triangle: its first interior vertex */
     float *nb;            /* 3 per vertex: base normal at the vertex's base point */
-    size_t ne, nvtx, ntri;
+    float *vuv;           /* 2 per vertex: its map position (texels) in the triangle being made */
+    uint64_t *lkey;       /* an open-addressing table of one triangle's edges (lcap slots, 0 = free) */
+    uint32_t *lval;       /* the half-edge that put each key there */
+    uint32_t *lslot;      /* per half-edge: the slot it used, to empty the table after */
+    size_t lcap;
+    int32_t *ltwin;       /* per half-edge of one triangle's tessellation: the one across it, or -1 */
+    uint32_t *lstack;     /* the half-edges still to test for a flip */
+    size_t ne, nvtx, ntri, lmax;
     dm_trimesh *mesh;
 } dm__rc_run;
 
@@ -7058,8 +7068,10 @@ static dm_result dm__rc_count(dm__rc_run *r)
         int c;
         r->tri_first[t] = (uint32_t)nv;
         nv += (n - 1) * (n - 2) / 2;
+        uint64_t nt0 = nt;
         nt += (n - 3) * (n - 3);
         for (c = 0; c < 3; c++) nt += r->edge_level[r->he_edge[3 * t + (size_t)c]] + n - 3;
+        if (nt - nt0 > r->lmax) r->lmax = (size_t)(nt - nt0);
         if (nv >= DM_NO_HIT || nt >= ((uint64_t)1 << 40)) return DM_ERR_TOO_LARGE;
     }
     r->nvtx = (size_t)nv;
@@ -7082,7 +7094,17 @@ static dm_result dm__rc_alloc(dm__rc_run *r)
     m->face_base = (uint32_t *)dm__alloc_array(&sc->a, r->ntri, sizeof(uint32_t), &sc->overflow);
     r->acc = (double *)dm__take(sc, 5 * (r->nvtx > r->bnv ? r->nvtx : r->bnv), sizeof(double));
     r->nb = (float *)dm__take(sc, 3 * r->nvtx, sizeof(float));
-    if (!m->positions || !m->normals || !m->indices || !m->face_base || !r->acc || !r->nb) return dm__scratch_fail(sc);
+    r->vuv = (float *)dm__take(sc, 2 * r->nvtx, sizeof(float));
+    for (r->lcap = 64; r->lcap < 6 * r->lmax; r->lcap *= 2) {}
+    r->lkey = (uint64_t *)dm__take(sc, r->lcap, sizeof(uint64_t));
+    r->lval = (uint32_t *)dm__take(sc, r->lcap, sizeof(uint32_t));
+    r->lslot = (uint32_t *)dm__take(sc, 3 * r->lmax, sizeof(uint32_t));
+    r->ltwin = (int32_t *)dm__take(sc, 3 * r->lmax, sizeof(int32_t));
+    r->lstack = (uint32_t *)dm__take(sc, 3 * r->lmax, sizeof(uint32_t));
+    if (!m->positions || !m->normals || !m->indices || !m->face_base || !r->acc || !r->nb || !r->vuv || !r->lkey ||
+        !r->lval || !r->lslot || !r->ltwin || !r->lstack)
+        return dm__scratch_fail(sc);
+    memset(r->lkey, 0, r->lcap * sizeof(uint64_t));
     memset(r->acc, 0, 5 * r->nvtx * sizeof(double));
     m->vertex_count = r->nvtx;
     m->triangle_count = r->ntri;
@@ -7133,8 +7155,9 @@ static uint32_t dm__rc_inner_vertex(const dm__rc_run *r, size_t t, uint32_t n, c
 }
 
 /* one sample of base triangle t at barycentrics w (a grid point): the base point and base
-   normal into vertex id (the same point from every triangle that shares it), and the map's depth
-   and normal there added to the vertex's sums */
+   normal into vertex id (the same point from every triangle that shares it), its map position in
+   texels into vuv (for the flips of 4b), and the map's depth and normal there added to the
+   vertex's sums */
 static void dm__rc_sample(dm__rc_run *r, size_t t, uint32_t id, const double w[3])
 {
     const uint32_t *bi = r->bidx + 3 * t;
@@ -7156,6 +7179,8 @@ static void dm__rc_sample(dm__rc_run *r, size_t t, uint32_t id, const double w[3
         r->mesh->positions[3 * (size_t)id + (size_t)k] = (float)p[k];
         r->nb[3 * (size_t)id + (size_t)k] = len > 0.0 ? (float)(nb[k] / len) : 0.0f;
     }
+    r->vuv[2 * (size_t)id] = (float)(u * r->param->width);
+    r->vuv[2 * (size_t)id + 1] = (float)(v * r->param->height);
     dm__rc_lookup(r->map, u, v, &d, nn);
     acc[0] += d;
     for (k = 0; k < 3; k++) acc[1 + k] += nn[k];
@@ -7208,10 +7233,100 @@ static void dm__rc_strip(dm__rc_run *r, size_t t, uint32_t n, int c, size_t *tri
     }
 }
 
+/* twice the signed area of (a, b, c) in the map (texels) */
+static double dm__rc_orient(const float *a, const float *b, const float *c)
+{
+    return ((double)b[0] - a[0]) * ((double)c[1] - a[1]) - ((double)b[1] - a[1]) * ((double)c[0] - a[0]);
+}
+
+/* d strictly inside the circle through the counter-clockwise a, b, c (all in texels) */
+static int dm__rc_in_circle(const float *a, const float *b, const float *c, const float *d)
+{
+    double ax = (double)a[0] - d[0], ay = (double)a[1] - d[1], bx = (double)b[0] - d[0], by = (double)b[1] - d[1];
+    double cx = (double)c[0] - d[0], cy = (double)c[1] - d[1];
+    double det = (ax * ax + ay * ay) * (bx * cy - cx * by) - (bx * bx + by * by) * (ax * cy - cx * ay) +
+                 (cx * cx + cy * cy) * (ax * by - bx * ay);
+    double scale = (ax * ax + ay * ay + bx * bx + by * by + cx * cx + cy * cy);
+    return det > 1e-9 * scale * scale;
+}
+
+/* half-edge h of the local triangles (3 lt + c) of the mesh's triangles from tri0 */
+#define DM__RC_HE(tri0, h) (3 * (tri0) + (size_t)(h))
+
+/* 4b. base triangle t's tessellation (its triangles tri0 .. tri1) made Delaunay in the map by
+   edge flips (Lawson), its border fixed: the strips' and corners' slivers become the triangles
+   with the largest smallest angles the same points allow, so that the surface's normals do not
+   jump where the grid meets its edges */
+static void dm__rc_delaunay(dm__rc_run *r, size_t tri0, size_t tri1)
+{
+    uint32_t *I = r->mesh->indices;
+    const float *uv = r->vuv;
+    size_t nh = 3 * (tri1 - tri0), i, ns = 0, budget, mask = 63;
+    int32_t *tw = r->ltwin;
+    while (mask + 1 < 2 * nh && mask + 1 < r->lcap) mask = 2 * mask + 1; /* a table this triangle's size */
+    for (i = 0; i < nh; i++) { /* the twins: each edge's two half-edges meet in the table */
+        uint32_t a = I[DM__RC_HE(tri0, i)], b = I[DM__RC_HE(tri0, i - i % 3 + (i % 3 + 1) % 3)];
+        uint64_t key = (a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a)) + 1; /* never 0 */
+        size_t slot = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+        tw[i] = -1;
+        while (r->lkey[slot] != 0 && r->lkey[slot] != key) slot = (slot + 1) & mask;
+        r->lslot[i] = (uint32_t)slot;
+        if (r->lkey[slot] == key) {
+            tw[i] = (int32_t)r->lval[slot];
+            tw[r->lval[slot]] = (int32_t)i;
+            r->lstack[ns++] = r->lval[slot];
+        } else {
+            r->lkey[slot] = key;
+            r->lval[slot] = (uint32_t)i;
+        }
+    }
+    for (i = 0; i < nh; i++) r->lkey[r->lslot[i]] = 0; /* the table emptied again */
+    budget = 8 * nh + 64; /* Lawson's flips end; the budget only guards rounding */
+    while (ns > 0 && budget-- > 0) {
+        uint32_t h = r->lstack[--ns], g, f0, f1, a, b, c, d, out[4];
+        int32_t ot[4];
+        int k;
+        if (tw[h] < 0) continue;
+        g = (uint32_t)tw[h];
+        f0 = h / 3; f1 = g / 3;
+        a = I[DM__RC_HE(tri0, h)];
+        b = I[DM__RC_HE(tri0, 3 * f0 + (h % 3 + 1) % 3)];
+        c = I[DM__RC_HE(tri0, 3 * f0 + (h % 3 + 2) % 3)];
+        d = I[DM__RC_HE(tri0, 3 * f1 + (g % 3 + 2) % 3)];
+        if (!dm__rc_in_circle(uv + 2 * (size_t)a, uv + 2 * (size_t)b, uv + 2 * (size_t)c, uv + 2 * (size_t)d) ||
+            !(dm__rc_orient(uv + 2 * (size_t)a, uv + 2 * (size_t)d, uv + 2 * (size_t)c) > 0.0) ||
+            !(dm__rc_orient(uv + 2 * (size_t)d, uv + 2 * (size_t)b, uv + 2 * (size_t)c) > 0.0))
+            continue;
+        /* the outer half-edges: b->c, c->a of f0; a->d, d->b of f1, and who is across them */
+        out[0] = 3 * f0 + (h % 3 + 1) % 3; out[1] = 3 * f0 + (h % 3 + 2) % 3;
+        out[2] = 3 * f1 + (g % 3 + 1) % 3; out[3] = 3 * f1 + (g % 3 + 2) % 3;
+        for (k = 0; k < 4; k++) ot[k] = tw[out[k]];
+        /* f0 = (a, d, c): a->d (was out 2), d->c (new), c->a (was out 1);
+           f1 = (d, b, c): d->b (was out 3), b->c (was out 0), c->d (new) */
+        I[DM__RC_HE(tri0, 3 * f0)] = a; I[DM__RC_HE(tri0, 3 * f0 + 1)] = d; I[DM__RC_HE(tri0, 3 * f0 + 2)] = c;
+        I[DM__RC_HE(tri0, 3 * f1)] = d; I[DM__RC_HE(tri0, 3 * f1 + 1)] = b; I[DM__RC_HE(tri0, 3 * f1 + 2)] = c;
+        {
+            uint32_t nhs[6] = {3 * f0, 3 * f0 + 1, 3 * f0 + 2, 3 * f1, 3 * f1 + 1, 3 * f1 + 2};
+            int32_t nt[6];
+            nt[0] = ot[2]; nt[1] = (int32_t)(3 * f1 + 2); nt[2] = ot[1];
+            nt[3] = ot[3]; nt[4] = ot[0]; nt[5] = (int32_t)(3 * f0 + 1);
+            for (k = 0; k < 6; k++) {
+                tw[nhs[k]] = nt[k];
+                if (nt[k] >= 0 && k != 1 && k != 5) {
+                    tw[nt[k]] = (int32_t)nhs[k];
+                    r->lstack[ns++] = nhs[k];
+                }
+            }
+        }
+    }
+}
+#undef DM__RC_HE
+
 /* 4. base triangle t: its samples (corners, edge points, interior grid), then its triangles
-   (the interior grid and the three strips) */
+   (the interior grid and the three strips), made Delaunay in the map */
 static void dm__rc_triangle(dm__rc_run *r, size_t t, size_t *tri)
 {
+    size_t tri0 = *tri;
     uint32_t n = r->tri_level[t], a[3], b1, b2, q[4][3];
     double w[3];
     int c, k;
@@ -7254,6 +7369,7 @@ static void dm__rc_triangle(dm__rc_run *r, size_t t, size_t *tri)
             }
         }
     for (c = 0; c < 3; c++) dm__rc_strip(r, t, n, c, tri);
+    dm__rc_delaunay(r, tri0, *tri);
 }
 
 /* 5. every vertex: its base point moved by the mean of its samples' depths along the base

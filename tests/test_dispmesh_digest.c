@@ -32,17 +32,17 @@ static const expected table[] = {
     {"sphere simplify shell", 0x9459af265ff8e9dfull},
     {"sphere parameterize", 0x80a902b82b2d02d6ull},
     {"sphere bake", 0xb5b7e0dc92947dcfull},
-    {"sphere reconstruct", 0x5cd2ea7fd1415122ull},
+    {"sphere reconstruct", 0xe578609d78936bcfull},
     {"torus simplify", 0xab7b78e3a557c32cull},
     {"torus simplify shell", 0xcca5ae4f5b9915a8ull},
     {"torus parameterize", 0xde98b5209519af41ull},
     {"torus bake", 0xc9e4b3e8d396ca72ull},
-    {"torus reconstruct", 0xa48a05e17c586bdeull},
+    {"torus reconstruct", 0xcbc86d81f02bc005ull},
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
     {"thin torus simplify shell", 0xaf62b4d9e1d8d84bull},
     {"thin torus parameterize", 0x2aa6458a410ebd87ull},
     {"thin torus bake", 0x6bfacd7ad2905e25ull},
-    {"thin torus reconstruct", 0xab4b54133f9eea5dull},
+    {"thin torus reconstruct", 0xa2cfdaa5af2daf35ull},
 };
 
 #define STAGES 5

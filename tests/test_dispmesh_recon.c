@@ -488,7 +488,7 @@ int main(int argc, char **argv)
                 b.nv = mm.vertex_count;
                 b.t = mm.indices;
                 b.nt = mm.triangle_count;
-                run_case("bunny", &b, 500, 512, "seam lines 1.6x the other pixels' error (bar 1.5x): to come");
+                run_case("bunny", &b, 500, 512, "folds of the base -> surface mapping at the base's sharpest edges (seams): normal p99 1.18 vs 0.30 rad, seam lines 1.51x the other pixels' error (bar 1.5x): to come");
                 mio_free_mesh(&mm);
             }
         }
