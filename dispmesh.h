@@ -229,8 +229,8 @@
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
      packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of
      the original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per
-     covered texel), 60 more per vertex and 64 per triangle of the largest base triangle's
-     tessellation while dm_reconstruct runs.
+     covered texel), 60 more per vertex and up to 180 per triangle of the largest base
+     triangle's tessellation while dm_reconstruct runs.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
      their gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public
      dm_param and dm_dispmap arrays they read (a caller may have edited them): an index out of
