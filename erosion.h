@@ -105,9 +105,12 @@
        allocator (NULL = ERO_MALLOC/ERO_FREE), progress (per step; nonzero cancels), user.
 
    MEMORY
-     ero_erode allocates once per call: 40 bytes per texel for a height field, 76 for a surface grid
-     (positions, normals, curvature, two filter intermediates per axis, H, column coefficients, the
-     regular-run lengths), freed before it returns. The maps are the caller's.
+     ero_erode allocates once per call, freed before it returns: for a height field without a valid
+     map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of
+     about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights, all else
+     40 bytes per texel for a height field and 76 for a surface grid (positions, normals,
+     curvature, two filter intermediates per axis, H, column coefficients, the regular-run
+     lengths). The maps are the caller's.
 
    ERRORS
      Functions return ero_result (ERO_OK = 0); ero_result_string() names it.
@@ -294,7 +297,9 @@ ERODEF ero_result ero_paint_sphere(const ero_grid *g, uint8_t *material, const f
 
 /* FMA contraction off from here to the end of the implementation, the user's setting restored
    after it: each a * b + c rounds twice whatever the dialect or -ffp-contract, so the bits do not
-   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma; clang
+   depend on them (see LIMITS). GCC ignores STDC FP_CONTRACT but honours its optimize pragma, which
+   also lets the row loops vectorise at -O2 (no-trapping-math: the selects that stand for branches
+   may evaluate both sides; neither changes a result bit); clang
    takes fp contract inside float_control push/pop (except under -ffp-contract=fast, which ignores
    pragmas); other compilers: nothing. */
 #if defined(__clang__) && (__clang_major__ >= 13 || (__clang_major__ >= 11 && !defined(__apple_build_version__)))
@@ -302,7 +307,7 @@ ERODEF ero_result ero_paint_sphere(const ero_grid *g, uint8_t *material, const f
 #pragma clang fp contract(off)
 #elif defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER)
 #pragma GCC push_options
-#pragma GCC optimize("fp-contract=off")
+#pragma GCC optimize("fp-contract=off", "no-trapping-math", "tree-vectorize", "vect-cost-model=dynamic")
 #endif
 
 #ifdef __cplusplus
@@ -331,6 +336,7 @@ typedef struct ero__run {
     ero_options o;
     float wind[3];
     int has_rot;
+    int ring;                              /* a plain height field: the ring of rows (ero__ring_step) */
     int box_r, gau_r;
     float box_w[ERO__MAXR + 2], gau_w[ERO__MAXR + 1];
     float box_sum, gau_sum;
@@ -343,6 +349,8 @@ typedef struct ero__run {
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
 } ero__run;
+
+static size_t ero__ring_floats(const ero__run *r);
 
 static int ero__finite(float v) { return v == v && v - v == 0.0f; }
 static int ero__valid(const ero__run *r, uint32_t i) { return !r->valid || r->valid[i]; }
@@ -583,6 +591,11 @@ static ero_result ero__scratch(ero__run *r)
 {
     size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 4 + 2), bytes, k;
     float *f;
+    if (r->ring) { /* rows only */
+        r->block = ero__alloc(r->al, ero__ring_floats(r) * sizeof(float));
+        r->hh = (float *)r->block;
+        return r->block ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
+    }
     bytes = planes * n * sizeof(float) + 4 * n;
     r->block = ero__alloc(r->al, bytes);
     if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
@@ -934,33 +947,37 @@ static float ero__resistance(const ero_material *m, float c)
     return u * u * m->eps_max + 2.0f * c * u * m->eps_medium + c * c * m->eps_min;
 }
 
+/* H at one valid texel from its averaged normal n (not unit) and mean curvature kap */
+static inline float ero__texel_h(const ero__run *r, const ero_material *m, float n0, float n1, float n2, float kap)
+{
+    float n[3], len, e, c, res, wf, hx, t;
+    float lc = r->o.curvature_length;
+    n[0] = n0; n[1] = n1; n[2] = n2;
+    len = sqrtf(ero__dot(n, n));
+    e = len > 0.0f ? -ero__dot(n, r->wind) / len : 0.0f;
+    c = kap > 0.0f ? kap * lc : 0.0f; /* convex only: see MODEL */
+    if (c > 1.0f) c = 1.0f;
+    res = ero__resistance(m, c);
+    if (e > 0.0f) {
+        wf = ((r->o.flags & ERO_CONSTANT_WINDWARD) ? r->o.force : r->o.force * e) + m->ambient;
+        hx = wf / res;
+    } else {
+        hx = (r->o.flags & ERO_LEEWARD_LITERAL) ? m->ambient : m->ambient / res;
+    }
+    if (kap < 0.0f && r->o.deposit_ratio >= 0.0f) {
+        t = r->o.deposit_ramp > 0.0f ? -kap * lc / r->o.deposit_ramp : 1.0f;
+        if (t > 1.0f) t = 1.0f;
+        hx = hx * ((1.0f - t) - r->o.deposit_ratio * t);
+    }
+    return ero__finite(hx) ? hx : 0.0f; /* beyond float's range (eps_min ~ 0): no change */
+}
+
 static void ero__erosion_heights(ero__run *r)
 {
     size_t i;
-    float lc = r->o.curvature_length;
     for (i = 0; i < r->n; i++) {
-        const ero_material *m = &r->mats[r->mat ? r->mat[i] : 0];
-        float n[3], len, e, c, res, wf, hx, t = 0.0f, kap;
         if (!ero__valid(r, (uint32_t)i)) { r->hh[i] = 0.0f; continue; }
-        n[0] = r->g[0][i]; n[1] = r->g[1][i]; n[2] = r->g[2][i];
-        kap = r->g[3][i];
-        len = sqrtf(ero__dot(n, n));
-        e = len > 0.0f ? -ero__dot(n, r->wind) / len : 0.0f;
-        c = kap > 0.0f ? kap * lc : 0.0f; /* convex only: see MODEL */
-        if (c > 1.0f) c = 1.0f;
-        res = ero__resistance(m, c);
-        if (e > 0.0f) {
-            wf = ((r->o.flags & ERO_CONSTANT_WINDWARD) ? r->o.force : r->o.force * e) + m->ambient;
-            hx = wf / res;
-        } else {
-            hx = (r->o.flags & ERO_LEEWARD_LITERAL) ? m->ambient : m->ambient / res;
-        }
-        if (kap < 0.0f && r->o.deposit_ratio >= 0.0f) {
-            t = r->o.deposit_ramp > 0.0f ? -kap * lc / r->o.deposit_ramp : 1.0f;
-            if (t > 1.0f) t = 1.0f;
-            hx = hx * ((1.0f - t) - r->o.deposit_ratio * t);
-        }
-        r->hh[i] = ero__finite(hx) ? hx : 0.0f; /* beyond float's range (eps_min ~ 0): no change */
+        r->hh[i] = ero__texel_h(r, &r->mats[r->mat ? r->mat[i] : 0], r->g[0][i], r->g[1][i], r->g[2][i], r->g[3][i]);
     }
 }
 
@@ -991,32 +1008,35 @@ static float ero__bounded(const ero__run *r, float d0, float d)
     }
 }
 
+/* adds rate * h to valid texel i (the bound, the report), returns the change of disp */
+static inline float ero__apply_texel(ero__run *r, size_t i, float h, ero_report *rep)
+{
+    float d0 = r->disp[i], d1, ch;
+    double vol;
+    if (r->hf) { /* height: erosion lowers it */
+        d1 = ero__bounded(r, d0, d0 - r->o.rate * h);
+        if (!ero__finite(d1)) d1 = d0;
+        ch = d0 - d1;
+        vol = ero__column(r, i, -d0, -d1);
+    } else {
+        d1 = ero__bounded(r, d0, d0 + r->o.rate * h);
+        if (!ero__finite(d1)) d1 = d0;
+        ch = d1 - d0;
+        vol = ero__column(r, i, d0, d1);
+    }
+    r->disp[i] = d1;
+    if (!(vol - vol == 0.0)) vol = 0.0; /* not finite: beyond float's range, unreported */
+    if (vol > 0.0) rep->eroded += vol;
+    else rep->deposited -= vol;
+    if (fabsf(ch) > rep->max_change) rep->max_change = fabsf(ch);
+    return d1 - d0;
+}
+
 static void ero__apply(ero__run *r, ero_report *rep)
 {
     size_t i;
-    float rate = r->o.rate;
-    for (i = 0; i < r->n; i++) {
-        float d0 = r->disp[i], d1, ch;
-        double vol;
-        if (!ero__valid(r, (uint32_t)i)) continue;
-        if (r->hf) { /* height: erosion lowers it */
-            d1 = ero__bounded(r, d0, d0 - rate * r->hh[i]);
-            if (!ero__finite(d1)) d1 = d0;
-            ch = d0 - d1;
-            vol = ero__column(r, i, -d0, -d1);
-        } else {
-            d1 = ero__bounded(r, d0, d0 + rate * r->hh[i]);
-            if (!ero__finite(d1)) d1 = d0;
-            ch = d1 - d0;
-            vol = ero__column(r, i, d0, d1);
-        }
-        r->disp[i] = d1;
-        r->hh[i] = d1 - d0;
-        if (!(vol - vol == 0.0)) vol = 0.0; /* not finite: beyond float's range, unreported */
-        if (vol > 0.0) rep->eroded += vol;
-        else rep->deposited -= vol;
-        if (fabsf(ch) > rep->max_change) rep->max_change = fabsf(ch);
-    }
+    for (i = 0; i < r->n; i++)
+        if (ero__valid(r, (uint32_t)i)) r->hh[i] = ero__apply_texel(r, i, r->hh[i], rep);
 }
 
 /* invalid texels within two image texels of valid ones take the mean change of the image
@@ -1057,6 +1077,374 @@ static void ero__extend_invalid(ero__run *r)
 }
 
 /* ================================================================================================
+   a plain height field (no valid map): one pass over a ring of rows
+   ================================================================================================ */
+
+/* Every texel of a wrapped field, and every texel off a border of an unwrapped one, has the four
+   grid neighbours: its geometry, filters and H run row by row on short rows that stay in cache,
+   with the same sums in the same order as the walk (so the same bits). A row's geometry is
+   box-filtered along x as it is made, the box's y pass and H follow br rows later, H's Gaussian x
+   pass at once and its y pass gr rows later, then the change is applied; the rows the geometry
+   still reads after they changed come from copies (the first ones, for the wrap; the last four). */
+
+#if defined(__GNUC__) || defined(__clang__)
+#define ERO__RESTRICT __restrict
+#define ERO__INLINE static inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define ERO__RESTRICT __restrict
+#define ERO__INLINE static __forceinline
+#else
+#define ERO__RESTRICT
+#define ERO__INLINE static inline
+#endif
+
+typedef struct ero__rows {
+    size_t Wp;            /* the row length rounded up to 8 */
+    int pad;              /* columns before x = 0 in the padded row: the larger radius */
+    float *gx[4];         /* (2 box_r + 1) rows of box-x-filtered normal xyz, curvature */
+    float *hx;            /* (2 gau_r + 1) rows of Gaussian-x-filtered H */
+    float *geo[4], *avg[4], *hrow, *chg, *padded;
+    float *len;           /* a row's square roots */
+    float *mrow[4];       /* a row's materials: eps_min, eps_max, eps_medium, ambient */
+    float *ws_box, *ws_gau; /* per column: the x pass's weight sum */
+    float *head;          /* the first rows before the step (a wrapped field reads them last) */
+    float *orig;          /* the last four applied rows before the step */
+    long head_rows, applied;
+} ero__rows;
+
+static int ero__ring_fits(const ero__run *r)
+{
+    long R = r->box_r > r->gau_r ? r->box_r : r->gau_r;
+    return r->hf && !r->valid && r->W >= 2 * R + 3 && r->H >= 2 * (r->box_r + r->gau_r) + 4;
+}
+
+static size_t ero__ring_floats(const ero__run *r)
+{
+    size_t Wp = ((size_t)r->W + 7) & ~(size_t)7, rows;
+    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 5 + 1;
+    return rows * Wp + 2 * ERO__MAXR + 16 + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
+}
+
+static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
+{
+    size_t Wp = ((size_t)r->W + 7) & ~(size_t)7;
+    int k;
+    q->Wp = Wp;
+    q->pad = r->box_r > r->gau_r ? r->box_r : r->gau_r;
+    for (k = 0; k < 4; k++) { q->gx[k] = f; f += (2 * (size_t)r->box_r + 1) * Wp; }
+    q->hx = f; f += (2 * (size_t)r->gau_r + 1) * Wp;
+    for (k = 0; k < 4; k++) { q->geo[k] = f; f += Wp; }
+    for (k = 0; k < 4; k++) { q->avg[k] = f; f += Wp; }
+    q->hrow = f; f += Wp;
+    q->chg = f; f += Wp;
+    q->len = f; f += Wp;
+    for (k = 0; k < 4; k++) { q->mrow[k] = f; f += Wp; }
+    q->ws_box = f; f += Wp;
+    q->ws_gau = f; f += Wp;
+    q->padded = f; f += Wp + 2 * ERO__MAXR + 16;
+    q->head_rows = r->box_r + r->gau_r + 2;
+    q->head = f; f += (size_t)q->head_rows * (size_t)r->W;
+    q->orig = f;
+}
+
+/* the x pass's weight sum at each column: all taps with wrap, those inside the row without */
+static void ero__ring_weights(const ero__run *r, float *ws, const float *w, int R)
+{
+    long W = r->W, x;
+    int k;
+    for (x = 0; x < W; x++) {
+        float s = w[0];
+        for (k = 1; k <= R; k++) {
+            if (r->wrap || x + k < W) s += w[k];
+            if (r->wrap || x - k >= 0) s += w[k];
+        }
+        ws[x] = s;
+    }
+}
+
+/* one row filtered along x: in (W values) padded by wrap or zeros into q->padded, the taps eight
+   columns at a time, divided by ws */
+static void ero__ring_xpass(const ero__run *r, ero__rows *q, const float *in, float *ERO__RESTRICT out,
+                            const float *w, int R, const float *ws)
+{
+    long W = r->W, x;
+    size_t b, Wp = q->Wp;
+    float *p = q->padded + q->pad;
+    int k, j;
+    for (x = -(long)q->pad; x < 0; x++) p[x] = r->wrap ? in[x + W] : 0.0f;
+    memcpy(p, in, (size_t)W * sizeof(float));
+    for (x = W; x < (long)Wp + q->pad; x++) p[x] = r->wrap && x < 2 * W ? in[x - W] : 0.0f;
+    for (b = 0; b < Wp; b += 8) {
+        const float *c = p + b;
+        float acc[8];
+        for (j = 0; j < 8; j++) acc[j] = w[0] * c[j];
+        for (k = 1; k <= R; k++) {
+            const float *up = c + k, *dn = c - k;
+            float wk = w[k];
+            for (j = 0; j < 8; j++) {
+                acc[j] += wk * up[j];
+                acc[j] += wk * dn[j];
+            }
+        }
+        for (j = 0; j < 8; j++) out[b + (size_t)j] = acc[j];
+    }
+    for (x = 0; x < W; x++) out[x] = out[x] / ws[x];
+}
+
+/* the y pass: rows[R + k] is the row at offset k (NULL: beyond an unwrapped border) */
+static void ero__ring_ypass(size_t Wp, float *const *rows, float *ERO__RESTRICT out, const float *w, int R)
+{
+    size_t b;
+    int k, j;
+    float ws = w[0];
+    for (k = 1; k <= R; k++) {
+        if (rows[R + k]) ws += w[k];
+        if (rows[R - k]) ws += w[k];
+    }
+    for (b = 0; b < Wp; b += 8) {
+        const float *c = rows[R] + b;
+        float acc[8];
+        for (j = 0; j < 8; j++) acc[j] = w[0] * c[j];
+        for (k = 1; k <= R; k++) {
+            const float *up = rows[R + k], *dn = rows[R - k];
+            float wk = w[k];
+            if (up) for (j = 0; j < 8; j++) acc[j] += wk * up[b + (size_t)j];
+            if (dn) for (j = 0; j < 8; j++) acc[j] += wk * dn[b + (size_t)j];
+        }
+        for (j = 0; j < 8; j++) out[b + (size_t)j] = acc[j] / ws;
+    }
+}
+
+/* the geometry of a texel with its four neighbours: ero__texel_geometry's sums with the offsets'
+   zero components left out (tx = (s, 0, a), ty = (0, s, b), so Tx x Ty = (-a s, -s b, s s)),
+   its branches as selects so that a row's loop vectorises; len2 = |Tx x Ty|^2, len its root */
+/* finite without a branch: v - v is 0 for finite v, NaN otherwise */
+ERO__INLINE int ero__fin(float v) { return v - v == 0.0f; }
+
+ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd, float s)
+{
+    float a = 0.5f * ((hr - hc) - (hl - hc)), b = 0.5f * ((hu - hc) - (hd - hc));
+    float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
+    return (c0 * c0 + c1 * c1) + c2 * c2;
+}
+ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len, float *g0,
+                               float *g1, float *g2, float *g3)
+{
+    float dr = hr - hc, dl = hl - hc, du = hu - hc, dd = hd - hc;
+    float a = 0.5f * (dr - dl), b = 0.5f * (du - dd);
+    float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
+    float inv = 1.0f / len, m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
+    float n0 = len > 0.0f ? m0 : 0.0f, n1 = len > 0.0f ? m1 : 0.0f, n2 = len > 0.0f ? m2 : 1.0f;
+    float qx = (c2 + dr * dr) + (c2 + dl * dl), qy = (c2 + du * du) + (c2 + dd * dd);
+    float kx = -2.0f * ((s * n0 + dr * n2) + (-s * n0 + dl * n2)) / qx;
+    float ky = -2.0f * ((s * n1 + du * n2) + (-s * n1 + dd * n2)) / qy;
+    float fin = (n0 - n0) + (n1 - n1) + (n2 - n2); /* 0 when all are finite, else NaN */
+    kx = qx > 0.0f ? kx : 0.0f;
+    kx = ero__fin(kx) ? kx : 0.0f;
+    ky = qy > 0.0f ? ky : 0.0f;
+    ky = ero__fin(ky) ? ky : 0.0f;
+    *g0 = fin == 0.0f ? n0 : 0.0f; *g1 = fin == 0.0f ? n1 : 0.0f; *g2 = fin == 0.0f ? n2 : 1.0f;
+    *g3 = (kx + ky) / 2.0f;
+}
+
+/* the texels 1 .. W - 2 of a row with rows on both sides; the square roots in a loop apart
+   (sqrtf's errno keeps a loop from vectorising) */
+static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RESTRICT m, const float *ERO__RESTRICT u,
+                             float s, long W, float *ERO__RESTRICT len, float *ERO__RESTRICT g0,
+                             float *ERO__RESTRICT g1, float *ERO__RESTRICT g2, float *ERO__RESTRICT g3)
+{
+    long x;
+    for (x = 1; x < W - 1; x++) len[x] = ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s);
+    for (x = 1; x < W - 1; x++) len[x] = sqrtf(len[x]);
+    for (x = 1; x < W - 1; x++)
+        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, len[x], &g0[x], &g1[x], &g2[x], &g3[x]);
+}
+
+/* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) */
+static void ero__ring_geometry(const ero__run *r, ero__rows *q, const float *dn, const float *mid, const float *up)
+{
+    long W = r->W, x;
+    float s = r->s, *g0 = q->geo[0], *g1 = q->geo[1], *g2 = q->geo[2], *g3 = q->geo[3];
+    if (up && dn) ero__hf_interior(dn, mid, up, s, W, q->len, g0, g1, g2, g3);
+    for (x = 0; x < W; x++) {
+        float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3] = {0.0f, 0.0f, 1.0f};
+        int have = 0;
+        long xr = x + 1 < W ? x + 1 : r->wrap ? 0 : -1, xl = x > 0 ? x - 1 : r->wrap ? W - 1 : -1;
+        if (up && dn && x > 0 && x < W - 1) { x = W - 2; continue; }
+        if (xr >= 0) { e[0][0] = s; e[0][2] = mid[xr] - mid[x]; have |= 1; }
+        if (xl >= 0) { e[1][0] = -s; e[1][2] = mid[xl] - mid[x]; have |= 2; }
+        if (up) { e[2][1] = s; e[2][2] = up[x] - mid[x]; have |= 4; }
+        if (dn) { e[3][1] = -s; e[3][2] = dn[x] - mid[x]; have |= 8; }
+        if (have == 15)
+            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s,
+                          sqrtf(ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s)), &g0[x], &g1[x], &g2[x], &g3[x]);
+        else ero__texel_geometry(e, have, nb, &g0[x], &g1[x], &g2[x], &g3[x]);
+    }
+}
+
+static long ero__mod(long a, long m) { return ((a % m) + m) % m; }
+
+/* row y of the heights as they were before this step */
+static const float *ero__ring_row(const ero__run *r, const ero__rows *q, long y)
+{
+    if (y >= q->applied) return r->disp + (size_t)y * (size_t)r->W;
+    if (y < q->head_rows) return q->head + (size_t)y * (size_t)r->W;
+    return q->orig + (size_t)(y & 3) * (size_t)r->W;
+}
+
+/* geometry of row v (wrapped into the field), box-filtered along x into its ring slot */
+static void ero__ring_row_geometry(ero__run *r, ero__rows *q, long v)
+{
+    long H = r->H, y = ero__mod(v, H), slot = ero__mod(v, 2 * (long)r->box_r + 1);
+    const float *dn = y > 0 ? ero__ring_row(r, q, y - 1) : r->wrap ? ero__ring_row(r, q, H - 1) : NULL;
+    const float *up = y + 1 < H ? ero__ring_row(r, q, y + 1) : r->wrap ? ero__ring_row(r, q, 0) : NULL;
+    int k;
+    ero__ring_geometry(r, q, dn, ero__ring_row(r, q, y), up);
+    for (k = 0; k < 4; k++)
+        ero__ring_xpass(r, q, q->geo[k], q->gx[k] + (size_t)slot * q->Wp, r->box_w, r->box_r, q->ws_box);
+}
+
+/* the rows at offsets -R..R from v in a ring of 2R + 1 slots (NULL beyond an unwrapped border) */
+static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, int R, float **rows)
+{
+    int k;
+    for (k = -R; k <= R; k++) {
+        long y = v + k;
+        rows[R + k] = !r->wrap && (y < 0 || y >= r->H) ? NULL : ring + (size_t)ero__mod(y, 2 * (long)R + 1) * Wp;
+    }
+}
+
+/* H of a row (ero__texel_h's sums, the branches as selects, the square roots and the materials'
+   lookup in a loop apart) */
+typedef struct ero__hparams {
+    float w0, w1, w2, force, lc, ramp, ratio;
+    int constant, literal, deposit;
+} ero__hparams;
+
+static void ero__h_row(const ero__hparams *p, long W, const float *ERO__RESTRICT n0, const float *ERO__RESTRICT n1,
+                       const float *ERO__RESTRICT n2, const float *ERO__RESTRICT kap, const float *ERO__RESTRICT len,
+                       const float *ERO__RESTRICT emin, const float *ERO__RESTRICT emax, const float *ERO__RESTRICT emed,
+                       const float *ERO__RESTRICT amb, float *ERO__RESTRICT out)
+{
+    long x;
+    float w0 = p->w0, w1 = p->w1, w2 = p->w2, force = p->force, lc = p->lc, ramp = p->ramp, ratio = p->ratio;
+    int constant = p->constant, literal = p->literal, deposit = p->deposit;
+    for (x = 0; x < W; x++) {
+        float l = len[x], k = kap[x];
+        float dot = (n0[x] * w0 + n1[x] * w1) + n2[x] * w2, ev = -dot / l, e = l > 0.0f ? ev : 0.0f;
+        float ck = k * lc, c0 = k > 0.0f ? ck : 0.0f, c = c0 > 1.0f ? 1.0f : c0, u = 1.0f - c;
+        float res = u * u * emax[x] + 2.0f * c * u * emed[x] + c * c * emin[x];
+        float fe = force * e, wf = (constant ? force : fe) + amb[x], hw = wf / res, al = amb[x] / res;
+        float hl = literal ? amb[x] : al, h = e > 0.0f ? hw : hl;
+        float tr = -k * lc / ramp, t0 = ramp > 0.0f ? tr : 1.0f, t = t0 > 1.0f ? 1.0f : t0;
+        float hd = h * ((1.0f - t) - ratio * t);
+        h = deposit && k < 0.0f ? hd : h;
+        out[x] = ero__fin(h) ? h : 0.0f;
+    }
+}
+
+static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
+{
+    ero__hparams p;
+    long W = r->W, x;
+    float *a0 = q->avg[0], *a1 = q->avg[1], *a2 = q->avg[2];
+    p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = r->wind[2];
+    p.force = r->o.force; p.lc = r->o.curvature_length; p.ramp = r->o.deposit_ramp; p.ratio = r->o.deposit_ratio;
+    p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
+    p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
+    p.deposit = r->o.deposit_ratio >= 0.0f;
+    for (x = 0; x < W; x++) q->len[x] = (a0[x] * a0[x] + a1[x] * a1[x]) + a2[x] * a2[x];
+    for (x = 0; x < W; x++) {
+        const ero_material *m = &r->mats[mat ? mat[x] : 0];
+        q->len[x] = sqrtf(q->len[x]);
+        q->mrow[0][x] = m->eps_min; q->mrow[1][x] = m->eps_max; q->mrow[2][x] = m->eps_medium; q->mrow[3][x] = m->ambient;
+    }
+    ero__h_row(&p, W, a0, a1, a2, q->avg[3], q->len, q->mrow[0], q->mrow[1], q->mrow[2], q->mrow[3], q->hrow);
+}
+
+/* row j's averaged geometry, its H, H filtered along x into its ring slot */
+static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
+{
+    float *rows[2 * ERO__MAXR + 1];
+    long W = r->W, y = ero__mod(j, r->H);
+    const uint8_t *mat = r->mat ? r->mat + (size_t)y * (size_t)W : NULL;
+    int k;
+    for (k = 0; k < 4; k++) {
+        ero__ring_window(r, q->gx[k], q->Wp, j, r->box_r, rows);
+        ero__ring_ypass(q->Wp, rows, q->avg[k], r->box_w, r->box_r);
+    }
+    ero__ring_h(r, q, mat);
+    ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, r->gau_w, r->gau_r,
+                    q->ws_gau);
+}
+
+/* a row's change applied to the heights (ero__apply_texel's, the report's sums in eight lanes) */
+ERO__INLINE void ero__hf_apply_lane(float *h, float c, float rate, float bv, double s2, double *er, double *de, float *mx)
+{
+    float d0 = *h, d = d0 - rate * c, lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d, ch, a;
+    double vol;
+    d1 = ero__fin(d1) ? d1 : d0;
+    ch = d0 - d1;
+    vol = s2 * ((double)-d1 - (double)-d0);
+    vol = vol - vol == 0.0 ? vol : 0.0;
+    *er += vol > 0.0 ? vol : 0.0;
+    *de -= vol > 0.0 ? 0.0 : vol;
+    a = fabsf(ch);
+    *mx = a > *mx ? a : *mx;
+    *h = d1;
+}
+
+static void ero__hf_apply_row(const ero__run *r, float *ERO__RESTRICT h, const float *ERO__RESTRICT chg, long W,
+                              ero_report *rep)
+{
+    double er[8] = {0, 0, 0, 0, 0, 0, 0, 0}, de[8] = {0, 0, 0, 0, 0, 0, 0, 0}, s2 = (double)r->s * r->s;
+    float mx[8] = {0, 0, 0, 0, 0, 0, 0, 0}, rate = r->o.rate;
+    float bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF;
+    long b;
+    int j;
+    for (b = 0; b + 8 <= W; b += 8)
+        for (j = 0; j < 8; j++) ero__hf_apply_lane(h + b + j, chg[b + j], rate, bv, s2, &er[j], &de[j], &mx[j]);
+    for (j = 0; b + j < W; j++) ero__hf_apply_lane(h + b + j, chg[b + j], rate, bv, s2, &er[j], &de[j], &mx[j]);
+    for (j = 0; j < 8; j++) {
+        rep->eroded += er[j];
+        rep->deposited += de[j];
+        if (mx[j] > rep->max_change) rep->max_change = mx[j];
+    }
+}
+
+/* row m's filtered H applied to the heights (the row kept first: the geometry may still read it) */
+static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *rep)
+{
+    float *rows[2 * ERO__MAXR + 1];
+    size_t W = (size_t)r->W, i0 = (size_t)m * W;
+    ero__ring_window(r, q->hx, q->Wp, m, r->gau_r, rows);
+    ero__ring_ypass(q->Wp, rows, q->chg, r->gau_w, r->gau_r);
+    memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
+    q->applied = m + 1;
+    ero__hf_apply_row(r, r->disp + i0, q->chg, (long)W, rep);
+}
+
+/* one time step of a plain height field: row v's geometry, row v - box_r's H, row
+   v - box_r - gau_r's change */
+static void ero__ring_step(ero__run *r, ero_report *rep)
+{
+    ero__rows q;
+    long H = r->H, lag = r->box_r + r->gau_r, v;
+    ero__ring_carve(r, &q, r->hh);
+    ero__ring_weights(r, q.ws_box, r->box_w, r->box_r);
+    ero__ring_weights(r, q.ws_gau, r->gau_w, r->gau_r);
+    memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
+    q.applied = 0;
+    memset(rep, 0, sizeof *rep);
+    for (v = r->wrap ? -lag : 0; v < H + lag; v++) {
+        long j = v - r->box_r, m = j - r->gau_r;
+        if (r->wrap || v < H) ero__ring_row_geometry(r, &q, v);
+        if (r->wrap ? j >= -(long)r->gau_r : j >= 0 && j < H) ero__ring_row_h(r, &q, j);
+        if (m >= 0 && m < H) ero__ring_row_apply(r, &q, m, rep);
+    }
+}
+
+/* ================================================================================================
    the step and the run
    ================================================================================================ */
 
@@ -1064,6 +1452,7 @@ static void ero__extend_invalid(ero__run *r)
 static void ero__time_step(ero__run *r, ero_report *rep)
 {
     float *one[1];
+    if (r->ring) { ero__ring_step(r, rep); return; }
     ero__points(r);                                                   /* 5. (of the last step) surface */
     ero__geometry(r);                                                 /*    normals, curvature */
     ero__filter(r, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum);    /*    their averages */
@@ -1100,6 +1489,7 @@ static ero_result ero__setup(ero__run *r, const ero_grid *g, const uint8_t *mate
     wl = sqrt((double)o.wind[0] * o.wind[0] + (double)o.wind[1] * o.wind[1] + (double)o.wind[2] * o.wind[2]);
     for (i = 0; i < 3; i++) r->wind[i] = (float)(o.wind[i] / wl);
     if ((e = ero__kernels(r, h)) != ERO_OK) return e;
+    r->ring = ero__ring_fits(r);
     if (!r->hf)
         for (i = 0; i < 4 * r->n && !r->has_rot; i++) r->has_rot = r->nbr[i] != ERO__NONE && r->nbr_rot[i] != 0;
     r->al = o.allocator;
@@ -1118,7 +1508,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if (total) *total = sum;
     if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
     if ((e = ero__scratch(&r)) != ERO_OK) return e;
-    ero__regular_runs(&r);
+    if (!r.ring) ero__regular_runs(&r);
     ero__columns(&r);
     sum.corrected = r.corrected;
     for (s = 0; s < steps; s++) {
