@@ -333,6 +333,7 @@ typedef struct ero__run {
     const uint8_t *mat;
     ero_material mats[256];
     size_t corrected;
+    size_t mat_count;                      /* the table's size */
     ero_options o;
     float wind[3];
     int has_rot;
@@ -501,6 +502,7 @@ static ero_result ero__check_materials(ero__run *r, const uint8_t *material, con
         }
     }
     r->mat = material;
+    r->mat_count = count;
     if (material)
         for (i = 0; i < r->n; i++)
             if (material[i] >= count) return ERO_ERR_BAD_MATERIAL;
@@ -1162,32 +1164,35 @@ static void ero__ring_weights(const ero__run *r, float *ws, const float *w, int 
     }
 }
 
+/* out[x] = the taps' sum about p[x] (p readable R before and after), in the walk's order */
+static void ero__taps_row(const float *ERO__RESTRICT p, float *ERO__RESTRICT out, long n, const float *w, int R)
+{
+    long x;
+    int k;
+    float w0 = w[0];
+    for (x = 0; x < n; x++) out[x] = w0 * p[x];
+    for (k = 1; k <= R; k++) {
+        const float *ERO__RESTRICT up = p + k, *ERO__RESTRICT dn = p - k;
+        float wk = w[k];
+        for (x = 0; x < n; x++) {
+            float a = out[x] + wk * up[x];
+            out[x] = a + wk * dn[x];
+        }
+    }
+}
+
 /* one row filtered along x: in (W values) padded by wrap or zeros into q->padded, the taps eight
    columns at a time, divided by ws */
 static void ero__ring_xpass(const ero__run *r, ero__rows *q, const float *in, float *ERO__RESTRICT out,
                             const float *w, int R, const float *ws)
 {
     long W = r->W, x;
-    size_t b, Wp = q->Wp;
+    size_t Wp = q->Wp;
     float *p = q->padded + q->pad;
-    int k, j;
     for (x = -(long)q->pad; x < 0; x++) p[x] = r->wrap ? in[x + W] : 0.0f;
     memcpy(p, in, (size_t)W * sizeof(float));
     for (x = W; x < (long)Wp + q->pad; x++) p[x] = r->wrap && x < 2 * W ? in[x - W] : 0.0f;
-    for (b = 0; b < Wp; b += 8) {
-        const float *c = p + b;
-        float acc[8];
-        for (j = 0; j < 8; j++) acc[j] = w[0] * c[j];
-        for (k = 1; k <= R; k++) {
-            const float *up = c + k, *dn = c - k;
-            float wk = w[k];
-            for (j = 0; j < 8; j++) {
-                acc[j] += wk * up[j];
-                acc[j] += wk * dn[j];
-            }
-        }
-        for (j = 0; j < 8; j++) out[b + (size_t)j] = acc[j];
-    }
+    ero__taps_row(p, out, (long)Wp, w, R);
     for (x = 0; x < W; x++) out[x] = out[x] / ws[x];
 }
 
@@ -1354,11 +1359,12 @@ static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
     p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
     p.deposit = r->o.deposit_ratio >= 0.0f;
     for (x = 0; x < W; x++) q->len[x] = (a0[x] * a0[x] + a1[x] * a1[x]) + a2[x] * a2[x];
-    for (x = 0; x < W; x++) {
-        const ero_material *m = &r->mats[mat ? mat[x] : 0];
-        q->len[x] = sqrtf(q->len[x]);
-        q->mrow[0][x] = m->eps_min; q->mrow[1][x] = m->eps_max; q->mrow[2][x] = m->eps_medium; q->mrow[3][x] = m->ambient;
-    }
+    for (x = 0; x < W; x++) q->len[x] = sqrtf(q->len[x]);
+    if (r->mat_count > 1) /* one material: the rows were filled once (ero__ring_step) */
+        for (x = 0; x < W; x++) {
+            const ero_material *m = &r->mats[mat ? mat[x] : 0];
+            q->mrow[0][x] = m->eps_min; q->mrow[1][x] = m->eps_max; q->mrow[2][x] = m->eps_medium; q->mrow[3][x] = m->ambient;
+        }
     ero__h_row(&p, W, a0, a1, a2, q->avg[3], q->len, q->mrow[0], q->mrow[1], q->mrow[2], q->mrow[3], q->hrow);
 }
 
@@ -1378,33 +1384,47 @@ static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
                     q->ws_gau);
 }
 
-/* a row's change applied to the heights (ero__apply_texel's, the report's sums in eight lanes) */
-ERO__INLINE void ero__hf_apply_lane(float *h, float c, float rate, float bv, double s2, double *er, double *de, float *mx)
+/* a row's change applied to the heights h (h0: the row before; ero__apply_texel's sums: the
+   difference of two floats is exact in double and s^2 times it finite) */
+static void ero__hf_change_row(float *ERO__RESTRICT h, const float *ERO__RESTRICT chg, long W, float rate, float bv)
 {
-    float d0 = *h, d = d0 - rate * c, lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d, ch, a;
-    double vol;
-    d1 = ero__fin(d1) ? d1 : d0;
-    ch = d0 - d1;
-    vol = s2 * ((double)-d1 - (double)-d0);
-    vol = vol - vol == 0.0 ? vol : 0.0;
-    *er += vol > 0.0 ? vol : 0.0;
-    *de -= vol > 0.0 ? 0.0 : vol;
-    a = fabsf(ch);
-    *mx = a > *mx ? a : *mx;
-    *h = d1;
+    long x;
+    for (x = 0; x < W; x++) {
+        float d0 = h[x], d = d0 - rate * chg[x], lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d;
+        h[x] = ero__fin(d1) ? d1 : d0; /* beyond float's range: as it was */
+    }
 }
 
-static void ero__hf_apply_row(const ero__run *r, float *ERO__RESTRICT h, const float *ERO__RESTRICT chg, long W,
-                              ero_report *rep)
+/* the report's sums over a row, in eight lanes */
+static void ero__hf_report_row(const float *ERO__RESTRICT h0, const float *ERO__RESTRICT h, long W, double s2,
+                               double *ERO__RESTRICT er, double *ERO__RESTRICT de, float *ERO__RESTRICT mx)
 {
-    double er[8] = {0, 0, 0, 0, 0, 0, 0, 0}, de[8] = {0, 0, 0, 0, 0, 0, 0, 0}, s2 = (double)r->s * r->s;
-    float mx[8] = {0, 0, 0, 0, 0, 0, 0, 0}, rate = r->o.rate;
-    float bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF;
     long b;
     int j;
     for (b = 0; b + 8 <= W; b += 8)
-        for (j = 0; j < 8; j++) ero__hf_apply_lane(h + b + j, chg[b + j], rate, bv, s2, &er[j], &de[j], &mx[j]);
-    for (j = 0; b + j < W; j++) ero__hf_apply_lane(h + b + j, chg[b + j], rate, bv, s2, &er[j], &de[j], &mx[j]);
+        for (j = 0; j < 8; j++) {
+            double vol = s2 * ((double)h0[b + j] - (double)h[b + j]);
+            float a = fabsf(h0[b + j] - h[b + j]);
+            er[j] += vol > 0.0 ? vol : 0.0;
+            de[j] -= vol > 0.0 ? 0.0 : vol;
+            mx[j] = a > mx[j] ? a : mx[j];
+        }
+    for (j = 0; b + j < W; j++) {
+        double vol = s2 * ((double)h0[b + j] - (double)h[b + j]);
+        float a = fabsf(h0[b + j] - h[b + j]);
+        er[j] += vol > 0.0 ? vol : 0.0;
+        de[j] -= vol > 0.0 ? 0.0 : vol;
+        mx[j] = a > mx[j] ? a : mx[j];
+    }
+}
+
+static void ero__hf_apply_row(const ero__run *r, float *h, const float *h0, const float *chg, long W, ero_report *rep)
+{
+    double er[8] = {0, 0, 0, 0, 0, 0, 0, 0}, de[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    float mx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    int j;
+    ero__hf_change_row(h, chg, W, r->o.rate, r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF);
+    ero__hf_report_row(h0, h, W, (double)r->s * r->s, er, de, mx);
     for (j = 0; j < 8; j++) {
         rep->eroded += er[j];
         rep->deposited += de[j];
@@ -1421,7 +1441,7 @@ static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *r
     ero__ring_ypass(q->Wp, rows, q->chg, r->gau_w, r->gau_r);
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
-    ero__hf_apply_row(r, r->disp + i0, q->chg, (long)W, rep);
+    ero__hf_apply_row(r, r->disp + i0, q->orig + (size_t)(m & 3) * W, q->chg, (long)W, rep);
 }
 
 /* one time step of a plain height field: row v's geometry, row v - box_r's H, row
@@ -1434,6 +1454,10 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
     ero__ring_weights(r, q.ws_box, r->box_w, r->box_r);
     ero__ring_weights(r, q.ws_gau, r->gau_w, r->gau_r);
     memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
+    for (v = 0; v < r->W; v++) {
+        q.mrow[0][v] = r->mats[0].eps_min; q.mrow[1][v] = r->mats[0].eps_max;
+        q.mrow[2][v] = r->mats[0].eps_medium; q.mrow[3][v] = r->mats[0].ambient;
+    }
     q.applied = 0;
     memset(rep, 0, sizeof *rep);
     for (v = r->wrap ? -lag : 0; v < H + lag; v++) {
