@@ -164,8 +164,9 @@
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
-     MEMORY. About 60 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 bytes per fragment besides.
+     MEMORY. About 72 bytes per original vertex, a copy of the original and its BVH; while
+     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 40 bytes per
+     original vertex near the widest candidate.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
@@ -7675,6 +7676,15 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
    Section: the bounding shell and paper 000's two simplification constraints
    --------------------------------------------------------------------------------------------- */
 
+/* An original vertex the enclosure check constrains: its position and its nearest old one-ring
+   triangle bt at barycentric (bu, bv), squared distance d2 (its old signed distance is taken
+   from these only where the check needs it). */
+typedef struct dm__sh_pt {
+    float p[3];
+    uint32_t bt;
+    double bu, bv, d2;
+} dm__sh_pt;
+
 typedef struct dm__sh_internal {
     dm_bvh *bvh;         /* the original */
     float *pos;          /* the original's positions and indices (copies) */
@@ -7689,7 +7699,7 @@ typedef struct dm__sh_internal {
                             by dm_shell_collapsed */
     size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls (this run) */
     size_t last_level;   /* the level of the last candidate or collapse seen */
-    uint32_t *pts;       /* original vertices near one candidate */
+    struct dm__sh_pt *pts; /* the original's vertices near one candidate */
     size_t pts_cap;
     float *tri;          /* the candidate's old and new triangles: 9 coordinates and a bounding
                             sphere (centre, radius) each */
@@ -7698,6 +7708,7 @@ typedef struct dm__sh_internal {
     double lo[3], cell;
     int dim[3];
     uint32_t *cell_first, *cell_vert;
+    float *cell_pos;     /* the positions of cell_vert, in its order (the gather reads them in a row) */
     uint32_t relaxed_keep; /* keep of the last candidate allowed only by the relaxed check */
     size_t relaxed_level;
     /* the enclosure's answer for the last candidate (asked for where keep goes, then in full) */
@@ -7725,6 +7736,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->tri);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_vert);
+        a.free(a.user, in->cell_pos);
         a.free(a.user, in);
     }
     a.free(a.user, shell->positions);
@@ -7872,8 +7884,9 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
     in->cell_first = (uint32_t *)dm__alloc_array(&r->a, ncell + 1, sizeof(uint32_t), &r->sc.overflow);
     in->cell_vert = (uint32_t *)dm__alloc_array(&r->a, nref ? nref : 1, sizeof(uint32_t), &r->sc.overflow);
+    in->cell_pos = (float *)dm__alloc_array(&r->a, nref ? nref : 1, 3 * sizeof(float), &r->sc.overflow);
     cnt = (uint32_t *)dm__take(&r->sc, ncell + 1, sizeof(uint32_t));
-    if (!in->cell_first || !in->cell_vert || !cnt) return dm__scratch_fail(&r->sc);
+    if (!in->cell_first || !in->cell_vert || !in->cell_pos || !cnt) return dm__scratch_fail(&r->sc);
     memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
     for (v = 0; v < r->nv; v++)
         if (stopped[v]) cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++;
@@ -7882,6 +7895,7 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     for (i = 0; i < ncell; i++) cnt[i] = in->cell_first[i];
     for (v = 0; v < r->nv; v++)
         if (stopped[v]) in->cell_vert[cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++] = (uint32_t)v;
+    for (i = 0; i < nref; i++) memcpy(in->cell_pos + 3 * i, r->pos + 3 * (size_t)in->cell_vert[i], 3 * sizeof(float));
     return DM_OK;
 }
 
@@ -8514,32 +8528,27 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
     return 1;
 }
 
-/* vertex v with its old signed distance sd (as float bits) appended to in->pts as entry npts;
-   0 when out of memory */
-static int dm__sh_push_pt(dm_shell *sh, dm__sh_internal *in, size_t npts, uint32_t v, double sd)
+/* pt appended to in->pts as entry npts; 0 when out of memory */
+static int dm__sh_push_pt(dm_shell *sh, dm__sh_internal *in, size_t npts, const dm__sh_pt *pt)
 {
-    float f = (float)sd;
-    uint32_t bits;
     if (npts >= in->pts_cap) {
-        uint32_t *np2;
+        dm__sh_pt *np2;
         int of = 0;
         size_t cap = in->pts_cap ? 2 * in->pts_cap : 1024;
-        np2 = (uint32_t *)dm__alloc_array(&sh->allocator, cap, 2 * sizeof(uint32_t), &of);
+        np2 = (dm__sh_pt *)dm__alloc_array(&sh->allocator, cap, sizeof(dm__sh_pt), &of);
         if (!np2) return 0;
-        if (npts) memcpy(np2, in->pts, 2 * npts * sizeof(uint32_t));
+        if (npts) memcpy(np2, in->pts, npts * sizeof(dm__sh_pt));
         sh->allocator.free(sh->allocator.user, in->pts);
         in->pts = np2;
         in->pts_cap = cap;
     }
-    memcpy(&bits, &f, sizeof bits);
-    in->pts[2 * npts] = v;
-    in->pts[2 * npts + 1] = bits;
+    in->pts[npts] = *pt;
     return 1;
 }
 
 /* the relevant original vertices, from the grid cells of the box: within reach of the old
-   triangles, their closest feature at keep or remove; *npts of them in in->pts, with their old
-   signed distance; 0 when out of memory */
+   triangles, their closest feature at keep or remove; *npts of them in in->pts, with their
+   nearest old triangle; 0 when out of memory */
 static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, size_t *npts)
 {
     const double *lo = b->lo, *hi = b->hi;
@@ -8555,12 +8564,12 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
             for (cx = cl[0]; cx <= ch[0]; cx++) {
                 size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
                 for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
-                    uint32_t v = in->cell_vert[q];
-                    double pp[3], sd, d2, bu, bv;
+                    dm__sh_pt pt;
+                    double pp[3], d2, bu, bv;
                     uint32_t fv[3];
                     size_t bt;
                     int nf;
-                    dm__load3(in->pos, v, pp);
+                    dm__load3(in->cell_pos, q, pp);
                     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
                         pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
                         continue;
@@ -8569,8 +8578,12 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                     if (bt == (size_t)-1 || sqrt(d2) > b->reach ||
                         !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
                         continue; /* beyond reach, or closest to the ring's rim */
-                    sd = dm__sh_sign(c->old_triangles, in->tri, c->old_triangle_count, bt, bu, bv, fv, nf, pp, sqrt(d2));
-                    if (!dm__sh_push_pt(sh, in, *npts, v, sd)) return 0;
+                    memcpy(pt.p, in->cell_pos + 3 * q, sizeof pt.p);
+                    pt.bt = (uint32_t)bt;
+                    pt.bu = bu;
+                    pt.bv = bv;
+                    pt.d2 = d2;
+                    if (!dm__sh_push_pt(sh, in, *npts, &pt)) return 0;
                     (*npts)++;
                 }
             }
@@ -8589,7 +8602,7 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
         size_t t;
         int j;
         const uint32_t *tr;
-        dm__load3(in->pos, in->pts[2 * i], pp);
+        dm__load3(in->pts[i].p, 0, pp);
         t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, hint, &d2, &bu, &bv);
         if (t == (size_t)-1) continue;
         hint = t;
@@ -8682,6 +8695,18 @@ static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], do
     }
 }
 
+/* pt's old signed distance, as a float (the old triangles of in->tri) */
+static float dm__sh_old_signed(const dm_collapse *c, const float *tf, const dm__sh_pt *pt)
+{
+    uint32_t fv[3];
+    double pp[3];
+    int nf;
+    dm__load3(pt->p, 0, pp);
+    dm__sh_feature(c, c->old_triangles, pt->bt, pt->bu, pt->bv, 1, fv, &nf);
+    return (float)dm__sh_sign(c->old_triangles, tf, c->old_triangle_count, pt->bt, pt->bu, pt->bv, fv, nf, pp,
+                              sqrt(pt->d2));
+}
+
 /* the check at the rounded position x: no relevant vertex ends outside (its signed distance
    beyond 4 margins and beyond its old one by a margin) */
 static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3], size_t npts)
@@ -8689,12 +8714,11 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
     for (i = 0; i < npts; i++) {
+        const dm__sh_pt *pt = in->pts + i;
         double pp[3], sd;
-        float f;
-        memcpy(&f, &in->pts[2 * i + 1], sizeof f);
-        dm__load3(in->pos, in->pts[2 * i], pp);
+        dm__load3(pt->p, 0, pp);
         sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
-        if (sd > 4.0 * in->margin && sd > (double)f + in->margin) {
+        if (sd > 4.0 * in->margin && sd > (double)dm__sh_old_signed(c, in->tri, pt) + in->margin) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
         }
