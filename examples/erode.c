@@ -1,9 +1,13 @@
 /* erode - paper 000's wind erosion (erosion.h) on a mesh's displacement map or on a height map.
 
-   usage: erode IN|--torus --steps N --wind X,Y,Z [--material MASK] [--hard EMIN,EMAX] [--soft EMIN,EMAX]
+   usage: erode IN|--torus|--reliefs|--letters --steps N --wind X,Y,Z [--material MASK] [--hard EMIN,EMAX] [--soft EMIN,EMAX]
                 [--res R] [--faces F] [--height-scale S] [--wrap] [--rate R] [--render-steps A,B,...]
-                [--size S] [--marker X,Y,Z] -o PREFIX
+                [--size S] [--marker X,Y,Z] [--view X,Y,Z] -o PREFIX
      --torus       instead of IN: a generated torus (radii 1 and 0.3, 128 x 48 quads), paper Fig 5.2.1's
+     --reliefs     instead of IN: a cylinder (radius 0.5, height 1.2) with raised bosses, an R x 0.38R
+                   surface grid whose base, the cylinder, encloses them (paper Fig 5.2.2's)
+     --letters     the same cylinder with the raised letters "CGGM", "CG" of the hard material and
+                   the rest soft (Fig 5.2.3's); the text faces -x
      IN            a mesh (OBJ, OFF, PLY, STL; run through dispmesh.h to a base + an R x R map first)
                    or a height map (PFM: heights in world units; PNG 8/16-bit or PGM: grey scaled by
                    --height-scale), the map spanning 1 world unit along its longer side
@@ -19,12 +23,14 @@
      --rate R      world units of depth per unit of H per step (default erosion.h's, 1e-3 x scale)
      --render-steps A,B,...  the steps after which a view is rendered (default 1 and N)
      --size S      pixels of each view (default 400); --marker X,Y,Z the wind source's marker
-                   (default: 1.2 x the scale against the wind from the centre)
+                   (default: 1.2 x the scale against the wind from the centre); --view X,Y,Z the
+                   direction from the centre to the eye (default: beside the wind source)
      -o PREFIX     output prefix (required)
    Writes PREFIX_map.pfm (the weathered displacement or height, 1 channel, row 0 at the bottom),
    PREFIX_map.png (the same, 16-bit grey from its min to its max), PREFIX.obj (the weathered mesh:
    dispmesh.h's reconstruction, or the height field's grid), PREFIX_render.png (before | after each
-   render step, the wind source marked), and on stdout
+   render step, the wind source marked; the change since "before" shaded: orange where worn, blue
+   where filled, by the same scale in every view), and on stdout
      RESULT erosion domain=<heightfield|surface> res=<w>x<h> steps=<n> eroded=<v> deposited=<v>
             max_change=<d> step_ms=<t>
    Progress goes to stderr. Exit status: 0 done, 1 failure (unreadable input, a library error, a
@@ -57,9 +63,9 @@
 typedef struct args {
     const char *in, *prefix, *material;
     long steps, res, faces, size;
-    double wind[3], hard[2], soft[2], height_scale, rate, marker[3];
+    double wind[3], hard[2], soft[2], height_scale, rate, marker[3], view[3];
     double render_steps[MAX_RENDERS];
-    int render_count, wrap, has_marker, torus;
+    int render_count, wrap, has_marker, has_view, torus, cylinder; /* cylinder: 1 reliefs, 2 letters */
 } args;
 
 /* everything one run holds, freed by run_free */
@@ -79,18 +85,22 @@ typedef struct run {
     sr_image8 views[MAX_RENDERS + 1];
     char captions[MAX_RENDERS + 1][48];
     int view_count;
+    float *states[MAX_RENDERS + 1];   /* the map at each view */
+    float *gen;                       /* a generated surface grid's arrays (one block) */
+    float *before_p;                  /* the "before" reconstruction's points (change shading) */
+    size_t before_nv;
 } run;
 
 static void usage(FILE *to)
 {
-    fprintf(to, "usage: erode IN|--torus --steps N --wind X,Y,Z [--material MASK] [--hard EMIN,EMAX] [--soft EMIN,EMAX]\n"
+    fprintf(to, "usage: erode IN|--torus|--reliefs|--letters --steps N --wind X,Y,Z [--material MASK] [--hard EMIN,EMAX] [--soft EMIN,EMAX]\n"
                 "             [--res R] [--faces F] [--height-scale S] [--wrap] [--rate R] [--render-steps A,B,...]\n"
-                "             [--size S] [--marker X,Y,Z] -o PREFIX\n"
-                "  IN: a mesh (OBJ, OFF, PLY, STL) or a height map (PFM, PNG, PGM); --torus a generated torus\n"
+                "             [--size S] [--marker X,Y,Z] [--view X,Y,Z] -o PREFIX\n"
+                "  IN: a mesh (OBJ, OFF, PLY, STL) or a height map (PFM, PNG, PGM); --torus, --reliefs, --letters: generated\n"
                 "  --steps N (1..100000)  --wind X,Y,Z toward which the wind blows  --material MASK (>= 0.5: hard)\n"
                 "  --hard EMIN,EMAX (4,16)  --soft EMIN,EMAX (1,4)  --res R (256)  --faces F (500)\n"
                 "  --height-scale S (0.1)  --wrap  --rate R (1e-3 x scale)  --render-steps A,B,... (1,N)\n"
-                "  --size S (400)  --marker X,Y,Z (the wind source)  -o PREFIX  --version\n");
+                "  --size S (400)  --marker X,Y,Z (the wind source)  --view X,Y,Z (eye direction)  -o PREFIX  --version\n");
 }
 
 static int parse_args(int argc, char **argv, args *a)
@@ -105,6 +115,11 @@ static int parse_args(int argc, char **argv, args *a)
         if (strcmp(o, "--version") == 0) { printf("%s\n", ERODE_VERSION); exit(0); }
         if (strcmp(o, "--wrap") == 0) { a->wrap = 1; continue; }
         if (strcmp(o, "--torus") == 0) { a->torus = 1; continue; }
+        if (strcmp(o, "--reliefs") == 0 || strcmp(o, "--letters") == 0) {
+            if (a->cylinder) return cli_usage_error(PROG, "more than one of --reliefs and --letters");
+            a->cylinder = o[2] == 'r' ? 1 : 2;
+            continue;
+        }
         if (o[0] != '-') {
             if (a->in) return cli_usage_error(PROG, "more than one input: '%s' and '%s'", a->in, o);
             a->in = o;
@@ -128,14 +143,18 @@ static int parse_args(int argc, char **argv, args *a)
         else if (strcmp(o, "--height-scale") == 0) { if (!cli_parse_double(v, 1e-9, 1e9, &a->height_scale)) return cli_usage_error(PROG, "--height-scale '%s': a positive number", v); }
         else if (strcmp(o, "--rate") == 0) { if (!cli_parse_double(v, 1e-12, 1e6, &a->rate)) return cli_usage_error(PROG, "--rate '%s': a positive number", v); }
         else if (strcmp(o, "--marker") == 0) { if (!cli_parse_doubles(v, ',', 3, 3, -1e9, 1e9, a->marker, NULL)) return cli_usage_error(PROG, "--marker '%s': three numbers X,Y,Z", v); a->has_marker = 1; }
-        else if (strcmp(o, "--render-steps") == 0) {
+        else if (strcmp(o, "--view") == 0) {
+            if (!cli_parse_doubles(v, ',', 3, 3, -1e9, 1e9, a->view, NULL) || (a->view[0] == 0 && a->view[1] == 0 && a->view[2] == 0))
+                return cli_usage_error(PROG, "--view '%s': three numbers X,Y,Z, not all zero", v);
+            a->has_view = 1;
+        } else if (strcmp(o, "--render-steps") == 0) {
             if (!cli_parse_doubles(v, ',', 1, MAX_RENDERS, 0, 100000, a->render_steps, &n))
                 return cli_usage_error(PROG, "--render-steps '%s': 1 to %d step numbers", v, MAX_RENDERS);
             a->render_count = n;
         } else return cli_usage_error(PROG, "unknown option '%s'", o);
     }
-    if (!a->in && !a->torus) return cli_usage_error(PROG, "no input (IN or --torus)");
-    if (a->in && a->torus) return cli_usage_error(PROG, "both an input '%s' and --torus", a->in);
+    if (!a->in && !a->torus && !a->cylinder) return cli_usage_error(PROG, "no input (IN, --torus, --reliefs or --letters)");
+    if ((a->in != NULL) + a->torus + (a->cylinder != 0) > 1) return cli_usage_error(PROG, "more than one input (IN, --torus, --reliefs, --letters)");
     if (!a->prefix) return cli_usage_error(PROG, "no output prefix (-o PREFIX)");
     if (!a->steps) return cli_usage_error(PROG, "--steps is required");
     if (a->wind[0] == 0 && a->wind[1] == 0 && a->wind[2] == 0) return cli_usage_error(PROG, "--wind is required");
@@ -157,6 +176,9 @@ static void run_free(run *R)
     free(R->disp0);
     free(R->mat);
     if (!R->surface) free(R->disp);
+    free(R->gen);
+    free(R->before_p);
+    for (k = 0; k <= MAX_RENDERS; k++) free(R->states[k]);
     dm_dispmap_free(R->map);
     dm_param_free(R->param);
     dm_pm_free(R->pm);
@@ -271,6 +293,121 @@ static int load_mesh(run *R, const args *a)
     return 1;
 }
 
+/* ---- the generated cylinders (Figs 5.2.2, 5.2.3) ------------------------------------------- */
+
+#define CYL_RB 0.5     /* the base cylinder's radius: it encloses the reliefs (disp >= 0) */
+#define CYL_R0 0.44    /* the relief surface's radius between the reliefs */
+#define CYL_HALF 0.6   /* half the height */
+#define CYL_PI 3.14159265358979323846
+
+/* "CGGM" as one 23 x 7 bitmap (5 x 7 letters, a column between), row 0 at the top */
+static const char *const cyl_font[7] = {
+    ".###.. .###.. .###.. #...#",
+    "#...#. #...#. #...#. ##.##",
+    "#..... #..... #..... #.#.#",
+    "#..... #.###. #.###. #.#.#",
+    "#..... #...#. #...#. #...#",
+    "#...#. #...#. #...#. #...#",
+    ".###.. .###.. .###.. #...#"};
+
+static float cyl_cell(int col, int row)
+{
+    int c = col + col / 6; /* the strings have a space after each 6 columns */
+    if (col < 0 || col >= 23 || row < 0 || row >= 7) return 0.0f;
+    return cyl_font[row][c] == '#' ? 1.0f : 0.0f;
+}
+
+/* the letters' height (0 .. 1) at arc length s from the text's centre and height z, and the letter */
+static float cyl_letters(double s, double z, int *letter)
+{
+    const double cell = 0.05;
+    double col = (s + 11.5 * cell) / cell - 0.5, row = (3.5 * cell - z) / cell - 0.5, fx, fy, m, t;
+    int c0 = (int)floor(col), r0 = (int)floor(row);
+    fx = col - c0; fy = row - r0;
+    m = (1 - fy) * ((1 - fx) * cyl_cell(c0, r0) + fx * cyl_cell(c0 + 1, r0)) +
+        fy * ((1 - fx) * cyl_cell(c0, r0 + 1) + fx * cyl_cell(c0 + 1, r0 + 1));
+    *letter = (int)floor((col + 0.5) / 6.0);
+    t = (m - 0.25) / 0.5;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return (float)(t * t * (3 - 2 * t));
+}
+
+/* the bosses' height (0 .. 1): 12 around by 3 along the axis */
+static float cyl_bosses(double th, double z)
+{
+    const double rad = 0.11;
+    int i, j;
+    float best = 0.0f;
+    for (i = 0; i < 12; i++)
+        for (j = -1; j <= 1; j++) {
+            double dth = th - 2 * CYL_PI * (i + 0.5) / 12, ds, dz = z - 0.35 * j, q;
+            dth -= 2 * CYL_PI * floor(dth / (2 * CYL_PI) + 0.5);
+            ds = CYL_RB * dth;
+            q = (ds * ds + dz * dz) / (rad * rad);
+            if (q < 1 && (float)((1 - q) * (1 - q)) > best) best = (float)((1 - q) * (1 - q));
+        }
+    return best;
+}
+
+/* the texel (x, y)'s angle and height on a W x H cylinder grid */
+static void cyl_texel(int x, int y, int W, int H, double *th, double *z)
+{
+    *th = 2 * CYL_PI * (x + 0.5) / W;
+    *z = -CYL_HALF + 2 * CYL_HALF * (y + 0.5) / H;
+}
+
+/* the cylinder as a surface grid: u around (wrapping, no rotation), v along the axis (open ends) */
+static int make_cylinder(run *R, const args *a)
+{
+    int W = (int)a->res, H = (int)(a->res * 2 * CYL_HALF / (2 * CYL_PI * CYL_RB) + 0.5), x, y, d;
+    size_t n = (size_t)W * H, i;
+    float *pos, *nrm, *area;
+    uint32_t *nbr;
+    uint8_t *valid, *rot;
+    R->gen = (float *)malloc(n * (8 * sizeof(float) + 4 * sizeof(uint32_t) + 5));
+    if (!R->gen) { fprintf(stderr, "erode: out of memory\n"); return 0; }
+    pos = R->gen; nrm = pos + 3 * n; R->disp = nrm + 3 * n; area = R->disp + n;
+    nbr = (uint32_t *)(area + n); valid = (uint8_t *)(nbr + 4 * n); rot = valid + n;
+    for (y = 0; y < H; y++)
+        for (x = 0; x < W; x++) {
+            double th, z, relief;
+            int letter;
+            i = (size_t)y * W + x;
+            cyl_texel(x, y, W, H, &th, &z);
+            relief = a->cylinder == 1 ? 0.045 * cyl_bosses(th, z) : 0.04 * cyl_letters(CYL_RB * (th - CYL_PI), z, &letter);
+            pos[3 * i] = (float)(CYL_RB * cos(th)); pos[3 * i + 1] = (float)(CYL_RB * sin(th)); pos[3 * i + 2] = (float)z;
+            nrm[3 * i] = (float)cos(th); nrm[3 * i + 1] = (float)sin(th); nrm[3 * i + 2] = 0.0f;
+            R->disp[i] = (float)(CYL_RB - CYL_R0 - relief);
+            area[i] = (float)((2 * CYL_PI * CYL_RB / W) * (2 * CYL_HALF / H));
+            valid[i] = 1;
+            nbr[4 * i + 0] = (uint32_t)(y * W + (x + 1) % W);
+            nbr[4 * i + 1] = (uint32_t)(y * W + (x + W - 1) % W);
+            nbr[4 * i + 2] = y + 1 < H ? (uint32_t)((y + 1) * W + x) : UINT32_MAX;
+            nbr[4 * i + 3] = y > 0 ? (uint32_t)((y - 1) * W + x) : UINT32_MAX;
+            for (d = 0; d < 4; d++) rot[4 * i + (size_t)d] = 0;
+        }
+    R->surface = 1;
+    R->w = W; R->h = H;
+    R->g = ero_surface_grid(W, H, pos, nrm, R->disp, area, valid, nbr, rot);
+    R->lo[0] = R->lo[1] = (float)-CYL_RB; R->lo[2] = (float)-CYL_HALF;
+    R->hi[0] = R->hi[1] = (float)CYL_RB; R->hi[2] = (float)CYL_HALF;
+    fprintf(stderr, "erode: a cylinder with %s, %d x %d surface grid\n", a->cylinder == 1 ? "bosses" : "the letters CGGM", W, H);
+    return 1;
+}
+
+/* Fig 5.2.3's materials: the letters C and G (the first two) hard, the rest soft */
+static void cylinder_materials(run *R)
+{
+    int x, y, letter;
+    for (y = 0; y < R->h; y++)
+        for (x = 0; x < R->w; x++) {
+            double th, z;
+            cyl_texel(x, y, R->w, R->h, &th, &z);
+            if (cyl_letters(CYL_RB * (th - CYL_PI), z, &letter) > 0.0f && letter >= 0 && letter < 2)
+                R->mat[(size_t)y * R->w + x] = 1;
+        }
+}
+
 static int load_material(run *R, const args *a)
 {
     sr_picture pic;
@@ -279,6 +416,7 @@ static int load_material(run *R, const args *a)
     size_t n = (size_t)R->w * R->h;
     R->mat = (uint8_t *)calloc(n, 1);
     if (!R->mat) return 0;
+    if (a->cylinder == 2) cylinder_materials(R);
     if (!a->material) return 1;
     if ((r = sr_read_image(a->material, NULL, &pic)) != SR_OK) { cli_result_error(PROG, a->material, sr_result_string(r), r == SR_ERR_IO ? errno : 0); return 0; }
     mask = (float *)malloc((size_t)pic.width * pic.height * sizeof(float));
@@ -333,11 +471,32 @@ static int grid_mesh(const run *R, int stride, tri_mesh *m)
     return 1;
 }
 
+/* a generated cylinder's surface points as a grid mesh, closed around */
+static int cylinder_mesh(const run *R, tri_mesh *m)
+{
+    int W = R->w, H = R->h, x, y, k;
+    memset(m, 0, sizeof *m);
+    m->nv = (size_t)W * H;
+    m->nt = 2 * (size_t)W * (H - 1);
+    m->p = (float *)malloc(3 * m->nv * sizeof(float));
+    m->t = (uint32_t *)malloc(3 * (m->nt ? m->nt : 1) * sizeof(uint32_t));
+    if (!m->p || !m->t) return 0;
+    for (x = 0; x < W * H; x++)
+        for (k = 0; k < 3; k++) m->p[3 * x + k] = R->g.pos[3 * x + k] - R->disp[x] * R->g.nrm[3 * x + k];
+    for (y = 0; y + 1 < H; y++)
+        for (x = 0; x < W; x++) {
+            uint32_t a0 = (uint32_t)(y * W + x), a1 = (uint32_t)(y * W + (x + 1) % W), *t = m->t + 6 * ((size_t)y * W + x);
+            t[0] = a0; t[1] = a1; t[2] = a1 + (uint32_t)W; t[3] = a0; t[4] = a1 + (uint32_t)W; t[5] = a0 + (uint32_t)W;
+        }
+    return 1;
+}
+
 static int surface_mesh(const run *R, int stride, tri_mesh *m)
 {
     dm_result r;
     memset(m, 0, sizeof *m);
     if (!R->surface) return grid_mesh(R, stride, m);
+    if (R->gen) return cylinder_mesh(R, m);
     if ((r = dm_reconstruct(R->map, R->param, R->bp, R->bnv, R->bi, R->bnt, NULL, &m->rec)) != DM_OK) {
         cli_result_error(PROG, "dm_reconstruct", dm_result_string(r), 0);
         return 0;
@@ -360,14 +519,59 @@ static void wind_source(const run *R, const args *a, float src[3], float centre[
     for (k = 0; k < 3; k++) src[k] = a->has_marker ? (float)a->marker[k] : (float)(centre[k] - 0.6 * diag * a->wind[k] / wl);
 }
 
-/* renders the map's mesh from the side the wind comes from, with a marker at the wind source */
-static int render_view(run *R, const args *a, const char *caption)
+/* the shade of a change (world units, worn > 0) on the scale s: grey, orange where worn, blue where
+   filled, linear in the change */
+static void change_colour(float c, float s, float *rgb)
+{
+    static const float grey[3] = {0.72f, 0.72f, 0.72f}, worn[3] = {0.95f, 0.42f, 0.1f}, filled[3] = {0.2f, 0.45f, 1.0f};
+    float t = s > 0 ? c / s : 0.0f;
+    const float *to = t < 0 ? filled : worn;
+    int k;
+    t = fabsf(t) > 1 ? 1 : fabsf(t);
+    for (k = 0; k < 3; k++) rgb[k] = grey[k] + t * (to[k] - grey[k]);
+}
+
+/* per-vertex shades of the change since "before": a grid mesh's vertices are texels; a
+   reconstruction's are compared with the first one's (the same tessellation) along its normals */
+static float *change_colours(run *R, const tri_mesh *m, int stride, float scale)
+{
+    float *c = (float *)malloc(3 * (m->nv ? m->nv : 1) * sizeof(float));
+    size_t v;
+    int k;
+    if (!c) return NULL;
+    if (m->rec) {
+        if (!R->before_p) { /* this is "before" */
+            R->before_p = (float *)malloc(3 * m->nv * sizeof(float));
+            if (R->before_p) memcpy(R->before_p, m->p, 3 * m->nv * sizeof(float));
+            R->before_nv = m->nv;
+        }
+        for (v = 0; v < m->nv; v++) {
+            float ch = 0.0f;
+            if (R->before_p && R->before_nv == m->nv)
+                for (k = 0; k < 3; k++) ch += (R->before_p[3 * v + k] - m->p[3 * v + k]) * m->rec->normals[3 * v + k];
+            change_colour(ch, scale, c + 3 * v);
+        }
+    } else if (R->gen) {
+        for (v = 0; v < m->nv; v++) change_colour(R->disp[v] - R->disp0[v], scale, c + 3 * v);
+    } else {
+        int gw = (R->w - 1) / stride + 1;
+        for (v = 0; v < m->nv; v++) {
+            size_t i = (size_t)((int)(v / gw) * stride) * R->w + (size_t)((int)(v % gw) * stride);
+            change_colour(R->disp0[i] - R->disp[i], scale, c + 3 * v);
+        }
+    }
+    return c;
+}
+
+/* renders the map's mesh from the side the wind comes from, with a marker at the wind source, the
+   change since "before" shaded on the scale `scale` */
+static int render_view(run *R, const args *a, const char *caption, float scale)
 {
     tri_mesh m;
     sr_framebuffer fb;
     sr_camera cam;
     sr_draw_desc d;
-    float src[3], c[3], eye[3], up[3] = {0, 0, 1}, bg[4] = {0.08f, 0.08f, 0.1f, 1};
+    float src[3], c[3], eye[3], up[3] = {0, 0, 1}, bg[4] = {0.08f, 0.08f, 0.1f, 1}, *colours;
     sr_image8 *img = &R->views[R->view_count];
     int S = (int)a->size, k, mx, my, stride = R->surface ? 1 : (R->w > 256 ? R->w / 256 : 1);
     double dist = 0;
@@ -375,14 +579,21 @@ static int render_view(run *R, const args *a, const char *caption)
     wind_source(R, a, src, c);
     for (k = 0; k < 3; k++) dist += (src[k] - c[k]) * (src[k] - c[k]);
     dist = sqrt(dist);
-    for (k = 0; k < 3; k++) eye[k] = (float)(c[k] + 1.6 * (src[k] - c[k]) + 0.25 * dist * (k == 2)); /* beside the source */
+    if (a->has_view) { /* from the direction given */
+        double vl = sqrt(a->view[0] * a->view[0] + a->view[1] * a->view[1] + a->view[2] * a->view[2]);
+        for (k = 0; k < 3; k++) eye[k] = (float)(c[k] + 1.6 * dist * a->view[k] / vl);
+    } else
+        for (k = 0; k < 3; k++) eye[k] = (float)(c[k] + 1.6 * (src[k] - c[k]) + 0.25 * dist * (k == 2)); /* beside the source */
     if (fabs(src[0] - c[0]) < 1e-6 * dist && fabs(src[1] - c[1]) < 1e-6 * dist) { up[1] = 1; up[2] = 0; }
     if (sr_framebuffer_create(&fb, S, S, NULL) != SR_OK) { tri_mesh_free(&m); return 0; }
     sr_framebuffer_clear(&fb, bg, 1.0f);
     sr_camera_look_at(&cam, eye, c, up, 40.0f, 1.0f, (float)(0.05 * dist), (float)(8 * dist));
     sr_draw_desc_default(&d);
     d.positions = m.p; d.vertex_count = m.nv; d.indices = m.t; d.triangle_count = m.nt;
+    d.colors = colours = change_colours(R, &m, stride, scale);
+    if (!colours) { sr_framebuffer_free(&fb); tri_mesh_free(&m); return 0; }
     sr_draw_mesh(&fb, &cam, &d);
+    free(colours);
     img->width = img->height = S; img->channels = 3;
     img->pixels = (uint8_t *)malloc((size_t)S * S * 3);
     if (!img->pixels) { sr_framebuffer_free(&fb); tri_mesh_free(&m); return 0; }
@@ -428,7 +639,7 @@ static int write_outputs(run *R, const args *a, cli_outputs *outs)
     if (!(tmp = cli_output_add(outs, PROG, path))) return 0;
     if ((r = sr_write_pfm(tmp, R->disp, R->w, R->h, 1)) != SR_OK) { cli_result_error(PROG, path, sr_result_string(r), errno); return 0; }
     for (i = 0; i < n; i++) {
-        if (R->surface && !R->map->valid[i]) continue;
+        if (R->surface && R->map && !R->map->valid[i]) continue;
         if (R->disp[i] < lo) lo = R->disp[i];
         if (R->disp[i] > hi) hi = R->disp[i];
     }
@@ -504,14 +715,17 @@ int main(int argc, char **argv)
     progress pr;
     long done = 0;
     int k, status = 1, u = parse_args(argc, argv, &a);
+    size_t n, i;
+    float *final = NULL, scale = 0.0f;
     double t0, t_erode = 0;
     char cap[48];
     if (u) return u;
     memset(&R, 0, sizeof R);
     memset(&total, 0, sizeof total);
     cli_outputs_init(&outs);
-    if (!(a.in && is_image(a.in) ? load_heightmap(&R, &a) : load_mesh(&R, &a))) goto done;
+    if (!(a.cylinder ? make_cylinder(&R, &a) : a.in && is_image(a.in) ? load_heightmap(&R, &a) : load_mesh(&R, &a))) goto done;
     if (!load_material(&R, &a)) goto done;
+    n = (size_t)R.w * R.h;
     R.disp0 = (float *)malloc((size_t)R.w * R.h * sizeof(float));
     if (!R.disp0) goto done;
     memcpy(R.disp0, R.disp, (size_t)R.w * R.h * sizeof(float));
@@ -522,7 +736,6 @@ int main(int argc, char **argv)
     o.progress = show_progress;
     o.user = &pr;
     pr.total = a.steps; pr.last = now_s();
-    if (!render_view(&R, &a, "before")) goto done;
     for (k = 0; k <= a.render_count; k++) { /* erode up to each render step (resuming gives the same bits) */
         long until = k < a.render_count ? (long)a.render_steps[k] : a.steps;
         if (until > done) {
@@ -536,11 +749,23 @@ int main(int argc, char **argv)
             if (seg.max_change > total.max_change) total.max_change = seg.max_change;
             done = until;
         }
-        if (k < a.render_count) {
-            snprintf(cap, sizeof cap, "after %ld step%s", done, done == 1 ? "" : "s");
-            if (!render_view(&R, &a, cap)) goto done;
+        if (k < a.render_count) { /* the map now, rendered when all are done (one shading scale) */
+            if (!(R.states[k] = (float *)malloc(n * sizeof(float)))) goto done;
+            memcpy(R.states[k], R.disp, n * sizeof(float));
         }
     }
+    if (!(final = (float *)malloc(n * sizeof(float)))) goto done;
+    memcpy(final, R.disp, n * sizeof(float));
+    for (i = 0; i < n; i++) /* the shading scale: the largest change over the run */
+        if ((!R.map || R.map->valid[i]) && fabsf(final[i] - R.disp0[i]) > scale) scale = fabsf(final[i] - R.disp0[i]);
+    memcpy(R.disp, R.disp0, n * sizeof(float));
+    if (!render_view(&R, &a, "before", scale)) goto done;
+    for (k = 0; k < a.render_count; k++) {
+        snprintf(cap, sizeof cap, "after %ld step%s", (long)a.render_steps[k], a.render_steps[k] == 1 ? "" : "s");
+        memcpy(R.disp, R.states[k], n * sizeof(float));
+        if (!render_view(&R, &a, cap, scale)) goto done;
+    }
+    memcpy(R.disp, final, n * sizeof(float));
     make_parent_dir(a.prefix);
     if (!write_outputs(&R, &a, &outs) || !cli_outputs_commit(&outs, PROG)) goto done;
     printf("RESULT erosion domain=%s res=%dx%d steps=%ld eroded=%.6g deposited=%.6g max_change=%.6g step_ms=%.3f\n",
@@ -549,6 +774,7 @@ int main(int argc, char **argv)
     status = 0;
 done:
     if (status) cli_outputs_discard(&outs);
+    free(final);
     run_free(&R);
     return status;
 }

@@ -5,7 +5,9 @@
    neighbours' and the reported volume matches the reconstructed torus's enclosed volume within 2%;
    a height field eroded at 512^2 and 2048^2 agrees (RMS <= 5% of the change); a wrapped tile
    commutes with circular shifts bit for bit; a stopped and resumed run gives the same bits; bad
-   input gets its named error with the map untouched; no allocation failure leaks. */
+   input gets its named error with the map untouched; no allocation failure leaks; on a cylinder
+   with bosses the windward side wears more than the leeward (Fig 5.2.2), and raised letters of a
+   hard material lose less than those of a soft one (Fig 5.2.3). */
 #define ERO_IMPLEMENTATION
 #include "erosion.h"
 #define DM_IMPLEMENTATION
@@ -615,6 +617,138 @@ static void test_alloc_failure(torus_map *t)
     free(d0);
 }
 
+/* ---- Figs 5.2.2 and 5.2.3: cylinders with reliefs ---------------------------------------------- */
+
+/* a cylinder of radius 0.5 and height 1.2 as a surface grid (u around, wrapping; v along the axis)
+   whose base encloses the reliefs: disp = 0.06 - relief */
+typedef struct cyl_grid {
+    int w, h;
+    float *pos, *nrm, *disp, *area;
+    uint32_t *nbr;
+    uint8_t *rot, *mat;
+} cyl_grid;
+
+static const char *const cyl_font[7] = { /* "CGGM", 5 x 7 letters, a column between */
+    ".###.. .###.. .###.. #...#", "#...#. #...#. #...#. ##.##", "#..... #..... #..... #.#.#",
+    "#..... #.###. #.###. #.#.#", "#..... #...#. #...#. #...#", "#...#. #...#. #...#. #...#",
+    ".###.. .###.. .###.. #...#"};
+
+/* the letter (0..3) whose stroke covers arc length s from the text's centre (which faces -x) and
+   height z, or -1; cells of 0.05 */
+static int cyl_letter(double s, double z)
+{
+    int col = (int)floor((s + 0.575) / 0.05), row = (int)floor((0.175 - z) / 0.05);
+    if (col < 0 || col >= 23 || row < 0 || row >= 7 || cyl_font[row][col + col / 6] != '#') return -1;
+    return col / 6;
+}
+
+static void make_cylinder(cyl_grid *c, int w, int letters)
+{
+    int x, y, h = (int)(w * 1.2 / 3.14159265 + 0.5);
+    size_t n = (size_t)w * h, i;
+    c->w = w; c->h = h;
+    c->pos = (float *)malloc(3 * n * sizeof(float)); c->nrm = (float *)malloc(3 * n * sizeof(float));
+    c->disp = (float *)malloc(n * sizeof(float)); c->area = (float *)malloc(n * sizeof(float));
+    c->nbr = (uint32_t *)malloc(4 * n * sizeof(uint32_t)); c->rot = (uint8_t *)calloc(4 * n, 1);
+    c->mat = (uint8_t *)calloc(n, 1);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            double th = 6.283185307 * (x + 0.5) / w, z = -0.6 + 1.2 * (y + 0.5) / h, relief = 0.0;
+            i = (size_t)y * w + x;
+            if (letters) {
+                int l = cyl_letter(0.5 * (th - 3.14159265), z);
+                if (l >= 0) relief = 0.04;
+                if (l >= 0 && l < 2) c->mat[i] = 1; /* C, G hard */
+            } else { /* bosses, 12 around by 3 along */
+                int b, j;
+                for (b = 0; b < 12; b++)
+                    for (j = -1; j <= 1; j++) {
+                        double dth = th - 6.283185307 * (b + 0.5) / 12, ds, dz = z - 0.35 * j, q;
+                        dth -= 6.283185307 * floor(dth / 6.283185307 + 0.5);
+                        ds = 0.5 * dth;
+                        q = (ds * ds + dz * dz) / (0.11 * 0.11);
+                        if (q < 1 && 0.045 * (1 - q) * (1 - q) > relief) relief = 0.045 * (1 - q) * (1 - q);
+                    }
+            }
+            c->pos[3 * i] = (float)(0.5 * cos(th)); c->pos[3 * i + 1] = (float)(0.5 * sin(th)); c->pos[3 * i + 2] = (float)z;
+            c->nrm[3 * i] = (float)cos(th); c->nrm[3 * i + 1] = (float)sin(th); c->nrm[3 * i + 2] = 0.0f;
+            c->disp[i] = (float)(0.06 - relief);
+            c->area[i] = (float)((3.14159265 / w) * (1.2 / h));
+            c->nbr[4 * i + 0] = (uint32_t)(y * w + (x + 1) % w);
+            c->nbr[4 * i + 1] = (uint32_t)(y * w + (x + w - 1) % w);
+            c->nbr[4 * i + 2] = y + 1 < h ? (uint32_t)((y + 1) * w + x) : UINT32_MAX;
+            c->nbr[4 * i + 3] = y > 0 ? (uint32_t)((y - 1) * w + x) : UINT32_MAX;
+        }
+}
+
+static void cyl_free(cyl_grid *c)
+{
+    free(c->pos); free(c->nrm); free(c->disp); free(c->area); free(c->nbr); free(c->rot); free(c->mat);
+}
+
+/* the wind blows toward +x: windward texels face -x */
+static ero_result cyl_erode(cyl_grid *c, const ero_material *mats, size_t count, int steps)
+{
+    ero_grid g = ero_surface_grid(c->w, c->h, c->pos, c->nrm, c->disp, c->area, NULL, c->nbr, c->rot);
+    ero_options o = ero_default_options();
+    o.wind[0] = 1.0f;
+    o.rate = 0.006f;
+    return ero_erode(&g, count ? c->mat : NULL, mats, count, steps, &o, NULL, NULL);
+}
+
+static void test_cylinder_reliefs(void)
+{
+    cyl_grid c;
+    float *d0;
+    size_t n, i;
+    double wind = 0, lee = 0;
+    long nw = 0, nl = 0;
+    make_cylinder(&c, 128, 0);
+    n = (size_t)c.w * c.h;
+    d0 = copy_floats(c.disp, n);
+    T_CHECK(cyl_erode(&c, NULL, 0, 10) == ERO_OK);
+    for (i = 0; i < n; i++) { /* the wear (disp grows inward) on each side, away from the open ends */
+        size_t y = i / (size_t)c.w;
+        if (y < 4 || y + 4 >= (size_t)c.h) continue;
+        if (c.nrm[3 * i] < -0.2f) { wind += c.disp[i] - d0[i]; nw++; }
+        else if (c.nrm[3 * i] > 0.2f) { lee += c.disp[i] - d0[i]; nl++; }
+    }
+    wind /= (double)nw; lee /= (double)nl;
+    printf("  note: Fig 5.2.2 cylinder with bosses, 10 steps: mean wear windward %.4g, leeward %.4g (x%.2f)\n", wind, lee, wind / lee);
+    T_CHECK_MSG(wind > 1.5 * lee && lee > 0, "windward wear %g not above 1.5 x leeward %g", wind, lee);
+    free(d0);
+    cyl_free(&c);
+}
+
+static void test_cylinder_letters(void)
+{
+    cyl_grid c;
+    float *d0;
+    size_t n;
+    int x, y;
+    double loss[2] = {0, 0};
+    long cnt[2] = {0, 0};
+    ero_material mats[2] = {{1, 4, 0, 0}, {4, 16, 0, 0}}; /* soft, hard */
+    make_cylinder(&c, 192, 1);
+    n = (size_t)c.w * c.h;
+    d0 = copy_floats(c.disp, n);
+    T_CHECK(cyl_erode(&c, mats, 2, 10) == ERO_OK);
+    for (y = 0; y < c.h; y++)
+        for (x = 0; x < c.w; x++) {
+            size_t i = (size_t)y * c.w + x;
+            double th = 6.283185307 * (x + 0.5) / c.w, z = -0.6 + 1.2 * (y + 0.5) / c.h;
+            int l = cyl_letter(0.5 * (th - 3.14159265), z);
+            if (l < 0) continue;
+            loss[l < 2] += c.disp[i] - d0[i]; /* [1]: C, G (hard); [0]: G, M (soft) */
+            cnt[l < 2]++;
+        }
+    loss[0] /= (double)cnt[0]; loss[1] /= (double)cnt[1];
+    printf("  note: Fig 5.2.3 letters CGGM, 10 steps: mean loss of hard CG %.4g, soft GM %.4g\n", loss[1], loss[0]);
+    T_CHECK_MSG(loss[1] < 0.5 * loss[0] && loss[1] > 0, "hard letters lost %g, soft %g", loss[1], loss[0]);
+    free(d0);
+    cyl_free(&c);
+}
+
 int main(int argc, char **argv)
 {
     torus_map t;
@@ -624,6 +758,8 @@ int main(int argc, char **argv)
     test_bound();
     test_materials();
     test_tiling();
+    test_cylinder_reliefs();
+    test_cylinder_letters();
     if (T_CHECK(make_torus_map(&t, 256))) {
         test_torus(&t);
         test_resume(&t);
