@@ -45,7 +45,7 @@ static const scene_look looks[4] = {
      {0.5f, 0.4f, 0.75f}, {1.0f, 1.0f, 1.0f}, {0.20f, 0.20f, 0.22f}}};
 
 typedef struct args {
-    const char *preset, *out, *obj;
+    const char *preset, *out, *obj, *heights;
     int W, H, half, cubic, flat;
     int have_seed, have_levels, have_omega, have_eps, have_sigma;
     long seed, levels, max_triangles;
@@ -77,6 +77,8 @@ static void usage(FILE *to)
             "                       vertices, lit per pixel) or flat (one colour per quad, as the\n"
             "                       paper draws its polygons)\n"
             "  --obj FILE           also write the triangle mesh (positions only) as OBJ (default: none)\n"
+            "  --heights FILE       also write the four-point height grid (before the epsilon split)\n"
+            "                       as a 1-channel PFM, heights over the terrain's width (default: none)\n"
             "  -h, --help           show this help and exit\n"
             "  --version            show the version and exit\n"
             "Exit status: 0 done, 1 failure (the terrain cannot be built, a write failed), 2 usage.\n"
@@ -102,7 +104,7 @@ static int parse_args(int argc, char **argv, args *a)
         if (strcmp(s, "--version") == 0) { printf("%s\n", TERRAIN_VERSION); return 0; }
         if (strcmp(s, "--omega-half") == 0) { a->half = 1; continue; }
         if (strcmp(s, "--cubic") == 0) { a->cubic = 1; continue; }
-        if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0 || strcmp(s, "--preset") == 0 || strcmp(s, "--obj") == 0 ||
+        if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0 || strcmp(s, "--preset") == 0 || strcmp(s, "--obj") == 0 || strcmp(s, "--heights") == 0 ||
             strcmp(s, "--size") == 0 || strcmp(s, "--seed") == 0 || strcmp(s, "--levels") == 0 || strcmp(s, "--omega") == 0 ||
             strcmp(s, "--eps") == 0 || strcmp(s, "--sigma") == 0 || strcmp(s, "--max-triangles") == 0 ||
             strcmp(s, "--shading") == 0) {
@@ -116,6 +118,9 @@ static int parse_args(int argc, char **argv, args *a)
         if (strcmp(s, "-o") == 0 || strcmp(s, "--output") == 0) {
             if (!cli_has_extension(v, ".png")) return cli_usage_error("terrain", "%s '%s': the name must end in .png (any case)", s, v);
             a->out = v;
+        } else if (strcmp(s, "--heights") == 0) {
+            if (!cli_has_extension(v, ".pfm")) return cli_usage_error("terrain", "--heights '%s': the name must end in .pfm (any case)", v);
+            a->heights = v;
         } else if (strcmp(s, "--obj") == 0) {
             if (!cli_has_extension(v, ".obj")) return cli_usage_error("terrain", "--obj '%s': the name must end in .obj (any case)", v);
             a->obj = v;
@@ -245,6 +250,33 @@ static void scene_light(const scene_look *look, sr_light *light)
     }
 }
 
+/* The four-point grid of heights (sd4_terrain_build's steps 1 and 2) over the terrain's width, as PFM. */
+static int write_heights(const char *path, const sd4_terrain_desc *d)
+{
+    size_t nx = d->nx ? d->nx : 9, ny = d->ny ? d->ny : 9, NX, NY, i;
+    double *control = NULL, *fine = NULL, width;
+    float *h = NULL;
+    sd4_options o;
+    int ok = 0;
+    memset(&o, 0, sizeof o);
+    o.end_rule = o.end_rule_y = d->border;
+    o.omega_convention = d->omega_convention;
+    if (sd4_grid_size(nx, ny, d->levels, &o, &NX, &NY) != SD4_OK) return 0;
+    control = (double *)malloc(nx * ny * sizeof(double));
+    fine = (double *)malloc(NX * NY * sizeof(double));
+    h = (float *)malloc(NX * NY * sizeof(float));
+    width = (double)((NX > NY ? NX : NY) - 1) * (d->spacing != 0.0 ? d->spacing : 64.0) / (double)((size_t)1 << d->levels);
+    if (control && fine && h &&
+        (d->heights ? (memcpy(control, d->heights, nx * ny * sizeof(double)), SD4_OK)
+                    : sd4_random_heights(nx, ny, d->amplitude != 0.0 ? d->amplitude : 60.0, d->smooth_passes, d->seed, NULL, control)) == SD4_OK &&
+        sd4_grid_refine(control, nx, ny, 1, d->omega, d->levels, &o, fine, NX * NY) == SD4_OK) {
+        for (i = 0; i < NX * NY; i++) h[i] = (float)(fine[i] / width);
+        ok = sr_write_pfm(path, h, (int)NX, (int)NY, 1) == SR_OK;
+    }
+    free(control); free(fine); free(h);
+    return ok;
+}
+
 /* Renders the mesh into png_tmp. 0 done, 1 failure (reported). */
 static int render(const args *a, const scene_look *look, const sd4_mesh *m, const char *png_tmp)
 {
@@ -309,7 +341,7 @@ int main(int argc, char **argv)
     sd4_mesh m;
     sd4_result r;
     cli_outputs outs;
-    const char *png_tmp, *obj_tmp = NULL;
+    const char *png_tmp, *obj_tmp = NULL, *heights_tmp = NULL;
     int i, status = parse_args(argc, argv, &a);
     if (status >= 0) return status;
     for (i = 0; i < 4; i++)
@@ -334,7 +366,12 @@ int main(int argc, char **argv)
     cli_outputs_init(&outs);
     png_tmp = cli_output_add(&outs, "terrain", a.out);
     if (a.obj) obj_tmp = cli_output_add(&outs, "terrain", a.obj);
-    if (!png_tmp || (a.obj && !obj_tmp)) status = 1;
+    if (a.heights) heights_tmp = cli_output_add(&outs, "terrain", a.heights);
+    if (!png_tmp || (a.obj && !obj_tmp) || (a.heights && !heights_tmp)) status = 1;
+    else if (a.heights && (errno = 0, !write_heights(heights_tmp, &d))) {
+        cli_file_error("terrain", a.heights, "cannot write", errno);
+        status = 1;
+    }
     else if (a.obj && (errno = 0, !write_obj(obj_tmp, &m))) {
         cli_file_error("terrain", a.obj, "cannot write", errno);
         status = 1;
