@@ -12,7 +12,8 @@ for name in dispmesh_bunny_views dispmesh_brick_views \
             deform_fig4-4_cylinder_bend90 deform_fig4-4_cylinder_bend180 deform_fig4-4b_box_twist720 \
             deform_fig2-3_bunny_ear deform_fig2-3_bunny_ear_rigid5 \
             relief_fig6-9_cube_engraved relief_fig6-2_sheet relief_fig6-7_cylinder relief_baseline_sheet \
-            erosion_fig5-2-1_torus_render \
+            erosion_fig5-2-1_torus_render erosion_fig5-2-2_reliefs_render erosion_fig5-2-3_letters_render \
+            erosion_subdiv4_terrain_render \
             sphere_f16 bunny bunny_wire; do
   if [ -f "$OUT/$name.png" ]; then
     "$B/thumbnail" "$OUT/$name.png" "$docs/$name.png" --width 760 --max-bytes 61440

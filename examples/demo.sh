@@ -84,9 +84,24 @@ else
   echo "demo: /usr/share/glmark2/models/bunny.obj not found (apt-get install glmark2-data): grass bunny skipped"
 fi
 # erosion.h: paper 000 part B's wind erosion through the displacement map: its Fig 5.2.1, a torus of one
-# material after 1 and 10 steps with the wind source marked (before | 1 | 10); the bunny weathered; a
+# material after 1 and 10 steps with the wind source marked (before | 1 | 10), seen from the side so
+# that windward (orange: worn) and leeward show; Fig 5.2.2, a cylinder with bosses, the wind from -x
+# (the left), the leeward side wearing less; Fig 5.2.3, a cylinder with the raised letters CGGM, CG
+# hard and the rest soft; the bunny weathered; a subdiv4.h terrain (terrain --heights) weathered; a
 # height map (a generated ridge field, tileable) weathered with a hard band painted from a mask
-"$B/erode" --torus --steps 10 --wind -1,0,-0.3 --rate 0.02 --res 256 --size 320 -o "$OUT/erosion_fig5-2-1_torus"
+"$B/erode" --torus --steps 10 --wind -1,0,-0.3 --rate 0.02 --res 256 --size 320 --view 0.2,-1,0.9 \
+  -o "$OUT/erosion_fig5-2-1_torus"
+rendered=$((rendered + 1))
+"$B/erode" --reliefs --steps 10 --wind 1,0,0 --rate 0.006 --res 256 --size 320 --render-steps 3,10 --view 0,-1,0.3 \
+  -o "$OUT/erosion_fig5-2-2_reliefs"
+rendered=$((rendered + 1))
+"$B/erode" --letters --steps 10 --wind 1,0,0 --rate 0.006 --res 256 --size 320 --render-steps 3,10 --view -1,0,0.25 \
+  -o "$OUT/erosion_fig5-2-3_letters"
+rendered=$((rendered + 1))
+"$B/terrain" --preset vegetation --levels 5 --size 320 -o "$OUT/erosion_subdiv4_terrain_in.png" \
+  --heights "$OUT/erosion_subdiv4_terrain_in.pfm"
+"$B/erode" "$OUT/erosion_subdiv4_terrain_in.pfm" --steps 20 --wind 1,0.4,-0.6 --rate 0.0015 --render-steps 5,20 \
+  --size 320 -o "$OUT/erosion_subdiv4_terrain"
 rendered=$((rendered + 1))
 if [ -f /usr/share/glmark2/models/bunny.obj ]; then
   "$B/erode" /usr/share/glmark2/models/bunny.obj --steps 10 --wind -1,-0.3,-0.5 --rate 0.004 --res 256 --size 320 \
