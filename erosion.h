@@ -321,6 +321,13 @@ extern "C" {
    the run: the domain, the resolved parameters, the scratch planes
    ================================================================================================ */
 
+/* the texels a filter pass walks (off the regular stretches), their taps recorded once per call */
+typedef struct ero__walks {
+    size_t count;
+    uint32_t *tap;                         /* 2 R per texel: +k, -k for k = 1..R (UINT32_MAX: none) */
+    uint8_t *odd;                          /* the same: an odd number of quarter turns to the tap */
+} ero__walks;
+
 typedef struct ero__run {
     int hf, wrap, W, H;
     size_t n;
@@ -349,6 +356,8 @@ typedef struct ero__run {
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
+    ero__walks walks[2][2];                /* per kernel (box, Gaussian) and axis */
+    void *walk_block;
 } ero__run;
 
 static size_t ero__ring_floats(const ero__run *r);
@@ -818,48 +827,6 @@ static void ero__columns(ero__run *r)
    the seam-aware separable filter
    ================================================================================================ */
 
-/* sum over the taps along axis a (0 x, 1 y) from texel i, renormalised; pick: per visited texel,
-   the planes to read (src when turns are even, alt when odd) */
-static void ero__taps(const ero__run *r, uint32_t i, int axis, float *const *src, float *const *alt, int C,
-                      const float *w, int R, float wfull, float *out)
-{
-    const uint8_t *reg = r->reg + 4 * (size_t)i;
-    int c, k;
-    if (reg[2 * axis] >= R && reg[2 * axis + 1] >= R) { /* a regular stretch: direct indices */
-        size_t st = axis ? (size_t)r->W : 1;
-        for (c = 0; c < C; c++) {
-            const float *f = src[c];
-            float acc = w[0] * f[i];
-            for (k = 1; k <= R; k++) {
-                acc += w[k] * f[i + (size_t)k * st];
-                acc += w[k] * f[i - (size_t)k * st];
-            }
-            out[c] = acc / wfull;
-        }
-        return;
-    } else { /* walk both ways, across seams */
-        uint32_t jp = i, jm = i;
-        int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0;
-        float acc[4], ws = w[0];
-        for (c = 0; c < C; c++) acc[c] = w[0] * src[c][i];
-        for (k = 1; k <= R; k++) {
-            if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
-            if (jp != ERO__NONE) {
-                float *const *f = (tp & 1) ? alt : src;
-                for (c = 0; c < C; c++) acc[c] += w[k] * f[c][jp];
-                ws += w[k];
-            }
-            if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
-            if (jm != ERO__NONE) {
-                float *const *f = (tm & 1) ? alt : src;
-                for (c = 0; c < C; c++) acc[c] += w[k] * f[c][jm];
-                ws += w[k];
-            }
-        }
-        for (c = 0; c < C; c++) out[c] = acc[c] / ws;
-    }
-}
-
 /* the taps of a regular stretch of cnt texels from i0 along a stride (1 or W), all of them inside
    the grid: the same sums in the same order as ero__taps, eight texels at a time */
 static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, size_t st, const float *w, int R, float wfull)
@@ -891,12 +858,93 @@ static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, siz
     }
 }
 
+/* the texels ero__pass walks (valid, off a regular stretch), in its order: the count, or with
+   wk->tap set, their taps (ero__taps' walk, recorded once per call) */
+static size_t ero__record_walks(const ero__run *r, int axis, int R, ero__walks *wk)
+{
+    size_t W = (size_t)r->W, y, x, cnt = 0;
+    for (y = 0; y < (size_t)r->H; y++)
+        for (x = 0; x < W; x++) {
+            size_t i = y * W + x;
+            uint32_t jp = (uint32_t)i, jm = (uint32_t)i;
+            int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0, k;
+            if (!ero__valid(r, (uint32_t)i) || (r->reg[4 * i + 2 * (size_t)axis] >= R && r->reg[4 * i + 2 * (size_t)axis + 1] >= R))
+                continue;
+            if (wk->tap) {
+                uint32_t *t = wk->tap + 2 * (size_t)R * cnt;
+                uint8_t *o = wk->odd + 2 * (size_t)R * cnt;
+                for (k = 0; k < R; k++) {
+                    if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
+                    if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
+                    t[2 * k] = jp; o[2 * k] = (uint8_t)(tp & 1);
+                    t[2 * k + 1] = jm; o[2 * k + 1] = (uint8_t)(tm & 1);
+                }
+            }
+            cnt++;
+        }
+    return cnt;
+}
+
+/* the taps of walked texel number e (ero__taps' sums in its order) */
+static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *const *src, float *const *alt,
+                             int C, const float *w, int R, float *out)
+{
+    const uint32_t *t = wk->tap + 2 * (size_t)R * e;
+    const uint8_t *o = wk->odd + 2 * (size_t)R * e;
+    float acc[4], ws = w[0];
+    int c, k, s;
+    for (c = 0; c < C; c++) acc[c] = w[0] * src[c][i];
+    for (k = 0; k < R; k++)
+        for (s = 0; s < 2; s++) {
+            uint32_t j = t[2 * k + s];
+            float *const *f = o[2 * k + s] ? alt : src;
+            if (j == ERO__NONE) continue;
+            for (c = 0; c < C; c++) acc[c] += w[k + 1] * f[c][j];
+            ws += w[k + 1];
+        }
+    for (c = 0; c < C; c++) out[c] = acc[c] / ws;
+}
+
+/* every kernel's and axis's walks in one block */
+static ero_result ero__record_all_walks(ero__run *r)
+{
+    size_t total = 0, cnt[2][2];
+    int kern, axis;
+    unsigned char *b;
+    if (r->hf && r->ring) return ERO_OK;
+    for (kern = 0; kern < 2; kern++)
+        for (axis = 0; axis < 2; axis++) {
+            int R = kern ? r->gau_r : r->box_r;
+            r->walks[kern][axis].tap = NULL;
+            cnt[kern][axis] = R ? ero__record_walks(r, axis, R, &r->walks[kern][axis]) : 0;
+            total += cnt[kern][axis] * 2 * (size_t)R;
+        }
+    r->walk_block = ero__alloc(r->al, total * 5 + 1);
+    if (!r->walk_block) return ERO_ERR_OUT_OF_MEMORY;
+    b = (unsigned char *)r->walk_block;
+    for (kern = 0; kern < 2; kern++)
+        for (axis = 0; axis < 2; axis++) {
+            int R = kern ? r->gau_r : r->box_r;
+            ero__walks *wk = &r->walks[kern][axis];
+            wk->count = cnt[kern][axis];
+            wk->tap = (uint32_t *)b; b += wk->count * 2 * (size_t)R * sizeof(uint32_t);
+        }
+    for (kern = 0; kern < 2; kern++)
+        for (axis = 0; axis < 2; axis++) {
+            int R = kern ? r->gau_r : r->box_r;
+            ero__walks *wk = &r->walks[kern][axis];
+            wk->odd = b; b += wk->count * 2 * (size_t)R;
+            if (R) ero__record_walks(r, axis, R, wk);
+        }
+    return ERO_OK;
+}
+
 /* one filter pass along `axis` of every texel: src (even turns) / alt (odd turns) into out;
    regular stretches of each row go to ero__taps_run, the rest walk */
 static void ero__pass(const ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
-                      const float *w, int R, float wfull)
+                      const float *w, int R, float wfull, const ero__walks *wk)
 {
-    size_t W = (size_t)r->W, y, x, c;
+    size_t W = (size_t)r->W, y, x, c, next = 0;
     float v[4];
     for (y = 0; y < (size_t)r->H; y++) {
         size_t row = y * W;
@@ -912,7 +960,7 @@ static void ero__pass(const ero__run *r, int axis, float *const *src, float *con
             }
             if (!ero__valid(r, (uint32_t)i)) for (c = 0; c < (size_t)C; c++) out[c][i] = 0.0f;
             else {
-                ero__taps(r, (uint32_t)i, axis, src, alt, C, w, R, wfull, v);
+                ero__walked_taps(wk, next++, (uint32_t)i, src, alt, C, w, R, v);
                 for (c = 0; c < (size_t)C; c++) out[c][i] = v[c];
             }
             x++;
@@ -923,7 +971,8 @@ static void ero__pass(const ero__run *r, int axis, float *const *src, float *con
 /* the planes src (C of them) filtered along each texel's x then y, into dst (may be src):
    pass 1 along own x (and, with rotated seams, along own y), pass 2 along own y over the
    values that continue this texel's x */
-static void ero__filter(ero__run *r, float **src, float **dst, int C, const float *w, int R, float wfull)
+static void ero__filter(ero__run *r, float **src, float **dst, int C, const float *w, int R, float wfull,
+                        const ero__walks *wk)
 {
     size_t i;
     int c;
@@ -931,9 +980,9 @@ static void ero__filter(ero__run *r, float **src, float **dst, int C, const floa
         if (dst != src) for (c = 0; c < C; c++) memcpy(dst[c], src[c], r->n * sizeof(float));
         return;
     }
-    ero__pass(r, 0, src, src, r->ax, C, w, R, wfull);
-    if (r->has_rot) ero__pass(r, 1, src, src, r->ay, C, w, R, wfull);
-    ero__pass(r, 1, r->ax, r->ay, dst, C, w, R, wfull);
+    ero__pass(r, 0, src, src, r->ax, C, w, R, wfull, &wk[0]);
+    if (r->has_rot) ero__pass(r, 1, src, src, r->ay, C, w, R, wfull, &wk[1]);
+    ero__pass(r, 1, r->ax, r->ay, dst, C, w, R, wfull, &wk[1]);
     if (r->valid) /* invalid texels keep their values */
         for (i = 0; i < r->n; i++)
             if (!r->valid[i] && dst != src) for (c = 0; c < C; c++) dst[c][i] = src[c][i];
@@ -1479,10 +1528,10 @@ static void ero__time_step(ero__run *r, ero_report *rep)
     if (r->ring) { ero__ring_step(r, rep); return; }
     ero__points(r);                                                   /* 5. (of the last step) surface */
     ero__geometry(r);                                                 /*    normals, curvature */
-    ero__filter(r, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum);    /*    their averages */
+    ero__filter(r, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum, r->walks[0]); /* their averages */
     ero__erosion_heights(r);                                          /* 1-2. H into the erosion map */
     one[0] = r->hh;
-    ero__filter(r, one, one, 1, r->gau_w, r->gau_r, r->gau_sum);      /* 3. low-pass filter */
+    ero__filter(r, one, one, 1, r->gau_w, r->gau_r, r->gau_sum, r->walks[1]); /* 3. low-pass filter */
     memset(rep, 0, sizeof *rep);
     ero__apply(r, rep);                                               /* 4. add it to the map */
     ero__extend_invalid(r);
@@ -1533,6 +1582,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
     if ((e = ero__scratch(&r)) != ERO_OK) return e;
     if (!r.ring) ero__regular_runs(&r);
+    if ((e = ero__record_all_walks(&r)) != ERO_OK) { ero__free(r.al, r.block); return e; }
     ero__columns(&r);
     sum.corrected = r.corrected;
     for (s = 0; s < steps; s++) {
@@ -1548,6 +1598,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     }
     if (e == ERO_OK && r.o.progress) r.o.progress(r.o.user, 1.0f);
     if (total) *total = sum;
+    ero__free(r.al, r.walk_block);
     ero__free(r.al, r.block);
     return e;
 }
