@@ -107,10 +107,12 @@
    MEMORY
      ero_erode allocates once per call, freed before it returns: for a height field without a valid
      map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of
-     about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights, all else
+     about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else
      40 bytes per texel for a height field and 76 for a surface grid (positions, normals,
      curvature, two filter intermediates per axis, H, column coefficients, the regular-run
-     lengths). The maps are the caller's.
+     lengths) and 20 KiB, plus 10 (box_r + gau_r) bytes per axis for each texel within a kernel
+     radius of a seam or border (the walks' taps, found once per call) and up to 40 bytes for
+     each invalid texel next to valid ones. The maps are the caller's.
 
    ERRORS
      Functions return ero_result (ERO_OK = 0); ero_result_string() names it.
@@ -316,6 +318,7 @@ extern "C" {
 
 #define ERO__NONE 0xFFFFFFFFu
 #define ERO__MAXR 255
+#define ERO__SPAN 1024
 
 /* ================================================================================================
    the run: the domain, the resolved parameters, the scratch planes
@@ -356,8 +359,11 @@ typedef struct ero__run {
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
+    float *span;                           /* 5 ERO__SPAN: H's square roots and material rows */
     ero__walks walks[2][2];                /* per kernel (box, Gaussian) and axis */
     void *walk_block;
+    uint32_t *ext;                         /* invalid texels that take their neighbours' change: i, count, neighbours */
+    size_t ext_len;
 } ero__run;
 
 static size_t ero__ring_floats(const ero__run *r);
@@ -607,13 +613,14 @@ static ero_result ero__scratch(ero__run *r)
         r->hh = (float *)r->block;
         return r->block ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
     }
-    bytes = planes * n * sizeof(float) + 4 * n;
+    bytes = (planes * n + 5 * ERO__SPAN) * sizeof(float) + 4 * n;
     r->block = ero__alloc(r->al, bytes);
     if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
     f = (float *)r->block;
     for (k = 0; k < 4; k++) { r->g[k] = f; f += n; }
     for (k = 0; k < 4; k++) { r->ax[k] = f; f += n; }
     r->hh = f; f += n;
+    r->span = f; f += 5 * ERO__SPAN;
     if (!r->hf) {
         r->P = f; f += 3 * n;
         for (k = 0; k < 4; k++) { r->ay[k] = f; f += n; }
@@ -992,45 +999,8 @@ static void ero__filter(ero__run *r, float **src, float **dst, int C, const floa
    the model: H = W_f / R
    ================================================================================================ */
 
-static float ero__resistance(const ero_material *m, float c)
-{
-    float u = 1.0f - c;
-    return u * u * m->eps_max + 2.0f * c * u * m->eps_medium + c * c * m->eps_min;
-}
 
-/* H at one valid texel from its averaged normal n (not unit) and mean curvature kap */
-static inline float ero__texel_h(const ero__run *r, const ero_material *m, float n0, float n1, float n2, float kap)
-{
-    float n[3], len, e, c, res, wf, hx, t;
-    float lc = r->o.curvature_length;
-    n[0] = n0; n[1] = n1; n[2] = n2;
-    len = sqrtf(ero__dot(n, n));
-    e = len > 0.0f ? -ero__dot(n, r->wind) / len : 0.0f;
-    c = kap > 0.0f ? kap * lc : 0.0f; /* convex only: see MODEL */
-    if (c > 1.0f) c = 1.0f;
-    res = ero__resistance(m, c);
-    if (e > 0.0f) {
-        wf = ((r->o.flags & ERO_CONSTANT_WINDWARD) ? r->o.force : r->o.force * e) + m->ambient;
-        hx = wf / res;
-    } else {
-        hx = (r->o.flags & ERO_LEEWARD_LITERAL) ? m->ambient : m->ambient / res;
-    }
-    if (kap < 0.0f && r->o.deposit_ratio >= 0.0f) {
-        t = r->o.deposit_ramp > 0.0f ? -kap * lc / r->o.deposit_ramp : 1.0f;
-        if (t > 1.0f) t = 1.0f;
-        hx = hx * ((1.0f - t) - r->o.deposit_ratio * t);
-    }
-    return ero__finite(hx) ? hx : 0.0f; /* beyond float's range (eps_min ~ 0): no change */
-}
 
-static void ero__erosion_heights(ero__run *r)
-{
-    size_t i;
-    for (i = 0; i < r->n; i++) {
-        if (!ero__valid(r, (uint32_t)i)) { r->hh[i] = 0.0f; continue; }
-        r->hh[i] = ero__texel_h(r, &r->mats[r->mat ? r->mat[i] : 0], r->g[0][i], r->g[1][i], r->g[2][i], r->g[3][i]);
-    }
-}
 
 /* ================================================================================================
    applying the change, the report, the invalid texels
@@ -1091,20 +1061,21 @@ static void ero__apply(ero__run *r, ero_report *rep)
 }
 
 /* invalid texels within two image texels of valid ones take the mean change of the image
-   neighbours set before them (ring 1 from valid texels, ring 2 from ring 1); g[0] marks the ring */
-static void ero__extend_invalid(ero__run *r)
+   neighbours set before them (ring 1 from valid texels, ring 2 from ring 1): the rings and
+   each texel's neighbours (in the order they are summed) found once per call, into ext (NULL:
+   counted); g[0] marks the ring while they are found */
+static size_t ero__find_extension(ero__run *r, uint32_t *ext)
 {
     long W = r->W, H = r->H, x, y, dx, dy;
     int ring;
     float *mark = r->g[0];
-    size_t i;
-    if (!r->valid || (r->o.flags & ERO_KEEP_INVALID)) return;
+    size_t i, len = 0;
     for (i = 0; i < r->n; i++) mark[i] = r->valid[i] ? 0.0f : -1.0f;
     for (ring = 1; ring <= 2; ring++) {
         for (y = 0; y < H; y++)
             for (x = 0; x < W; x++) {
-                double s = 0.0;
-                int cnt = 0;
+                uint32_t nb[8];
+                int cnt = 0, k;
                 i = (size_t)(y * W + x);
                 if (mark[i] >= 0.0f) continue;
                 for (dy = -1; dy <= 1; dy++)
@@ -1113,18 +1084,49 @@ static void ero__extend_invalid(ero__run *r)
                         size_t j;
                         if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
                         j = (size_t)(yy * W + xx);
-                        if (mark[j] >= 0.0f && mark[j] < (float)ring) { s += r->hh[j]; cnt++; }
+                        if (mark[j] >= 0.0f && mark[j] < (float)ring) nb[cnt++] = (uint32_t)j;
                     }
-                if (cnt) { r->hh[i] = (float)(s / cnt); mark[i] = -2.0f - (float)ring; }
+                if (!cnt) continue;
+                mark[i] = -2.0f - (float)ring;
+                if (ext) {
+                    ext[len] = (uint32_t)i;
+                    ext[len + 1] = (uint32_t)cnt;
+                    for (k = 0; k < cnt; k++) ext[len + 2 + (size_t)k] = nb[k];
+                }
+                len += 2 + (size_t)cnt;
             }
         for (i = 0; i < r->n; i++) /* this ring becomes readable by the next */
             if (mark[i] <= -3.0f) mark[i] = (float)ring;
     }
-    for (i = 0; i < r->n; i++)
-        if (mark[i] >= 1.0f) {
-            float d = ero__bounded(r, r->disp[i], r->disp[i] + r->hh[i]);
-            if (ero__finite(d)) r->disp[i] = d;
-        }
+    return len;
+}
+
+static ero_result ero__extension(ero__run *r)
+{
+    if (!r->valid || (r->o.flags & ERO_KEEP_INVALID)) return ERO_OK;
+    r->ext_len = ero__find_extension(r, NULL);
+    r->ext = (uint32_t *)ero__alloc(r->al, (r->ext_len + 1) * sizeof(uint32_t));
+    if (!r->ext) return ERO_ERR_OUT_OF_MEMORY;
+    ero__find_extension(r, r->ext);
+    return ERO_OK;
+}
+
+/* the rings' changes (ring 1 then ring 2: each mean reads the ones before it) and their bound */
+static void ero__extend_invalid(ero__run *r)
+{
+    size_t e, k;
+    if (!r->ext) return;
+    for (e = 0; e < r->ext_len; e += 2 + r->ext[e + 1]) {
+        double s = 0.0;
+        uint32_t cnt = r->ext[e + 1];
+        for (k = 0; k < cnt; k++) s += r->hh[r->ext[e + 2 + k]];
+        r->hh[r->ext[e]] = (float)(s / cnt);
+    }
+    for (e = 0; e < r->ext_len; e += 2 + r->ext[e + 1]) {
+        uint32_t i = r->ext[e];
+        float d = ero__bounded(r, r->disp[i], r->disp[i] + r->hh[i]);
+        if (ero__finite(d)) r->disp[i] = d;
+    }
 }
 
 /* ================================================================================================
@@ -1368,8 +1370,9 @@ static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, 
     }
 }
 
-/* H of a row (ero__texel_h's sums, the branches as selects, the square roots and the materials'
-   lookup in a loop apart) */
+/* H of a row (MODEL: exposure e = -n_a . w / |n_a|, c the normalised convex curvature, R the
+   Bezier, W_f / R windward, ambient / R leeward, the deposition ramp where kap < 0; the branches
+   as selects, the square roots and the materials' lookup in loops apart) */
 typedef struct ero__hparams {
     float w0, w1, w2, force, lc, ramp, ratio;
     int constant, literal, deposit;
@@ -1397,24 +1400,58 @@ static void ero__h_row(const ero__hparams *p, long W, const float *ERO__RESTRICT
     }
 }
 
-static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
+/* H of cnt texels from their averaged normals a0..a2 and curvature kap: len and mrow (four
+   rows of the materials, filled by the caller when there is one material) are scratch */
+static void ero__h_span(const ero__run *r, const float *a0, const float *a1, const float *a2, const float *kap,
+                        const uint8_t *mat, long cnt, float *len, float *const *mrow, float *out)
 {
     ero__hparams p;
-    long W = r->W, x;
-    float *a0 = q->avg[0], *a1 = q->avg[1], *a2 = q->avg[2];
+    long x;
     p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = r->wind[2];
     p.force = r->o.force; p.lc = r->o.curvature_length; p.ramp = r->o.deposit_ramp; p.ratio = r->o.deposit_ratio;
     p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
     p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
     p.deposit = r->o.deposit_ratio >= 0.0f;
-    for (x = 0; x < W; x++) q->len[x] = (a0[x] * a0[x] + a1[x] * a1[x]) + a2[x] * a2[x];
-    for (x = 0; x < W; x++) q->len[x] = sqrtf(q->len[x]);
-    if (r->mat_count > 1) /* one material: the rows were filled once (ero__ring_step) */
-        for (x = 0; x < W; x++) {
+    for (x = 0; x < cnt; x++) len[x] = (a0[x] * a0[x] + a1[x] * a1[x]) + a2[x] * a2[x];
+    for (x = 0; x < cnt; x++) len[x] = sqrtf(len[x]);
+    if (r->mat_count > 1)
+        for (x = 0; x < cnt; x++) {
             const ero_material *m = &r->mats[mat ? mat[x] : 0];
-            q->mrow[0][x] = m->eps_min; q->mrow[1][x] = m->eps_max; q->mrow[2][x] = m->eps_medium; q->mrow[3][x] = m->ambient;
+            mrow[0][x] = m->eps_min; mrow[1][x] = m->eps_max; mrow[2][x] = m->eps_medium; mrow[3][x] = m->ambient;
         }
-    ero__h_row(&p, W, a0, a1, a2, q->avg[3], q->len, q->mrow[0], q->mrow[1], q->mrow[2], q->mrow[3], q->hrow);
+    ero__h_row(&p, cnt, a0, a1, a2, kap, len, mrow[0], mrow[1], mrow[2], mrow[3], out);
+}
+
+/* fills the material rows with the one material */
+static void ero__one_material(const ero__run *r, float *const *mrow, long cnt)
+{
+    long x;
+    for (x = 0; x < cnt; x++) {
+        mrow[0][x] = r->mats[0].eps_min; mrow[1][x] = r->mats[0].eps_max;
+        mrow[2][x] = r->mats[0].eps_medium; mrow[3][x] = r->mats[0].ambient;
+    }
+}
+
+static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
+{
+    ero__h_span(r, q->avg[0], q->avg[1], q->avg[2], q->avg[3], mat, r->W, q->len, q->mrow, q->hrow);
+}
+
+/* H of every texel of the planes g (0 where invalid), in spans of ERO__SPAN */
+static void ero__erosion_heights(ero__run *r)
+{
+    size_t i0, k;
+    float *mrow[4];
+    for (k = 0; k < 4; k++) mrow[k] = r->span + (k + 1) * ERO__SPAN;
+    if (r->mat_count == 1) ero__one_material(r, mrow, ERO__SPAN);
+    for (i0 = 0; i0 < r->n; i0 += ERO__SPAN) {
+        long cnt = (long)(r->n - i0 < ERO__SPAN ? r->n - i0 : ERO__SPAN);
+        ero__h_span(r, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0, r->mat ? r->mat + i0 : NULL, cnt,
+                    r->span, mrow, r->hh + i0);
+        if (r->valid)
+            for (k = 0; k < (size_t)cnt; k++)
+                if (!r->valid[i0 + k]) r->hh[i0 + k] = 0.0f;
+    }
 }
 
 /* row j's averaged geometry, its H, H filtered along x into its ring slot */
@@ -1503,10 +1540,7 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
     ero__ring_weights(r, q.ws_box, r->box_w, r->box_r);
     ero__ring_weights(r, q.ws_gau, r->gau_w, r->gau_r);
     memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
-    for (v = 0; v < r->W; v++) {
-        q.mrow[0][v] = r->mats[0].eps_min; q.mrow[1][v] = r->mats[0].eps_max;
-        q.mrow[2][v] = r->mats[0].eps_medium; q.mrow[3][v] = r->mats[0].ambient;
-    }
+    if (r->mat_count == 1) ero__one_material(r, q.mrow, r->W);
     q.applied = 0;
     memset(rep, 0, sizeof *rep);
     for (v = r->wrap ? -lag : 0; v < H + lag; v++) {
@@ -1582,7 +1616,11 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
     if ((e = ero__scratch(&r)) != ERO_OK) return e;
     if (!r.ring) ero__regular_runs(&r);
-    if ((e = ero__record_all_walks(&r)) != ERO_OK) { ero__free(r.al, r.block); return e; }
+    if ((e = ero__record_all_walks(&r)) != ERO_OK || (e = ero__extension(&r)) != ERO_OK) {
+        ero__free(r.al, r.walk_block);
+        ero__free(r.al, r.block);
+        return e;
+    }
     ero__columns(&r);
     sum.corrected = r.corrected;
     for (s = 0; s < steps; s++) {
@@ -1598,6 +1636,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     }
     if (e == ERO_OK && r.o.progress) r.o.progress(r.o.user, 1.0f);
     if (total) *total = sum;
+    ero__free(r.al, r.ext);
     ero__free(r.al, r.walk_block);
     ero__free(r.al, r.block);
     return e;
