@@ -97,6 +97,10 @@ demo: $(EXAMPLES) $(TOOLS)
 gallery: demo $(B)/thumbnail
 	@sh docs/gallery.sh $(B) $(OUT)
 
+# generated meshes for tests/dispmesh_meshes.sh
+$(B)/gen_shapes: tests/gen_shapes.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
+
 $(B)/thumbnail: docs/thumbnail.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) $< -o $@ -lm
 

@@ -53,9 +53,9 @@ for m in "$@"; do
     fbmax=0.2; case "$name" in brick|sphere.off) fbmax=0 ;; esac
     v=""
     num "$faces <= 1.02 * $1" || v="$v faces"
-    num "$r1 <= 0.1" || v="$v rms"
-    num "$r2 <= 0.25" || v="$v max"
-    num "$r3 <= 2.2" || v="$v base_only"
+    num "$rms <= 0.1 * $bo" || v="$v rms"          # the unrounded values (the columns are rounded)
+    num "$mx <= 0.25 * $bm" || v="$v max"
+    num "$bo <= 2.2 * $un" || v="$v base_only"
     num "$fb <= $fbmax" || v="$v fallback"
     [ -z "$v" ] && { v=ok; good=$((good + 1)); } || v="misses:$v"
     echo "| $name | $1 | $2 | $faces | $fb | $fr | $r1 | $r2 | $r3 | $secs | $v |"

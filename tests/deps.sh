@@ -7,7 +7,7 @@
 #   tests/deps.sh bench    the above plus the benchmark peers
 #   tests/deps.sh --list test|bench   print the package names only
 set -u
-test_pkgs="locales python3 pngcheck g++ clang libclang-rt-dev libopenmesh-dev libembree-dev libmeshoptimizer-dev glmark2-data assimp-testmodels assimp-utils libpng-dev"
+test_pkgs="locales python3 pngcheck g++ clang libclang-rt-dev libopenmesh-dev libembree-dev libmeshoptimizer-dev glmark2-data assimp-testmodels assimp-utils libpng-dev libcgal-demo"
 bench_pkgs="$test_pkgs libosmesa6-dev libsuitesparse-dev libopenblas0-serial libeigen3-dev libcgal-dev libtinyobjloader-dev libassimp-dev"
 
 list=0
