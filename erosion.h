@@ -29,7 +29,9 @@
                         the spacing s; neighbours are the grid's, optionally wrapping around.
      The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i;
      (+-s, 0, h_j - h_i) for a height field, exact under circular shifts); every filter, normal and
-     curvature then runs through the same walk over neighbours, which never sees a seam.
+     curvature then runs through the same walk over neighbours, which never sees a seam. A height
+     field without a valid map does the same sums in the same order in one pass over a ring of
+     rows (same bits, a fraction of the memory traffic).
 
    MODEL (paper section 4.2.2; its W_f and R are on pages the text lacks: the forms below are chosen)
      Lengths are world units. L = sqrt(sum of the valid texels' area) is the grid's scale; the
