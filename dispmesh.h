@@ -171,7 +171,10 @@
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's
-     own vertex normals (without it, normals come from the one-ring).
+     own vertex normals (without it, normals come from the one-ring). The overlap is checked on
+     the new one-ring only: a later collapse beside a triangle turns its corners' normals without
+     checking it again, so a few base triangles can fail it at the end (their texels then miss:
+     dm_dispmap.miss_count).
 
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
      WHAT. A base mesh laid out in one width x height map, the displacement and the original's
