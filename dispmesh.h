@@ -164,7 +164,7 @@
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
-     MEMORY. About 72 bytes per original vertex, a copy of the original and its BVH; while
+     MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
      dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 40 bytes per
      original vertex near the widest candidate.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
@@ -7702,7 +7702,7 @@ typedef struct dm__sh_internal {
                             by dm_shell_collapsed */
     size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls (this run) */
     size_t last_level;   /* the level of the last candidate or collapse seen */
-    struct dm__sh_pt *pts; /* the original's vertices near one candidate */
+    dm__sh_pt *pts;      /* the original's vertices near one candidate */
     size_t pts_cap;
     float *tri;          /* the candidate's old and new triangles: 9 coordinates and a bounding
                             sphere (centre, radius) each */
@@ -7710,8 +7710,8 @@ typedef struct dm__sh_internal {
     /* a uniform grid of the original's (referenced) vertices */
     double lo[3], cell;
     int dim[3];
-    uint32_t *cell_first, *cell_vert;
-    float *cell_pos;     /* the positions of cell_vert, in its order (the gather reads them in a row) */
+    uint32_t *cell_first; /* cell i's vertices are cell_pos[3 cell_first[i] .. 3 cell_first[i + 1]) */
+    float *cell_pos;     /* the vertices' positions in cell order (the gather reads them in a row) */
     uint32_t relaxed_keep; /* keep of the last candidate allowed only by the relaxed check */
     size_t relaxed_level;
     /* the enclosure's answer for the last candidate (asked for where keep goes, then in full) */
@@ -7738,7 +7738,6 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->vsum);
         a.free(a.user, in->tri);
         a.free(a.user, in->cell_first);
-        a.free(a.user, in->cell_vert);
         a.free(a.user, in->cell_pos);
         a.free(a.user, in);
     }
@@ -7886,10 +7885,9 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     }
     if (ext > 0.0 && in->cell * 1024.0 < ext) in->cell = ext / 1023.0;
     in->cell_first = (uint32_t *)dm__alloc_array(&r->a, ncell + 1, sizeof(uint32_t), &r->sc.overflow);
-    in->cell_vert = (uint32_t *)dm__alloc_array(&r->a, nref ? nref : 1, sizeof(uint32_t), &r->sc.overflow);
     in->cell_pos = (float *)dm__alloc_array(&r->a, nref ? nref : 1, 3 * sizeof(float), &r->sc.overflow);
     cnt = (uint32_t *)dm__take(&r->sc, ncell + 1, sizeof(uint32_t));
-    if (!in->cell_first || !in->cell_vert || !in->cell_pos || !cnt) return dm__scratch_fail(&r->sc);
+    if (!in->cell_first || !in->cell_pos || !cnt) return dm__scratch_fail(&r->sc);
     memset(cnt, 0, (ncell + 1) * sizeof(uint32_t));
     for (v = 0; v < r->nv; v++)
         if (stopped[v]) cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++;
@@ -7897,8 +7895,7 @@ static dm_result dm__sh_vertex_grid(dm__sh_run *r)
     for (i = 0; i < ncell; i++) in->cell_first[i + 1] = in->cell_first[i] + cnt[i];
     for (i = 0; i < ncell; i++) cnt[i] = in->cell_first[i];
     for (v = 0; v < r->nv; v++)
-        if (stopped[v]) in->cell_vert[cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++] = (uint32_t)v;
-    for (i = 0; i < nref; i++) memcpy(in->cell_pos + 3 * i, r->pos + 3 * (size_t)in->cell_vert[i], 3 * sizeof(float));
+        if (stopped[v]) memcpy(in->cell_pos + 3 * (size_t)cnt[dm__sh_cell_of(in, r->pos + 3 * v)]++, r->pos + 3 * v, 3 * sizeof(float));
     return DM_OK;
 }
 
