@@ -7479,16 +7479,41 @@ static double dm__pz_unit(uint64_t i, uint64_t stream)
     return (double)(dm__pz_hash(i * 8 + stream) >> 11) * (1.0 / 9007199254740992.0);
 }
 
-/* one side: samples on mesh P measured to the BVH of mesh Q; sums squared distances, max.
-   0, or 1 when cancelled. */
+/* An upper bound on the distance from x to Q, from the closest point c of Q found for an earlier
+   point: |x - c|, widened by c's float rounding (relative 2^-24 a coordinate) and the bound's own. */
+static double dm__pz_bound(const float x[3], const dm_closest *c)
+{
+    double d2 = 0.0, cmax = 0.0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double e = (double)x[k] - (double)c->point[k], a = fabs((double)c->point[k]);
+        d2 += e * e;
+        if (a > cmax) cmax = a;
+    }
+    return sqrt(d2) * (1.0 + 1e-6) + 1e-6 * cmax;
+}
+
+/* the closest point of Q to x; prev (when has_prev) bounds the search (the same answer, fewer
+   nodes: consecutive points lie close together) */
+static int dm__pz_closest(const dm_bvh *q, const float x[3], const dm_closest *prev, int has_prev, dm_closest *out)
+{
+    if (has_prev && dm_bvh_closest_point(q, x, (float)dm__pz_bound(x, prev), out)) return 1;
+    return dm_bvh_closest_point(q, x, INFINITY, out);
+}
+
+/* one side: samples on mesh P measured to the BVH of mesh Q; sums squared distances, max (over
+   the samples and every vertex of P; seen: nv bits of scratch). 0, or 1 when cancelled. */
 static int dm__pz_sample_side(const float *pos, size_t nv, const uint32_t *idx, size_t nt, const double *cum,
-                              const dm_bvh *q, size_t samples, uint64_t stream, double *sum2, double *mx,
-                              dm__pz_count *cnt)
+                              const dm_bvh *q, size_t samples, uint64_t stream, unsigned char *seen, double *sum2,
+                              double *mx, dm__pz_count *cnt)
 {
     size_t i;
     double total = cum[nt];
+    dm_closest prev;
+    int has_prev = 0;
     *sum2 = 0.0;
     *mx = 0.0;
+    memset(&prev, 0, sizeof prev);
     for (i = 0; i < samples && total > 0.0; i++) {
         double r = ((double)i + dm__pz_unit(i, stream)) / (double)samples * total, a = dm__pz_unit(i, stream + 1),
                b = dm__pz_unit(i, stream + 2), sa, p0[3], p1[3], p2[3];
@@ -7506,18 +7531,32 @@ static int dm__pz_sample_side(const float *pos, size_t nv, const uint32_t *idx, 
         dm__load3(pos, idx[3 * t + 1], p1);
         dm__load3(pos, idx[3 * t + 2], p2);
         for (k = 0; k < 3; k++) pt[k] = (float)((1.0 - sa) * p0[k] + sa * (1.0 - b) * p1[k] + sa * b * p2[k]);
-        if (dm_bvh_closest_point(q, pt, INFINITY, &cl)) {
+        if (dm__pz_closest(q, pt, &prev, has_prev, &cl)) {
             *sum2 += (double)cl.distance * cl.distance;
             if (cl.distance > *mx) *mx = cl.distance;
+            prev = cl;
+            has_prev = 1;
         }
         if (dm__pz_tick(cnt)) return 1;
     }
+    /* every vertex once; one whose bound does not pass the max cannot raise it */
+    memset(seen, 0, (nv + 7) / 8);
     for (i = 0; i < 3 * nt; i++) {
         dm_closest cl;
-        if (dm_bvh_closest_point(q, pos + 3 * (size_t)idx[i], INFINITY, &cl) && cl.distance > *mx) *mx = cl.distance;
+        uint32_t v = idx[i];
+        const float *x = pos + 3 * (size_t)v;
+        if (!(seen[v >> 3] & (1u << (v & 7)))) {
+            seen[v >> 3] = (unsigned char)(seen[v >> 3] | (1u << (v & 7)));
+            if (!has_prev || dm__pz_bound(x, &prev) > *mx) {
+                if (dm__pz_closest(q, x, &prev, has_prev, &cl)) {
+                    if (cl.distance > *mx) *mx = cl.distance;
+                    prev = cl;
+                    has_prev = 1;
+                }
+            }
+        }
         if (dm__pz_tick(cnt)) return 1;
     }
-    (void)nv;
     return 0;
 }
 
@@ -7542,6 +7581,7 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     dm_bvh *ba = NULL, *bb = NULL;
     dm_bvh_options bo;
     dm_result res;
+    unsigned char *seen;
     double *ca, *cb, lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, s2a, s2b, ma, mb, d;
     size_t t;
     int k;
@@ -7563,7 +7603,8 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     sc.a = dm__resolve_allocator(opt.allocator);
     ca = (double *)dm__take(&sc, ant + 1, sizeof(double));
     cb = (double *)dm__take(&sc, bnt + 1, sizeof(double));
-    if (!ca || !cb) { res = dm__scratch_fail(&sc); goto done; }
+    seen = (unsigned char *)dm__take(&sc, ((anv > bnv ? anv : bnv) + 7) / 8, 1);
+    if (!ca || !cb || !seen) { res = dm__scratch_fail(&sc); goto done; }
     ca[0] = cb[0] = 0.0;
     for (t = 0; t < ant; t++) {
         double n[3];
@@ -7587,8 +7628,8 @@ DMDEF dm_result dm_surface_distance(const float *ap, size_t anv, const uint32_t 
     res = dm_bvh_build(ap, anv, ai, ant, &bo, &ba);
     if (res == DM_OK) res = dm_bvh_build(bp, bnv, bi, bnt, &bo, &bb);
     if (res != DM_OK) goto done;
-    if (dm__pz_sample_side(ap, anv, ai, ant, ca, bb, samples, 1, &s2a, &ma, &cnt) ||
-        dm__pz_sample_side(bp, bnv, bi, bnt, cb, ba, samples, 5, &s2b, &mb, &cnt) ||
+    if (dm__pz_sample_side(ap, anv, ai, ant, ca, bb, samples, 1, seen, &s2a, &ma, &cnt) ||
+        dm__pz_sample_side(bp, bnv, bi, bnt, cb, ba, samples, 5, seen, &s2b, &mb, &cnt) ||
         (opt.progress && opt.progress(opt.progress_user, 1.0f) != 0)) {
         res = DM_CANCELLED;
         goto done;

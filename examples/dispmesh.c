@@ -1,7 +1,7 @@
 /* dispmesh - paper 000's representation end to end: a base mesh plus one displacement map.
 
    usage: dispmesh IN|--brick [--faces N] [--res R] [-o PREFIX] [--no-views] [--size S] [--both-ways] [--strict]
-                  [--min-quality Q]
+                  [--min-quality Q] [--samples N]
      IN          any mesh file meshio.h reads (OBJ, OFF, PLY, STL), a closed manifold works best
      --brick     instead of IN: a generated 2 x 1 x 1 brick with V grooves pressed inward (paper
                  Fig 5.1.1), 496 triangles, closed and oriented outward; --faces 12 gives its box
@@ -25,11 +25,13 @@
                  2 area / longest edge^2; default 0.05: without it, the constraint's vetoes leave
                  knots of slivers that the parameterization stretches; the unconstrained
                  reference base never has one)
+     --samples N the surface distances' area-uniform samples per side (default 200000; fewer
+                 run faster, the RMS figures to about 1/sqrt(N), the max from fewer points)
    The pipeline (dispmesh.h): meshio's mio_weld when the triangles do not share their vertices (an STL file),
    dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
-   mesh) and dm_surface_distance (200000 samples a side) against the original.
+   mesh) and dm_surface_distance (--samples points a side) against the original.
    Writes
      PREFIX_base.obj     the base mesh with its map coordinates (v, vt, f v/vt; vt v = 0 is the
                          map's row 0, which is the bottom row of the PFM and of the PNG)
@@ -633,7 +635,7 @@ static void usage(FILE *to)
 {
     fprintf(to,
             "usage: dispmesh IN|--brick [-o PREFIX] [--faces N] [--res R] [--size S] [--no-views] [--both-ways]\n"
-            "                [--strict] [--min-quality Q]\n"
+            "                [--strict] [--min-quality Q] [--samples N]\n"
             "Paper 000 end to end: a base mesh plus one displacement map, baked from IN and rebuilt from them.\n"
             "  IN                 a mesh file meshio.h reads (OBJ, OFF, PLY, STL; an STL soup is welded first);\n"
             "                     a closed manifold works best\n"
@@ -651,6 +653,7 @@ static void usage(FILE *to)
             "                     and bake those triangles both ways; --fallback names that default)\n"
             "  --min-quality Q    the constrained simplifier's sliver guard, 2 area / longest edge^2, in [-1, 0.5]\n"
             "                     (default 0.05; 0 = none)\n"
+            "  --samples N        surface-distance samples per side, 1000..100000000 (default 200000)\n"
             "  -h, --help         show this help and exit\n"
             "  --version          show the version and exit\n"
             "Prints one RESULT dispmesh line on stdout; progress on stderr.\n"
@@ -661,7 +664,7 @@ static void usage(FILE *to)
 
 typedef struct options {
     const char *in, *prefix;
-    long faces, res, size;
+    long faces, res, size, samples;
     double min_quality;
     int brick, views, inward, fallback;
 } options;
@@ -672,13 +675,13 @@ static int parse_args(int argc, char **argv, options *o)
     int i;
     memset(o, 0, sizeof *o);
     o->prefix = "out/dispmesh";
-    o->faces = 500; o->res = 512; o->size = 400;
+    o->faces = 500; o->res = 512; o->size = 400; o->samples = 200000;
     o->min_quality = 0.05; /* the constrained run's sliver guard (the library's default is none) */
     o->views = o->inward = o->fallback = 1;
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int takes = !strcmp(a, "--faces") || !strcmp(a, "--res") || !strcmp(a, "--size") || !strcmp(a, "--min-quality") ||
-                    !strcmp(a, "-o") || !strcmp(a, "--output");
+                    !strcmp(a, "--samples") || !strcmp(a, "-o") || !strcmp(a, "--output");
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); return 0; }
         if (!strcmp(a, "--version")) { printf("%s\n", DISPMESH_VERSION); return 0; }
         if (takes && !v) return cli_usage_error("dispmesh", "%s needs a value", a);
@@ -694,6 +697,9 @@ static int parse_args(int argc, char **argv, options *o)
             if (!cli_parse_long(v, 8, 16384, &o->res)) return cli_usage_error("dispmesh", "--res '%s': not an integer in 8..16384", v);
         } else if (!strcmp(a, "--size")) {
             if (!cli_parse_long(v, 16, 4096, &o->size)) return cli_usage_error("dispmesh", "--size '%s': not an integer in 16..4096", v);
+        } else if (!strcmp(a, "--samples")) {
+            if (!cli_parse_long(v, 1000, 100000000L, &o->samples))
+                return cli_usage_error("dispmesh", "--samples '%s': not an integer in 1000..100000000", v);
         } else if (!strcmp(a, "--min-quality")) {
             if (!cli_parse_double(v, -1.0, 0.5, &o->min_quality))
                 return cli_usage_error("dispmesh", "--min-quality '%s': not a number in [-1, 0.5]", v);
@@ -946,6 +952,7 @@ int main(int argc, char **argv)
         quarter q;
         dm_distance_options dopt;
         memset(&dopt, 0, sizeof dopt);
+        dopt.samples_per_side = (size_t)O.samples;
         dopt.progress = quarter_progress;
         dopt.progress_user = &q;
         q.st = &st;
