@@ -1161,7 +1161,9 @@ typedef struct ero__rows {
     float *geo[4], *avg[4], *hrow, *chg, *padded;
     float *len;           /* a row's square roots */
     float *mrow[4];       /* a row's materials: eps_min, eps_max, eps_medium, ambient */
-    float *ws_box, *ws_gau; /* per column: the x pass's weight sum */
+    float *ws_box, *ws_gau; /* per column: the full weight sum over the x pass's (1 inside) */
+    float *zero;          /* a row of zeros: the taps beyond an unwrapped border */
+    float wb[ERO__MAXR + 1], wg[ERO__MAXR + 1]; /* the box's and Gaussian's weights over their sums */
     float *head;          /* the first rows before the step (a wrapped field reads them last) */
     float *orig;          /* the last four applied rows before the step */
     long head_rows, applied;
@@ -1176,7 +1178,7 @@ static int ero__ring_fits(const ero__run *r)
 static size_t ero__ring_floats(const ero__run *r)
 {
     size_t Wp = ((size_t)r->W + 7) & ~(size_t)7, rows;
-    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 5 + 1;
+    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 5 + 2;
     return rows * Wp + 2 * ERO__MAXR + 16 + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
 }
 
@@ -1196,14 +1198,16 @@ static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
     for (k = 0; k < 4; k++) { q->mrow[k] = f; f += Wp; }
     q->ws_box = f; f += Wp;
     q->ws_gau = f; f += Wp;
+    q->zero = f; f += Wp;
     q->padded = f; f += Wp + 2 * ERO__MAXR + 16;
     q->head_rows = r->box_r + r->gau_r + 2;
     q->head = f; f += (size_t)q->head_rows * (size_t)r->W;
     q->orig = f;
 }
 
-/* the x pass's weight sum at each column: all taps with wrap, those inside the row without */
-static void ero__ring_weights(const ero__run *r, float *ws, const float *w, int R)
+/* per column, the full weight sum over the x pass's: all taps with wrap (1), those inside the row
+   without; and the weights over the full sum (the taps' sums need no division) */
+static void ero__ring_weights(const ero__run *r, float *ws, float *wn, const float *w, int R, float full)
 {
     long W = r->W, x;
     int k;
@@ -1213,63 +1217,85 @@ static void ero__ring_weights(const ero__run *r, float *ws, const float *w, int 
             if (r->wrap || x + k < W) s += w[k];
             if (r->wrap || x - k >= 0) s += w[k];
         }
-        ws[x] = s;
+        ws[x] = r->wrap ? 1.0f : full / s;
     }
+    for (k = 0; k <= R; k++) wn[k] = w[k] / full;
 }
 
-/* out[x] = the taps' sum about p[x] (p readable R before and after), in the walk's order */
-static void ero__taps_row(const float *ERO__RESTRICT p, float *ERO__RESTRICT out, long n, const float *w, int R)
+/* out[x] = w[0] c[x] + sum over k of w[k] (up[k - 1][x] + dn[k - 1][x]), two taps a loop */
+static void ero__taps(const float *const *up, const float *const *dn, const float *ERO__RESTRICT c,
+                      float *ERO__RESTRICT out, long n, const float *w, int R)
 {
     long x;
-    int k;
+    int k = 1;
     float w0 = w[0];
-    for (x = 0; x < n; x++) out[x] = w0 * p[x];
-    for (k = 1; k <= R; k++) {
-        const float *ERO__RESTRICT up = p + k, *ERO__RESTRICT dn = p - k;
-        float wk = w[k];
-        for (x = 0; x < n; x++) {
-            float a = out[x] + wk * up[x];
-            out[x] = a + wk * dn[x];
-        }
+    if (R >= 2) {
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0], *ERO__RESTRICT u2 = up[1],
+                                   *ERO__RESTRICT d2 = dn[1];
+        float w1 = w[1], w2 = w[2];
+        for (x = 0; x < n; x++) out[x] = (w0 * c[x] + w1 * (u1[x] + d1[x])) + w2 * (u2[x] + d2[x]);
+        k = 3;
+    } else if (R == 1) {
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0];
+        float w1 = w[1];
+        for (x = 0; x < n; x++) out[x] = w0 * c[x] + w1 * (u1[x] + d1[x]);
+        k = 2;
+    } else for (x = 0; x < n; x++) out[x] = w0 * c[x];
+    for (; k + 1 <= R; k += 2) {
+        const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1], *ERO__RESTRICT ub = up[k],
+                                   *ERO__RESTRICT db = dn[k];
+        float wa = w[k], wb = w[k + 1];
+        for (x = 0; x < n; x++) out[x] += wa * (ua[x] + da[x]) + wb * (ub[x] + db[x]);
+    }
+    if (k == R) {
+        const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1];
+        float wa = w[k];
+        for (x = 0; x < n; x++) out[x] += wa * (ua[x] + da[x]);
     }
 }
 
-/* one row filtered along x: in (W values) padded by wrap or zeros into q->padded, the taps eight
-   columns at a time, divided by ws */
+/* one row filtered along x: in (W values) padded by wrap or zeros into q->padded, the taps with
+   the normalised weights wn, the border columns of an unwrapped row renormalised by ws */
 static void ero__ring_xpass(const ero__run *r, ero__rows *q, const float *in, float *ERO__RESTRICT out,
-                            const float *w, int R, const float *ws)
+                            const float *wn, int R, const float *ws)
 {
     long W = r->W, x;
     size_t Wp = q->Wp;
+    const float *up[ERO__MAXR], *dn[ERO__MAXR];
     float *p = q->padded + q->pad;
+    int k;
     for (x = -(long)q->pad; x < 0; x++) p[x] = r->wrap ? in[x + W] : 0.0f;
     memcpy(p, in, (size_t)W * sizeof(float));
     for (x = W; x < (long)Wp + q->pad; x++) p[x] = r->wrap && x < 2 * W ? in[x - W] : 0.0f;
-    ero__taps_row(p, out, (long)Wp, w, R);
-    for (x = 0; x < W; x++) out[x] = out[x] / ws[x];
+    up[0] = dn[0] = p; /* unread when R = 0 */
+    for (k = 1; k <= R; k++) { up[k - 1] = p + k; dn[k - 1] = p - k; }
+    ero__taps(up, dn, p, out, (long)Wp, wn, R);
+    if (!r->wrap)
+        for (x = 0; x < W; x++) {
+            if (x == R && W - R > R) x = W - R;
+            out[x] *= ws[x];
+        }
 }
 
-/* the y pass: rows[R + k] is the row at offset k (NULL: beyond an unwrapped border) */
-static void ero__ring_ypass(size_t Wp, float *const *rows, float *ERO__RESTRICT out, const float *w, int R)
+/* the y pass: rows[R + k] is the row at offset k (NULL beyond an unwrapped border: zeros, and
+   the sum renormalised by the weights of the rows there are) */
+static void ero__ring_ypass(const ero__rows *q, float *const *rows, float *ERO__RESTRICT out, const float *wn, int R)
 {
-    size_t b;
-    int k, j;
-    float ws = w[0];
+    const float *up[ERO__MAXR], *dn[ERO__MAXR];
+    size_t x, Wp = q->Wp;
+    int k, border = 0;
+    float ws = wn[0];
+    up[0] = dn[0] = rows[R]; /* unread when R = 0 */
     for (k = 1; k <= R; k++) {
-        if (rows[R + k]) ws += w[k];
-        if (rows[R - k]) ws += w[k];
+        up[k - 1] = rows[R + k] ? rows[R + k] : q->zero;
+        dn[k - 1] = rows[R - k] ? rows[R - k] : q->zero;
+        if (rows[R + k]) ws += wn[k]; else border = 1;
+        if (rows[R - k]) ws += wn[k]; else border = 1;
     }
-    for (b = 0; b < Wp; b += 8) {
-        const float *c = rows[R] + b;
-        float acc[8];
-        for (j = 0; j < 8; j++) acc[j] = w[0] * c[j];
-        for (k = 1; k <= R; k++) {
-            const float *up = rows[R + k], *dn = rows[R - k];
-            float wk = w[k];
-            if (up) for (j = 0; j < 8; j++) acc[j] += wk * up[b + (size_t)j];
-            if (dn) for (j = 0; j < 8; j++) acc[j] += wk * dn[b + (size_t)j];
-        }
-        for (j = 0; j < 8; j++) out[b + (size_t)j] = acc[j] / ws;
+    ero__taps(up, dn, rows[R], out, (long)Wp, wn, R);
+    if (border) {
+        float sc = 1.0f / ws;
+        for (x = 0; x < Wp; x++) out[x] *= sc;
     }
 }
 
@@ -1359,7 +1385,7 @@ static void ero__ring_row_geometry(ero__run *r, ero__rows *q, long v)
     int k;
     ero__ring_geometry(r, q, dn, ero__ring_row(r, q, y), up);
     for (k = 0; k < 4; k++)
-        ero__ring_xpass(r, q, q->geo[k], q->gx[k] + (size_t)slot * q->Wp, r->box_w, r->box_r, q->ws_box);
+        ero__ring_xpass(r, q, q->geo[k], q->gx[k] + (size_t)slot * q->Wp, q->wb, r->box_r, q->ws_box);
 }
 
 /* the rows at offsets -R..R from v in a ring of 2R + 1 slots (NULL beyond an unwrapped border) */
@@ -1465,10 +1491,10 @@ static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
     int k;
     for (k = 0; k < 4; k++) {
         ero__ring_window(r, q->gx[k], q->Wp, j, r->box_r, rows);
-        ero__ring_ypass(q->Wp, rows, q->avg[k], r->box_w, r->box_r);
+        ero__ring_ypass(q, rows, q->avg[k], q->wb, r->box_r);
     }
     ero__ring_h(r, q, mat);
-    ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, r->gau_w, r->gau_r,
+    ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, q->wg, r->gau_r,
                     q->ws_gau);
 }
 
@@ -1526,7 +1552,7 @@ static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *r
     float *rows[2 * ERO__MAXR + 1];
     size_t W = (size_t)r->W, i0 = (size_t)m * W;
     ero__ring_window(r, q->hx, q->Wp, m, r->gau_r, rows);
-    ero__ring_ypass(q->Wp, rows, q->chg, r->gau_w, r->gau_r);
+    ero__ring_ypass(q, rows, q->chg, q->wg, r->gau_r);
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
     ero__hf_apply_row(r, r->disp + i0, q->orig + (size_t)(m & 3) * W, q->chg, (long)W, rep);
@@ -1539,8 +1565,9 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
     ero__rows q;
     long H = r->H, lag = r->box_r + r->gau_r, v;
     ero__ring_carve(r, &q, r->hh);
-    ero__ring_weights(r, q.ws_box, r->box_w, r->box_r);
-    ero__ring_weights(r, q.ws_gau, r->gau_w, r->gau_r);
+    ero__ring_weights(r, q.ws_box, q.wb, r->box_w, r->box_r, r->box_sum);
+    ero__ring_weights(r, q.ws_gau, q.wg, r->gau_w, r->gau_r, r->gau_sum);
+    memset(q.zero, 0, q.Wp * sizeof(float));
     memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
     if (r->mat_count == 1) ero__one_material(r, q.mrow, r->W);
     q.applied = 0;
