@@ -30,8 +30,10 @@
      The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i;
      (+-s, 0, h_j - h_i) for a height field, exact under circular shifts); every filter, normal and
      curvature then runs through the same walk over neighbours, which never sees a seam. A height
-     field without a valid map does the same sums in the same order in one pass over a ring of
-     rows (same bits, a fraction of the memory traffic).
+     field without a valid map runs the same model in one pass over a ring of rows (a fraction of
+     the memory traffic; its bits differ from the walk's in the last places: the filters' weights
+     divided by their sum beforehand, 1 / |n| by a reciprocal square root accurate to about 3 ulp,
+     the report's sums in float within a row).
 
    MODEL (paper section 4.2.2; its W_f and R are on pages the text lacks: the forms below are chosen)
      Lengths are world units. L = sqrt(sum of the valid texels' area) is the grid's scale; the
@@ -361,7 +363,7 @@ typedef struct ero__run {
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
-    float *span;                           /* 5 ERO__SPAN: H's square roots and material rows */
+    float *span;                           /* 4 ERO__SPAN: H's material rows */
     ero__walks walks[2][2];                /* per kernel (box, Gaussian) and axis */
     void *walk_block;
     uint32_t *ext;                         /* invalid texels that take their neighbours' change: i, count, neighbours */
@@ -615,14 +617,14 @@ static ero_result ero__scratch(ero__run *r)
         r->hh = (float *)r->block;
         return r->block ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
     }
-    bytes = (planes * n + 5 * ERO__SPAN) * sizeof(float) + 4 * n;
+    bytes = (planes * n + 4 * ERO__SPAN) * sizeof(float) + 4 * n;
     r->block = ero__alloc(r->al, bytes);
     if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
     f = (float *)r->block;
     for (k = 0; k < 4; k++) { r->g[k] = f; f += n; }
     for (k = 0; k < 4; k++) { r->ax[k] = f; f += n; }
     r->hh = f; f += n;
-    r->span = f; f += 5 * ERO__SPAN;
+    r->span = f; f += 4 * ERO__SPAN;
     if (!r->hf) {
         r->P = f; f += 3 * n;
         for (k = 0; k < 4; k++) { r->ay[k] = f; f += n; }
@@ -1137,7 +1139,8 @@ static void ero__extend_invalid(ero__run *r)
 
 /* Every texel of a wrapped field, and every texel off a border of an unwrapped one, has the four
    grid neighbours: its geometry, filters and H run row by row on short rows that stay in cache,
-   with the same sums in the same order as the walk (so the same bits). A row's geometry is
+   in loops without divisions or sqrtf that vectorise, the same sums for every texel (so a
+   circular shift shifts the bits). A row's geometry is
    box-filtered along x as it is made, the box's y pass and H follow br rows later, H's Gaussian x
    pass at once and its y pass gr rows later, then the change is applied; the rows the geometry
    still reads after they changed come from copies (the first ones, for the wrap; the last four). */
@@ -1152,14 +1155,19 @@ static void ero__extend_invalid(ero__run *r)
 #define ERO__RESTRICT
 #define ERO__INLINE static inline
 #endif
+/* an eight-lane loop unrolled so that its lanes vectorise (GCC does not unroll it at -O2) */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8
+#define ERO__UNROLL8 _Pragma("GCC unroll 8")
+#else
+#define ERO__UNROLL8
+#endif
 
 typedef struct ero__rows {
-    size_t Wp;            /* the row length rounded up to 8 */
+    size_t Wp;            /* the row length (ero__ring_stride) */
     int pad;              /* columns before x = 0 in the padded row: the larger radius */
     float *gx[4];         /* (2 box_r + 1) rows of box-x-filtered normal xyz, curvature */
     float *hx;            /* (2 gau_r + 1) rows of Gaussian-x-filtered H */
-    float *geo[4], *avg[4], *hrow, *chg, *padded;
-    float *len;           /* a row's square roots */
+    float *geo[4], *avg[4], *hrow, *chg, *er, *de, *padded;
     float *mrow[4];       /* a row's materials: eps_min, eps_max, eps_medium, ambient */
     float *ws_box, *ws_gau; /* per column: the full weight sum over the x pass's (1 inside) */
     float *zero;          /* a row of zeros: the taps beyond an unwrapped border */
@@ -1175,16 +1183,20 @@ static int ero__ring_fits(const ero__run *r)
     return r->hf && !r->valid && r->W >= 2 * R + 3 && r->H >= 2 * (r->box_r + r->gau_r) + 4;
 }
 
+/* the rows' length: W rounded up to 8, and 16 more so that rows a power of two long do not sit
+   4 KiB apart (the ring's rows would share L1 sets and stall on false store-to-load aliasing) */
+static size_t ero__ring_stride(const ero__run *r) { return (((size_t)r->W + 7) & ~(size_t)7) + 16; }
+
 static size_t ero__ring_floats(const ero__run *r)
 {
-    size_t Wp = ((size_t)r->W + 7) & ~(size_t)7, rows;
-    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 5 + 2;
+    size_t Wp = ero__ring_stride(r), rows;
+    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 6 + 2;
     return rows * Wp + 2 * ERO__MAXR + 16 + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
 }
 
 static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
 {
-    size_t Wp = ((size_t)r->W + 7) & ~(size_t)7;
+    size_t Wp = ero__ring_stride(r);
     int k;
     q->Wp = Wp;
     q->pad = r->box_r > r->gau_r ? r->box_r : r->gau_r;
@@ -1194,7 +1206,8 @@ static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
     for (k = 0; k < 4; k++) { q->avg[k] = f; f += Wp; }
     q->hrow = f; f += Wp;
     q->chg = f; f += Wp;
-    q->len = f; f += Wp;
+    q->er = f; f += Wp;
+    q->de = f; f += Wp;
     for (k = 0; k < 4; k++) { q->mrow[k] = f; f += Wp; }
     q->ws_box = f; f += Wp;
     q->ws_gau = f; f += Wp;
@@ -1301,9 +1314,26 @@ static void ero__ring_ypass(const ero__rows *q, float *const *rows, float *ERO__
 
 /* the geometry of a texel with its four neighbours: ero__texel_geometry's sums with the offsets'
    zero components left out (tx = (s, 0, a), ty = (0, s, b), so Tx x Ty = (-a s, -s b, s s)),
-   its branches as selects so that a row's loop vectorises; len2 = |Tx x Ty|^2, len its root */
+   its branches as selects so that a row's loop vectorises; len2 = |Tx x Ty|^2, inv its
+   reciprocal square root */
 /* finite without a branch: v - v is 0 for finite v, NaN otherwise */
 ERO__INLINE int ero__fin(float v) { return v - v == 0.0f; }
+
+/* 1 / sqrt(x) for x >= 0 without sqrtf (whose errno keeps a loop from vectorising): the exponent
+   halved on the bits (Lomont's constant), three Newton steps (relative error below 4e-7, about
+   3 ulp); 0 for x = +inf, as 1 / sqrtf gives; large but finite for x = 0 (callers test x > 0) */
+ERO__INLINE float ero__rsqrt(float x)
+{
+    uint32_t i;
+    float y, hx = 0.5f * x;
+    memcpy(&i, &x, sizeof i);
+    i = 0x5f375a86u - (i >> 1);
+    memcpy(&y, &i, sizeof y);
+    y = y * (1.5f - hx * y * y);
+    y = y * (1.5f - hx * y * y);
+    y = y * (1.5f - hx * y * y);
+    return x < HUGE_VALF ? y : 0.0f;
+}
 
 ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd, float s)
 {
@@ -1311,14 +1341,14 @@ ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd,
     float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
     return (c0 * c0 + c1 * c1) + c2 * c2;
 }
-ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len, float *g0,
+ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len2, float *g0,
                                float *g1, float *g2, float *g3)
 {
     float dr = hr - hc, dl = hl - hc, du = hu - hc, dd = hd - hc;
     float a = 0.5f * (dr - dl), b = 0.5f * (du - dd);
     float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
-    float inv = 1.0f / len, m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
-    float n0 = len > 0.0f ? m0 : 0.0f, n1 = len > 0.0f ? m1 : 0.0f, n2 = len > 0.0f ? m2 : 1.0f;
+    float inv = ero__rsqrt(len2), m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
+    float n0 = len2 > 0.0f ? m0 : 0.0f, n1 = len2 > 0.0f ? m1 : 0.0f, n2 = len2 > 0.0f ? m2 : 1.0f;
     float qx = (c2 + dr * dr) + (c2 + dl * dl), qy = (c2 + du * du) + (c2 + dd * dd);
     float kx = -2.0f * ((s * n0 + dr * n2) + (-s * n0 + dl * n2)) / qx;
     float ky = -2.0f * ((s * n1 + du * n2) + (-s * n1 + dd * n2)) / qy;
@@ -1328,20 +1358,18 @@ ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd,
     ky = qy > 0.0f ? ky : 0.0f;
     ky = ero__fin(ky) ? ky : 0.0f;
     *g0 = fin == 0.0f ? n0 : 0.0f; *g1 = fin == 0.0f ? n1 : 0.0f; *g2 = fin == 0.0f ? n2 : 1.0f;
-    *g3 = (kx + ky) / 2.0f;
+    *g3 = (kx + ky) * 0.5f;
 }
 
-/* the texels 1 .. W - 2 of a row with rows on both sides; the square roots in a loop apart
-   (sqrtf's errno keeps a loop from vectorising) */
+/* the texels 1 .. W - 2 of a row with rows on both sides, in one loop that vectorises */
 static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RESTRICT m, const float *ERO__RESTRICT u,
-                             float s, long W, float *ERO__RESTRICT len, float *ERO__RESTRICT g0,
+                             float s, long W, float *ERO__RESTRICT g0,
                              float *ERO__RESTRICT g1, float *ERO__RESTRICT g2, float *ERO__RESTRICT g3)
 {
     long x;
-    for (x = 1; x < W - 1; x++) len[x] = ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s);
-    for (x = 1; x < W - 1; x++) len[x] = sqrtf(len[x]);
     for (x = 1; x < W - 1; x++)
-        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, len[x], &g0[x], &g1[x], &g2[x], &g3[x]);
+        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s),
+                      &g0[x], &g1[x], &g2[x], &g3[x]);
 }
 
 /* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) */
@@ -1349,7 +1377,7 @@ static void ero__ring_geometry(const ero__run *r, ero__rows *q, const float *dn,
 {
     long W = r->W, x;
     float s = r->s, *g0 = q->geo[0], *g1 = q->geo[1], *g2 = q->geo[2], *g3 = q->geo[3];
-    if (up && dn) ero__hf_interior(dn, mid, up, s, W, q->len, g0, g1, g2, g3);
+    if (up && dn) ero__hf_interior(dn, mid, up, s, W, g0, g1, g2, g3);
     for (x = 0; x < W; x++) {
         float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3] = {0.0f, 0.0f, 1.0f};
         int have = 0;
@@ -1360,8 +1388,8 @@ static void ero__ring_geometry(const ero__run *r, ero__rows *q, const float *dn,
         if (up) { e[2][1] = s; e[2][2] = up[x] - mid[x]; have |= 4; }
         if (dn) { e[3][1] = -s; e[3][2] = dn[x] - mid[x]; have |= 8; }
         if (have == 15)
-            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s,
-                          sqrtf(ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s)), &g0[x], &g1[x], &g2[x], &g3[x]);
+            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s, ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s),
+                          &g0[x], &g1[x], &g2[x], &g3[x]);
         else ero__texel_geometry(e, have, nb, &g0[x], &g1[x], &g2[x], &g3[x]);
     }
 }
@@ -1400,54 +1428,54 @@ static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, 
 
 /* H of a row (MODEL: exposure e = -n_a . w / |n_a|, c the normalised convex curvature, R the
    Bezier, W_f / R windward, ambient / R leeward, the deposition ramp where kap < 0; the branches
-   as selects, the square roots and the materials' lookup in loops apart) */
+   as selects, 1 / |n_a| by ero__rsqrt, one division; the materials' lookup in a loop apart) */
 typedef struct ero__hparams {
-    float w0, w1, w2, force, lc, ramp, ratio;
+    float w0, w1, w2, force, lc, inv_ramp, ratio;
     int constant, literal, deposit;
 } ero__hparams;
 
 static void ero__h_row(const ero__hparams *p, long W, const float *ERO__RESTRICT n0, const float *ERO__RESTRICT n1,
-                       const float *ERO__RESTRICT n2, const float *ERO__RESTRICT kap, const float *ERO__RESTRICT len,
+                       const float *ERO__RESTRICT n2, const float *ERO__RESTRICT kap,
                        const float *ERO__RESTRICT emin, const float *ERO__RESTRICT emax, const float *ERO__RESTRICT emed,
                        const float *ERO__RESTRICT amb, float *ERO__RESTRICT out)
 {
     long x;
-    float w0 = p->w0, w1 = p->w1, w2 = p->w2, force = p->force, lc = p->lc, ramp = p->ramp, ratio = p->ratio;
+    float w0 = p->w0, w1 = p->w1, w2 = p->w2, force = p->force, lc = p->lc, inv_ramp = p->inv_ramp;
+    float ratio = p->ratio;
     int constant = p->constant, literal = p->literal, deposit = p->deposit;
     for (x = 0; x < W; x++) {
-        float l = len[x], k = kap[x];
-        float dot = (n0[x] * w0 + n1[x] * w1) + n2[x] * w2, ev = -dot / l, e = l > 0.0f ? ev : 0.0f;
+        float l2 = (n0[x] * n0[x] + n1[x] * n1[x]) + n2[x] * n2[x], k = kap[x];
+        float dot = (n0[x] * w0 + n1[x] * w1) + n2[x] * w2, ev = -dot * ero__rsqrt(l2), e = l2 > 0.0f ? ev : 0.0f;
         float ck = k * lc, c0 = k > 0.0f ? ck : 0.0f, c = c0 > 1.0f ? 1.0f : c0, u = 1.0f - c;
-        float res = u * u * emax[x] + 2.0f * c * u * emed[x] + c * c * emin[x];
-        float fe = force * e, wf = (constant ? force : fe) + amb[x], hw = wf / res, al = amb[x] / res;
+        float res = u * u * emax[x] + 2.0f * c * u * emed[x] + c * c * emin[x], ir = 1.0f / res;
+        float fe = force * e, wf = (constant ? force : fe) + amb[x], hw = wf * ir, al = amb[x] * ir;
         float hl = literal ? amb[x] : al, h = e > 0.0f ? hw : hl;
-        float tr = -k * lc / ramp, t0 = ramp > 0.0f ? tr : 1.0f, t = t0 > 1.0f ? 1.0f : t0;
+        float tr = -k * lc * inv_ramp, t0 = inv_ramp > 0.0f ? tr : 1.0f, t = t0 > 1.0f ? 1.0f : t0;
         float hd = h * ((1.0f - t) - ratio * t);
         h = deposit && k < 0.0f ? hd : h;
         out[x] = ero__fin(h) ? h : 0.0f;
     }
 }
 
-/* H of cnt texels from their averaged normals a0..a2 and curvature kap: len and mrow (four
-   rows of the materials, filled by the caller when there is one material) are scratch */
+/* H of cnt texels from their averaged normals a0..a2 and curvature kap: mrow (four rows of the
+   materials, filled by the caller when there is one material) is scratch */
 static void ero__h_span(const ero__run *r, const float *a0, const float *a1, const float *a2, const float *kap,
-                        const uint8_t *mat, long cnt, float *len, float *const *mrow, float *out)
+                        const uint8_t *mat, long cnt, float *const *mrow, float *out)
 {
     ero__hparams p;
     long x;
     p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = r->wind[2];
-    p.force = r->o.force; p.lc = r->o.curvature_length; p.ramp = r->o.deposit_ramp; p.ratio = r->o.deposit_ratio;
+    p.force = r->o.force; p.lc = r->o.curvature_length; p.ratio = r->o.deposit_ratio;
+    p.inv_ramp = r->o.deposit_ramp > 0.0f ? 1.0f / r->o.deposit_ramp : 0.0f;
     p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
     p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
     p.deposit = r->o.deposit_ratio >= 0.0f;
-    for (x = 0; x < cnt; x++) len[x] = (a0[x] * a0[x] + a1[x] * a1[x]) + a2[x] * a2[x];
-    for (x = 0; x < cnt; x++) len[x] = sqrtf(len[x]);
     if (r->mat_count > 1)
         for (x = 0; x < cnt; x++) {
             const ero_material *m = &r->mats[mat ? mat[x] : 0];
             mrow[0][x] = m->eps_min; mrow[1][x] = m->eps_max; mrow[2][x] = m->eps_medium; mrow[3][x] = m->ambient;
         }
-    ero__h_row(&p, cnt, a0, a1, a2, kap, len, mrow[0], mrow[1], mrow[2], mrow[3], out);
+    ero__h_row(&p, cnt, a0, a1, a2, kap, mrow[0], mrow[1], mrow[2], mrow[3], out);
 }
 
 /* fills the material rows with the one material */
@@ -1462,7 +1490,7 @@ static void ero__one_material(const ero__run *r, float *const *mrow, long cnt)
 
 static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
 {
-    ero__h_span(r, q->avg[0], q->avg[1], q->avg[2], q->avg[3], mat, r->W, q->len, q->mrow, q->hrow);
+    ero__h_span(r, q->avg[0], q->avg[1], q->avg[2], q->avg[3], mat, r->W, q->mrow, q->hrow);
 }
 
 /* H of every texel of the planes g (0 where invalid), in spans of ERO__SPAN */
@@ -1470,12 +1498,12 @@ static void ero__erosion_heights(ero__run *r)
 {
     size_t i0, k;
     float *mrow[4];
-    for (k = 0; k < 4; k++) mrow[k] = r->span + (k + 1) * ERO__SPAN;
+    for (k = 0; k < 4; k++) mrow[k] = r->span + k * ERO__SPAN;
     if (r->mat_count == 1) ero__one_material(r, mrow, ERO__SPAN);
     for (i0 = 0; i0 < r->n; i0 += ERO__SPAN) {
         long cnt = (long)(r->n - i0 < ERO__SPAN ? r->n - i0 : ERO__SPAN);
-        ero__h_span(r, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0, r->mat ? r->mat + i0 : NULL, cnt,
-                    r->span, mrow, r->hh + i0);
+        ero__h_span(r, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0, r->mat ? r->mat + i0 : NULL, cnt, mrow,
+                    r->hh + i0);
         if (r->valid)
             for (k = 0; k < (size_t)cnt; k++)
                 if (!r->valid[i0 + k]) r->hh[i0 + k] = 0.0f;
@@ -1498,52 +1526,54 @@ static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
                     q->ws_gau);
 }
 
-/* a row's change applied to the heights h (h0: the row before; ero__apply_texel's sums: the
-   difference of two floats is exact in double and s^2 times it finite) */
-static void ero__hf_change_row(float *ERO__RESTRICT h, const float *ERO__RESTRICT chg, long W, float rate, float bv)
+/* a row's change applied to the heights h (bounded above by bv; beyond float's range: as it
+   was), chg overwritten by the change made (old - new; 0 where not finite) */
+static void ero__hf_change_row(float *ERO__RESTRICT h, float *ERO__RESTRICT chg, long W, float rate, float bv)
 {
     long x;
     for (x = 0; x < W; x++) {
         float d0 = h[x], d = d0 - rate * chg[x], lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d;
-        h[x] = ero__fin(d1) ? d1 : d0; /* beyond float's range: as it was */
+        float h1 = ero__fin(d1) ? d1 : d0, a = d0 - h1;
+        h[x] = h1;
+        chg[x] = ero__fin(a) ? a : 0.0f;
     }
 }
 
-/* the report's sums over a row, in eight lanes */
-static void ero__hf_report_row(const float *ERO__RESTRICT h0, const float *ERO__RESTRICT h, long W, double s2,
-                               double *ERO__RESTRICT er, double *ERO__RESTRICT de, float *ERO__RESTRICT mx)
+/* the report's sums over a row's changes a (overwritten): the eroded part into er, the deposited
+   into de, |a| into mx, then each row halved onto its first half (elementwise loops that
+   vectorise; pairwise sums), down to one value */
+static void ero__hf_report_row(float *ERO__RESTRICT a, long W, float *ERO__RESTRICT er, float *ERO__RESTRICT de,
+                               float *ERO__RESTRICT mx)
 {
-    long b;
-    int j;
-    for (b = 0; b + 8 <= W; b += 8)
-        for (j = 0; j < 8; j++) {
-            double vol = s2 * ((double)h0[b + j] - (double)h[b + j]);
-            float a = fabsf(h0[b + j] - h[b + j]);
-            er[j] += vol > 0.0 ? vol : 0.0;
-            de[j] -= vol > 0.0 ? 0.0 : vol;
-            mx[j] = a > mx[j] ? a : mx[j];
+    long x, len, h;
+    for (x = 0; x < W; x++) {
+        float f = a[x], g = -f;
+        er[x] = f > 0.0f ? f : 0.0f;
+        de[x] = g > 0.0f ? g : 0.0f;
+        a[x] = er[x] > de[x] ? er[x] : de[x];
+    }
+    for (len = W; len > 1; len = h) {
+        h = (len + 1) / 2;
+        for (x = 0; x < len - h; x++) {
+            er[x] += er[x + h];
+            de[x] += de[x + h];
+            a[x] = a[x + h] > a[x] ? a[x + h] : a[x];
         }
-    for (j = 0; b + j < W; j++) {
-        double vol = s2 * ((double)h0[b + j] - (double)h[b + j]);
-        float a = fabsf(h0[b + j] - h[b + j]);
-        er[j] += vol > 0.0 ? vol : 0.0;
-        de[j] -= vol > 0.0 ? 0.0 : vol;
-        mx[j] = a > mx[j] ? a : mx[j];
     }
+    mx[0] = a[0];
 }
 
-static void ero__hf_apply_row(const ero__run *r, float *h, const float *h0, const float *chg, long W, ero_report *rep)
+/* a row's change applied, the report's sums (ero__apply's column volume: s^2 times the change)
+   in float over the row, in double over the rows; er and de are scratch rows */
+static void ero__hf_apply_row(const ero__run *r, float *h, float *chg, float *er, float *de, long W, ero_report *rep)
 {
-    double er[8] = {0, 0, 0, 0, 0, 0, 0, 0}, de[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    float mx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    int j;
+    float mx;
+    double s2 = (double)r->s * r->s;
     ero__hf_change_row(h, chg, W, r->o.rate, r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF);
-    ero__hf_report_row(h0, h, W, (double)r->s * r->s, er, de, mx);
-    for (j = 0; j < 8; j++) {
-        rep->eroded += er[j];
-        rep->deposited += de[j];
-        if (mx[j] > rep->max_change) rep->max_change = mx[j];
-    }
+    ero__hf_report_row(chg, W, er, de, &mx);
+    if (mx > rep->max_change) rep->max_change = mx;
+    rep->eroded += s2 * er[0];
+    rep->deposited += s2 * de[0];
 }
 
 /* row m's filtered H applied to the heights (the row kept first: the geometry may still read it) */
@@ -1555,7 +1585,7 @@ static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *r
     ero__ring_ypass(q, rows, q->chg, q->wg, r->gau_r);
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
-    ero__hf_apply_row(r, r->disp + i0, q->orig + (size_t)(m & 3) * W, q->chg, (long)W, rep);
+    ero__hf_apply_row(r, r->disp + i0, q->chg, q->er, q->de, (long)W, rep);
 }
 
 /* one time step of a plain height field: row v's geometry, row v - box_r's H, row
