@@ -5186,6 +5186,40 @@ static int dm__highest_bit(uint64_t m)
 #endif
 }
 
+/* the index of the lowest set bit of m (nonzero) */
+static int dm__lowest_bit(uint64_t m)
+{
+    return dm__highest_bit(m & (~m + 1));
+}
+
+/* the first texel of row y at or after x whose bit is `taken` (0 free, 1 taken), or W */
+static long dm__pz_first_bit(const dm__pz_bitpack *b, int y, long x, int taken)
+{
+    const uint64_t *row = b->taken + (size_t)y * (size_t)b->words;
+    long w;
+    for (w = x >> 6; x < b->W && w < b->words; w++) {
+        uint64_t m = taken ? row[w] : ~row[w];
+        if (w == (x >> 6)) m &= ~(((uint64_t)1 << (x & 63)) - 1);
+        if (m) {
+            long at = w * 64 + dm__lowest_bit(m);
+            return at < b->W ? at : b->W;
+        }
+    }
+    return b->W;
+}
+
+/* the first x at or after `from` where texels x .. x + need - 1 of row y are all free, or -1 */
+static long dm__pz_next_fit(const dm__pz_bitpack *b, int y, long from, long need)
+{
+    for (;;) {
+        long z = dm__pz_first_bit(b, y, from, 0), o;
+        if (z + need > b->W) return -1;
+        o = dm__pz_first_bit(b, y, z, 1);
+        if (o - z >= need) return z;
+        from = o;
+    }
+}
+
 /* the last taken texel in row y between x0 and x1 (inclusive), or -1 */
 static long dm__pz_last_taken(const dm__pz_bitpack *b, int y, long x0, long x1)
 {
@@ -5225,8 +5259,9 @@ static int dm__pz_find_place(const dm__pz_bitpack *b, const dm__pz_shape *sh, in
                 r = (k + hint) % sh->h;
                 if (sh->lo[r] > sh->hi[r]) continue;
                 t = dm__pz_last_taken(b, y + r, x + sh->lo[r], x + sh->hi[r]);
-                if (t >= 0) {
-                    jump = t + 1 - sh->lo[r];
+                if (t >= 0) { /* no place for this row before its next free run long enough */
+                    t = dm__pz_next_fit(b, y + r, t + 1, (long)sh->hi[r] - sh->lo[r] + 1);
+                    jump = t < 0 ? b->W : t - sh->lo[r];
                     hint = r;
                 }
             }
