@@ -1320,19 +1320,22 @@ static void ero__ring_ypass(const ero__rows *q, float *const *rows, float *ERO__
 ERO__INLINE int ero__fin(float v) { return v - v == 0.0f; }
 
 /* 1 / sqrt(x) for x >= 0 without sqrtf (whose errno keeps a loop from vectorising): the exponent
-   halved on the bits (Lomont's constant), three Newton steps (relative error below 4e-7, about
-   3 ulp); 0 for x = +inf, as 1 / sqrtf gives; large but finite for x = 0 (callers test x > 0) */
+   halved on the bits (Lomont's constant), three Newton steps (relative error below 2e-7, about
+   3 ulp; subnormal x scaled by 2^48 first); 0 for x = +inf, as 1 / sqrtf gives, and for x = 0
+   or NaN (where callers take no direction) */
 ERO__INLINE float ero__rsqrt(float x)
 {
     uint32_t i;
-    float y, hx = 0.5f * x;
-    memcpy(&i, &x, sizeof i);
+    int tiny = x < 1.17549435e-38f;
+    float xs = tiny ? x * 281474976710656.0f : x, y, hx = 0.5f * xs;
+    memcpy(&i, &xs, sizeof i);
     i = 0x5f375a86u - (i >> 1);
     memcpy(&y, &i, sizeof y);
     y = y * (1.5f - hx * y * y);
     y = y * (1.5f - hx * y * y);
     y = y * (1.5f - hx * y * y);
-    return x < HUGE_VALF ? y : 0.0f;
+    y = tiny ? y * 16777216.0f : y;
+    return x > 0.0f && x < HUGE_VALF ? y : 0.0f;
 }
 
 ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd, float s)
@@ -1341,13 +1344,13 @@ ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd,
     float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
     return (c0 * c0 + c1 * c1) + c2 * c2;
 }
-ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len2, float *g0,
-                               float *g1, float *g2, float *g3)
+ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len2, float inv,
+                               float *g0, float *g1, float *g2, float *g3)
 {
     float dr = hr - hc, dl = hl - hc, du = hu - hc, dd = hd - hc;
     float a = 0.5f * (dr - dl), b = 0.5f * (du - dd);
     float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
-    float inv = ero__rsqrt(len2), m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
+    float m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
     float n0 = len2 > 0.0f ? m0 : 0.0f, n1 = len2 > 0.0f ? m1 : 0.0f, n2 = len2 > 0.0f ? m2 : 1.0f;
     float qx = (c2 + dr * dr) + (c2 + dl * dl), qy = (c2 + du * du) + (c2 + dd * dd);
     float kx = -2.0f * ((s * n0 + dr * n2) + (-s * n0 + dl * n2)) / qx;
@@ -1361,15 +1364,17 @@ ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd,
     *g3 = (kx + ky) * 0.5f;
 }
 
-/* the texels 1 .. W - 2 of a row with rows on both sides, in one loop that vectorises */
+/* the texels 1 .. W - 2 of a row with rows on both sides, in loops that vectorise (the
+   reciprocal square roots in g2, the squared lengths in g3 first) */
 static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RESTRICT m, const float *ERO__RESTRICT u,
                              float s, long W, float *ERO__RESTRICT g0,
                              float *ERO__RESTRICT g1, float *ERO__RESTRICT g2, float *ERO__RESTRICT g3)
 {
     long x;
+    for (x = 1; x < W - 1; x++) g3[x] = ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s);
+    for (x = 1; x < W - 1; x++) g2[x] = ero__rsqrt(g3[x]);
     for (x = 1; x < W - 1; x++)
-        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s),
-                      &g0[x], &g1[x], &g2[x], &g3[x]);
+        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, g3[x], g2[x], &g0[x], &g1[x], &g2[x], &g3[x]);
 }
 
 /* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) */
@@ -1387,9 +1392,10 @@ static void ero__ring_geometry(const ero__run *r, ero__rows *q, const float *dn,
         if (xl >= 0) { e[1][0] = -s; e[1][2] = mid[xl] - mid[x]; have |= 2; }
         if (up) { e[2][1] = s; e[2][2] = up[x] - mid[x]; have |= 4; }
         if (dn) { e[3][1] = -s; e[3][2] = dn[x] - mid[x]; have |= 8; }
-        if (have == 15)
-            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s, ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s),
-                          &g0[x], &g1[x], &g2[x], &g3[x]);
+        if (have == 15) {
+            float len2 = ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s);
+            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s, len2, ero__rsqrt(len2), &g0[x], &g1[x], &g2[x], &g3[x]);
+        }
         else ero__texel_geometry(e, have, nb, &g0[x], &g1[x], &g2[x], &g3[x]);
     }
 }
@@ -1428,7 +1434,8 @@ static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, 
 
 /* H of a row (MODEL: exposure e = -n_a . w / |n_a|, c the normalised convex curvature, R the
    Bezier, W_f / R windward, ambient / R leeward, the deposition ramp where kap < 0; the branches
-   as selects, 1 / |n_a| by ero__rsqrt, one division; the materials' lookup in a loop apart) */
+   as selects, 1 / |n_a| by ero__rsqrt in a loop apart (into out), one division; the materials'
+   lookup in a loop apart) */
 typedef struct ero__hparams {
     float w0, w1, w2, force, lc, inv_ramp, ratio;
     int constant, literal, deposit;
@@ -1443,9 +1450,10 @@ static void ero__h_row(const ero__hparams *p, long W, const float *ERO__RESTRICT
     float w0 = p->w0, w1 = p->w1, w2 = p->w2, force = p->force, lc = p->lc, inv_ramp = p->inv_ramp;
     float ratio = p->ratio;
     int constant = p->constant, literal = p->literal, deposit = p->deposit;
+    for (x = 0; x < W; x++) out[x] = ero__rsqrt((n0[x] * n0[x] + n1[x] * n1[x]) + n2[x] * n2[x]);
     for (x = 0; x < W; x++) {
-        float l2 = (n0[x] * n0[x] + n1[x] * n1[x]) + n2[x] * n2[x], k = kap[x];
-        float dot = (n0[x] * w0 + n1[x] * w1) + n2[x] * w2, ev = -dot * ero__rsqrt(l2), e = l2 > 0.0f ? ev : 0.0f;
+        float inv = out[x], k = kap[x];
+        float dot = (n0[x] * w0 + n1[x] * w1) + n2[x] * w2, ev = -dot * inv, e = inv > 0.0f ? ev : 0.0f;
         float ck = k * lc, c0 = k > 0.0f ? ck : 0.0f, c = c0 > 1.0f ? 1.0f : c0, u = 1.0f - c;
         float res = u * u * emax[x] + 2.0f * c * u * emed[x] + c * c * emin[x], ir = 1.0f / res;
         float fe = force * e, wf = (constant ? force : fe) + amb[x], hw = wf * ir, al = amb[x] * ir;
