@@ -97,9 +97,11 @@ static int run_simplify(void *u)
     dm_simplify_options so;
     memset(&so, 0, sizeof so);
     so.target_triangles = b->target;
-    if (b->constrained) {
+    if (b->constrained) { /* as build/dispmesh runs it: the sliver guard, the fallback where the shell is thin */
         so.constraint = dm_shell_constraint;
         so.on_collapse = dm_shell_collapsed;
+        so.relax = dm_shell_relax;
+        so.min_quality = 0.05f;
         so.constraint_user = b->shell;
     }
     return dm_simplify(b->pos, b->nv, b->idx, b->nt, &so, &b->pm, &b->rep) != DM_OK;
