@@ -839,11 +839,13 @@ static void ero__columns(ero__run *r)
    ================================================================================================ */
 
 /* the taps of a regular stretch of cnt texels from i0 along a stride (1 or W), all of them inside
-   the grid: the same sums in the same order as ero__taps, eight texels at a time */
+   the grid: the same sums in the same order as ero__walked_taps, eight texels at a time (times
+   the reciprocal of the weights' sum, as there) */
 static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, size_t st, const float *w, int R, float wfull)
 {
     size_t x = 0;
     int j, k;
+    float inv = 1.0f / wfull;
     for (; x + 8 <= cnt; x += 8) {
         const float *p = f + i0 + x;
         float acc[8];
@@ -856,7 +858,7 @@ static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, siz
                 acc[j] += wk * dn[j];
             }
         }
-        for (j = 0; j < 8; j++) out[i0 + x + (size_t)j] = acc[j] / wfull;
+        for (j = 0; j < 8; j++) out[i0 + x + (size_t)j] = acc[j] * inv;
     }
     for (; x < cnt; x++) {
         const float *p = f + i0 + x;
@@ -865,7 +867,7 @@ static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, siz
             acc += w[k] * p[(size_t)k * st];
             acc += w[k] * p[-(ptrdiff_t)((size_t)k * st)];
         }
-        out[i0 + x] = acc / wfull;
+        out[i0 + x] = acc * inv;
     }
 }
 
@@ -913,7 +915,8 @@ static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *
             for (c = 0; c < C; c++) acc[c] += w[k + 1] * f[c][j];
             ws += w[k + 1];
         }
-    for (c = 0; c < C; c++) out[c] = acc[c] / ws;
+    ws = 1.0f / ws;
+    for (c = 0; c < C; c++) out[c] = acc[c] * ws;
 }
 
 /* every kernel's and axis's walks in one block */
