@@ -548,8 +548,9 @@ DMDEF void dm_trimesh_free(dm_trimesh *mesh);
 /* Symmetric distance: samples_per_side area-uniform (deterministic) points on each mesh, each
    measured to the other with dm_bvh_closest_point, and every vertex (for the max). options NULL =
    all defaults. progress gets the fraction of the closest-point queries done, about every 4096
-   of them and at the end; nonzero cancels (DM_CANCELLED, *out zeroed). A 35k-vertex mesh
-   against a 400k-triangle one at 200000 samples a side takes about 2.5 s. */
+   of them and at the end; nonzero cancels (DM_CANCELLED, *out zeroed). Each search is bounded by
+   the previous point's answer, and a vertex is searched only when it could raise the max. A
+   35k-vertex mesh against a 1.4M-triangle one at 200000 samples a side takes about 2 s. */
 typedef struct dm_distance_options {
     size_t samples_per_side;          /* 0 = 200000; at most 10^9 (more is DM_ERR_INVALID_ARGUMENT) */
     const dm_allocator *allocator;    /* NULL = malloc/free */
