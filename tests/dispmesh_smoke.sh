@@ -103,6 +103,14 @@ check "--strict --faces 8 exits 0 (status $rc)" [ $rc -eq 0 ]
 check "--strict --faces 8: RESULT says target=8 faces=12 fallback=0 ($result)" [ "$(field target) $(field faces) $(field fallback)" = "8 12 0.0000" ]
 check "--strict --faces 8: the note says why and what the default does" grep -q 'shell constraint vetoed every remaining collapse.*without --strict' "$tmp/b8_err.txt"
 
+# ---- --samples: the distances' sample count; the same base and map, other distance estimates ---------
+"$prog" --brick --faces 48 --res 128 --no-views --samples 5000 -o "$tmp/s5" >"$tmp/s5_out.txt" 2>"$tmp/s5_err.txt"
+rc=$?
+result=$(grep '^RESULT dispmesh ' "$tmp/s5_out.txt" | tail -n 1)
+check "--samples 5000 exits 0 with a RESULT line (status $rc)" [ $rc -eq 0 -a -n "$result" ]
+"$prog" --brick --faces 48 --res 128 --no-views -o "$tmp/s0" >/dev/null 2>&1
+check "--samples changes no output file" cmp -s "$tmp/s5_disp.pfm" "$tmp/s0_disp.pfm"
+
 # ---- bad input --------------------------------------------------------------------------------------
 refuse() { # refuse DESCRIPTION STATUS ARGS...: exit STATUS, a message, no sanitizer report, no x_* file
   what="$1"; want="$2"; shift 2
@@ -139,6 +147,7 @@ refuse "unwritable prefix" 1 --brick --res 64 -o "$tmp/no/such/dir/x"
 refuse "no input" 2 -o "$tmp/x"
 refuse "--faces 4294967297" 2 --brick --faces 4294967297 -o "$tmp/x"
 refuse "--min-quality nan" 2 --brick --min-quality nan -o "$tmp/x"
+refuse "--samples 10 (below 1000)" 2 --brick --samples 10 -o "$tmp/x"
 refuse "--res without a value" 2 --brick -o "$tmp/x" --res
 refuse "an unknown option" 2 --brick --bogus -o "$tmp/x"
 # ---- a write cut short: the file-size limit (ulimit -f, SIGXFSZ ignored, so write() fails with EFBIG as

@@ -109,7 +109,7 @@ done
 for o in -o --output --view --up --wire --size --shading --ortho --help --version; do
   check "render_mesh --help lists $o" grep -q -e " $o" "$tmp/render_mesh-help.out"
 done
-for o in --brick -o --output --faces --res --size --no-views --both-ways --strict --min-quality --help --version; do
+for o in --brick -o --output --faces --res --size --no-views --both-ways --strict --min-quality --samples --help --version; do
   check "dispmesh --help lists $o" grep -q -e " $o" "$tmp/dispmesh-help.out"
 done
 for o in --cylinder --box -o --output --case --angle --shift --up --region --roi --handle --method --weights --frames \
