@@ -131,17 +131,19 @@ $(B)/ref_openmesh_simplify: tests/ref_openmesh_simplify.cpp $(ALLDEPS) | $(B)
 $(B)/ref_dispmesh_bake: tests/ref_dispmesh_bake.cpp $(ALLDEPS) | $(B)
 	$(CXX) $(CXXFLAGS_ALL) $< -o $@ -lembree3 -lmeshoptimizer -lm
 
-# Dependencies are installed first; the build is a separate make so that it sees what was installed.
+# Dependencies are installed first; the build is a separate make so that it sees what was installed,
+# on every core (JOBS; the tests themselves run one at a time).
+JOBS ?= $(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)
 test:
 	@tests/deps.sh test
-	@$(MAKE) --no-print-directory test-build
+	@$(MAKE) --no-print-directory -j$(JOBS) test-build
 	@HEADERS="$(HEADERS)" tests/run.sh $(B)
 
 test-build: $(C_TESTS) $(FUZZ_PLAIN) $(REF_TESTS)
 
 sanitize:
 	@tests/deps.sh test
-	@$(MAKE) --no-print-directory test-build B=$(B)/san OPT="-O1 -g" XFLAGS="$(SANFLAGS)"
+	@$(MAKE) --no-print-directory -j$(JOBS) test-build B=$(B)/san OPT="-O1 -g" XFLAGS="$(SANFLAGS)"
 	@ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 tests/run.sh $(B)/san sanitize
 
 # ---- fuzzing (clang + libFuzzer) ------------------------------------------------------------------
