@@ -112,10 +112,13 @@
      ero_erode allocates once per call, freed before it returns: for a height field without a valid
      map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of
      about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else
-     40 bytes per texel for a height field and 76 for a surface grid (positions, normals,
-     curvature, two filter intermediates per axis, H, column coefficients, the regular-run
-     lengths) and 20 KiB, plus 10 (box_r + gau_r) bytes per axis for each texel within a kernel
-     radius of a seam or border (the walks' taps, found once per call) and up to 40 bytes for
+     40 bytes per texel for a height field and 72 for a surface grid (positions, base normals,
+     normals, curvature, the filters' first pass, H, column coefficients, the regular-run
+     lengths) and 20 KiB, 8 bytes per run of one texel kind in a row (per pass and for the
+     geometry), 4 + 10 r bytes per axis and kernel for each texel within its radius r of a seam
+     or border (the walks' taps, found once per call), 4 + 4 C bytes per tap that reaches a
+     seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for the
+     Gaussian), and up to 40 bytes for
      each invalid texel next to valid ones. The maps are the caller's.
 
    ERRORS
@@ -324,6 +327,23 @@ extern "C" {
 #define ERO__MAXR 255
 #define ERO__SPAN 1024
 
+#if defined(__GNUC__) || defined(__clang__)
+#define ERO__RESTRICT __restrict
+#define ERO__INLINE static inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define ERO__RESTRICT __restrict
+#define ERO__INLINE static __forceinline
+#else
+#define ERO__RESTRICT
+#define ERO__INLINE static inline
+#endif
+/* an eight-lane loop unrolled so that its lanes vectorise (GCC does not unroll it at -O2) */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8
+#define ERO__UNROLL8 _Pragma("GCC unroll 8")
+#else
+#define ERO__UNROLL8
+#endif
+
 /* ================================================================================================
    the run: the domain, the resolved parameters, the scratch planes
    ================================================================================================ */
@@ -331,8 +351,14 @@ extern "C" {
 /* the texels a filter pass walks (off the regular stretches), their taps recorded once per call */
 typedef struct ero__walks {
     size_t count;
+    uint32_t *texel;                       /* the walked texels, in raster order */
     uint32_t *tap;                         /* 2 R per texel: +k, -k for k = 1..R (UINT32_MAX: none) */
     uint8_t *odd;                          /* the same: an odd number of quarter turns to the tap */
+    uint32_t *seg;                         /* the pass in runs: start, length << 2 | kind (ERO__RUN_*) */
+    size_t seg_count;
+    size_t alt_count;                      /* the odd taps (axis 1), in the order the pass meets them: */
+    uint32_t *alt_walk;                    /* their texel's walk along y (UINT32_MAX: a regular one) */
+    float *alt[4];                         /* the y pass's values there (the second pass reads them) */
 } ero__walks;
 
 typedef struct ero__run {
@@ -357,15 +383,17 @@ typedef struct ero__run {
     float box_sum, gau_sum;
     const ero_allocator *al;
     void *block;
-    float *P;                              /* 3n surface points (surface only) */
+    float *P[3];                           /* surface points x, y, z (surface only) */
+    float *N[3];                           /* base normals x, y, z (surface only) */
+    uint32_t *seg;                         /* the image in runs: start, length << 2 | kind (ERO__SEG_*) */
+    size_t seg_count;
     float *g[4];                           /* normal xyz, curvature; then their averages */
-    float *ax[4], *ay[4];                  /* first filter pass along own x / own y */
+    float *ax[4];                          /* the filters' first pass (along own x) */
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
     float *span;                           /* 4 ERO__SPAN: H's material rows */
     ero__walks walks[2][2];                /* per kernel (box, Gaussian) and axis */
-    void *walk_block;
     uint32_t *ext;                         /* invalid texels that take their neighbours' change: i, count, neighbours */
     size_t ext_len;
 } ero__run;
@@ -373,6 +401,8 @@ typedef struct ero__run {
 static size_t ero__ring_floats(const ero__run *r);
 
 static int ero__finite(float v) { return v == v && v - v == 0.0f; }
+/* finite without a branch: v - v is 0 for finite v, NaN otherwise */
+ERO__INLINE int ero__fin(float v) { return v - v == 0.0f; }
 static int ero__valid(const ero__run *r, uint32_t i) { return !r->valid || r->valid[i]; }
 
 static void *ero__alloc(const ero_allocator *a, size_t n)
@@ -610,7 +640,7 @@ static ero_result ero__kernels(ero__run *r, double h)
 
 static ero_result ero__scratch(ero__run *r)
 {
-    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 4 + 2), bytes, k;
+    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 3 + 2), bytes, k;
     float *f;
     if (r->ring) { /* rows only */
         r->block = ero__alloc(r->al, ero__ring_floats(r) * sizeof(float));
@@ -626,12 +656,10 @@ static ero_result ero__scratch(ero__run *r)
     r->hh = f; f += n;
     r->span = f; f += 4 * ERO__SPAN;
     if (!r->hf) {
-        r->P = f; f += 3 * n;
-        for (k = 0; k < 4; k++) { r->ay[k] = f; f += n; }
+        for (k = 0; k < 3; k++) { r->P[k] = f; f += n; }
+        for (k = 0; k < 3; k++) { r->N[k] = f; f += n; }
         r->q1 = f; f += n;
         r->q2 = f; f += n;
-    } else {
-        for (k = 0; k < 4; k++) r->ay[k] = r->ax[k];
     }
     r->reg = (uint8_t *)f;
     return ERO_OK;
@@ -665,6 +693,47 @@ static void ero__regular_runs(ero__run *r)
         }
 }
 
+enum { ERO__SEG_INVALID = 0, ERO__SEG_QUAD = 1, ERO__SEG_OTHER = 2 };
+
+/* a texel's kind for the geometry: invalid, valid with the four grid neighbours, other */
+static uint32_t ero__kind(const ero__run *r, size_t i)
+{
+    const uint8_t *g = r->reg + 4 * i;
+    if (!ero__valid(r, (uint32_t)i)) return ERO__SEG_INVALID;
+    return g[0] && g[1] && g[2] && g[3] ? ERO__SEG_QUAD : ERO__SEG_OTHER;
+}
+
+/* the runs of one kind within each row, at most ERO__SPAN long, into seg (NULL: counted) */
+static size_t ero__segments(const ero__run *r, uint32_t *seg)
+{
+    size_t W = (size_t)r->W, y, x, cnt = 0;
+    for (y = 0; y < (size_t)r->H; y++)
+        for (x = 0; x < W;) {
+            size_t i = y * W + x, e = x + 1;
+            uint32_t kind = ero__kind(r, i);
+            while (e < W && e - x < ERO__SPAN && ero__kind(r, y * W + e) == kind) e++;
+            if (seg) { seg[2 * cnt] = (uint32_t)i; seg[2 * cnt + 1] = (uint32_t)(e - x) << 2 | kind; }
+            cnt++;
+            x = e;
+        }
+    return cnt;
+}
+
+/* a surface's per-call tables: the base normals in planes, the runs of texel kinds */
+static ero_result ero__surface_tables(ero__run *r)
+{
+    size_t i;
+    if (r->hf) return ERO_OK;
+    for (i = 0; i < r->n; i++) {
+        r->N[0][i] = r->nrm[3 * i + 0]; r->N[1][i] = r->nrm[3 * i + 1]; r->N[2][i] = r->nrm[3 * i + 2];
+    }
+    r->seg_count = ero__segments(r, NULL);
+    r->seg = (uint32_t *)ero__alloc(r->al, 2 * r->seg_count * sizeof(uint32_t));
+    if (!r->seg) return ERO_ERR_OUT_OF_MEMORY;
+    ero__segments(r, r->seg);
+    return ERO_OK;
+}
+
 /* ================================================================================================
    geometry: surface points, offsets to neighbours, normals, curvature
    ================================================================================================ */
@@ -672,12 +741,13 @@ static void ero__regular_runs(ero__run *r)
 static void ero__points(ero__run *r)
 {
     size_t i;
+    float *ERO__RESTRICT px = r->P[0], *ERO__RESTRICT py = r->P[1], *ERO__RESTRICT pz = r->P[2];
     if (r->hf) return;
     for (i = 0; i < r->n; i++) {
         float d = r->disp[i];
-        r->P[3 * i + 0] = r->pos[3 * i + 0] - d * r->nrm[3 * i + 0];
-        r->P[3 * i + 1] = r->pos[3 * i + 1] - d * r->nrm[3 * i + 1];
-        r->P[3 * i + 2] = r->pos[3 * i + 2] - d * r->nrm[3 * i + 2];
+        px[i] = r->pos[3 * i + 0] - d * r->nrm[3 * i + 0];
+        py[i] = r->pos[3 * i + 1] - d * r->nrm[3 * i + 1];
+        pz[i] = r->pos[3 * i + 2] - d * r->nrm[3 * i + 2];
     }
 }
 
@@ -688,11 +758,14 @@ static void ero__offset(const ero__run *r, uint32_t i, uint32_t j, int d, int ba
         e[0] = d == 0 ? r->s : d == 1 ? -r->s : 0.0f;
         e[1] = d == 2 ? r->s : d == 3 ? -r->s : 0.0f;
         e[2] = base ? 0.0f : r->disp[j] - r->disp[i];
+    } else if (base) {
+        e[0] = r->pos[3 * (size_t)j + 0] - r->pos[3 * (size_t)i + 0];
+        e[1] = r->pos[3 * (size_t)j + 1] - r->pos[3 * (size_t)i + 1];
+        e[2] = r->pos[3 * (size_t)j + 2] - r->pos[3 * (size_t)i + 2];
     } else {
-        const float *a = base ? r->pos : r->P;
-        e[0] = a[3 * (size_t)j + 0] - a[3 * (size_t)i + 0];
-        e[1] = a[3 * (size_t)j + 1] - a[3 * (size_t)i + 1];
-        e[2] = a[3 * (size_t)j + 2] - a[3 * (size_t)i + 2];
+        e[0] = r->P[0][j] - r->P[0][i];
+        e[1] = r->P[1][j] - r->P[1][i];
+        e[2] = r->P[2][j] - r->P[2][i];
     }
 }
 
@@ -755,43 +828,93 @@ static inline void ero__texel_geometry(float e[4][3], int have, const float nb[3
     *g0 = n[0]; *g1 = n[1]; *g2 = n[2]; *g3 = kappa;
 }
 
-/* normal and mean curvature of the surface at every valid texel, into g[0..3]; texels whose four
-   neighbours are the grid's (the regular-run table) gather them without a lookup */
+/* texel i's normal and mean curvature into g[0..3] (0 where invalid), its neighbours looked up;
+   a height field's texels with the four grid neighbours (the regular-run table) without a lookup */
+static void ero__texel_at(ero__run *r, size_t i)
+{
+    float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3];
+    const uint8_t *reg = r->reg + 4 * i;
+    int d, have = 0, rot;
+    static const float up[3] = {0.0f, 0.0f, 1.0f};
+    if (!ero__valid(r, (uint32_t)i)) { r->g[0][i] = r->g[1][i] = r->g[2][i] = r->g[3][i] = 0.0f; return; }
+    if (r->hf && reg[0] && reg[1] && reg[2] && reg[3]) {
+        const size_t j[4] = {i + 1, i - 1, i + (size_t)r->W, i - (size_t)r->W};
+        e[0][0] = r->s; e[1][0] = -r->s; e[2][1] = r->s; e[3][1] = -r->s;
+        for (d = 0; d < 4; d++) e[d][2] = r->disp[j[d]] - r->disp[i];
+        ero__texel_geometry(e, 15, up, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+        return;
+    }
+    for (d = 0; d < 4; d++) {
+        uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
+        if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
+        ero__offset(r, (uint32_t)i, j, d, 0, e[d]);
+        have |= 1 << d;
+    }
+    ero__base_normal(r, (uint32_t)i, nb);
+    ero__texel_geometry(e, have, nb, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+}
+
+/* the offsets from texel x of a run to its + and - neighbours along one axis (o: 1 or W) */
+#define ERO__OFFSETS(ep, em, o)                                                                       \
+    float ep##0 = px[x + o] - px[x], ep##1 = py[x + o] - py[x], ep##2 = pz[x + o] - pz[x];            \
+    float em##0 = px[x - o] - px[x], em##1 = py[x - o] - py[x], em##2 = pz[x - o] - pz[x]
+
+/* the geometry of n texels of a row whose four grid neighbours are valid texels (rows W apart):
+   ero__texel_geometry's sums in its order, its branches as selects, in loops that vectorise (the
+   square roots in a scalar loop apart, as sqrtf's errno keeps a loop from vectorising; ln is
+   scratch) */
+static void ero__quad_geometry(const float *ERO__RESTRICT px, const float *ERO__RESTRICT py, const float *ERO__RESTRICT pz,
+                               const float *ERO__RESTRICT nb0, const float *ERO__RESTRICT nb1,
+                               const float *ERO__RESTRICT nb2, long W, long n, float *ERO__RESTRICT ln,
+                               float *ERO__RESTRICT g0, float *ERO__RESTRICT g1, float *ERO__RESTRICT g2,
+                               float *ERO__RESTRICT g3)
+{
+    long x;
+    for (x = 0; x < n; x++) {
+        ERO__OFFSETS(a, b, 1);
+        ERO__OFFSETS(c, d, W);
+        float t0 = 0.5f * (a0 - b0), t1 = 0.5f * (a1 - b1), t2 = 0.5f * (a2 - b2);
+        float u0 = 0.5f * (c0 - d0), u1 = 0.5f * (c1 - d1), u2 = 0.5f * (c2 - d2);
+        float m0 = t1 * u2 - t2 * u1, m1 = t2 * u0 - t0 * u2, m2 = t0 * u1 - t1 * u0;
+        ln[x] = (m0 * m0 + m1 * m1) + m2 * m2;
+    }
+    for (x = 0; x < n; x++) ln[x] = sqrtf(ln[x]);
+    for (x = 0; x < n; x++) {
+        ERO__OFFSETS(a, b, 1);
+        ERO__OFFSETS(c, d, W);
+        float t0 = 0.5f * (a0 - b0), t1 = 0.5f * (a1 - b1), t2 = 0.5f * (a2 - b2);
+        float u0 = 0.5f * (c0 - d0), u1 = 0.5f * (c1 - d1), u2 = 0.5f * (c2 - d2);
+        float m0 = t1 * u2 - t2 * u1, m1 = t2 * u0 - t0 * u2, m2 = t0 * u1 - t1 * u0, len = ln[x];
+        float side = (m0 * nb0[x] + m1 * nb1[x]) + m2 * nb2[x], inv = (side < 0.0f ? -1.0f : 1.0f) / len;
+        float n0 = len > 0.0f ? m0 * inv : nb0[x], n1 = len > 0.0f ? m1 * inv : nb1[x], n2 = len > 0.0f ? m2 * inv : nb2[x];
+        float qx = ((a0 * a0 + a1 * a1) + a2 * a2) + ((b0 * b0 + b1 * b1) + b2 * b2);
+        float qy = ((c0 * c0 + c1 * c1) + c2 * c2) + ((d0 * d0 + d1 * d1) + d2 * d2);
+        float kx = -2.0f * (((a0 * n0 + a1 * n1) + a2 * n2) + ((b0 * n0 + b1 * n1) + b2 * n2)) / qx;
+        float ky = -2.0f * (((c0 * n0 + c1 * n1) + c2 * n2) + ((d0 * n0 + d1 * n1) + d2 * n2)) / qy;
+        float fx0 = qx > 0.0f ? kx : 0.0f, fy0 = qy > 0.0f ? ky : 0.0f;
+        float fx = ero__fin(fx0) ? fx0 : 0.0f, fy = ero__fin(fy0) ? fy0 : 0.0f;
+        float fin = (n0 - n0) + (n1 - n1) + (n2 - n2); /* 0 when all are finite, else NaN */
+        g0[x] = fin == 0.0f ? n0 : nb0[x]; g1[x] = fin == 0.0f ? n1 : nb1[x]; g2[x] = fin == 0.0f ? n2 : nb2[x];
+        g3[x] = ((0.0f + fx) + fy) / 2.0f;
+    }
+}
+#undef ERO__OFFSETS
+
+/* normal and mean curvature of the surface at every valid texel, into g[0..3]: a surface's runs
+   of texels with the four grid neighbours in rows, the rest (and a height field) texel by texel */
 static void ero__geometry(ero__run *r)
 {
-    size_t i, W = (size_t)r->W;
-    static const float up[3] = {0.0f, 0.0f, 1.0f};
-    for (i = 0; i < r->n; i++) {
-        float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3];
-        const uint8_t *reg = r->reg + 4 * i;
-        int d, have = 0, rot;
-        if (!ero__valid(r, (uint32_t)i)) { r->g[0][i] = r->g[1][i] = r->g[2][i] = r->g[3][i] = 0.0f; continue; }
-        if (reg[0] && reg[1] && reg[2] && reg[3]) {
-            const size_t j[4] = {i + 1, i - 1, i + W, i - W};
-            if (r->hf) {
-                const float *h = r->disp, s = r->s;
-                e[0][0] = s; e[1][0] = -s; e[2][1] = s; e[3][1] = -s;
-                for (d = 0; d < 4; d++) e[d][2] = h[j[d]] - h[i];
-                ero__texel_geometry(e, 15, up, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
-            } else {
-                const float *P = r->P;
-                for (d = 0; d < 4; d++) {
-                    e[d][0] = P[3 * j[d] + 0] - P[3 * i + 0];
-                    e[d][1] = P[3 * j[d] + 1] - P[3 * i + 1];
-                    e[d][2] = P[3 * j[d] + 2] - P[3 * i + 2];
-                }
-                ero__texel_geometry(e, 15, r->nrm + 3 * i, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
-            }
-            continue;
-        }
-        for (d = 0; d < 4; d++) {
-            uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
-            if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
-            ero__offset(r, (uint32_t)i, j, d, 0, e[d]);
-            have |= 1 << d;
-        }
-        ero__base_normal(r, (uint32_t)i, nb);
-        ero__texel_geometry(e, have, nb, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+    size_t i, k;
+    if (r->hf) {
+        for (i = 0; i < r->n; i++) ero__texel_at(r, i);
+        return;
+    }
+    for (k = 0; k < r->seg_count; k++) {
+        size_t i0 = r->seg[2 * k], len = r->seg[2 * k + 1] >> 2;
+        if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
+            ero__quad_geometry(r->P[0] + i0, r->P[1] + i0, r->P[2] + i0, r->N[0] + i0, r->N[1] + i0, r->N[2] + i0, r->W,
+                               (long)len, r->span, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0);
+        else for (i = i0; i < i0 + len; i++) ero__texel_at(r, i);
     }
 }
 
@@ -838,69 +961,151 @@ static void ero__columns(ero__run *r)
    the seam-aware separable filter
    ================================================================================================ */
 
-/* the taps of a regular stretch of cnt texels from i0 along a stride (1 or W), all of them inside
-   the grid: the same sums in the same order as ero__walked_taps, eight texels at a time (times
-   the reciprocal of the weights' sum, as there) */
-static void ero__taps_run(const float *f, float *out, size_t i0, size_t cnt, size_t st, const float *w, int R, float wfull)
+enum { ERO__RUN_INVALID = 0, ERO__RUN_REGULAR = 1, ERO__RUN_WALK = 2 };
+
+/* a texel's kind for a pass along axis with radius R: invalid, regular (R grid steps both ways
+   stay valid and unrotated: the taps index directly), walked */
+static uint32_t ero__pass_kind(const ero__run *r, size_t i, int axis, int R)
 {
-    size_t x = 0;
-    int j, k;
-    float inv = 1.0f / wfull;
-    for (; x + 8 <= cnt; x += 8) {
-        const float *p = f + i0 + x;
-        float acc[8];
-        for (j = 0; j < 8; j++) acc[j] = w[0] * p[j];
-        for (k = 1; k <= R; k++) {
-            const float *up = p + (size_t)k * st, *dn = p - (size_t)k * st;
-            float wk = w[k];
-            for (j = 0; j < 8; j++) {
-                acc[j] += wk * up[j];
-                acc[j] += wk * dn[j];
-            }
-        }
-        for (j = 0; j < 8; j++) out[i0 + x + (size_t)j] = acc[j] * inv;
-    }
-    for (; x < cnt; x++) {
-        const float *p = f + i0 + x;
-        float acc = w[0] * p[0];
-        for (k = 1; k <= R; k++) {
-            acc += w[k] * p[(size_t)k * st];
-            acc += w[k] * p[-(ptrdiff_t)((size_t)k * st)];
-        }
-        out[i0 + x] = acc * inv;
-    }
+    const uint8_t *g = r->reg + 4 * i + 2 * axis;
+    if (!ero__valid(r, (uint32_t)i)) return ERO__RUN_INVALID;
+    return g[0] >= R && g[1] >= R ? ERO__RUN_REGULAR : ERO__RUN_WALK;
 }
 
-/* the texels ero__pass walks (valid, off a regular stretch), in its order: the count, or with
-   wk->tap set, their taps (ero__taps' walk, recorded once per call) */
-static size_t ero__record_walks(const ero__run *r, int axis, int R, ero__walks *wk)
+/* the runs of one pass kind within each row (at most 2^29 long) into seg (NULL: counted); the
+   walked texels' count into *walked */
+static size_t ero__pass_runs(const ero__run *r, int axis, int R, uint32_t *seg, size_t *walked)
 {
     size_t W = (size_t)r->W, y, x, cnt = 0;
+    *walked = 0;
     for (y = 0; y < (size_t)r->H; y++)
-        for (x = 0; x < W; x++) {
-            size_t i = y * W + x;
-            uint32_t jp = (uint32_t)i, jm = (uint32_t)i;
-            int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0, k;
-            if (!ero__valid(r, (uint32_t)i) || (r->reg[4 * i + 2 * (size_t)axis] >= R && r->reg[4 * i + 2 * (size_t)axis + 1] >= R))
-                continue;
-            if (wk->tap) {
-                uint32_t *t = wk->tap + 2 * (size_t)R * cnt;
-                uint8_t *o = wk->odd + 2 * (size_t)R * cnt;
-                for (k = 0; k < R; k++) {
-                    if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
-                    if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
-                    t[2 * k] = jp; o[2 * k] = (uint8_t)(tp & 1);
-                    t[2 * k + 1] = jm; o[2 * k + 1] = (uint8_t)(tm & 1);
-                }
-            }
+        for (x = 0; x < W;) {
+            size_t i = y * W + x, e = x + 1;
+            uint32_t kind = ero__pass_kind(r, i, axis, R);
+            while (e < W && e - x < ((size_t)1 << 29) && ero__pass_kind(r, y * W + e, axis, R) == kind) e++;
+            if (seg) { seg[2 * cnt] = (uint32_t)i; seg[2 * cnt + 1] = (uint32_t)(e - x) << 2 | kind; }
+            if (kind == ERO__RUN_WALK) *walked += e - x;
             cnt++;
+            x = e;
         }
     return cnt;
 }
 
-/* the taps of walked texel number e (ero__taps' sums in its order) */
+/* the walks of walked texel i (number e): R steps each way along axis, the taps met and whether
+   an odd number of quarter turns led to them */
+static void ero__walk(const ero__run *r, ero__walks *wk, size_t e, uint32_t i, int axis, int R)
+{
+    uint32_t *t = wk->tap + 2 * (size_t)R * e, jp = i, jm = i;
+    uint8_t *o = wk->odd + 2 * (size_t)R * e;
+    int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0, k;
+    wk->texel[e] = i;
+    for (k = 0; k < R; k++) {
+        if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
+        if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
+        t[2 * k] = jp; o[2 * k] = (uint8_t)(tp & 1);
+        t[2 * k + 1] = jm; o[2 * k + 1] = (uint8_t)(tm & 1);
+    }
+}
+
+/* the walk number of texel j (UINT32_MAX: not walked) */
+static uint32_t ero__walk_of(const ero__walks *wk, uint32_t j)
+{
+    size_t lo = 0, hi = wk->count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (wk->texel[mid] < j) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < wk->count && wk->texel[lo] == j ? (uint32_t)lo : ERO__NONE;
+}
+
+/* the odd taps of the second pass (axis 1): their walks and room for C channels of values */
+static ero_result ero__record_alt(ero__run *r, ero__walks *wk, int R, int C)
+{
+    size_t e, m = 0, k;
+    for (e = 0; e < 2 * (size_t)R * wk->count; e++) m += wk->odd[e] && wk->tap[e] != ERO__NONE;
+    wk->alt_count = m;
+    if (!m) return ERO_OK;
+    wk->alt_walk = (uint32_t *)ero__alloc(r->al, m * sizeof(uint32_t));
+    wk->alt[0] = (float *)ero__alloc(r->al, (size_t)C * m * sizeof(float));
+    if (!wk->alt_walk || !wk->alt[0]) return ERO_ERR_OUT_OF_MEMORY;
+    for (k = 1; k < (size_t)C; k++) wk->alt[k] = wk->alt[0] + k * m;
+    for (e = 0, m = 0; e < 2 * (size_t)R * wk->count; e++)
+        if (wk->odd[e] && wk->tap[e] != ERO__NONE) wk->alt_walk[m++] = ero__walk_of(wk, wk->tap[e]);
+    return ERO_OK;
+}
+
+/* one kernel's and axis's runs and walks */
+static ero_result ero__record_walks(ero__run *r, ero__walks *wk, int axis, int R, int C)
+{
+    size_t walked, k, e = 0;
+    wk->seg_count = ero__pass_runs(r, axis, R, NULL, &walked);
+    wk->count = walked;
+    wk->seg = (uint32_t *)ero__alloc(r->al, 2 * wk->seg_count * sizeof(uint32_t));
+    wk->texel = (uint32_t *)ero__alloc(r->al, walked * sizeof(uint32_t) + 1);
+    wk->tap = (uint32_t *)ero__alloc(r->al, 2 * (size_t)R * walked * sizeof(uint32_t) + 1);
+    wk->odd = (uint8_t *)ero__alloc(r->al, 2 * (size_t)R * walked + 1);
+    if (!wk->seg || !wk->texel || !wk->tap || !wk->odd) return ERO_ERR_OUT_OF_MEMORY;
+    ero__pass_runs(r, axis, R, wk->seg, &walked);
+    for (k = 0; k < wk->seg_count; k++) {
+        uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, i;
+        if ((wk->seg[2 * k + 1] & 3) == ERO__RUN_WALK)
+            for (i = i0; i < i0 + len; i++) ero__walk(r, wk, e++, i, axis, R);
+    }
+    return axis == 1 && r->has_rot ? ero__record_alt(r, wk, R, C) : ERO_OK;
+}
+
+/* every kernel's and axis's walks (box: 4 channels, Gaussian: 1) */
+static ero_result ero__record_all_walks(ero__run *r)
+{
+    int kern, axis;
+    ero_result e;
+    if (r->hf && r->ring) return ERO_OK;
+    for (kern = 0; kern < 2; kern++)
+        for (axis = 0; axis < 2; axis++) {
+            int R = kern ? r->gau_r : r->box_r;
+            if (R && (e = ero__record_walks(r, &r->walks[kern][axis], axis, R, kern ? 1 : 4)) != ERO_OK) return e;
+        }
+    return ERO_OK;
+}
+
+static void ero__free_walks(ero__run *r)
+{
+    int kern, axis;
+    for (kern = 0; kern < 2; kern++)
+        for (axis = 0; axis < 2; axis++) {
+            ero__walks *wk = &r->walks[kern][axis];
+            ero__free(r->al, wk->seg);
+            ero__free(r->al, wk->texel);
+            ero__free(r->al, wk->tap);
+            ero__free(r->al, wk->odd);
+            ero__free(r->al, wk->alt_walk);
+            ero__free(r->al, wk->alt[0]);
+        }
+}
+
+/* the taps of a regular run of n texels along a stride st (1 or W): w[0] f + (w[k] f(+k) +
+   w[k] f(-k)) for k = 1..R in that order, times inv (the reciprocal of the weights' sum), as
+   ero__walked_taps sums them */
+static void ero__taps_line(const float *ERO__RESTRICT f, float *ERO__RESTRICT out, long n, long st, const float *w,
+                           int R, float inv)
+{
+    long x;
+    int k;
+    float w0 = w[0];
+    for (x = 0; x < n; x++) out[x] = w0 * f[x];
+    for (k = 1; k <= R; k++) {
+        const float *ERO__RESTRICT up = f + k * st, *ERO__RESTRICT dn = f - k * st;
+        float wk = w[k];
+        for (x = 0; x < n; x++) out[x] = (out[x] + wk * up[x]) + wk * dn[x];
+    }
+    for (x = 0; x < n; x++) out[x] = out[x] * inv;
+}
+
+/* the taps of walked texel number e: odd taps read alt's values in the order the pass meets
+   them (*next counts them; alt NULL: src's own values) */
 static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *const *src, float *const *alt,
-                             int C, const float *w, int R, float *out)
+                             size_t *next, int C, const float *w, int R, float *out)
 {
     const uint32_t *t = wk->tap + 2 * (size_t)R * e;
     const uint8_t *o = wk->odd + 2 * (size_t)R * e;
@@ -910,93 +1115,84 @@ static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *
     for (k = 0; k < R; k++)
         for (s = 0; s < 2; s++) {
             uint32_t j = t[2 * k + s];
-            float *const *f = o[2 * k + s] ? alt : src;
             if (j == ERO__NONE) continue;
-            for (c = 0; c < C; c++) acc[c] += w[k + 1] * f[c][j];
+            if (o[2 * k + s] && alt) {
+                for (c = 0; c < C; c++) acc[c] += w[k + 1] * alt[c][*next];
+                ++*next;
+            } else
+                for (c = 0; c < C; c++) acc[c] += w[k + 1] * src[c][j];
             ws += w[k + 1];
         }
     ws = 1.0f / ws;
     for (c = 0; c < C; c++) out[c] = acc[c] * ws;
 }
 
-/* every kernel's and axis's walks in one block */
-static ero_result ero__record_all_walks(ero__run *r)
+/* the y pass of src at the second pass's odd taps (texel by texel: regular ones directly,
+   the others by their walks), into wk->alt */
+static void ero__alt_values(const ero__run *r, ero__walks *wk, float *const *src, int C, const float *w, int R,
+                            float inv)
 {
-    size_t total = 0, cnt[2][2];
-    int kern, axis;
-    unsigned char *b;
-    if (r->hf && r->ring) return ERO_OK;
-    for (kern = 0; kern < 2; kern++)
-        for (axis = 0; axis < 2; axis++) {
-            int R = kern ? r->gau_r : r->box_r;
-            r->walks[kern][axis].tap = NULL;
-            cnt[kern][axis] = R ? ero__record_walks(r, axis, R, &r->walks[kern][axis]) : 0;
-            total += cnt[kern][axis] * 2 * (size_t)R;
-        }
-    r->walk_block = ero__alloc(r->al, total * 5 + 1);
-    if (!r->walk_block) return ERO_ERR_OUT_OF_MEMORY;
-    b = (unsigned char *)r->walk_block;
-    for (kern = 0; kern < 2; kern++)
-        for (axis = 0; axis < 2; axis++) {
-            int R = kern ? r->gau_r : r->box_r;
-            ero__walks *wk = &r->walks[kern][axis];
-            wk->count = cnt[kern][axis];
-            wk->tap = (uint32_t *)b; b += wk->count * 2 * (size_t)R * sizeof(uint32_t);
-        }
-    for (kern = 0; kern < 2; kern++)
-        for (axis = 0; axis < 2; axis++) {
-            int R = kern ? r->gau_r : r->box_r;
-            ero__walks *wk = &r->walks[kern][axis];
-            wk->odd = b; b += wk->count * 2 * (size_t)R;
-            if (R) ero__record_walks(r, axis, R, wk);
-        }
-    return ERO_OK;
+    size_t e, m = 0, W = (size_t)r->W;
+    float v[4];
+    int c, k;
+    for (e = 0; e < 2 * (size_t)R * wk->count; e++) {
+        uint32_t j = wk->tap[e], q;
+        if (!wk->odd[e] || j == ERO__NONE) continue;
+        q = wk->alt_walk[m];
+        if (q != ERO__NONE) ero__walked_taps(wk, q, j, src, NULL, NULL, C, w, R, v);
+        else
+            for (c = 0; c < C; c++) {
+                const float *f = src[c] + j;
+                float acc = w[0] * f[0];
+                for (k = 1; k <= R; k++) {
+                    acc += w[k] * f[(size_t)k * W];
+                    acc += w[k] * f[-(ptrdiff_t)((size_t)k * W)];
+                }
+                v[c] = acc * inv;
+            }
+        for (c = 0; c < C; c++) wk->alt[c][m] = v[c];
+        m++;
+    }
 }
 
-/* one filter pass along `axis` of every texel: src (even turns) / alt (odd turns) into out;
-   regular stretches of each row go to ero__taps_run, the rest walk */
+/* one filter pass along `axis` of every texel, src into out: regular runs by ero__taps_line,
+   walked texels by their recorded taps (odd ones from alt, NULL: src), invalid ones 0 */
 static void ero__pass(const ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
                       const float *w, int R, float wfull, const ero__walks *wk)
 {
-    size_t W = (size_t)r->W, y, x, c, next = 0;
-    float v[4];
-    for (y = 0; y < (size_t)r->H; y++) {
-        size_t row = y * W;
-        for (x = 0; x < W;) {
-            size_t i = row + x, e = x;
-            while (e < W && ero__valid(r, (uint32_t)(row + e)) && r->reg[4 * (row + e) + 2 * (size_t)axis] >= R &&
-                   r->reg[4 * (row + e) + 2 * (size_t)axis + 1] >= R)
-                e++;
-            if (e > x) {
-                for (c = 0; c < (size_t)C; c++) ero__taps_run(src[c], out[c], i, e - x, axis ? W : 1, w, R, wfull);
-                x = e;
-                continue;
+    size_t k, e = 0, odd = 0;
+    long st = axis ? (long)r->W : 1;
+    float v[4], inv = 1.0f / wfull;
+    int c;
+    for (k = 0; k < wk->seg_count; k++) {
+        uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, kind = wk->seg[2 * k + 1] & 3, i;
+        if (kind == ERO__RUN_REGULAR)
+            for (c = 0; c < C; c++) ero__taps_line(src[c] + i0, out[c] + i0, (long)len, st, w, R, inv);
+        else if (kind == ERO__RUN_INVALID)
+            for (c = 0; c < C; c++) memset(out[c] + i0, 0, len * sizeof(float));
+        else
+            for (i = i0; i < i0 + len; i++) {
+                ero__walked_taps(wk, e++, i, src, alt, &odd, C, w, R, v);
+                for (c = 0; c < C; c++) out[c][i] = v[c];
             }
-            if (!ero__valid(r, (uint32_t)i)) for (c = 0; c < (size_t)C; c++) out[c][i] = 0.0f;
-            else {
-                ero__walked_taps(wk, next++, (uint32_t)i, src, alt, C, w, R, v);
-                for (c = 0; c < (size_t)C; c++) out[c][i] = v[c];
-            }
-            x++;
-        }
     }
 }
 
 /* the planes src (C of them) filtered along each texel's x then y, into dst (may be src):
-   pass 1 along own x (and, with rotated seams, along own y), pass 2 along own y over the
-   values that continue this texel's x */
-static void ero__filter(ero__run *r, float **src, float **dst, int C, const float *w, int R, float wfull,
-                        const ero__walks *wk)
+   pass 1 along own x, pass 2 along own y over the values that continue this texel's x (across
+   a seam that turns the axes, the y pass of src at the texel reached: ero__alt_values) */
+static void ero__filter(ero__run *r, int kern, float **src, float **dst, int C, const float *w, int R, float wfull)
 {
     size_t i;
     int c;
+    ero__walks *wk = r->walks[kern];
     if (R == 0) {
         if (dst != src) for (c = 0; c < C; c++) memcpy(dst[c], src[c], r->n * sizeof(float));
         return;
     }
-    ero__pass(r, 0, src, src, r->ax, C, w, R, wfull, &wk[0]);
-    if (r->has_rot) ero__pass(r, 1, src, src, r->ay, C, w, R, wfull, &wk[1]);
-    ero__pass(r, 1, r->ax, r->ay, dst, C, w, R, wfull, &wk[1]);
+    ero__pass(r, 0, src, NULL, r->ax, C, w, R, wfull, &wk[0]);
+    if (wk[1].alt_count) ero__alt_values(r, &wk[1], src, C, w, R, 1.0f / wfull);
+    ero__pass(r, 1, r->ax, wk[1].alt_count ? wk[1].alt : NULL, dst, C, w, R, wfull, &wk[1]);
     if (r->valid) /* invalid texels keep their values */
         for (i = 0; i < r->n; i++)
             if (!r->valid[i] && dst != src) for (c = 0; c < C; c++) dst[c][i] = src[c][i];
@@ -1147,23 +1343,6 @@ static void ero__extend_invalid(ero__run *r)
    box-filtered along x as it is made, the box's y pass and H follow br rows later, H's Gaussian x
    pass at once and its y pass gr rows later, then the change is applied; the rows the geometry
    still reads after they changed come from copies (the first ones, for the wrap; the last four). */
-
-#if defined(__GNUC__) || defined(__clang__)
-#define ERO__RESTRICT __restrict
-#define ERO__INLINE static inline __attribute__((always_inline))
-#elif defined(_MSC_VER)
-#define ERO__RESTRICT __restrict
-#define ERO__INLINE static __forceinline
-#else
-#define ERO__RESTRICT
-#define ERO__INLINE static inline
-#endif
-/* an eight-lane loop unrolled so that its lanes vectorise (GCC does not unroll it at -O2) */
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8
-#define ERO__UNROLL8 _Pragma("GCC unroll 8")
-#else
-#define ERO__UNROLL8
-#endif
 
 typedef struct ero__rows {
     size_t Wp;            /* the row length (ero__ring_stride) */
@@ -1319,8 +1498,6 @@ static void ero__ring_ypass(const ero__rows *q, float *const *rows, float *ERO__
    zero components left out (tx = (s, 0, a), ty = (0, s, b), so Tx x Ty = (-a s, -s b, s s)),
    its branches as selects so that a row's loop vectorises; len2 = |Tx x Ty|^2, inv its
    reciprocal square root */
-/* finite without a branch: v - v is 0 for finite v, NaN otherwise */
-ERO__INLINE int ero__fin(float v) { return v - v == 0.0f; }
 
 /* 1 / sqrt(x) for x >= 0 without sqrtf (whose errno keeps a loop from vectorising): the exponent
    halved on the bits (Lomont's constant), three Newton steps (relative error below 2e-7, about
@@ -1632,10 +1809,10 @@ static void ero__time_step(ero__run *r, ero_report *rep)
     if (r->ring) { ero__ring_step(r, rep); return; }
     ero__points(r);                                                   /* 5. (of the last step) surface */
     ero__geometry(r);                                                 /*    normals, curvature */
-    ero__filter(r, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum, r->walks[0]); /* their averages */
+    ero__filter(r, 0, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum);  /* their averages */
     ero__erosion_heights(r);                                          /* 1-2. H into the erosion map */
     one[0] = r->hh;
-    ero__filter(r, one, one, 1, r->gau_w, r->gau_r, r->gau_sum, r->walks[1]); /* 3. low-pass filter */
+    ero__filter(r, 1, one, one, 1, r->gau_w, r->gau_r, r->gau_sum);     /* 3. low-pass filter */
     memset(rep, 0, sizeof *rep);
     ero__apply(r, rep);                                               /* 4. add it to the map */
     ero__extend_invalid(r);
@@ -1686,8 +1863,10 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
     if ((e = ero__scratch(&r)) != ERO_OK) return e;
     if (!r.ring) ero__regular_runs(&r);
-    if ((e = ero__record_all_walks(&r)) != ERO_OK || (e = ero__extension(&r)) != ERO_OK) {
-        ero__free(r.al, r.walk_block);
+    if ((e = ero__surface_tables(&r)) != ERO_OK || (e = ero__record_all_walks(&r)) != ERO_OK ||
+        (e = ero__extension(&r)) != ERO_OK) {
+        ero__free(r.al, r.seg);
+        ero__free_walks(&r);
         ero__free(r.al, r.block);
         return e;
     }
@@ -1707,7 +1886,8 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if (e == ERO_OK && r.o.progress) r.o.progress(r.o.user, 1.0f);
     if (total) *total = sum;
     ero__free(r.al, r.ext);
-    ero__free(r.al, r.walk_block);
+    ero__free(r.al, r.seg);
+    ero__free_walks(&r);
     ero__free(r.al, r.block);
     return e;
 }
