@@ -392,7 +392,7 @@ typedef struct ero__run {
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
-    float *span;                           /* 4 ERO__SPAN: H's material rows */
+    float *span;                           /* 9 ERO__SPAN: H's material rows, a pass's rows, scratch */
     ero__walks walks[2][2];                /* per kernel (box, Gaussian) and axis */
     uint32_t *ext;                         /* invalid texels that take their neighbours' change: i, count, neighbours */
     size_t ext_len;
@@ -417,7 +417,7 @@ static void ero__free(const ero_allocator *a, void *p)
 }
 
 /* the neighbour of texel i = (x, y) along d (0 +x, 1 -x, 2 +y, 3 -y), the quarter turns into its axes */
-static uint32_t ero__nb_xy(const ero__run *r, uint32_t i, uint32_t x, uint32_t y, int d, int *rot)
+ERO__INLINE uint32_t ero__nb_xy(const ero__run *r, uint32_t i, uint32_t x, uint32_t y, int d, int *rot)
 {
     uint32_t W = (uint32_t)r->W, H = (uint32_t)r->H;
     *rot = 0;
@@ -434,21 +434,21 @@ static uint32_t ero__nb_xy(const ero__run *r, uint32_t i, uint32_t x, uint32_t y
     }
 }
 
-static uint32_t ero__nb(const ero__run *r, uint32_t i, int d, int *rot)
+ERO__INLINE uint32_t ero__nb(const ero__run *r, uint32_t i, int d, int *rot)
 {
     if (!r->hf) return ero__nb_xy(r, i, 0, 0, d, rot);
     return ero__nb_xy(r, i, i % (uint32_t)r->W, i / (uint32_t)r->W, d, rot);
 }
 
 /* direction d turned `rot` quarter turns counter-clockwise (+x -> +y -> -x -> -y) */
-static int ero__turn(int d, int rot)
+ERO__INLINE int ero__turn(int d, int rot)
 {
     static const int to_angle[4] = {0, 2, 1, 3}; /* d -> angle index; the table is its own inverse */
     return to_angle[(to_angle[d] + rot) & 3];
 }
 
 /* one step of a walk: the next usable texel (UINT32_MAX if none), the direction in its axes */
-static uint32_t ero__step(const ero__run *r, uint32_t i, int *d, int *turns)
+ERO__INLINE uint32_t ero__step(const ero__run *r, uint32_t i, int *d, int *turns)
 {
     int rot;
     uint32_t j = ero__nb(r, i, *d, &rot);
@@ -638,28 +638,32 @@ static ero_result ero__kernels(ero__run *r, double h)
    scratch
    ================================================================================================ */
 
+/* the planes are n + ERO__STAGGER floats apart: planes of a power-of-two size would start at the
+   same address modulo 4 KiB, and a loop over ten of them would thrash an L1 set and stall on
+   false store-to-load aliasing */
+#define ERO__STAGGER 48
 static ero_result ero__scratch(ero__run *r)
 {
-    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 3 + 2), bytes, k;
+    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 3 + 2), bytes, k, np = n + ERO__STAGGER;
     float *f;
     if (r->ring) { /* rows only */
         r->block = ero__alloc(r->al, ero__ring_floats(r) * sizeof(float));
         r->hh = (float *)r->block;
         return r->block ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
     }
-    bytes = (planes * n + 4 * ERO__SPAN) * sizeof(float) + 4 * n;
+    bytes = (planes * np + 9 * ERO__SPAN) * sizeof(float) + 4 * n;
     r->block = ero__alloc(r->al, bytes);
     if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
     f = (float *)r->block;
-    for (k = 0; k < 4; k++) { r->g[k] = f; f += n; }
-    for (k = 0; k < 4; k++) { r->ax[k] = f; f += n; }
-    r->hh = f; f += n;
-    r->span = f; f += 4 * ERO__SPAN;
+    for (k = 0; k < 4; k++) { r->g[k] = f; f += np; }
+    for (k = 0; k < 4; k++) { r->ax[k] = f; f += np; }
+    r->hh = f; f += np;
+    r->span = f; f += 9 * ERO__SPAN;
     if (!r->hf) {
-        for (k = 0; k < 3; k++) { r->P[k] = f; f += n; }
-        for (k = 0; k < 3; k++) { r->N[k] = f; f += n; }
-        r->q1 = f; f += n;
-        r->q2 = f; f += n;
+        for (k = 0; k < 3; k++) { r->P[k] = f; f += np; }
+        for (k = 0; k < 3; k++) { r->N[k] = f; f += np; }
+        r->q1 = f; f += np;
+        r->q2 = f; f += np;
     }
     r->reg = (uint8_t *)f;
     return ERO_OK;
@@ -913,7 +917,7 @@ static void ero__geometry(ero__run *r)
         size_t i0 = r->seg[2 * k], len = r->seg[2 * k + 1] >> 2;
         if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
             ero__quad_geometry(r->P[0] + i0, r->P[1] + i0, r->P[2] + i0, r->N[0] + i0, r->N[1] + i0, r->N[2] + i0, r->W,
-                               (long)len, r->span, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0);
+                               (long)len, r->span + 8 * ERO__SPAN, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0);
         else for (i = i0; i < i0 + len; i++) ero__texel_at(r, i);
     }
 }
@@ -921,39 +925,84 @@ static void ero__geometry(ero__run *r)
 /* the column volume coefficients (surface): a texel's column between depths t0 and t1 holds
    area (t1 - t0 + q1 (t1^2 - t0^2) / 2 + q2 (t1^3 - t0^3) / 3), from
    det(Bu - t Nu, Bv - t Nv, n) / det(Bu, Bv, n) = 1 + q1 t + q2 t^2 (B base, N normal differences) */
+static void ero__column_at(ero__run *r, size_t i)
+{
+    float eb[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, en[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    float bu[3], bv[3], nu[3], nv[3], c[3], n[3], a0, a1, a2;
+    int d, have = 0, rot, k;
+    r->q1[i] = r->q2[i] = 0.0f;
+    if (!ero__valid(r, (uint32_t)i)) return;
+    for (d = 0; d < 4; d++) {
+        uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
+        if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
+        ero__offset(r, (uint32_t)i, j, d, 1, eb[d]);
+        for (k = 0; k < 3; k++) en[d][k] = r->nrm[3 * (size_t)j + (size_t)k] - r->nrm[3 * i + (size_t)k];
+        have |= 1 << d;
+    }
+    if (!ero__tangent(eb[0], eb[1], have & 3, bu) || !ero__tangent(eb[2], eb[3], (have >> 2) & 3, bv)) return;
+    ero__tangent(en[0], en[1], have & 3, nu);
+    ero__tangent(en[2], en[3], (have >> 2) & 3, nv);
+    ero__base_normal(r, (uint32_t)i, n);
+    ero__cross(bu, bv, c);
+    a0 = ero__dot(c, n);
+    if (fabsf(a0) < 1e-30f) return;
+    ero__cross(nu, bv, c);
+    a1 = -ero__dot(c, n);
+    ero__cross(bu, nv, c);
+    a1 -= ero__dot(c, n);
+    ero__cross(nu, nv, c);
+    a2 = ero__dot(c, n);
+    r->q1[i] = a1 / a0;
+    r->q2[i] = a2 / a0;
+    if (!ero__finite(r->q1[i]) || !ero__finite(r->q2[i])) r->q1[i] = r->q2[i] = 0.0f; /* beyond float's range */
+}
+
+/* ero__column_at's sums in its order for n texels of a row with the four grid neighbours (base
+   points b, normals m in planes), its branches as selects, in a loop that vectorises */
+#define ERO__TANGENT(t, f, o)                                                                         \
+    float t##0 = 0.5f * ((f##0[x + o] - f##0[x]) - (f##0[x - o] - f##0[x]));                           \
+    float t##1 = 0.5f * ((f##1[x + o] - f##1[x]) - (f##1[x - o] - f##1[x]));                           \
+    float t##2 = 0.5f * ((f##2[x + o] - f##2[x]) - (f##2[x - o] - f##2[x]))
+#define ERO__TRIPLE(a, b) (((a##1 * b##2 - a##2 * b##1) * m0[x] + (a##2 * b##0 - a##0 * b##2) * m1[x]) +     \
+                           (a##0 * b##1 - a##1 * b##0) * m2[x])
+static void ero__quad_columns(const float *ERO__RESTRICT b0, const float *ERO__RESTRICT b1, const float *ERO__RESTRICT b2,
+                              const float *ERO__RESTRICT m0, const float *ERO__RESTRICT m1,
+                              const float *ERO__RESTRICT m2, long W, long n, float *ERO__RESTRICT q1,
+                              float *ERO__RESTRICT q2)
+{
+    long x;
+    for (x = 0; x < n; x++) {
+        ERO__TANGENT(bu, b, 1);
+        ERO__TANGENT(bv, b, W);
+        ERO__TANGENT(nu, m, 1);
+        ERO__TANGENT(nv, m, W);
+        float a0 = ERO__TRIPLE(bu, bv), a1 = -ERO__TRIPLE(nu, bv), a2 = ERO__TRIPLE(nu, nv);
+        float a1b = a1 - ERO__TRIPLE(bu, nv), c1 = a1b / a0, c2 = a2 / a0;
+        float small = fabsf(a0) < 1e-30f ? 1.0f : 0.0f;
+        float bad = small + ((c1 - c1) + (c2 - c2)); /* 0 when a0 is usable and both are finite */
+        q1[x] = bad == 0.0f ? c1 : 0.0f;
+        q2[x] = bad == 0.0f ? c2 : 0.0f;
+    }
+}
+#undef ERO__TANGENT
+#undef ERO__TRIPLE
+
+/* the column coefficients of every valid texel (surface): runs with the four grid neighbours in
+   rows (the base points in P for the while), the rest texel by texel; 0 where invalid */
 static void ero__columns(ero__run *r)
 {
-    size_t i;
+    size_t i, k;
     if (r->hf) return;
     for (i = 0; i < r->n; i++) {
-        float eb[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, en[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, bu[3], bv[3], nu[3], nv[3], c[3], n[3], a0, a1, a2;
-        int d, have = 0, rot;
-        r->q1[i] = r->q2[i] = 0.0f;
-        if (!ero__valid(r, (uint32_t)i)) continue;
-        for (d = 0; d < 4; d++) {
-            uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
-            int k;
-            if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
-            ero__offset(r, (uint32_t)i, j, d, 1, eb[d]);
-            for (k = 0; k < 3; k++) en[d][k] = r->nrm[3 * (size_t)j + (size_t)k] - r->nrm[3 * i + (size_t)k];
-            have |= 1 << d;
-        }
-        if (!ero__tangent(eb[0], eb[1], have & 3, bu) || !ero__tangent(eb[2], eb[3], (have >> 2) & 3, bv)) continue;
-        ero__tangent(en[0], en[1], have & 3, nu);
-        ero__tangent(en[2], en[3], (have >> 2) & 3, nv);
-        ero__base_normal(r, (uint32_t)i, n);
-        ero__cross(bu, bv, c);
-        a0 = ero__dot(c, n);
-        if (fabsf(a0) < 1e-30f) continue;
-        ero__cross(nu, bv, c);
-        a1 = -ero__dot(c, n);
-        ero__cross(bu, nv, c);
-        a1 -= ero__dot(c, n);
-        ero__cross(nu, nv, c);
-        a2 = ero__dot(c, n);
-        r->q1[i] = a1 / a0;
-        r->q2[i] = a2 / a0;
-        if (!ero__finite(r->q1[i]) || !ero__finite(r->q2[i])) r->q1[i] = r->q2[i] = 0.0f; /* beyond float's range */
+        r->P[0][i] = r->pos[3 * i + 0]; r->P[1][i] = r->pos[3 * i + 1]; r->P[2][i] = r->pos[3 * i + 2];
+    }
+    for (k = 0; k < r->seg_count; k++) {
+        size_t i0 = r->seg[2 * k], len = r->seg[2 * k + 1] >> 2;
+        if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
+            ero__quad_columns(r->P[0] + i0, r->P[1] + i0, r->P[2] + i0, r->N[0] + i0, r->N[1] + i0, r->N[2] + i0, r->W,
+                              (long)len, r->q1 + i0, r->q2 + i0);
+        else
+            for (i = i0; i < i0 + len; i++) ero__column_at(r, i);
     }
 }
 
@@ -972,7 +1021,7 @@ static uint32_t ero__pass_kind(const ero__run *r, size_t i, int axis, int R)
     return g[0] >= R && g[1] >= R ? ERO__RUN_REGULAR : ERO__RUN_WALK;
 }
 
-/* the runs of one pass kind within each row (at most 2^29 long) into seg (NULL: counted); the
+/* the runs of one pass kind within each row (at most ERO__SPAN long) into seg (NULL: counted); the
    walked texels' count into *walked */
 static size_t ero__pass_runs(const ero__run *r, int axis, int R, uint32_t *seg, size_t *walked)
 {
@@ -982,13 +1031,22 @@ static size_t ero__pass_runs(const ero__run *r, int axis, int R, uint32_t *seg, 
         for (x = 0; x < W;) {
             size_t i = y * W + x, e = x + 1;
             uint32_t kind = ero__pass_kind(r, i, axis, R);
-            while (e < W && e - x < ((size_t)1 << 29) && ero__pass_kind(r, y * W + e, axis, R) == kind) e++;
+            while (e < W && e - x < ERO__SPAN && ero__pass_kind(r, y * W + e, axis, R) == kind) e++;
             if (seg) { seg[2 * cnt] = (uint32_t)i; seg[2 * cnt + 1] = (uint32_t)(e - x) << 2 | kind; }
             if (kind == ERO__RUN_WALK) *walked += e - x;
             cnt++;
             x = e;
         }
     return cnt;
+}
+
+/* ero__step, the grid's steps (the regular-run table) without a lookup */
+ERO__INLINE uint32_t ero__walk_step(const ero__run *r, uint32_t j, int *d, int *turns)
+{
+    static const int sign[4] = {1, -1, 1, -1};
+    if (j == ERO__NONE) return j;
+    if (r->reg[4 * (size_t)j + (size_t)*d]) return (uint32_t)((long)j + sign[*d] * (*d < 2 ? 1L : (long)r->W));
+    return ero__step(r, j, d, turns);
 }
 
 /* the walks of walked texel i (number e): R steps each way along axis, the taps met and whether
@@ -1000,8 +1058,8 @@ static void ero__walk(const ero__run *r, ero__walks *wk, size_t e, uint32_t i, i
     int dp = 2 * axis, dm = 2 * axis + 1, tp = 0, tm = 0, k;
     wk->texel[e] = i;
     for (k = 0; k < R; k++) {
-        if (jp != ERO__NONE) jp = ero__step(r, jp, &dp, &tp);
-        if (jm != ERO__NONE) jm = ero__step(r, jm, &dm, &tm);
+        jp = ero__walk_step(r, jp, &dp, &tp);
+        jm = ero__walk_step(r, jm, &dm, &tm);
         t[2 * k] = jp; o[2 * k] = (uint8_t)(tp & 1);
         t[2 * k + 1] = jm; o[2 * k + 1] = (uint8_t)(tm & 1);
     }
@@ -1155,47 +1213,68 @@ static void ero__alt_values(const ero__run *r, ero__walks *wk, float *const *src
     }
 }
 
-/* one filter pass along `axis` of every texel, src into out: regular runs by ero__taps_line,
-   walked texels by their recorded taps (odd ones from alt, NULL: src), invalid ones 0 */
-static void ero__pass(const ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
-                      const float *w, int R, float wfull, const ero__walks *wk)
+/* what a pass does with a run's values: planes (into out), H of the box's averages (into hh), the
+   change applied (the Gaussian's) */
+enum { ERO__SINK_PLANES = 0, ERO__SINK_H = 1, ERO__SINK_APPLY = 2 };
+
+static float ero__apply_texel(ero__run *r, size_t i, float h, ero_report *rep);
+static void ero__h_span(const ero__run *r, const float *a0, const float *a1, const float *a2, const float *kap,
+                        const uint8_t *mat, long cnt, float *const *mrow, float *out);
+static void ero__fill_materials(const ero__run *r, float *const *mrow);
+
+/* a run's values v (len of them, C channels, from texel i0) to the sink */
+static void ero__sink(ero__run *r, int sink, float *const *v, size_t i0, size_t len, ero_report *rep)
+{
+    size_t x;
+    float *mrow[4];
+    int k;
+    if (sink == ERO__SINK_H) {
+        for (k = 0; k < 4; k++) mrow[k] = r->span + (size_t)k * ERO__SPAN;
+        ero__h_span(r, v[0], v[1], v[2], v[3], r->mat ? r->mat + i0 : NULL, (long)len, mrow, r->hh + i0);
+    } else if (sink == ERO__SINK_APPLY)
+        for (x = 0; x < len; x++) r->hh[i0 + x] = ero__apply_texel(r, i0 + x, v[0][x], rep);
+}
+
+/* one filter pass along `axis` of every texel of src: regular runs by ero__taps_line, walked
+   texels by their recorded taps (odd ones from alt, NULL: src); a run's values go into out
+   (invalid texels 0) or, a run at a time, to a sink (invalid texels: H 0, no change) */
+static void ero__pass(ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
+                      const float *w, int R, float wfull, const ero__walks *wk, int sink, ero_report *rep)
 {
     size_t k, e = 0, odd = 0;
     long st = axis ? (long)r->W : 1;
-    float v[4], inv = 1.0f / wfull;
+    float v[4], inv = 1.0f / wfull, *o[4];
     int c;
+    if (sink != ERO__SINK_PLANES) ero__fill_materials(r, NULL);
     for (k = 0; k < wk->seg_count; k++) {
         uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, kind = wk->seg[2 * k + 1] & 3, i;
+        for (c = 0; c < C; c++) o[c] = sink == ERO__SINK_PLANES ? out[c] + i0 : r->span + (size_t)(4 + c) * ERO__SPAN;
+        if (kind == ERO__RUN_INVALID) {
+            if (sink == ERO__SINK_PLANES) for (c = 0; c < C; c++) memset(o[c], 0, len * sizeof(float));
+            if (sink == ERO__SINK_H) memset(r->hh + i0, 0, len * sizeof(float));
+            continue;
+        }
         if (kind == ERO__RUN_REGULAR)
-            for (c = 0; c < C; c++) ero__taps_line(src[c] + i0, out[c] + i0, (long)len, st, w, R, inv);
-        else if (kind == ERO__RUN_INVALID)
-            for (c = 0; c < C; c++) memset(out[c] + i0, 0, len * sizeof(float));
+            for (c = 0; c < C; c++) ero__taps_line(src[c] + i0, o[c], (long)len, st, w, R, inv);
         else
-            for (i = i0; i < i0 + len; i++) {
-                ero__walked_taps(wk, e++, i, src, alt, &odd, C, w, R, v);
-                for (c = 0; c < C; c++) out[c][i] = v[c];
+            for (i = 0; i < len; i++) {
+                ero__walked_taps(wk, e++, i0 + i, src, alt, &odd, C, w, R, v);
+                for (c = 0; c < C; c++) o[c][i] = v[c];
             }
+        ero__sink(r, sink, o, i0, len, rep);
     }
 }
 
-/* the planes src (C of them) filtered along each texel's x then y, into dst (may be src):
-   pass 1 along own x, pass 2 along own y over the values that continue this texel's x (across
-   a seam that turns the axes, the y pass of src at the texel reached: ero__alt_values) */
-static void ero__filter(ero__run *r, int kern, float **src, float **dst, int C, const float *w, int R, float wfull)
+/* the planes src (C of them) filtered along each texel's x then y: pass 1 along own x into ax,
+   pass 2 along own y over the values that continue this texel's x (across a seam that turns the
+   axes, the y pass of src at the texel reached: ero__alt_values), to the sink (R > 0) */
+static void ero__filter(ero__run *r, int kern, float **src, int C, const float *w, int R, float wfull, int sink,
+                        ero_report *rep)
 {
-    size_t i;
-    int c;
     ero__walks *wk = r->walks[kern];
-    if (R == 0) {
-        if (dst != src) for (c = 0; c < C; c++) memcpy(dst[c], src[c], r->n * sizeof(float));
-        return;
-    }
-    ero__pass(r, 0, src, NULL, r->ax, C, w, R, wfull, &wk[0]);
+    ero__pass(r, 0, src, NULL, r->ax, C, w, R, wfull, &wk[0], ERO__SINK_PLANES, NULL);
     if (wk[1].alt_count) ero__alt_values(r, &wk[1], src, C, w, R, 1.0f / wfull);
-    ero__pass(r, 1, r->ax, wk[1].alt_count ? wk[1].alt : NULL, dst, C, w, R, wfull, &wk[1]);
-    if (r->valid) /* invalid texels keep their values */
-        for (i = 0; i < r->n; i++)
-            if (!r->valid[i] && dst != src) for (c = 0; c < C; c++) dst[c][i] = src[c][i];
+    ero__pass(r, 1, r->ax, wk[1].alt_count ? wk[1].alt : NULL, NULL, C, w, R, wfull, &wk[1], sink, rep);
 }
 
 /* ================================================================================================
@@ -1681,13 +1760,22 @@ static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
     ero__h_span(r, q->avg[0], q->avg[1], q->avg[2], q->avg[3], mat, r->W, q->mrow, q->hrow);
 }
 
+/* the material rows in span (or mrow) for ero__h_span: the one material, if there is one */
+static void ero__fill_materials(const ero__run *r, float *const *mrow)
+{
+    float *rows[4];
+    int k;
+    for (k = 0; k < 4; k++) rows[k] = mrow ? mrow[k] : r->span + (size_t)k * ERO__SPAN;
+    if (r->mat_count == 1) ero__one_material(r, rows, ERO__SPAN);
+}
+
 /* H of every texel of the planes g (0 where invalid), in spans of ERO__SPAN */
 static void ero__erosion_heights(ero__run *r)
 {
     size_t i0, k;
     float *mrow[4];
     for (k = 0; k < 4; k++) mrow[k] = r->span + k * ERO__SPAN;
-    if (r->mat_count == 1) ero__one_material(r, mrow, ERO__SPAN);
+    ero__fill_materials(r, mrow);
     for (i0 = 0; i0 < r->n; i0 += ERO__SPAN) {
         long cnt = (long)(r->n - i0 < ERO__SPAN ? r->n - i0 : ERO__SPAN);
         ero__h_span(r, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0, r->mat ? r->mat + i0 : NULL, cnt, mrow,
@@ -1807,14 +1895,18 @@ static void ero__time_step(ero__run *r, ero_report *rep)
 {
     float *one[1];
     if (r->ring) { ero__ring_step(r, rep); return; }
-    ero__points(r);                                                   /* 5. (of the last step) surface */
-    ero__geometry(r);                                                 /*    normals, curvature */
-    ero__filter(r, 0, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum);  /* their averages */
-    ero__erosion_heights(r);                                          /* 1-2. H into the erosion map */
-    one[0] = r->hh;
-    ero__filter(r, 1, one, one, 1, r->gau_w, r->gau_r, r->gau_sum);     /* 3. low-pass filter */
+    ero__points(r);                                         /* 5. (of the last step) surface */
+    ero__geometry(r);                                       /*    normals, curvature */
     memset(rep, 0, sizeof *rep);
-    ero__apply(r, rep);                                               /* 4. add it to the map */
+    if (r->box_r)                                           /*    their averages, 1-2. H */
+        ero__filter(r, 0, r->g, 4, r->box_w, r->box_r, r->box_sum, ERO__SINK_H, NULL);
+    else
+        ero__erosion_heights(r);
+    one[0] = r->hh;
+    if (r->gau_r)                                           /* 3. low-pass filter, 4. added */
+        ero__filter(r, 1, one, 1, r->gau_w, r->gau_r, r->gau_sum, ERO__SINK_APPLY, rep);
+    else
+        ero__apply(r, rep);
     ero__extend_invalid(r);
 }
 
