@@ -114,8 +114,8 @@
      about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else
      40 bytes per texel for a height field and 72 for a surface grid (positions, base normals,
      normals, curvature, the filters' first pass, H, column coefficients, the regular-run
-     lengths) and 20 KiB, 8 bytes per run of one texel kind in a row (per pass and for the
-     geometry), 4 + 10 r bytes per axis and kernel for each texel within its radius r of a seam
+     lengths) and 40 KiB, 8 bytes per run of one texel kind in a row (per pass and for the
+     geometry), 16 bytes per valid texel off the four grid neighbours (its neighbours), 4 + 10 r bytes per axis and kernel for each texel within its radius r of a seam
      or border (the walks' taps, found once per call), 4 + 4 C bytes per tap that reaches a
      seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for the
      Gaussian), and up to 40 bytes for
@@ -387,6 +387,7 @@ typedef struct ero__run {
     float *N[3];                           /* base normals x, y, z (surface only) */
     uint32_t *seg;                         /* the image in runs: start, length << 2 | kind (ERO__SEG_*) */
     size_t seg_count;
+    uint32_t *onb;                         /* 4 per ERO__SEG_OTHER texel, in order: its usable neighbours */
     float *g[4];                           /* normal xyz, curvature; then their averages */
     float *ax[4];                          /* the filters' first pass (along own x) */
     float *hh;                             /* H, then the filtered change */
@@ -726,7 +727,8 @@ static size_t ero__segments(const ero__run *r, uint32_t *seg)
 /* a surface's per-call tables: the base normals in planes, the runs of texel kinds */
 static ero_result ero__surface_tables(ero__run *r)
 {
-    size_t i;
+    size_t i, k, other = 0;
+    int d, rot;
     if (r->hf) return ERO_OK;
     for (i = 0; i < r->n; i++) {
         r->N[0][i] = r->nrm[3 * i + 0]; r->N[1][i] = r->nrm[3 * i + 1]; r->N[2][i] = r->nrm[3 * i + 2];
@@ -735,6 +737,18 @@ static ero_result ero__surface_tables(ero__run *r)
     r->seg = (uint32_t *)ero__alloc(r->al, 2 * r->seg_count * sizeof(uint32_t));
     if (!r->seg) return ERO_ERR_OUT_OF_MEMORY;
     ero__segments(r, r->seg);
+    for (k = 0; k < r->seg_count; k++) other += (r->seg[2 * k + 1] & 3) == ERO__SEG_OTHER ? r->seg[2 * k + 1] >> 2 : 0;
+    r->onb = (uint32_t *)ero__alloc(r->al, 4 * other * sizeof(uint32_t) + 1);
+    if (!r->onb) return ERO_ERR_OUT_OF_MEMORY;
+    for (k = 0, other = 0; k < r->seg_count; k++) {
+        size_t i0 = r->seg[2 * k], len = r->seg[2 * k + 1] >> 2;
+        if ((r->seg[2 * k + 1] & 3) != ERO__SEG_OTHER) continue;
+        for (i = i0; i < i0 + len; i++, other++)
+            for (d = 0; d < 4; d++) {
+                uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
+                r->onb[4 * other + (size_t)d] = j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j) ? ERO__NONE : j;
+            }
+    }
     return ERO_OK;
 }
 
@@ -904,37 +918,67 @@ static void ero__quad_geometry(const float *ERO__RESTRICT px, const float *ERO__
 }
 #undef ERO__OFFSETS
 
+/* a hint that p is read soon (a seam's neighbours are far apart: cache misses) */
+#if defined(__GNUC__) || defined(__clang__)
+#define ERO__PREFETCH(p) __builtin_prefetch(p)
+#else
+#define ERO__PREFETCH(p) ((void)(p))
+#endif
+
+/* the surface geometry of texel i (not one of ero__quad_geometry's) from its usable neighbours j
+   (ero__texel_at's sums); the points of the neighbours of the texel `ahead` fetched meanwhile */
+static void ero__other_geometry(ero__run *r, size_t i, const uint32_t *j, const uint32_t *ahead)
+{
+    float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3];
+    int d, k, have = 0;
+    for (d = 0; d < 4; d++)
+        if (ahead[d] != ERO__NONE)
+            for (k = 0; k < 3; k++) ERO__PREFETCH(r->P[k] + ahead[d]);
+    for (d = 0; d < 4; d++) {
+        if (j[d] == ERO__NONE) continue;
+        for (k = 0; k < 3; k++) e[d][k] = r->P[k][j[d]] - r->P[k][i];
+        have |= 1 << d;
+    }
+    for (k = 0; k < 3; k++) nb[k] = r->N[k][i];
+    ero__texel_geometry(e, have, nb, &r->g[0][i], &r->g[1][i], &r->g[2][i], &r->g[3][i]);
+}
+
 /* normal and mean curvature of the surface at every valid texel, into g[0..3]: a surface's runs
    of texels with the four grid neighbours in rows, the rest (and a height field) texel by texel */
 static void ero__geometry(ero__run *r)
 {
-    size_t i, k;
+    size_t i, k, m = 0, other = 0;
+    int c;
     if (r->hf) {
         for (i = 0; i < r->n; i++) ero__texel_at(r, i);
         return;
     }
+    for (k = 0; k < r->seg_count; k++) other += (r->seg[2 * k + 1] & 3) == ERO__SEG_OTHER ? r->seg[2 * k + 1] >> 2 : 0;
     for (k = 0; k < r->seg_count; k++) {
         size_t i0 = r->seg[2 * k], len = r->seg[2 * k + 1] >> 2;
-        if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
+        if ((r->seg[2 * k + 1] & 3) == ERO__SEG_OTHER)
+            for (i = i0; i < i0 + len; i++, m++)
+                ero__other_geometry(r, i, r->onb + 4 * m, r->onb + 4 * (m + 8 < other ? m + 8 : m));
+        else if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
             ero__quad_geometry(r->P[0] + i0, r->P[1] + i0, r->P[2] + i0, r->N[0] + i0, r->N[1] + i0, r->N[2] + i0, r->W,
                                (long)len, r->span + 8 * ERO__SPAN, r->g[0] + i0, r->g[1] + i0, r->g[2] + i0, r->g[3] + i0);
-        else for (i = i0; i < i0 + len; i++) ero__texel_at(r, i);
+        else
+            for (c = 0; c < 4; c++) memset(r->g[c] + i0, 0, len * sizeof(float));
     }
 }
 
 /* the column volume coefficients (surface): a texel's column between depths t0 and t1 holds
    area (t1 - t0 + q1 (t1^2 - t0^2) / 2 + q2 (t1^3 - t0^3) / 3), from
    det(Bu - t Nu, Bv - t Nv, n) / det(Bu, Bv, n) = 1 + q1 t + q2 t^2 (B base, N normal differences) */
-static void ero__column_at(ero__run *r, size_t i)
+static void ero__column_at(ero__run *r, size_t i, const uint32_t *nbj)
 {
     float eb[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, en[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     float bu[3], bv[3], nu[3], nv[3], c[3], n[3], a0, a1, a2;
-    int d, have = 0, rot, k;
+    int d, have = 0, k;
     r->q1[i] = r->q2[i] = 0.0f;
-    if (!ero__valid(r, (uint32_t)i)) return;
     for (d = 0; d < 4; d++) {
-        uint32_t j = ero__nb(r, (uint32_t)i, d, &rot);
-        if (j == ERO__NONE || j == (uint32_t)i || !ero__valid(r, j)) continue;
+        uint32_t j = nbj[d];
+        if (j == ERO__NONE) continue;
         ero__offset(r, (uint32_t)i, j, d, 1, eb[d]);
         for (k = 0; k < 3; k++) en[d][k] = r->nrm[3 * (size_t)j + (size_t)k] - r->nrm[3 * i + (size_t)k];
         have |= 1 << d;
@@ -991,7 +1035,7 @@ static void ero__quad_columns(const float *ERO__RESTRICT b0, const float *ERO__R
    rows (the base points in P for the while), the rest texel by texel; 0 where invalid */
 static void ero__columns(ero__run *r)
 {
-    size_t i, k;
+    size_t i, k, m = 0;
     if (r->hf) return;
     for (i = 0; i < r->n; i++) {
         r->P[0][i] = r->pos[3 * i + 0]; r->P[1][i] = r->pos[3 * i + 1]; r->P[2][i] = r->pos[3 * i + 2];
@@ -1001,8 +1045,12 @@ static void ero__columns(ero__run *r)
         if ((r->seg[2 * k + 1] & 3) == ERO__SEG_QUAD)
             ero__quad_columns(r->P[0] + i0, r->P[1] + i0, r->P[2] + i0, r->N[0] + i0, r->N[1] + i0, r->N[2] + i0, r->W,
                               (long)len, r->q1 + i0, r->q2 + i0);
-        else
-            for (i = i0; i < i0 + len; i++) ero__column_at(r, i);
+        else if ((r->seg[2 * k + 1] & 3) == ERO__SEG_OTHER)
+            for (i = i0; i < i0 + len; i++, m++) ero__column_at(r, i, r->onb + 4 * m);
+        else {
+            memset(r->q1 + i0, 0, len * sizeof(float));
+            memset(r->q2 + i0, 0, len * sizeof(float));
+        }
     }
 }
 
@@ -1065,22 +1113,12 @@ static void ero__walk(const ero__run *r, ero__walks *wk, size_t e, uint32_t i, i
     }
 }
 
-/* the walk number of texel j (UINT32_MAX: not walked) */
-static uint32_t ero__walk_of(const ero__walks *wk, uint32_t j)
-{
-    size_t lo = 0, hi = wk->count;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (wk->texel[mid] < j) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo < wk->count && wk->texel[lo] == j ? (uint32_t)lo : ERO__NONE;
-}
-
-/* the odd taps of the second pass (axis 1): their walks and room for C channels of values */
+/* the odd taps of the second pass (axis 1): their walks (a texel's walk number kept in the
+   bits of hh, free until the first step) and room for C channels of values */
 static ero_result ero__record_alt(ero__run *r, ero__walks *wk, int R, int C)
 {
     size_t e, m = 0, k;
+    uint32_t q;
     for (e = 0; e < 2 * (size_t)R * wk->count; e++) m += wk->odd[e] && wk->tap[e] != ERO__NONE;
     wk->alt_count = m;
     if (!m) return ERO_OK;
@@ -1088,15 +1126,33 @@ static ero_result ero__record_alt(ero__run *r, ero__walks *wk, int R, int C)
     wk->alt[0] = (float *)ero__alloc(r->al, (size_t)C * m * sizeof(float));
     if (!wk->alt_walk || !wk->alt[0]) return ERO_ERR_OUT_OF_MEMORY;
     for (k = 1; k < (size_t)C; k++) wk->alt[k] = wk->alt[0] + k * m;
-    for (e = 0, m = 0; e < 2 * (size_t)R * wk->count; e++)
-        if (wk->odd[e] && wk->tap[e] != ERO__NONE) wk->alt_walk[m++] = ero__walk_of(wk, wk->tap[e]);
+    for (e = 0; e < wk->count; e++) {
+        q = (uint32_t)e;
+        memcpy(r->hh + wk->texel[e], &q, sizeof q);
+    }
+    for (e = 0, m = 0; e < 2 * (size_t)R * wk->count; e++) {
+        uint32_t j = wk->tap[e];
+        if (!wk->odd[e] || j == ERO__NONE) continue;
+        q = ERO__NONE;
+        if (ero__pass_kind(r, j, 1, R) == ERO__RUN_WALK) memcpy(&q, r->hh + j, sizeof q);
+        wk->alt_walk[m++] = q;
+    }
     return ERO_OK;
 }
 
-/* one kernel's and axis's runs and walks */
-static ero_result ero__record_walks(ero__run *r, ero__walks *wk, int axis, int R, int C)
+/* walked texel e's taps as the first R of the Rb a wider kernel's walk q recorded */
+static void ero__walk_prefix(ero__walks *wk, size_t e, int R, const ero__walks *wide, size_t q, int Rb)
 {
-    size_t walked, k, e = 0;
+    memcpy(wk->tap + 2 * (size_t)R * e, wide->tap + 2 * (size_t)Rb * q, 2 * (size_t)R * sizeof(uint32_t));
+    memcpy(wk->odd + 2 * (size_t)R * e, wide->odd + 2 * (size_t)Rb * q, 2 * (size_t)R);
+    wk->texel[e] = wide->texel[q];
+}
+
+/* one kernel's and axis's runs and walks; a texel walked for R is walked for the wider kernel's
+   Rb >= R as well (wide, NULL: none), and the first R steps of its walks are the same */
+static ero_result ero__record_walks(ero__run *r, ero__walks *wk, int axis, int R, int C, const ero__walks *wide, int Rb)
+{
+    size_t walked, k, e = 0, q = 0;
     wk->seg_count = ero__pass_runs(r, axis, R, NULL, &walked);
     wk->count = walked;
     wk->seg = (uint32_t *)ero__alloc(r->al, 2 * wk->seg_count * sizeof(uint32_t));
@@ -1107,8 +1163,12 @@ static ero_result ero__record_walks(ero__run *r, ero__walks *wk, int axis, int R
     ero__pass_runs(r, axis, R, wk->seg, &walked);
     for (k = 0; k < wk->seg_count; k++) {
         uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, i;
-        if ((wk->seg[2 * k + 1] & 3) == ERO__RUN_WALK)
-            for (i = i0; i < i0 + len; i++) ero__walk(r, wk, e++, i, axis, R);
+        if ((wk->seg[2 * k + 1] & 3) != ERO__RUN_WALK) continue;
+        for (i = i0; i < i0 + len; i++) {
+            if (!wide) { ero__walk(r, wk, e++, i, axis, R); continue; }
+            while (wide->texel[q] < i) q++;
+            ero__walk_prefix(wk, e++, R, wide, q, Rb);
+        }
     }
     return axis == 1 && r->has_rot ? ero__record_alt(r, wk, R, C) : ERO_OK;
 }
@@ -1116,14 +1176,15 @@ static ero_result ero__record_walks(ero__run *r, ero__walks *wk, int axis, int R
 /* every kernel's and axis's walks (box: 4 channels, Gaussian: 1) */
 static ero_result ero__record_all_walks(ero__run *r)
 {
-    int kern, axis;
+    int axis;
     ero_result e;
     if (r->hf && r->ring) return ERO_OK;
-    for (kern = 0; kern < 2; kern++)
-        for (axis = 0; axis < 2; axis++) {
-            int R = kern ? r->gau_r : r->box_r;
-            if (R && (e = ero__record_walks(r, &r->walks[kern][axis], axis, R, kern ? 1 : 4)) != ERO_OK) return e;
-        }
+    for (axis = 0; axis < 2; axis++) {
+        int wide = r->gau_r >= r->box_r, Rw = wide ? r->gau_r : r->box_r, Rn = wide ? r->box_r : r->gau_r;
+        ero__walks *ww = &r->walks[wide][axis];
+        if (Rw && (e = ero__record_walks(r, ww, axis, Rw, wide ? 1 : 4, NULL, 0)) != ERO_OK) return e;
+        if (Rn && (e = ero__record_walks(r, &r->walks[!wide][axis], axis, Rn, wide ? 4 : 1, ww, Rw)) != ERO_OK) return e;
+    }
     return ERO_OK;
 }
 
@@ -1342,39 +1403,55 @@ static void ero__apply(ero__run *r, ero_report *rep)
         if (ero__valid(r, (uint32_t)i)) r->hh[i] = ero__apply_texel(r, i, r->hh[i], rep);
 }
 
+/* the image neighbours j of texel (x, y), row by row, with 0 <= mark[j] < ring, into nb */
+ERO__INLINE int ero__ext_neighbours(const float *mark, long W, long H, long x, long y, float ring, uint32_t *nb)
+{
+    long dx, dy;
+    int cnt = 0;
+    for (dy = -1; dy <= 1; dy++) {
+        long yy = y + dy;
+        if (yy < 0 || yy >= H) continue;
+        for (dx = -1; dx <= 1; dx++) {
+            long xx = x + dx;
+            size_t j = (size_t)(yy * W + xx);
+            if (xx >= 0 && xx < W && mark[j] >= 0.0f && mark[j] < ring) nb[cnt++] = (uint32_t)j;
+        }
+    }
+    return cnt;
+}
+
 /* invalid texels within two image texels of valid ones take the mean change of the image
-   neighbours set before them (ring 1 from valid texels, ring 2 from ring 1): the rings and
-   each texel's neighbours (in the order they are summed) found once per call, into ext (NULL:
-   counted); g[0] marks the ring while they are found */
+   neighbours set before them (ring 1 from valid texels, ring 2 from ring 1): the rings marked in
+   g[0] (0 valid, 1 and 2 the rings, -1 the rest) and their length counted; with ext, each ring
+   texel and its neighbours (in the order they are summed) listed from the marks */
 static size_t ero__find_extension(ero__run *r, uint32_t *ext)
 {
-    long W = r->W, H = r->H, x, y, dx, dy;
-    int ring;
+    long W = r->W, H = r->H, x, y;
+    int ring, k;
     float *mark = r->g[0];
     size_t i, len = 0;
+    uint32_t nb[9];
+    if (ext) {
+        for (ring = 1; ring <= 2; ring++)
+            for (y = 0, i = 0; y < H; y++)
+                for (x = 0; x < W; x++, i++) {
+                    if (mark[i] != (float)ring) continue;
+                    ext[len] = (uint32_t)i;
+                    ext[len + 1] = (uint32_t)ero__ext_neighbours(mark, W, H, x, y, (float)ring, nb);
+                    for (k = 0; k < (int)ext[len + 1]; k++) ext[len + 2 + (size_t)k] = nb[k];
+                    len += 2 + ext[len + 1];
+                }
+        return len;
+    }
     for (i = 0; i < r->n; i++) mark[i] = r->valid[i] ? 0.0f : -1.0f;
     for (ring = 1; ring <= 2; ring++) {
-        for (y = 0; y < H; y++)
-            for (x = 0; x < W; x++) {
-                uint32_t nb[8];
-                int cnt = 0, k;
-                i = (size_t)(y * W + x);
-                if (mark[i] >= 0.0f) continue;
-                for (dy = -1; dy <= 1; dy++)
-                    for (dx = -1; dx <= 1; dx++) {
-                        long xx = x + dx, yy = y + dy;
-                        size_t j;
-                        if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
-                        j = (size_t)(yy * W + xx);
-                        if (mark[j] >= 0.0f && mark[j] < (float)ring) nb[cnt++] = (uint32_t)j;
-                    }
+        for (y = 0, i = 0; y < H; y++)
+            for (x = 0; x < W; x++, i++) {
+                int cnt;
+                if (mark[i] >= 0.0f || mark[i] < -1.5f) continue;
+                cnt = ero__ext_neighbours(mark, W, H, x, y, (float)ring, nb);
                 if (!cnt) continue;
                 mark[i] = -2.0f - (float)ring;
-                if (ext) {
-                    ext[len] = (uint32_t)i;
-                    ext[len + 1] = (uint32_t)cnt;
-                    for (k = 0; k < cnt; k++) ext[len + 2 + (size_t)k] = nb[k];
-                }
                 len += 2 + (size_t)cnt;
             }
         for (i = 0; i < r->n; i++) /* this ring becomes readable by the next */
@@ -1958,6 +2035,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if ((e = ero__surface_tables(&r)) != ERO_OK || (e = ero__record_all_walks(&r)) != ERO_OK ||
         (e = ero__extension(&r)) != ERO_OK) {
         ero__free(r.al, r.seg);
+        ero__free(r.al, r.onb);
         ero__free_walks(&r);
         ero__free(r.al, r.block);
         return e;
@@ -1979,6 +2057,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
     if (total) *total = sum;
     ero__free(r.al, r.ext);
     ero__free(r.al, r.seg);
+    ero__free(r.al, r.onb);
     ero__free_walks(&r);
     ero__free(r.al, r.block);
     return e;
