@@ -1279,6 +1279,7 @@ static void ero__alt_values(const ero__run *r, ero__walks *wk, float *const *src
 enum { ERO__SINK_PLANES = 0, ERO__SINK_H = 1, ERO__SINK_APPLY = 2 };
 
 static float ero__apply_texel(ero__run *r, size_t i, float h, ero_report *rep);
+static void ero__surface_apply_run(ero__run *r, size_t i0, long n, const float *h, ero_report *rep);
 static void ero__h_span(const ero__run *r, const float *a0, const float *a1, const float *a2, const float *kap,
                         const uint8_t *mat, long cnt, float *const *mrow, float *out);
 static void ero__fill_materials(const ero__run *r, float *const *mrow);
@@ -1292,7 +1293,9 @@ static void ero__sink(ero__run *r, int sink, float *const *v, size_t i0, size_t 
     if (sink == ERO__SINK_H) {
         for (k = 0; k < 4; k++) mrow[k] = r->span + (size_t)k * ERO__SPAN;
         ero__h_span(r, v[0], v[1], v[2], v[3], r->mat ? r->mat + i0 : NULL, (long)len, mrow, r->hh + i0);
-    } else if (sink == ERO__SINK_APPLY)
+    } else if (sink == ERO__SINK_APPLY && !r->hf)
+        ero__surface_apply_run(r, i0, (long)len, v[0], rep);
+    else if (sink == ERO__SINK_APPLY)
         for (x = 0; x < len; x++) r->hh[i0 + x] = ero__apply_texel(r, i0 + x, v[0][x], rep);
 }
 
@@ -1394,6 +1397,42 @@ static inline float ero__apply_texel(ero__run *r, size_t i, float h, ero_report 
     else rep->deposited -= vol;
     if (fabsf(ch) > rep->max_change) rep->max_change = fabsf(ch);
     return d1 - d0;
+}
+
+/* ero__apply_texel for n valid surface texels from i0 (changes h), in loops that vectorise, the
+   report's sums in their order; the texels' surface points updated */
+static void ero__surface_apply_run(ero__run *r, size_t i0, long n, const float *ERO__RESTRICT h, ero_report *rep)
+{
+    float *ERO__RESTRICT d = r->disp + i0, *ERO__RESTRICT chg = r->hh + i0, rate = r->o.rate, mx = rep->max_change;
+    const float *ERO__RESTRICT q1 = r->q1 + i0, *ERO__RESTRICT q2 = r->q2 + i0, *ERO__RESTRICT ar = r->area + i0;
+    const float *ERO__RESTRICT pos = r->pos + 3 * i0, *ERO__RESTRICT nrm = r->nrm + 3 * i0;
+    float bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : 0.0f;
+    int bounded = r->o.bound != ERO_BOUND_NONE;
+    double vol[ERO__SPAN], er = rep->eroded, de = rep->deposited;
+    long x;
+    int k;
+    for (x = 0; x < n; x++) {
+        float d0 = d[x], dn = d0 + rate * h[x], lim = d0 < bv ? d0 : bv, db = dn < lim ? lim : dn;
+        float d1b = bounded ? db : dn, d1 = ero__fin(d1b) ? d1b : d0;
+        double a = d0, b = d1;
+        chg[x] = d1 - d0;
+        d[x] = d1;
+        vol[x] = ar[x] * ((b - a) + q1[x] * (b * b - a * a) / 2.0 + q2[x] * (b * b * b - a * a * a) / 3.0);
+    }
+    for (x = 0; x < n; x++) { /* in order: the same sums as ero__apply_texel's */
+        double v = vol[x] - vol[x] == 0.0 ? vol[x] : 0.0;
+        float c = fabsf(chg[x]);
+        er += v > 0.0 ? v : 0.0;
+        de -= v > 0.0 ? 0.0 : v;
+        mx = c > mx ? c : mx;
+    }
+    rep->eroded = er;
+    rep->deposited = de;
+    rep->max_change = mx;
+    for (k = 0; k < 3; k++) {
+        float *ERO__RESTRICT p = r->P[k] + i0;
+        for (x = 0; x < n; x++) p[x] = pos[3 * x + k] - d[x] * nrm[3 * x + k];
+    }
 }
 
 static void ero__apply(ero__run *r, ero_report *rep)
@@ -1972,8 +2011,7 @@ static void ero__time_step(ero__run *r, ero_report *rep)
 {
     float *one[1];
     if (r->ring) { ero__ring_step(r, rep); return; }
-    ero__points(r);                                         /* 5. (of the last step) surface */
-    ero__geometry(r);                                       /*    normals, curvature */
+    ero__geometry(r);                                       /* 5. (of the last step) normals, curvature */
     memset(rep, 0, sizeof *rep);
     if (r->box_r)                                           /*    their averages, 1-2. H */
         ero__filter(r, 0, r->g, 4, r->box_w, r->box_r, r->box_sum, ERO__SINK_H, NULL);
@@ -1982,8 +2020,10 @@ static void ero__time_step(ero__run *r, ero_report *rep)
     one[0] = r->hh;
     if (r->gau_r)                                           /* 3. low-pass filter, 4. added */
         ero__filter(r, 1, one, 1, r->gau_w, r->gau_r, r->gau_sum, ERO__SINK_APPLY, rep);
-    else
+    else {
         ero__apply(r, rep);
+        ero__points(r);
+    }
     ero__extend_invalid(r);
 }
 
@@ -2041,6 +2081,7 @@ ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const er
         return e;
     }
     ero__columns(&r);
+    ero__points(&r); /* then kept by each step's change */
     sum.corrected = r.corrected;
     for (s = 0; s < steps; s++) {
         if (r.o.progress && r.o.progress(r.o.user, (float)s / (float)steps)) { e = ERO_CANCELLED; break; }
