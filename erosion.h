@@ -118,7 +118,7 @@
      geometry), 16 bytes per valid texel off the four grid neighbours (its neighbours), 4 + 10 r bytes per axis and kernel for each texel within its radius r of a seam
      or border (the walks' taps, found once per call), 4 + 4 C bytes per tap that reaches a
      seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for the
-     Gaussian), and up to 40 bytes for
+     Gaussian), 4 C bytes per walked texel of the busiest pass (their values), and up to 40 bytes for
      each invalid texel next to valid ones. The maps are the caller's.
 
    ERRORS
@@ -388,6 +388,7 @@ typedef struct ero__run {
     uint32_t *seg;                         /* the image in runs: start, length << 2 | kind (ERO__SEG_*) */
     size_t seg_count;
     uint32_t *onb;                         /* 4 per ERO__SEG_OTHER texel, in order: its usable neighbours */
+    float *wvals;                          /* a pass's walked texels' values */
     float *g[4];                           /* normal xyz, curvature; then their averages */
     float *ax[4];                          /* the filters' first pass (along own x) */
     float *hh;                             /* H, then the filtered change */
@@ -1178,19 +1179,24 @@ static ero_result ero__record_all_walks(ero__run *r)
 {
     int axis;
     ero_result e;
+    size_t most = 0;
     if (r->hf && r->ring) return ERO_OK;
     for (axis = 0; axis < 2; axis++) {
         int wide = r->gau_r >= r->box_r, Rw = wide ? r->gau_r : r->box_r, Rn = wide ? r->box_r : r->gau_r;
         ero__walks *ww = &r->walks[wide][axis];
         if (Rw && (e = ero__record_walks(r, ww, axis, Rw, wide ? 1 : 4, NULL, 0)) != ERO_OK) return e;
         if (Rn && (e = ero__record_walks(r, &r->walks[!wide][axis], axis, Rn, wide ? 4 : 1, ww, Rw)) != ERO_OK) return e;
+        if (4 * r->walks[0][axis].count > most) most = 4 * r->walks[0][axis].count;
+        if (r->walks[1][axis].count > most) most = r->walks[1][axis].count;
     }
-    return ERO_OK;
+    r->wvals = (float *)ero__alloc(r->al, most * sizeof(float) + 1);
+    return r->wvals ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
 }
 
 static void ero__free_walks(ero__run *r)
 {
     int kern, axis;
+    ero__free(r->al, r->wvals);
     for (kern = 0; kern < 2; kern++)
         for (axis = 0; axis < 2; axis++) {
             ero__walks *wk = &r->walks[kern][axis];
@@ -1223,8 +1229,8 @@ static void ero__taps_line(const float *ERO__RESTRICT f, float *ERO__RESTRICT ou
 
 /* the taps of walked texel number e: odd taps read alt's values in the order the pass meets
    them (*next counts them; alt NULL: src's own values) */
-static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *const *src, float *const *alt,
-                             size_t *next, int C, const float *w, int R, float *out)
+ERO__INLINE void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *const *src, float *const *alt,
+                                  size_t *next, int C, const float *w, int R, float *out)
 {
     const uint32_t *t = wk->tap + 2 * (size_t)R * e;
     const uint8_t *o = wk->odd + 2 * (size_t)R * e;
@@ -1244,6 +1250,18 @@ static void ero__walked_taps(const ero__walks *wk, size_t e, uint32_t i, float *
         }
     ws = 1.0f / ws;
     for (c = 0; c < C; c++) out[c] = acc[c] * ws;
+}
+
+/* every walked texel's taps (ero__walked_taps, in its order) into vals, C per texel: one loop
+   whose loads do not wait on each other, as those across seams miss the cache */
+static void ero__walked_all(const ero__walks *wk, float *const *src, float *const *alt, int C, const float *w, int R,
+                            float *vals)
+{
+    size_t e, next = 0;
+    if (C == 4)
+        for (e = 0; e < wk->count; e++) ero__walked_taps(wk, e, wk->texel[e], src, alt, &next, 4, w, R, vals + 4 * e);
+    else
+        for (e = 0; e < wk->count; e++) ero__walked_taps(wk, e, wk->texel[e], src, alt, &next, C, w, R, vals + (size_t)C * e);
 }
 
 /* the y pass of src at the second pass's odd taps (texel by texel: regular ones directly,
@@ -1305,11 +1323,12 @@ static void ero__sink(ero__run *r, int sink, float *const *v, size_t i0, size_t 
 static void ero__pass(ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
                       const float *w, int R, float wfull, const ero__walks *wk, int sink, ero_report *rep)
 {
-    size_t k, e = 0, odd = 0;
+    size_t k, e = 0;
     long st = axis ? (long)r->W : 1;
-    float v[4], inv = 1.0f / wfull, *o[4];
+    float inv = 1.0f / wfull, *o[4];
     int c;
     if (sink != ERO__SINK_PLANES) ero__fill_materials(r, NULL);
+    ero__walked_all(wk, src, alt, C, w, R, r->wvals);
     for (k = 0; k < wk->seg_count; k++) {
         uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, kind = wk->seg[2 * k + 1] & 3, i;
         for (c = 0; c < C; c++) o[c] = sink == ERO__SINK_PLANES ? out[c] + i0 : r->span + (size_t)(4 + c) * ERO__SPAN;
@@ -1321,10 +1340,8 @@ static void ero__pass(ero__run *r, int axis, float *const *src, float *const *al
         if (kind == ERO__RUN_REGULAR)
             for (c = 0; c < C; c++) ero__taps_line(src[c] + i0, o[c], (long)len, st, w, R, inv);
         else
-            for (i = 0; i < len; i++) {
-                ero__walked_taps(wk, e++, i0 + i, src, alt, &odd, C, w, R, v);
-                for (c = 0; c < C; c++) o[c][i] = v[c];
-            }
+            for (i = 0; i < len; i++, e++)
+                for (c = 0; c < C; c++) o[c][i] = r->wvals[(size_t)C * e + (size_t)c];
         ero__sink(r, sink, o, i0, len, rep);
     }
 }
