@@ -110,16 +110,17 @@
 
    MEMORY
      ero_erode allocates once per call, freed before it returns: for a height field without a valid
-     map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of
-     about 8 box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else
-     40 bytes per texel for a height field and 72 for a surface grid (positions, base normals,
-     normals, curvature, the filters' first pass, H, column coefficients, the regular-run
-     lengths) and 40 KiB, 8 bytes per run of one texel kind in a row (per pass and for the
-     geometry), 16 bytes per valid texel off the four grid neighbours (its neighbours), 4 + 10 r bytes per axis and kernel for each texel within its radius r of a seam
-     or border (the walks' taps, found once per call), 4 + 4 C bytes per tap that reaches a
-     seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for the
-     Gaussian), 4 C bytes per walked texel of the busiest pass (their values), and up to 40 bytes for
-     each invalid texel next to valid ones. The maps are the caller's.
+     map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of about 8
+     box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else 24 bytes
+     per texel for a height field and 56 for a surface grid (positions, base normals, normals and
+     curvature (the box filter's first pass in their place, the Gaussian's in the first of them), H,
+     column coefficients, the regular-run lengths) and 40 KiB plus 16 bytes per column, 8 bytes per
+     run of one texel kind in a row (per pass and for the geometry), 16 bytes per valid texel off the
+     four grid neighbours (its neighbours), 4 + 10 r bytes per axis and kernel for each texel within
+     its radius r of a seam or border (the walks' taps, found once per call), 4 + 4 C bytes per tap
+     that reaches a seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for
+     the Gaussian), 4 C bytes per walked texel of the busiest pass (their values), and up to 40 bytes
+     for each invalid texel next to valid ones. The maps are the caller's.
 
    ERRORS
      Functions return ero_result (ERO_OK = 0); ero_result_string() names it.
@@ -390,7 +391,7 @@ typedef struct ero__run {
     uint32_t *onb;                         /* 4 per ERO__SEG_OTHER texel, in order: its usable neighbours */
     float *wvals;                          /* a pass's walked texels' values */
     float *g[4];                           /* normal xyz, curvature; then their averages */
-    float *ax[4];                          /* the filters' first pass (along own x) */
+    float *rowbuf;                         /* 4 W: a row of an in-place pass */
     float *hh;                             /* H, then the filtered change */
     float *q1, *q2;                        /* column volume coefficients (surface only) */
     uint8_t *reg;                          /* 4n: regular run lengths along +x, -x, +y, -y */
@@ -646,21 +647,21 @@ static ero_result ero__kernels(ero__run *r, double h)
 #define ERO__STAGGER 48
 static ero_result ero__scratch(ero__run *r)
 {
-    size_t n = r->n, planes = 4 + 4 + 1 + (r->hf ? 0 : 3 + 3 + 2), bytes, k, np = n + ERO__STAGGER;
+    size_t n = r->n, planes = 4 + 1 + (r->hf ? 0 : 3 + 3 + 2), bytes, k, np = n + ERO__STAGGER;
     float *f;
     if (r->ring) { /* rows only */
         r->block = ero__alloc(r->al, ero__ring_floats(r) * sizeof(float));
         r->hh = (float *)r->block;
         return r->block ? ERO_OK : ERO_ERR_OUT_OF_MEMORY;
     }
-    bytes = (planes * np + 9 * ERO__SPAN) * sizeof(float) + 4 * n;
+    bytes = (planes * np + 9 * ERO__SPAN + 4 * (size_t)r->W) * sizeof(float) + 4 * n;
     r->block = ero__alloc(r->al, bytes);
     if (!r->block) return ERO_ERR_OUT_OF_MEMORY;
     f = (float *)r->block;
     for (k = 0; k < 4; k++) { r->g[k] = f; f += np; }
-    for (k = 0; k < 4; k++) { r->ax[k] = f; f += np; }
     r->hh = f; f += np;
     r->span = f; f += 9 * ERO__SPAN;
+    r->rowbuf = f; f += 4 * (size_t)r->W;
     if (!r->hf) {
         for (k = 0; k < 3; k++) { r->P[k] = f; f += np; }
         for (k = 0; k < 3; k++) { r->N[k] = f; f += np; }
@@ -1319,19 +1320,25 @@ static void ero__sink(ero__run *r, int sink, float *const *v, size_t i0, size_t 
 
 /* one filter pass along `axis` of every texel of src: regular runs by ero__taps_line, walked
    texels by their recorded taps (odd ones from alt, NULL: src); a run's values go into out
-   (invalid texels 0) or, a run at a time, to a sink (invalid texels: H 0, no change) */
+   (invalid texels 0; out = src along x: a row at a time, once the row is done) or, a run at a
+   time, to a sink (invalid texels: H 0, no change) */
 static void ero__pass(ero__run *r, int axis, float *const *src, float *const *alt, float *const *out, int C,
                       const float *w, int R, float wfull, const ero__walks *wk, int sink, ero_report *rep)
 {
-    size_t k, e = 0;
+    size_t k, e = 0, W = (size_t)r->W;
     long st = axis ? (long)r->W : 1;
     float inv = 1.0f / wfull, *o[4];
-    int c;
+    int c, inplace = sink == ERO__SINK_PLANES && out == src && axis == 0;
     if (sink != ERO__SINK_PLANES) ero__fill_materials(r, NULL);
     ero__walked_all(wk, src, alt, C, w, R, r->wvals);
     for (k = 0; k < wk->seg_count; k++) {
         uint32_t i0 = wk->seg[2 * k], len = wk->seg[2 * k + 1] >> 2, kind = wk->seg[2 * k + 1] & 3, i;
-        for (c = 0; c < C; c++) o[c] = sink == ERO__SINK_PLANES ? out[c] + i0 : r->span + (size_t)(4 + c) * ERO__SPAN;
+        size_t row0 = i0 / W * W;
+        if (inplace && k > 0 && i0 == row0)
+            for (c = 0; c < C; c++) memcpy(src[c] + row0 - W, r->rowbuf + (size_t)c * W, W * sizeof(float));
+        for (c = 0; c < C; c++)
+            o[c] = inplace ? r->rowbuf + (size_t)c * W + (i0 - row0)
+                 : sink == ERO__SINK_PLANES ? out[c] + i0 : r->span + (size_t)(4 + c) * ERO__SPAN;
         if (kind == ERO__RUN_INVALID) {
             if (sink == ERO__SINK_PLANES) for (c = 0; c < C; c++) memset(o[c], 0, len * sizeof(float));
             if (sink == ERO__SINK_H) memset(r->hh + i0, 0, len * sizeof(float));
@@ -1344,18 +1351,21 @@ static void ero__pass(ero__run *r, int axis, float *const *src, float *const *al
                 for (c = 0; c < C; c++) o[c][i] = r->wvals[(size_t)C * e + (size_t)c];
         ero__sink(r, sink, o, i0, len, rep);
     }
+    if (inplace && wk->seg_count)
+        for (c = 0; c < C; c++) memcpy(src[c] + r->n - W, r->rowbuf + (size_t)c * W, W * sizeof(float));
 }
 
-/* the planes src (C of them) filtered along each texel's x then y: pass 1 along own x into ax,
-   pass 2 along own y over the values that continue this texel's x (across a seam that turns the
-   axes, the y pass of src at the texel reached: ero__alt_values), to the sink (R > 0) */
-static void ero__filter(ero__run *r, int kern, float **src, int C, const float *w, int R, float wfull, int sink,
-                        ero_report *rep)
+/* the planes src (C of them) filtered along each texel's x then y: pass 1 along own x into mid
+   (may be src), pass 2 along own y over the values that continue this texel's x (across a seam
+   that turns the axes, the y pass of src at the texel reached: ero__alt_values, before pass 1
+   overwrites src), to the sink (R > 0) */
+static void ero__filter(ero__run *r, int kern, float **src, float **mid, int C, const float *w, int R, float wfull,
+                        int sink, ero_report *rep)
 {
     ero__walks *wk = r->walks[kern];
-    ero__pass(r, 0, src, NULL, r->ax, C, w, R, wfull, &wk[0], ERO__SINK_PLANES, NULL);
     if (wk[1].alt_count) ero__alt_values(r, &wk[1], src, C, w, R, 1.0f / wfull);
-    ero__pass(r, 1, r->ax, wk[1].alt_count ? wk[1].alt : NULL, NULL, C, w, R, wfull, &wk[1], sink, rep);
+    ero__pass(r, 0, src, NULL, mid, C, w, R, wfull, &wk[0], ERO__SINK_PLANES, NULL);
+    ero__pass(r, 1, mid, wk[1].alt_count ? wk[1].alt : NULL, NULL, C, w, R, wfull, &wk[1], sink, rep);
 }
 
 /* ================================================================================================
@@ -2026,17 +2036,18 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
 /* one time step (paper section 4.2.3, steps 1-5) */
 static void ero__time_step(ero__run *r, ero_report *rep)
 {
-    float *one[1];
+    float *one[1], *mid[1];
     if (r->ring) { ero__ring_step(r, rep); return; }
     ero__geometry(r);                                       /* 5. (of the last step) normals, curvature */
     memset(rep, 0, sizeof *rep);
     if (r->box_r)                                           /*    their averages, 1-2. H */
-        ero__filter(r, 0, r->g, 4, r->box_w, r->box_r, r->box_sum, ERO__SINK_H, NULL);
+        ero__filter(r, 0, r->g, r->g, 4, r->box_w, r->box_r, r->box_sum, ERO__SINK_H, NULL);
     else
         ero__erosion_heights(r);
     one[0] = r->hh;
+    mid[0] = r->g[0];                                       /* free once H is made */
     if (r->gau_r)                                           /* 3. low-pass filter, 4. added */
-        ero__filter(r, 1, one, 1, r->gau_w, r->gau_r, r->gau_sum, ERO__SINK_APPLY, rep);
+        ero__filter(r, 1, one, mid, 1, r->gau_w, r->gau_r, r->gau_sum, ERO__SINK_APPLY, rep);
     else {
         ero__apply(r, rep);
         ero__points(r);
