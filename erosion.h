@@ -465,6 +465,33 @@ ERO__INLINE uint32_t ero__step(const ero__run *r, uint32_t i, int *d, int *turns
    checking the input
    ================================================================================================ */
 
+/* nonzero if a neighbour index or rotation of the 4 n entries is out of range (branch-free) */
+static int ero__bad_indices(const uint32_t *nbr, const uint8_t *rot, size_t n)
+{
+    size_t i;
+    uint32_t n32 = (uint32_t)n; /* n <= 2^32 - 2 */
+    int bad = 0;
+    for (i = 0; i < 4 * n; i++) bad |= ((nbr[i] >= n32) & (nbr[i] != ERO__NONE)) | (rot[i] > 3);
+    return bad;
+}
+
+/* nonzero if a surface texel's map is bad (see ERO_ERR_BAD_MAP), checked where v (the valid
+   map, or all ones) is nonzero */
+static int ero__bad_texels(const ero_grid *g, const uint8_t *v, size_t n)
+{
+    const float *d = g->disp, *p = g->pos, *q = g->nrm, *a = g->area;
+    size_t i;
+    int bad = 0;
+    for (i = 0; i < n; i++) {
+        const float *pi = p + 3 * i, *qi = q + 3 * i;
+        float s = (pi[0] - pi[0]) + (pi[1] - pi[1]) + (pi[2] - pi[2]) + (qi[0] - qi[0]) + (qi[1] - qi[1]) +
+                  (qi[2] - qi[2]) + (a[i] - a[i]); /* 0 when all are finite, else NaN */
+        int f = !(s == 0.0f) | (qi[0] * qi[0] + qi[1] * qi[1] + qi[2] * qi[2] < 1e-12f) | (a[i] < 0.0f);
+        bad |= (!ero__fin(d[i])) | ((v[i] != 0) & f);
+    }
+    return bad;
+}
+
 static ero_result ero__check_grid(const ero_grid *g, size_t *n_out)
 {
     size_t n, i;
@@ -476,19 +503,22 @@ static ero_result ero__check_grid(const ero_grid *g, size_t *n_out)
     if (n > ((size_t)-1) / 96) return ERO_ERR_TOO_LARGE;
     if (g->domain == ERO_HEIGHTFIELD) {
         if (!ero__finite(g->spacing) || g->spacing <= 0.0f) return ERO_ERR_BAD_SPACING;
+        for (i = 0; i < n; i++)
+            if (!ero__finite(g->disp[i])) return ERO_ERR_BAD_MAP;
     } else {
         if (!g->pos || !g->nrm || !g->area || !g->nbr || !g->nbr_rot) return ERO_ERR_INVALID_ARGUMENT;
-        for (i = 0; i < 4 * n; i++)
-            if ((g->nbr[i] >= n && g->nbr[i] != ERO__NONE) || g->nbr_rot[i] > 3) return ERO_ERR_BAD_INDEX;
-    }
-    for (i = 0; i < n; i++) {
-        if (!ero__finite(g->disp[i])) return ERO_ERR_BAD_MAP;
-        if (g->domain == ERO_SURFACE && (!g->valid || g->valid[i])) {
-            const float *p = g->pos + 3 * i, *q = g->nrm + 3 * i;
-            if (!ero__finite(p[0]) || !ero__finite(p[1]) || !ero__finite(p[2])) return ERO_ERR_BAD_MAP;
-            if (!ero__finite(q[0]) || !ero__finite(q[1]) || !ero__finite(q[2])) return ERO_ERR_BAD_MAP;
-            if (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1e-12f) return ERO_ERR_BAD_MAP;
-            if (!ero__finite(g->area[i]) || g->area[i] < 0.0f) return ERO_ERR_BAD_MAP;
+        if (ero__bad_indices(g->nbr, g->nbr_rot, n)) return ERO_ERR_BAD_INDEX;
+        if (g->valid) {
+            if (ero__bad_texels(g, g->valid, n)) return ERO_ERR_BAD_MAP;
+        } else {
+            for (i = 0; i < n; i += ERO__SPAN) {
+                ero_grid part = *g;
+                size_t cnt = n - i < ERO__SPAN ? n - i : ERO__SPAN;
+                uint8_t all[ERO__SPAN];
+                memset(all, 1, cnt);
+                part.disp += i; part.pos += 3 * i; part.nrm += 3 * i; part.area += i;
+                if (ero__bad_texels(&part, all, cnt)) return ERO_ERR_BAD_MAP;
+            }
         }
     }
     *n_out = n;
