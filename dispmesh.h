@@ -241,7 +241,9 @@
      range, a missing array, or a NaN or infinite value (a depth beyond 1e18) is DM_ERR_BAD_MAP.
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
      LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE),
-     at most 1024 segments along one base edge.
+     at most 1024 segments along one base edge. Beside a sharp base edge, where the surface lies
+     deep and steep under a narrow triangle, the normal rays fold: a few reconstructed triangles
+     there face backwards (they are not repaired).
 
    REFERENCES
      Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald, SAH-based BVH
