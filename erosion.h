@@ -27,13 +27,15 @@
                         counter-clockwise in the neighbour's axes). The surface is pos - disp nrm.
        ERO_HEIGHTFIELD  a height field: disp is the height (up, +z), texel (x, y) at (x s, y s) for
                         the spacing s; neighbours are the grid's, optionally wrapping around.
-     The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i;
-     (+-s, 0, h_j - h_i) for a height field, exact under circular shifts); every filter, normal and
-     curvature then runs through the same walk over neighbours, which never sees a seam. A height
-     field without a valid map runs the same model in one pass over a ring of rows (a fraction of
-     the memory traffic; its bits differ from the walk's in the last places: the filters' weights
-     divided by their sum beforehand, 1 / |n| by a reciprocal square root accurate to about 3 ulp,
-     the report's sums in float within a row).
+     The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i; (+-s, 0,
+     h_j - h_i) for a height field, exact under circular shifts); every filter, normal and curvature
+     then runs through the same walk over neighbours, which never sees a seam. The walk is resolved
+     once per call: texels whose neighbours (or filter taps) are the grid's run in row loops that
+     vectorise, the others through recorded index lists, with the same sums in the same order (the
+     same bits as texel by texel). A height field without a valid map runs the same model in one pass
+     over a ring of rows (a fraction of the memory traffic; its bits differ from the walk's in the
+     last places: the filters' weights divided by their sum beforehand, 1 / |n| by a reciprocal
+     square root accurate to about 3 ulp, the report's sums in float within a row).
 
    MODEL (paper section 4.2.2; its W_f and R are on pages the text lacks: the forms below are chosen)
      Lengths are world units. L = sqrt(sum of the valid texels' area) is the grid's scale; the
