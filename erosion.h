@@ -247,6 +247,9 @@ typedef struct ero_options {
     void *user;
 } ero_options;
 
+/* The tables ero_erode makes for a grid, kept across calls (ero_workspace_create). */
+typedef struct ero_workspace ero_workspace;
+
 typedef struct ero_report {
     double eroded;            /* volume removed (world units^3) */
     double deposited;         /* volume added */
@@ -269,6 +272,28 @@ ERODEF ero_grid ero_surface_grid(int width, int height, const float *pos, const 
 ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const ero_material *materials,
                             size_t material_count, int steps, const ero_options *options,
                             ero_report *per_step, ero_report *total);
+
+/* A workspace: the scratch and the tables ero_erode makes from a grid's geometry, made once and
+   reused by ero_erode_ws over many calls (the same bits as ero_erode). g's domain, size, spacing,
+   wrap and its arrays valid, pos, nrm, area, nbr, nbr_rot must stay as they are, unchanged, for
+   the workspace's life (it keeps their pointers and tables made from them); disp is not read here.
+   options: as for ero_erode; its normal_radius, filter_sigma (resolved) and ERO_KEEP_INVALID
+   fix the workspace's kernels, its allocator serves the workspace until ero_workspace_destroy.
+   *out: the workspace, NULL on failure. */
+ERODEF ero_result ero_workspace_create(const ero_grid *g, const ero_options *options, ero_workspace **out);
+
+/* ero_erode on ws's grid, allocating nothing. g: the grid ws was made for (the same domain, size,
+   spacing, wrap and geometry pointers, else ERO_ERR_INVALID_ARGUMENT); g->disp is read and written
+   as by ero_erode and may differ between calls. options: resolving to ws's normal_radius,
+   filter_sigma and ERO_KEEP_INVALID (else ERO_ERR_BAD_PARAMETER); the wind, rate, force, the
+   curvature, deposition and bound options, the other flags, progress and user may change between
+   calls. The other parameters as for ero_erode. */
+ERODEF ero_result ero_erode_ws(ero_workspace *ws, const ero_grid *g, const uint8_t *material,
+                               const ero_material *materials, size_t material_count, int steps,
+                               const ero_options *options, ero_report *per_step, ero_report *total);
+
+/* Frees ws (NULL: nothing) with the allocator it was made with. */
+ERODEF void ero_workspace_destroy(ero_workspace *ws);
 
 /* The options with every zero replaced by its value for grid g (lengths from L). */
 ERODEF ero_result ero_resolve_options(const ero_grid *g, const ero_options *options, ero_options *out);
@@ -381,6 +406,7 @@ typedef struct ero__run {
     float wind[3];
     int has_rot;
     int ring;                              /* a plain height field: the ring of rows (ero__ring_step) */
+    double texel, scale;                   /* the texel size h and the grid's scale L (MODEL) */
     int box_r, gau_r;
     float box_w[ERO__MAXR + 2], gau_w[ERO__MAXR + 1];
     float box_sum, gau_sum;
@@ -2087,11 +2113,20 @@ static void ero__time_step(ero__run *r, ero_report *rep)
     ero__extend_invalid(r);
 }
 
+/* the resolved options and the wind's unit vector */
+static void ero__set_options(ero__run *r, const ero_options *o)
+{
+    double wl = sqrt((double)o->wind[0] * o->wind[0] + (double)o->wind[1] * o->wind[1] + (double)o->wind[2] * o->wind[2]);
+    int i;
+    r->o = ero__resolve(o, r->scale);
+    for (i = 0; i < 3; i++) r->wind[i] = (float)(o->wind[i] / wl);
+}
+
 static ero_result ero__setup(ero__run *r, const ero_grid *g, const uint8_t *material, const ero_material *materials,
                              size_t material_count, int steps, const ero_options *options)
 {
     ero_result e;
-    double h, L, wl;
+    double h, L;
     size_t i;
     ero_options o = options ? *options : ero_default_options();
     memset(r, 0, sizeof *r);
@@ -2108,9 +2143,9 @@ static ero_result ero__setup(ero__run *r, const ero_grid *g, const uint8_t *mate
     r->pos = g->pos; r->nrm = g->nrm; r->area = g->area; r->nbr = g->nbr; r->nbr_rot = g->nbr_rot;
     if ((e = ero__check_materials(r, material, materials, material_count)) != ERO_OK) return e;
     ero__scales(g, r->n, &h, &L);
-    r->o = ero__resolve(&o, L);
-    wl = sqrt((double)o.wind[0] * o.wind[0] + (double)o.wind[1] * o.wind[1] + (double)o.wind[2] * o.wind[2]);
-    for (i = 0; i < 3; i++) r->wind[i] = (float)(o.wind[i] / wl);
+    r->texel = h;
+    r->scale = L;
+    ero__set_options(r, &o);
     if ((e = ero__kernels(r, h)) != ERO_OK) return e;
     r->ring = ero__ring_fits(r);
     if (!r->hf)
@@ -2119,49 +2154,161 @@ static ero_result ero__setup(ero__run *r, const ero_grid *g, const uint8_t *mate
     return ERO_OK;
 }
 
-ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const ero_material *materials,
-                            size_t material_count, int steps, const ero_options *options, ero_report *per_step,
-                            ero_report *total)
+/* frees what ero__build allocated (what it did not is NULL) */
+static void ero__release(ero__run *r)
 {
-    ero__run r;
-    ero_report rep, sum;
+    ero__free(r->al, r->ext);
+    ero__free(r->al, r->seg);
+    ero__free(r->al, r->onb);
+    ero__free_walks(r);
+    ero__free(r->al, r->block);
+    r->ext = NULL; r->seg = NULL; r->onb = NULL; r->block = NULL;
+}
+
+/* the scratch and every table that depends on the grid's geometry and the kernels alone */
+static ero_result ero__build(ero__run *r)
+{
     ero_result e;
-    int s;
-    memset(&sum, 0, sizeof sum);
-    if (total) *total = sum;
-    if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
-    if ((e = ero__scratch(&r)) != ERO_OK) return e;
-    if (!r.ring) ero__regular_runs(&r);
-    if ((e = ero__surface_tables(&r)) != ERO_OK || (e = ero__record_all_walks(&r)) != ERO_OK ||
-        (e = ero__extension(&r)) != ERO_OK) {
-        ero__free(r.al, r.seg);
-        ero__free(r.al, r.onb);
-        ero__free_walks(&r);
-        ero__free(r.al, r.block);
+    if ((e = ero__scratch(r)) != ERO_OK) return e;
+    if (!r->ring) ero__regular_runs(r);
+    if ((e = ero__surface_tables(r)) != ERO_OK || (e = ero__record_all_walks(r)) != ERO_OK ||
+        (e = ero__extension(r)) != ERO_OK) {
+        ero__release(r);
         return e;
     }
-    ero__columns(&r);
-    ero__points(&r); /* then kept by each step's change */
-    sum.corrected = r.corrected;
+    ero__columns(r);
+    return ERO_OK;
+}
+
+/* `steps` steps from the map as it is (the state is the map alone: the surface points made from
+   it first, then kept by each step's change) */
+static ero_result ero__run_steps(ero__run *r, int steps, ero_report *per_step, ero_report *total)
+{
+    ero_report rep, sum;
+    ero_result e = ERO_OK;
+    int s;
+    memset(&sum, 0, sizeof sum);
+    ero__points(r);
+    sum.corrected = r->corrected;
     for (s = 0; s < steps; s++) {
-        if (r.o.progress && r.o.progress(r.o.user, (float)s / (float)steps)) { e = ERO_CANCELLED; break; }
-        ero__time_step(&r, &rep);
+        if (r->o.progress && r->o.progress(r->o.user, (float)s / (float)steps)) { e = ERO_CANCELLED; break; }
+        ero__time_step(r, &rep);
         rep.steps = 1;
-        rep.corrected = r.corrected;
+        rep.corrected = r->corrected;
         if (per_step) per_step[s] = rep;
         sum.eroded += rep.eroded;
         sum.deposited += rep.deposited;
         if (rep.max_change > sum.max_change) sum.max_change = rep.max_change;
         sum.steps++;
     }
-    if (e == ERO_OK && r.o.progress) r.o.progress(r.o.user, 1.0f);
+    if (e == ERO_OK && r->o.progress) r->o.progress(r->o.user, 1.0f);
     if (total) *total = sum;
-    ero__free(r.al, r.ext);
-    ero__free(r.al, r.seg);
-    ero__free(r.al, r.onb);
-    ero__free_walks(&r);
-    ero__free(r.al, r.block);
     return e;
+}
+
+ERODEF ero_result ero_erode(const ero_grid *g, const uint8_t *material, const ero_material *materials,
+                            size_t material_count, int steps, const ero_options *options, ero_report *per_step,
+                            ero_report *total)
+{
+    ero__run r;
+    ero_result e;
+    if (total) memset(total, 0, sizeof *total);
+    if ((e = ero__setup(&r, g, material, materials, material_count, steps, options)) != ERO_OK) return e;
+    if ((e = ero__build(&r)) != ERO_OK) return e;
+    e = ero__run_steps(&r, steps, per_step, total);
+    ero__release(&r);
+    return e;
+}
+
+/* ================================================================================================
+   the workspace: ero__build's tables kept across calls
+   ================================================================================================ */
+
+struct ero_workspace {
+    ero__run r;
+    ero_grid g;              /* the grid it was made for (disp aside) */
+    float normal_radius, filter_sigma; /* the resolved lengths the kernels came from */
+    int keep_invalid;
+    ero_allocator al;        /* a copy of the caller's allocator (r.al points here), if one was given */
+};
+
+ERODEF ero_result ero_workspace_create(const ero_grid *g, const ero_options *options, ero_workspace **out)
+{
+    ero__run r;
+    ero_workspace *ws;
+    ero_result e;
+    if (!out) return ERO_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if ((e = ero__setup(&r, g, NULL, NULL, 0, 1, options)) != ERO_OK) return e;
+    ws = (ero_workspace *)ero__alloc(r.al, sizeof *ws);
+    if (!ws) return ERO_ERR_OUT_OF_MEMORY;
+    memset(ws, 0, sizeof *ws);
+    ws->r = r;
+    if (r.al) { ws->al = *r.al; ws->r.al = &ws->al; }
+    ws->g = *g;
+    ws->normal_radius = r.o.normal_radius;
+    ws->filter_sigma = r.o.filter_sigma;
+    ws->keep_invalid = (r.o.flags & ERO_KEEP_INVALID) != 0;
+    if ((e = ero__build(&ws->r)) != ERO_OK) {
+        ero__free(r.al, ws);
+        return e;
+    }
+    *out = ws;
+    return ERO_OK;
+}
+
+ERODEF void ero_workspace_destroy(ero_workspace *ws)
+{
+    ero_allocator al;
+    const ero_allocator *a;
+    if (!ws) return;
+    ero__release(&ws->r);
+    al = ws->al;
+    a = ws->r.al ? &al : NULL;
+    ero__free(a, ws);
+}
+
+/* nonzero unless g is the grid ws was made for: its domain, size, spacing, wrap and geometry arrays */
+static int ero__other_grid(const ero_workspace *ws, const ero_grid *g)
+{
+    const ero_grid *m = &ws->g;
+    return g->domain != m->domain || g->width != m->width || g->height != m->height || g->valid != m->valid ||
+           g->pos != m->pos || g->nrm != m->nrm || g->area != m->area || g->nbr != m->nbr ||
+           g->nbr_rot != m->nbr_rot || (g->domain == ERO_HEIGHTFIELD && (!(g->spacing == m->spacing) ||
+                                                                          (g->wrap != 0) != (m->wrap != 0)));
+}
+
+/* nonzero if a value of disp is not finite (branch-free) */
+static int ero__bad_disp(const float *d, size_t n)
+{
+    size_t i;
+    int bad = 0;
+    for (i = 0; i < n; i++) bad |= !ero__fin(d[i]);
+    return bad;
+}
+
+ERODEF ero_result ero_erode_ws(ero_workspace *ws, const ero_grid *g, const uint8_t *material,
+                               const ero_material *materials, size_t material_count, int steps,
+                               const ero_options *options, ero_report *per_step, ero_report *total)
+{
+    ero__run *r;
+    ero_options o = options ? *options : ero_default_options(), ro;
+    ero_result e;
+    if (total) memset(total, 0, sizeof *total);
+    if (!ws || !g || !g->disp || ero__other_grid(ws, g)) return ERO_ERR_INVALID_ARGUMENT;
+    r = &ws->r;
+    if (ero__bad_disp(g->disp, r->n)) return ERO_ERR_BAD_MAP;
+    if ((e = ero__check_options(&o)) != ERO_OK) return e;
+    ro = ero__resolve(&o, r->scale);
+    if (!(ro.normal_radius == ws->normal_radius) || !(ro.filter_sigma == ws->filter_sigma) ||
+        ((ro.flags & ERO_KEEP_INVALID) != 0) != ws->keep_invalid)
+        return ERO_ERR_BAD_PARAMETER;
+    if (steps < 1) return ERO_ERR_BAD_STEPS;
+    r->corrected = 0;
+    if ((e = ero__check_materials(r, material, materials, material_count)) != ERO_OK) return e;
+    r->disp = g->disp;
+    ero__set_options(r, &o);
+    return ero__run_steps(r, steps, per_step, total);
 }
 
 /* ================================================================================================

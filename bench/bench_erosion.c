@@ -6,10 +6,14 @@
      --res N  a resolution to measure (repeatable; default 1024 and 4096)
    For each resolution, for a height field and for MESH's map:
      RESULT erosion domain=<heightfield|surface> res=<n> step_ms=<t> stream_ms=<t> ratio=<step/stream>
-   step_ms: one step of a 4-step ero_erode call (the call divided by 4: the per-call checks and
-   set-up spread over the steps); stream_ms: one plain loop over exactly the arrays a step must
-   touch (height field: height and a 1-byte material id; surface: pos, nrm, disp, area, valid,
-   nbr, nbr_rot, material id), writing disp once. Interleaved with bench_interleave, one thread.
+            call_ms=<t>
+   step_ms: one step on a reused workspace (a 4-step ero_erode_ws call divided by 4, the
+   workspace made once per grid outside the timer: the per-call disp, option and material checks
+   spread over the steps); stream_ms: one plain loop over exactly the arrays a step must touch
+   (height field: height and a 1-byte material id; surface: pos, nrm, disp, area, valid, nbr,
+   nbr_rot, material id), writing disp once; call_ms: one 4-step ero_erode call divided by 4 (the
+   one-call form: the input checks, scratch and tables of the workspace made and freed inside
+   it). The three interleaved with bench_interleave, one thread.
    Fixed parameters (bench/README.md): normal-averaging radius 2 texels and filter sigma 1 texel at
    1024^2 (the same world lengths at 4096^2), wind (1, 0.3, -1), one material {1, 4}. */
 #include "bench.h"
@@ -29,10 +33,16 @@ typedef struct bench_case {
     float *disp0;   /* the map before (restored after each timed run) */
     uint8_t *mat;
     size_t n;
+    ero_workspace *ws;  /* made once per grid, outside the timer */
     volatile float zero; /* 0 at run time: the stream loop reads every array, the compiler cannot drop it */
 } bench_case;
 
 static int run_step(void *user)
+{
+    bench_case *c = (bench_case *)user;
+    return ero_erode_ws(c->ws, &c->g, c->mat, NULL, 0, STEPS, &c->o, NULL, NULL) != ERO_OK;
+}
+static int run_call(void *user)
 {
     bench_case *c = (bench_case *)user;
     return ero_erode(&c->g, c->mat, NULL, 0, STEPS, &c->o, NULL, NULL) != ERO_OK;
@@ -69,16 +79,19 @@ static int run_stream(void *user)
 
 static void measure(bench_case *c, const char *domain, int res)
 {
-    bench_side s[2];
+    bench_side s[3];
+    int k;
     c->disp0 = (float *)malloc(c->n * sizeof(float));
     c->mat = (uint8_t *)calloc(c->n, 1);
     if (!c->disp0 || !c->mat) { fprintf(stderr, "bench_erosion: out of memory\n"); exit(1); }
     memcpy(c->disp0, c->g.disp, c->n * sizeof(float));
+    if (ero_workspace_create(&c->g, &c->o, &c->ws) != ERO_OK) { fprintf(stderr, "bench_erosion: no workspace\n"); exit(1); }
     s[0] = bench_make_side("step", run_step, after_step, c);
     s[1] = bench_make_side("stream", run_stream, after_step, c);
+    s[2] = bench_make_side("call", run_call, after_step, c);
     fprintf(stderr, "bench_erosion: %s %d^2\n", domain, res);
-    if (bench_interleave(s, 2, 0) != 0) { fprintf(stderr, "bench_erosion: a run failed\n"); exit(1); }
-    for (int k = 0; k < 2; k++) { /* per step */
+    if (bench_interleave(s, 3, 0) != 0) { fprintf(stderr, "bench_erosion: a run failed\n"); exit(1); }
+    for (k = 0; k < 3; k++) { /* per step */
         s[k].median /= STEPS; s[k].min /= STEPS; s[k].max /= STEPS;
         for (int j = 0; j < s[k].runs; j++) s[k].samples[j] /= STEPS;
     }
@@ -86,8 +99,10 @@ static void measure(bench_case *c, const char *domain, int res)
     bench_print_ms("step", &s[0]);
     bench_print_ms("stream", &s[1]);
     bench_print_ratio(&s[0], &s[1]);
+    bench_print_ms("call", &s[2]);
     printf("\n");
     fflush(stdout);
+    ero_workspace_destroy(c->ws);
     free(c->disp0);
     free(c->mat);
 }

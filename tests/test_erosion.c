@@ -617,6 +617,119 @@ static void test_alloc_failure(torus_map *t)
     free(d0);
 }
 
+/* ---- a workspace reused across calls: the same bits as ero_erode ------------------------------ */
+
+/* steps of ero_erode_ws on a reused workspace, split as `parts` says, equal ero_erode's one call */
+static int ws_matches(ero_grid *g, const ero_options *o, int steps, const int *parts, int nparts)
+{
+    size_t n = (size_t)g->width * g->height;
+    float *d0 = copy_floats(g->disp, n), *once;
+    ero_report a[16], b[16], ta, tb;
+    ero_workspace *ws = NULL;
+    int k, done = 0, same;
+    if (ero_erode(g, NULL, NULL, 0, steps, o, a, &ta) != ERO_OK) return 0;
+    once = copy_floats(g->disp, n);
+    memcpy(g->disp, d0, n * sizeof(float));
+    same = ero_workspace_create(g, o, &ws) == ERO_OK;
+    for (k = 0; k < 2 && same; k++) { /* twice: a used workspace gives the same bits as a new one */
+        int p;
+        for (p = 0, done = 0; p < nparts && same; done += parts[p++])
+            same = ero_erode_ws(ws, g, NULL, NULL, 0, parts[p], o, b + done, &tb) == ERO_OK;
+        same = same && done == steps && memcmp(once, g->disp, n * sizeof(float)) == 0;
+        for (p = 0; p < steps && same; p++)
+            same = memcmp(&a[p].eroded, &b[p].eroded, sizeof(double)) == 0 &&
+                   memcmp(&a[p].deposited, &b[p].deposited, sizeof(double)) == 0 && a[p].max_change == b[p].max_change;
+        memcpy(g->disp, d0, n * sizeof(float));
+    }
+    ero_workspace_destroy(ws);
+    free(d0); free(once);
+    return same;
+}
+
+static void test_workspace(torus_map *t)
+{
+    enum { N = 96 };
+    dm_dispmap *m = t->map;
+    size_t n = (size_t)m->width * m->height, k;
+    float *d0 = copy_floats(m->disp, n), *h = analytic_field(N), *mid;
+    uint8_t *valid = (uint8_t *)malloc(N * N), mat[N * N];
+    ero_grid g = torus_ero(t), b, hg = ero_heightfield_grid(N, N, h, 1.0f / N, 1);
+    ero_options o = torus_options(), p, ho = ero_default_options();
+    ero_material hard = {3, 5, 0, 0};
+    ero_workspace *ws = NULL;
+    fail_alloc fa = {0, 0, 0};
+    ero_allocator al = {fa_alloc, fa_free, &fa};
+    const int split[3] = {4, 3, 3}, one[1] = {10}, hsplit[2] = {2, 3}, hone[1] = {5};
+    long calls;
+    int all = 1;
+    T_CHECK_MSG(ws_matches(&g, &o, 10, one, 1), "torus: a workspace's 10 steps differ from ero_erode's");
+    T_CHECK_MSG(ws_matches(&g, &o, 10, split, 3), "torus: 4 + 3 + 3 steps on a workspace differ from 10 at once");
+    ho.wind[0] = 1.0f; ho.wind[1] = 0.3f; ho.wind[2] = -1.0f;
+    ho.normal_radius = 3.0f / N; ho.filter_sigma = 1.5f / N;
+    T_CHECK_MSG(ws_matches(&hg, &ho, 5, hone, 1) && ws_matches(&hg, &ho, 5, hsplit, 2),
+                "wrapped height field: a workspace differs from ero_erode");
+    hg.wrap = 0;
+    T_CHECK_MSG(ws_matches(&hg, &ho, 5, hsplit, 2), "height field: a workspace differs from ero_erode");
+    for (k = 0; k < N * N; k++) valid[k] = (k % N - 40.0) * (k % N - 40.0) + (k / N - 50.0) * (k / N - 50.0) < 35.0 * 35.0;
+    hg.valid = valid;
+    T_CHECK_MSG(ws_matches(&hg, &ho, 5, hsplit, 2), "height field with a valid map: a workspace differs from ero_erode");
+    /* what may change between calls: the wind, the rate, the materials */
+    T_CHECK(ero_workspace_create(&g, &o, &ws) == ERO_OK && ws);
+    p = o; p.wind[0] = -o.wind[1]; p.wind[1] = o.wind[0]; p.rate = 0.5f * o.rate;
+    memset(mat, 0, sizeof mat);
+    T_CHECK(ero_erode(&g, NULL, NULL, 0, 2, &o, NULL, NULL) == ERO_OK && ero_erode(&g, NULL, &hard, 1, 2, &p, NULL, NULL) == ERO_OK);
+    mid = copy_floats(m->disp, n);
+    memcpy(m->disp, d0, n * sizeof(float));
+    T_CHECK(ero_erode_ws(ws, &g, NULL, NULL, 0, 2, &o, NULL, NULL) == ERO_OK &&
+            ero_erode_ws(ws, &g, NULL, &hard, 1, 2, &p, NULL, NULL) == ERO_OK);
+    T_CHECK_MSG(memcmp(mid, m->disp, n * sizeof(float)) == 0, "a workspace with the wind changed between calls differs");
+    memcpy(m->disp, d0, n * sizeof(float));
+    /* what may not: another grid, other kernels; and the per-call checks, the map untouched */
+    T_EQ_INT(ero_erode_ws(NULL, &g, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(ero_erode_ws(ws, NULL, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_INVALID_ARGUMENT);
+    b = g; b.nbr = NULL;
+    T_EQ_INT(ero_erode_ws(ws, &b, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_INVALID_ARGUMENT);
+    b = g; b.height = g.height - 1;
+    T_EQ_INT(ero_erode_ws(ws, &b, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_INVALID_ARGUMENT);
+    T_EQ_INT(ero_erode_ws(ws, &hg, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_INVALID_ARGUMENT);
+    p = o; p.filter_sigma = 1.5f * (o.filter_sigma > 0 ? o.filter_sigma : 0.01f);
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, NULL, 0, 1, &p, NULL, NULL), ERO_ERR_BAD_PARAMETER);
+    p = o; p.flags ^= ERO_KEEP_INVALID;
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, NULL, 0, 1, &p, NULL, NULL), ERO_ERR_BAD_PARAMETER);
+    p = o; p.wind[0] = p.wind[1] = p.wind[2] = 0.0f;
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, NULL, 0, 1, &p, NULL, NULL), ERO_ERR_BAD_WIND);
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, NULL, 0, 0, &o, NULL, NULL), ERO_ERR_BAD_STEPS);
+    hard.eps_min = 6.0f;
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, &hard, 1, 1, &o, NULL, NULL), ERO_ERR_BAD_MATERIAL);
+    m->disp[n / 2] = NAN;
+    T_EQ_INT(ero_erode_ws(ws, &g, NULL, NULL, 0, 1, &o, NULL, NULL), ERO_ERR_BAD_MAP);
+    m->disp[n / 2] = d0[n / 2];
+    T_CHECK_MSG(memcmp(d0, m->disp, n * sizeof(float)) == 0, "a failed workspace call changed the map");
+    ero_workspace_destroy(ws);
+    ero_workspace_destroy(NULL);
+    T_EQ_INT(ero_workspace_create(&g, &o, NULL), ERO_ERR_INVALID_ARGUMENT);
+    b = g; b.nbr = NULL; ws = (ero_workspace *)&b; /* not NULL: the call sets it */
+    T_EQ_INT(ero_workspace_create(&b, &o, &ws), ERO_ERR_INVALID_ARGUMENT);
+    T_CHECK(ws == NULL);
+    /* allocation failure: every allocation of the workspace in turn; a call allocates nothing */
+    o.allocator = &al;
+    T_CHECK(ero_workspace_create(&g, &o, &ws) == ERO_OK);
+    calls = fa.calls;
+    T_CHECK(ero_erode_ws(ws, &g, NULL, NULL, 0, 2, &o, NULL, NULL) == ERO_OK);
+    T_CHECK_MSG(fa.calls == calls, "ero_erode_ws allocated %ld blocks", fa.calls - calls);
+    ero_workspace_destroy(ws);
+    T_CHECK(calls >= 2 && fa.live == 0);
+    memcpy(m->disp, d0, n * sizeof(float));
+    for (k = 1; k <= (size_t)calls; k++) {
+        fa.calls = 0; fa.fail_at = (long)k; fa.live = 0;
+        ws = NULL;
+        all &= ero_workspace_create(&g, &o, &ws) == ERO_ERR_OUT_OF_MEMORY && ws == NULL && fa.live == 0;
+    }
+    T_CHECK_MSG(all, "workspace allocation failure: %ld calls failed in turn: not all reported, or leaked", calls);
+    T_CHECK(memcmp(d0, m->disp, n * sizeof(float)) == 0);
+    free(d0); free(h); free(valid); free(mid);
+}
+
 /* ---- Figs 5.2.2 and 5.2.3: cylinders with reliefs ---------------------------------------------- */
 
 /* a cylinder of radius 0.5 and height 1.2 as a surface grid (u around, wrapping; v along the axis)
@@ -765,6 +878,7 @@ int main(int argc, char **argv)
         test_resume(&t);
         test_bad_input(&t);
         test_alloc_failure(&t);
+        test_workspace(&t);
     }
     torus_free(&t);
     test_resolution();
