@@ -12,6 +12,9 @@
        ero_report total;
        ero_erode(&g, NULL, &soft, 1, 10, &o, NULL, &total);  // 10 steps; height[] is weathered
        printf("eroded %g deposited %g\n", total.eroded, total.deposited);
+       // many calls on one grid: its tables made once (the same bits as ero_erode)
+       ero_workspace *ws; ero_workspace_create(&g, &o, &ws);
+       ero_erode_ws(ws, &g, NULL, &soft, 1, 10, &o, NULL, &total); ... ero_workspace_destroy(ws);
 
    WHAT
      Each step computes, for every valid sample x, the erosion height H(x) = W_f(x) / R(x) (paper eq.
@@ -30,8 +33,8 @@
      The domains differ only in how a neighbour is found and in the offset to it (P_j - P_i; (+-s, 0,
      h_j - h_i) for a height field, exact under circular shifts); every filter, normal and curvature
      then runs through the same walk over neighbours, which never sees a seam. The walk is resolved
-     once per call: texels whose neighbours (or filter taps) are the grid's run in row loops that
-     vectorise, the others through recorded index lists, with the same sums in the same order (the
+     once per call (or per workspace): texels whose neighbours (or filter taps) are the grid's run
+     in row loops that vectorise, the others through recorded index lists, with the same sums in the same order (the
      same bits as texel by texel). A height field without a valid map runs the same model in one pass
      over a ring of rows (a fraction of the memory traffic; its bits differ from the walk's in the
      last places: the filters' weights divided by their sum beforehand, 1 / |n| by a reciprocal
@@ -111,7 +114,9 @@
        allocator (NULL = ERO_MALLOC/ERO_FREE), progress (per step; nonzero cancels), user.
 
    MEMORY
-     ero_erode allocates once per call, freed before it returns: for a height field without a valid
+     ero_erode allocates once per call, freed before it returns (ero_workspace_create allocates the
+     same, plus the workspace struct of a few KiB, kept until ero_workspace_destroy; ero_erode_ws
+     allocates nothing): for a height field without a valid
      map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of about 8
      box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else 24 bytes
      per texel for a height field and 56 for a surface grid (positions, base normals, normals and
@@ -119,14 +124,15 @@
      column coefficients, the regular-run lengths) and 40 KiB plus 16 bytes per column, 8 bytes per
      run of one texel kind in a row (per pass and for the geometry), 16 bytes per valid texel off the
      four grid neighbours (its neighbours), 4 + 10 r bytes per axis and kernel for each texel within
-     its radius r of a seam or border (the walks' taps, found once per call), 4 + 4 C bytes per tap
-     that reaches a seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for
+     its radius r of a seam or border (the walks' taps, found once per call or workspace), 4 + 4 C
+     bytes per tap that reaches a seam turning the axes an odd number of quarter turns (C = 4 for the box, 1 for
      the Gaussian), 4 C bytes per walked texel of the busiest pass (their values), and up to 40 bytes
      for each invalid texel next to valid ones. The maps are the caller's.
 
    ERRORS
      Functions return ero_result (ERO_OK = 0); ero_result_string() names it.
-       ERO_ERR_INVALID_ARGUMENT  a NULL pointer (grid, disp, a surface array), an unknown domain;
+       ERO_ERR_INVALID_ARGUMENT  a NULL pointer (grid, disp, a surface array, workspace), an unknown
+                                 domain; for ero_erode_ws a grid other than the workspace's;
        ERO_ERR_BAD_SIZE          width or height < 1;
        ERO_ERR_TOO_LARGE         width * height overflows or exceeds 2^32 - 2 texels;
        ERO_ERR_BAD_SPACING       a height field's spacing <= 0 or not finite;
@@ -136,17 +142,21 @@
        ERO_ERR_BAD_WIND          a zero, NaN or infinite wind vector;
        ERO_ERR_BAD_MATERIAL      eps_min <= 0, eps_min >= eps_max, a NaN, a material id >= count;
        ERO_ERR_BAD_STEPS         steps < 1;
-       ERO_ERR_BAD_PARAMETER     a negative or non-finite option, a radius beyond 255 texels;
+       ERO_ERR_BAD_PARAMETER     a negative or non-finite option, a radius beyond 255 texels; for
+                                 ero_erode_ws radii or ERO_KEEP_INVALID other than the workspace's;
        ERO_ERR_OUT_OF_MEMORY     the allocator returned NULL;
        ERO_CANCELLED             the progress callback returned nonzero.
      A change that would leave float's range (huge maps, eps_min near 0) leaves the texel as it
      was. Everything is checked before the first step; on any error but ERO_CANCELLED the maps are
      untouched; cancelled, they hold the steps completed (report.steps), a valid state to resume.
+     A workspace stays usable after any error of ero_erode_ws.
 
    THREAD SAFETY
-     No global state; every function is re-entrant. The same input gives the same bits on every
-     run: sums in a fixed order relative to each texel, so a circular shift of a wrapped height
-     field shifts the result bit for bit.
+     No global state; every function is re-entrant. A workspace is scratch: one call at a time uses
+     it (threads eroding at once need a workspace each); it only reads the grid's geometry arrays.
+     The same input gives the same bits on every run, with a workspace or without: sums in a fixed
+     order relative to each texel, so a circular shift of a wrapped height field shifts the result
+     bit for bit.
 
    LIMITS
      Steps are explicit (the paper's): the windward term moves slopes like an advection, so a rate
