@@ -712,6 +712,7 @@ int main(int argc, char **argv)
     ero_material mats[2];
     ero_report seg, total;
     ero_result er;
+    ero_workspace *ws = NULL; /* the grid's tables, made once for the render segments' calls */
     progress pr;
     long done = 0;
     int k, status = 1, u = parse_args(argc, argv, &a);
@@ -736,15 +737,19 @@ int main(int argc, char **argv)
     o.progress = show_progress;
     o.user = &pr;
     pr.total = a.steps; pr.last = now_s();
+    t0 = now_s();
+    er = ero_workspace_create(&R.g, &o, &ws);
+    t_erode += now_s() - t0;
+    if (er != ERO_OK) { cli_result_error(PROG, "ero_workspace_create", ero_result_string(er), 0); goto done; }
     for (k = 0; k <= a.render_count; k++) { /* erode up to each render step (resuming gives the same bits) */
         long until = k < a.render_count ? (long)a.render_steps[k] : a.steps;
         if (until > done) {
             pr.done_before = done;
             pr.segment = until - done;
             t0 = now_s();
-            er = ero_erode(&R.g, R.mat, mats, 2, (int)(until - done), &o, NULL, &seg);
+            er = ero_erode_ws(ws, &R.g, R.mat, mats, 2, (int)(until - done), &o, NULL, &seg);
             t_erode += now_s() - t0;
-            if (er != ERO_OK) { cli_result_error(PROG, "ero_erode", ero_result_string(er), 0); goto done; }
+            if (er != ERO_OK) { cli_result_error(PROG, "ero_erode_ws", ero_result_string(er), 0); goto done; }
             total.eroded += seg.eroded; total.deposited += seg.deposited;
             if (seg.max_change > total.max_change) total.max_change = seg.max_change;
             done = until;
@@ -774,6 +779,7 @@ int main(int argc, char **argv)
     status = 0;
 done:
     if (status) cli_outputs_discard(&outs);
+    ero_workspace_destroy(ws);
     free(final);
     run_free(&R);
     return status;
