@@ -37,8 +37,10 @@
      in row loops that vectorise, the others through recorded index lists, with the same sums in the same order (the
      same bits as texel by texel). A height field without a valid map runs the same model in one pass
      over a ring of rows (a fraction of the memory traffic; its bits differ from the walk's in the
-     last places: the filters' weights divided by their sum beforehand, 1 / |n| by a reciprocal
-     square root accurate to about 3 ulp, the report's sums in float within a row).
+     last places: the box's sums left undivided (the averaged normal's direction does not depend
+     on their length; the curvature's divided once), the curvature in a height field's closed
+     form, R in powers of c, 1 / |n| by a reciprocal square root accurate to about 3 ulp, the
+     report's sums in float over 32 rows per column, then in double).
 
    MODEL (paper section 4.2.2; its W_f and R are on pages the text lacks: the forms below are chosen)
      Lengths are world units. L = sqrt(sum of the valid texels' area) is the grid's scale; the
@@ -118,7 +120,7 @@
      same, plus the workspace struct of a few KiB, kept until ero_workspace_destroy; ero_erode_ws
      allocates nothing): for a height field without a valid
      map (and at least 2 r + 3 texels a side, r the larger kernel radius in texels) a ring of about 8
-     box_r + 2 gau_r + 24 rows of floats plus box_r + gau_r + 6 rows of heights; all else 24 bytes
+     box_r + 2 gau_r + 25 rows of floats plus box_r + gau_r + 6 rows of heights; all else 24 bytes
      per texel for a height field and 56 for a surface grid (positions, base normals, normals and
      curvature (the box filter's first pass in their place, the Gaussian's in the first of them), H,
      column coefficients, the regular-run lengths) and 40 KiB plus 16 bytes per column, 8 bytes per
@@ -1628,22 +1630,33 @@ static void ero__extend_invalid(ero__run *r)
 
 /* Every texel of a wrapped field, and every texel off a border of an unwrapped one, has the four
    grid neighbours: its geometry, filters and H run row by row on short rows that stay in cache,
-   in loops without divisions or sqrtf that vectorise, the same sums for every texel (so a
-   circular shift shifts the bits). A row's geometry is
-   box-filtered along x as it is made, the box's y pass and H follow br rows later, H's Gaussian x
-   pass at once and its y pass gr rows later, then the change is applied; the rows the geometry
-   still reads after they changed come from copies (the first ones, for the wrap; the last four). */
+   in loops that vectorise, the same sums for every texel (so a circular shift shifts the bits).
+   A row's geometry goes into a ring of 2 box_r + 1 rows; box_r rows later the box's y pass over
+   them, its x pass and H, which goes into a ring of 2 gau_r + 1 rows; gau_r rows later the
+   Gaussian's y and x passes and the change. The rows the geometry still reads after they changed
+   come from copies (the first ones, for the wrap; the last four).
+   The box sums are not divided by the weights' sum: the averaged normal's direction does not
+   depend on its length, and the curvature's sum is divided through kf (per column: minus
+   curvature_length over the sum) and a row factor. The geometry's four channels are the unit
+   normal's x and y negated, its z, and the mean curvature negated (ero__hf_texel); the signs are
+   folded into the wind and kf. */
 
 typedef struct ero__rows {
     size_t Wp;            /* the row length (ero__ring_stride) */
-    int pad;              /* columns before x = 0 in the padded row: the larger radius */
-    float *gx[4];         /* (2 box_r + 1) rows of box-x-filtered normal xyz, curvature */
-    float *hx;            /* (2 gau_r + 1) rows of Gaussian-x-filtered H */
-    float *geo[4], *avg[4], *hrow, *chg, *er, *de, *padded;
-    float *mrow[4];       /* a row's materials: eps_min, eps_max, eps_medium, ambient */
-    float *ws_box, *ws_gau; /* per column: the full weight sum over the x pass's (1 inside) */
+    int pad;              /* columns before x = 0 in a padded row: the larger radius, rounded up to 8 */
+    float *geo[4];        /* (2 box_r + 1) rows each: the geometry of the rows (ero__hf_texel's channels) */
+    float *hr;            /* (2 gau_r + 1) rows of H */
+    float *ty[4];         /* padded: one row's box sums along y */
+    float *tg;            /* padded: one row's Gaussian along y */
+    float *avg[4];        /* one row's box sums (along y, then x) */
+    float *chg;           /* one row's Gaussian (along y, then x) */
+    float *er, *de, *mx;  /* per column: the report's sums and largest change over the last rows */
+    float *kf;            /* per column: -curvature_length / (the box's x weights inside the row times all of them) */
+    float *gf;            /* per column: rate / the Gaussian's x weights inside the row (over their full sum) */
+    float *mrow[4];       /* a row's resistance R(c) = m0 + c (m1 + c m2), and ambient */
     float *zero;          /* a row of zeros: the taps beyond an unwrapped border */
-    float wb[ERO__MAXR + 1], wg[ERO__MAXR + 1]; /* the box's and Gaussian's weights over their sums */
+    float wb[ERO__MAXR + 1], wg[ERO__MAXR + 1]; /* the box's weights; the Gaussian's over their sum */
+    float coef[256][4];   /* per material: m0, m1, m2, ambient */
     float *head;          /* the first rows before the step (a wrapped field reads them last) */
     float *orig;          /* the last four applied rows before the step */
     long head_rows, applied;
@@ -1658,56 +1671,77 @@ static int ero__ring_fits(const ero__run *r)
 /* the rows' length: W rounded up to 8, and 16 more so that rows a power of two long do not sit
    4 KiB apart (the ring's rows would share L1 sets and stall on false store-to-load aliasing) */
 static size_t ero__ring_stride(const ero__run *r) { return (((size_t)r->W + 7) & ~(size_t)7) + 16; }
+static int ero__ring_pad(const ero__run *r) { return ((r->box_r > r->gau_r ? r->box_r : r->gau_r) + 7) & ~7; }
 
 static size_t ero__ring_floats(const ero__run *r)
 {
-    size_t Wp = ero__ring_stride(r), rows;
-    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 4 + 4 + 6 + 2;
-    return rows * Wp + 2 * ERO__MAXR + 16 + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
+    size_t Wp = ero__ring_stride(r), rows, padded = Wp + 2 * (size_t)ero__ring_pad(r);
+    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 1 + 3 + 2 + 4 + 1;
+    return rows * Wp + 5 * padded + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
 }
 
 static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
 {
-    size_t Wp = ero__ring_stride(r);
+    size_t Wp = ero__ring_stride(r), padded;
     int k;
     q->Wp = Wp;
-    q->pad = r->box_r > r->gau_r ? r->box_r : r->gau_r;
-    for (k = 0; k < 4; k++) { q->gx[k] = f; f += (2 * (size_t)r->box_r + 1) * Wp; }
-    q->hx = f; f += (2 * (size_t)r->gau_r + 1) * Wp;
-    for (k = 0; k < 4; k++) { q->geo[k] = f; f += Wp; }
+    q->pad = ero__ring_pad(r);
+    padded = Wp + 2 * (size_t)q->pad;
+    for (k = 0; k < 4; k++) { q->geo[k] = f; f += (2 * (size_t)r->box_r + 1) * Wp; }
+    q->hr = f; f += (2 * (size_t)r->gau_r + 1) * Wp;
+    for (k = 0; k < 4; k++) { q->ty[k] = f + q->pad; f += padded; }
+    q->tg = f + q->pad; f += padded;
     for (k = 0; k < 4; k++) { q->avg[k] = f; f += Wp; }
-    q->hrow = f; f += Wp;
     q->chg = f; f += Wp;
     q->er = f; f += Wp;
     q->de = f; f += Wp;
+    q->mx = f; f += Wp;
+    q->kf = f; f += Wp;
+    q->gf = f; f += Wp;
     for (k = 0; k < 4; k++) { q->mrow[k] = f; f += Wp; }
-    q->ws_box = f; f += Wp;
-    q->ws_gau = f; f += Wp;
     q->zero = f; f += Wp;
-    q->padded = f; f += Wp + 2 * ERO__MAXR + 16;
     q->head_rows = r->box_r + r->gau_r + 2;
     q->head = f; f += (size_t)q->head_rows * (size_t)r->W;
     q->orig = f;
 }
 
-/* per column, the full weight sum over the x pass's: all taps with wrap (1), those inside the row
-   without; and the weights over the full sum (the taps' sums need no division) */
-static void ero__ring_weights(const ero__run *r, float *ws, float *wn, const float *w, int R, float full)
+/* the weights of the taps inside the row at column x (all of them with wrap), summed as
+   ero__kernels sums the full kernel */
+static float ero__col_sum(const ero__run *r, const float *w, int R, long x)
 {
-    long W = r->W, x;
+    float s = w[0];
     int k;
-    for (x = 0; x < W; x++) {
-        float s = w[0];
-        for (k = 1; k <= R; k++) {
-            if (r->wrap || x + k < W) s += w[k];
-            if (r->wrap || x - k >= 0) s += w[k];
-        }
-        ws[x] = r->wrap ? 1.0f : full / s;
+    for (k = 1; k <= R; k++) {
+        if (r->wrap || x + k < r->W) s += w[k];
+        if (r->wrap || x - k >= 0) s += w[k];
     }
-    for (k = 0; k <= R; k++) wn[k] = w[k] / full;
+    return s;
 }
 
-/* out[x] = w[0] c[x] + sum over k of w[k] (up[k - 1][x] + dn[k - 1][x]), two taps a loop */
+/* the weights and the per-column factors (kf, gf: see ero__rows); the resistance's coefficients */
+static void ero__ring_weights(const ero__run *r, ero__rows *q)
+{
+    long x;
+    size_t m;
+    int k;
+    float lc = r->o.curvature_length;
+    for (k = 0; k <= r->box_r; k++) q->wb[k] = r->box_w[k];
+    for (k = 0; k <= r->gau_r; k++) q->wg[k] = r->gau_w[k] / r->gau_sum;
+    for (x = 0; x < r->W; x++) {
+        q->kf[x] = -lc / (ero__col_sum(r, r->box_w, r->box_r, x) * r->box_sum);
+        q->gf[x] = r->o.rate * (r->gau_sum / ero__col_sum(r, r->gau_w, r->gau_r, x));
+    }
+    for (m = 0; m < r->mat_count; m++) {
+        const ero_material *e = &r->mats[m];
+        q->coef[m][0] = e->eps_max;
+        q->coef[m][1] = 2.0f * (e->eps_medium - e->eps_max);
+        q->coef[m][2] = (e->eps_max - 2.0f * e->eps_medium) + e->eps_min;
+        q->coef[m][3] = e->ambient;
+    }
+}
+
+/* out[x] = w[0] c[x] + w[1] (up[0][x] + dn[0][x]) + ... + w[R] (up[R - 1][x] + dn[R - 1][x]),
+   added in that order (two taps a loop) */
 static void ero__taps(const float *const *up, const float *const *dn, const float *ERO__RESTRICT c,
                       float *ERO__RESTRICT out, long n, const float *w, int R)
 {
@@ -1730,65 +1764,98 @@ static void ero__taps(const float *const *up, const float *const *dn, const floa
         const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1], *ERO__RESTRICT ub = up[k],
                                    *ERO__RESTRICT db = dn[k];
         float wa = w[k], wb = w[k + 1];
-        for (x = 0; x < n; x++) out[x] += wa * (ua[x] + da[x]) + wb * (ub[x] + db[x]);
+        for (x = 0; x < n; x++) out[x] = (out[x] + wa * (ua[x] + da[x])) + wb * (ub[x] + db[x]);
     }
     if (k == R) {
         const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1];
         float wa = w[k];
-        for (x = 0; x < n; x++) out[x] += wa * (ua[x] + da[x]);
+        for (x = 0; x < n; x++) out[x] = out[x] + wa * (ua[x] + da[x]);
     }
 }
 
-/* one row filtered along x: in (W values) padded by wrap or zeros into q->padded, the taps with
-   the normalised weights wn, the border columns of an unwrapped row renormalised by ws */
-static void ero__ring_xpass(const ero__run *r, ero__rows *q, const float *in, float *ERO__RESTRICT out,
-                            const float *wn, int R, const float *ws)
+/* ero__taps for the box (ero__kernels: w[k] = 1 for k < R, w[R] = the end tap's weight): the same
+   sums without the products by 1 */
+static void ero__box_taps(const float *const *up, const float *const *dn, const float *ERO__RESTRICT c,
+                          float *ERO__RESTRICT out, long n, const float *w, int R)
 {
-    long W = r->W, x;
-    size_t Wp = q->Wp;
-    const float *up[ERO__MAXR], *dn[ERO__MAXR];
-    float *p = q->padded + q->pad;
-    int k;
-    for (x = -(long)q->pad; x < 0; x++) p[x] = r->wrap ? in[x + W] : 0.0f;
-    memcpy(p, in, (size_t)W * sizeof(float));
-    for (x = W; x < (long)Wp + q->pad; x++) p[x] = r->wrap && x < 2 * W ? in[x - W] : 0.0f;
-    up[0] = dn[0] = p; /* unread when R = 0 */
-    for (k = 1; k <= R; k++) { up[k - 1] = p + k; dn[k - 1] = p - k; }
-    ero__taps(up, dn, p, out, (long)Wp, wn, R);
-    if (!r->wrap)
-        for (x = 0; x < W; x++) {
-            if (x == R && W - R > R) x = W - R;
-            out[x] *= ws[x];
-        }
+    long x;
+    int k = 1;
+    float we = w[R];
+    if (R == 2) {
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0], *ERO__RESTRICT u2 = up[1],
+                                   *ERO__RESTRICT d2 = dn[1];
+        for (x = 0; x < n; x++) out[x] = (c[x] + (u1[x] + d1[x])) + we * (u2[x] + d2[x]);
+        return;
+    }
+    if (R < 2) {
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0];
+        if (R == 1) for (x = 0; x < n; x++) out[x] = c[x] + we * (u1[x] + d1[x]);
+        else for (x = 0; x < n; x++) out[x] = c[x];
+        return;
+    }
+    {
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0], *ERO__RESTRICT u2 = up[1],
+                                   *ERO__RESTRICT d2 = dn[1];
+        for (x = 0; x < n; x++) out[x] = (c[x] + (u1[x] + d1[x])) + (u2[x] + d2[x]);
+        k = 3;
+    }
+    for (; k + 1 < R; k += 2) {
+        const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1], *ERO__RESTRICT ub = up[k],
+                                   *ERO__RESTRICT db = dn[k];
+        for (x = 0; x < n; x++) out[x] = (out[x] + (ua[x] + da[x])) + (ub[x] + db[x]);
+    }
+    for (; k < R; k++) {
+        const float *ERO__RESTRICT ua = up[k - 1], *ERO__RESTRICT da = dn[k - 1];
+        for (x = 0; x < n; x++) out[x] = out[x] + (ua[x] + da[x]);
+    }
+    {
+        const float *ERO__RESTRICT ua = up[R - 1], *ERO__RESTRICT da = dn[R - 1];
+        for (x = 0; x < n; x++) out[x] = out[x] + we * (ua[x] + da[x]);
+    }
 }
 
-/* the y pass: rows[R + k] is the row at offset k (NULL beyond an unwrapped border: zeros, and
-   the sum renormalised by the weights of the rows there are) */
-static void ero__ring_ypass(const ero__rows *q, float *const *rows, float *ERO__RESTRICT out, const float *wn, int R)
+/* a padded row's columns beyond 0 .. W - 1: the other end's with wrap, else zeros */
+static void ero__ring_pad_row(const ero__run *r, const ero__rows *q, float *p)
+{
+    long W = r->W, x;
+    for (x = 1; x <= q->pad; x++) {
+        p[-x] = r->wrap ? p[W - x] : 0.0f;
+        p[W - 1 + x] = r->wrap ? p[x - 1] : 0.0f;
+    }
+}
+
+/* one padded row filtered along x (its pads set first) into out (box: by ero__box_taps) */
+static void ero__ring_xpass(const ero__run *r, const ero__rows *q, float *p, float *ERO__RESTRICT out, const float *w, int R,
+                            int box)
 {
     const float *up[ERO__MAXR], *dn[ERO__MAXR];
-    size_t x, Wp = q->Wp;
-    int k, border = 0;
-    float ws = wn[0];
+    int k;
+    ero__ring_pad_row(r, q, p);
+    up[0] = dn[0] = p; /* unread when R = 0 */
+    for (k = 1; k <= R; k++) { up[k - 1] = p + k; dn[k - 1] = p - k; }
+    if (box) ero__box_taps(up, dn, p, out, r->W, w, R);
+    else ero__taps(up, dn, p, out, r->W, w, R);
+}
+
+/* the y pass: rows[R + k] is the row at offset k (NULL beyond an unwrapped border: zeros);
+   returns the weights of the rows there are */
+static float ero__ring_ypass(const ero__run *r, const ero__rows *q, float *const *rows, float *ERO__RESTRICT out,
+                             const float *w, int R, int box)
+{
+    const float *up[ERO__MAXR], *dn[ERO__MAXR];
+    int k;
+    float ws = w[0];
     up[0] = dn[0] = rows[R]; /* unread when R = 0 */
     for (k = 1; k <= R; k++) {
         up[k - 1] = rows[R + k] ? rows[R + k] : q->zero;
         dn[k - 1] = rows[R - k] ? rows[R - k] : q->zero;
-        if (rows[R + k]) ws += wn[k]; else border = 1;
-        if (rows[R - k]) ws += wn[k]; else border = 1;
+        if (rows[R + k]) ws += w[k];
+        if (rows[R - k]) ws += w[k];
     }
-    ero__taps(up, dn, rows[R], out, (long)Wp, wn, R);
-    if (border) {
-        float sc = 1.0f / ws;
-        for (x = 0; x < Wp; x++) out[x] *= sc;
-    }
+    if (box) ero__box_taps(up, dn, rows[R], out, r->W, w, R);
+    else ero__taps(up, dn, rows[R], out, r->W, w, R);
+    return ws;
 }
-
-/* the geometry of a texel with its four neighbours: ero__texel_geometry's sums with the offsets'
-   zero components left out (tx = (s, 0, a), ty = (0, s, b), so Tx x Ty = (-a s, -s b, s s)),
-   its branches as selects so that a row's loop vectorises; len2 = |Tx x Ty|^2, inv its
-   reciprocal square root */
-
 /* 1 / sqrt(x) for x >= 0 without sqrtf (whose errno keeps a loop from vectorising): the exponent
    halved on the bits (Lomont's constant), three Newton steps (relative error below 2e-7, about
    3 ulp; subnormal x scaled by 2^48 first); 0 for x = +inf, as 1 / sqrtf gives, and for x = 0
@@ -1808,65 +1875,56 @@ ERO__INLINE float ero__rsqrt(float x)
     return x > 0.0f && x < HUGE_VALF ? y : 0.0f;
 }
 
-ERO__INLINE float ero__hf_len2(float hc, float hr, float hl, float hu, float hd, float s)
-{
-    float a = 0.5f * ((hr - hc) - (hl - hc)), b = 0.5f * ((hu - hc) - (hd - hc));
-    float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
-    return (c0 * c0 + c1 * c1) + c2 * c2;
-}
-ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float s, float len2, float inv,
+/* the geometry of a texel with its four neighbours (MODEL's sums for a height field, where the
+   offsets are (+-s, 0, d) and (0, +-s, d)): n = (-A, -B, 2s) / |.| with A, B twice the central
+   differences, and the mean curvature -n_z ((d+x + d-x) / q_x + (d+y + d-y) / q_y) with q the
+   offsets' squared lengths summed per axis. Out: A / |.|, B / |.|, n_z (0, 0, 1 where there is no
+   direction) and minus the curvature (0 where not finite). The branches as selects, so that a
+   row's loop vectorises. s2 = (2s)^2, q0 = 2 s^2 */
+ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd, float S, float s2, float q0,
                                float *g0, float *g1, float *g2, float *g3)
 {
     float dr = hr - hc, dl = hl - hc, du = hu - hc, dd = hd - hc;
-    float a = 0.5f * (dr - dl), b = 0.5f * (du - dd);
-    float c0 = -(a * s), c1 = -(s * b), c2 = s * s;
-    float m0 = c0 * inv, m1 = c1 * inv, m2 = c2 * inv;
-    float n0 = len2 > 0.0f ? m0 : 0.0f, n1 = len2 > 0.0f ? m1 : 0.0f, n2 = len2 > 0.0f ? m2 : 1.0f;
-    float qx = (c2 + dr * dr) + (c2 + dl * dl), qy = (c2 + du * du) + (c2 + dd * dd);
-    float kx = -2.0f * ((s * n0 + dr * n2) + (-s * n0 + dl * n2)) / qx;
-    float ky = -2.0f * ((s * n1 + du * n2) + (-s * n1 + dd * n2)) / qy;
-    float fin = (n0 - n0) + (n1 - n1) + (n2 - n2); /* 0 when all are finite, else NaN */
-    kx = qx > 0.0f ? kx : 0.0f;
-    kx = ero__fin(kx) ? kx : 0.0f;
-    ky = qy > 0.0f ? ky : 0.0f;
-    ky = ero__fin(ky) ? ky : 0.0f;
-    *g0 = fin == 0.0f ? n0 : 0.0f; *g1 = fin == 0.0f ? n1 : 0.0f; *g2 = fin == 0.0f ? n2 : 1.0f;
-    *g3 = (kx + ky) * 0.5f;
+    float A = dr - dl, B = du - dd, inv = ero__rsqrt((A * A + B * B) + s2), nz = S * inv;
+    float qx = (dr * dr + dl * dl) + q0, qy = (du * du + dd * dd) + q0;
+    float k = nz * ((dr + dl) / qx + (du + dd) / qy);
+    *g0 = inv > 0.0f ? A * inv : 0.0f;
+    *g1 = inv > 0.0f ? B * inv : 0.0f;
+    *g2 = inv > 0.0f ? nz : 1.0f;
+    *g3 = ero__fin(k) ? k : 0.0f;
 }
 
-/* the texels 1 .. W - 2 of a row with rows on both sides, in loops that vectorise (the
-   reciprocal square roots in g2, the squared lengths in g3 first) */
+/* the texels 1 .. W - 2 of a row with rows on both sides, in a loop that vectorises */
 static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RESTRICT m, const float *ERO__RESTRICT u,
-                             float s, long W, float *ERO__RESTRICT g0,
-                             float *ERO__RESTRICT g1, float *ERO__RESTRICT g2, float *ERO__RESTRICT g3)
+                             float s, long W, float *ERO__RESTRICT g0, float *ERO__RESTRICT g1, float *ERO__RESTRICT g2,
+                             float *ERO__RESTRICT g3)
 {
     long x;
-    for (x = 1; x < W - 1; x++) g3[x] = ero__hf_len2(m[x], m[x + 1], m[x - 1], u[x], d[x], s);
-    for (x = 1; x < W - 1; x++) g2[x] = ero__rsqrt(g3[x]);
-    for (x = 1; x < W - 1; x++)
-        ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], s, g3[x], g2[x], &g0[x], &g1[x], &g2[x], &g3[x]);
+    float S = 2.0f * s, s2 = S * S, q0 = 2.0f * (s * s);
+    for (x = 1; x < W - 1; x++) ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], S, s2, q0, &g0[x], &g1[x], &g2[x], &g3[x]);
 }
 
-/* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) */
-static void ero__ring_geometry(const ero__run *r, ero__rows *q, const float *dn, const float *mid, const float *up)
+/* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) into g */
+static void ero__ring_geometry(const ero__run *r, float *const *g, const float *dn, const float *mid, const float *up)
 {
     long W = r->W, x;
-    float s = r->s, *g0 = q->geo[0], *g1 = q->geo[1], *g2 = q->geo[2], *g3 = q->geo[3];
-    if (up && dn) ero__hf_interior(dn, mid, up, s, W, g0, g1, g2, g3);
+    float s = r->s, S = 2.0f * s, s2 = S * S, q0 = 2.0f * (s * s);
+    if (up && dn) ero__hf_interior(dn, mid, up, s, W, g[0], g[1], g[2], g[3]);
     for (x = 0; x < W; x++) {
-        float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3] = {0.0f, 0.0f, 1.0f};
+        float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3] = {0.0f, 0.0f, 1.0f}, n[4];
         int have = 0;
         long xr = x + 1 < W ? x + 1 : r->wrap ? 0 : -1, xl = x > 0 ? x - 1 : r->wrap ? W - 1 : -1;
         if (up && dn && x > 0 && x < W - 1) { x = W - 2; continue; }
+        if (xr >= 0 && xl >= 0 && up && dn) {
+            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], S, s2, q0, &g[0][x], &g[1][x], &g[2][x], &g[3][x]);
+            continue;
+        }
         if (xr >= 0) { e[0][0] = s; e[0][2] = mid[xr] - mid[x]; have |= 1; }
         if (xl >= 0) { e[1][0] = -s; e[1][2] = mid[xl] - mid[x]; have |= 2; }
         if (up) { e[2][1] = s; e[2][2] = up[x] - mid[x]; have |= 4; }
         if (dn) { e[3][1] = -s; e[3][2] = dn[x] - mid[x]; have |= 8; }
-        if (have == 15) {
-            float len2 = ero__hf_len2(mid[x], mid[xr], mid[xl], up[x], dn[x], s);
-            ero__hf_texel(mid[x], mid[xr], mid[xl], up[x], dn[x], s, len2, ero__rsqrt(len2), &g0[x], &g1[x], &g2[x], &g3[x]);
-        }
-        else ero__texel_geometry(e, have, nb, &g0[x], &g1[x], &g2[x], &g3[x]);
+        ero__texel_geometry(e, have, nb, &n[0], &n[1], &n[2], &n[3]);
+        g[0][x] = -n[0]; g[1][x] = -n[1]; g[2][x] = n[2]; g[3][x] = -n[3];
     }
 }
 
@@ -1880,28 +1938,30 @@ static const float *ero__ring_row(const ero__run *r, const ero__rows *q, long y)
     return q->orig + (size_t)(y & 3) * (size_t)r->W;
 }
 
-/* geometry of row v (wrapped into the field), box-filtered along x into its ring slot */
+/* geometry of row v (wrapped into the field) into its ring slot */
 static void ero__ring_row_geometry(ero__run *r, ero__rows *q, long v)
 {
-    long H = r->H, y = ero__mod(v, H), slot = ero__mod(v, 2 * (long)r->box_r + 1);
+    long H = r->H, y = ero__mod(v, H);
+    size_t at = (size_t)ero__mod(v, 2 * (long)r->box_r + 1) * q->Wp;
     const float *dn = y > 0 ? ero__ring_row(r, q, y - 1) : r->wrap ? ero__ring_row(r, q, H - 1) : NULL;
     const float *up = y + 1 < H ? ero__ring_row(r, q, y + 1) : r->wrap ? ero__ring_row(r, q, 0) : NULL;
+    float *g[4];
     int k;
-    ero__ring_geometry(r, q, dn, ero__ring_row(r, q, y), up);
-    for (k = 0; k < 4; k++)
-        ero__ring_xpass(r, q, q->geo[k], q->gx[k] + (size_t)slot * q->Wp, q->wb, r->box_r, q->ws_box);
+    for (k = 0; k < 4; k++) g[k] = q->geo[k] + at;
+    ero__ring_geometry(r, g, dn, ero__ring_row(r, q, y), up);
 }
 
 /* the rows at offsets -R..R from v in a ring of 2R + 1 slots (NULL beyond an unwrapped border) */
 static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, int R, float **rows)
 {
+    long slot = ero__mod(v - R, 2 * (long)R + 1);
     int k;
     for (k = -R; k <= R; k++) {
         long y = v + k;
-        rows[R + k] = !r->wrap && (y < 0 || y >= r->H) ? NULL : ring + (size_t)ero__mod(y, 2 * (long)R + 1) * Wp;
+        rows[R + k] = !r->wrap && (y < 0 || y >= r->H) ? NULL : ring + (size_t)slot * Wp;
+        slot = slot == 2 * R ? 0 : slot + 1;
     }
 }
-
 /* H of a row (MODEL: exposure e = -n_a . w / |n_a|, c the normalised convex curvature, R the
    Bezier, W_f / R windward, ambient / R leeward, the deposition ramp where kap < 0; the branches
    as selects, 1 / |n_a| by ero__rsqrt in a loop apart (into out), one division; the materials'
@@ -1966,11 +2026,6 @@ static void ero__one_material(const ero__run *r, float *const *mrow, long cnt)
     }
 }
 
-static void ero__ring_h(const ero__run *r, ero__rows *q, const uint8_t *mat)
-{
-    ero__h_span(r, q->avg[0], q->avg[1], q->avg[2], q->avg[3], mat, r->W, q->mrow, q->hrow);
-}
-
 /* the material rows in span (or mrow) for ero__h_span: the one material, if there is one */
 static void ero__fill_materials(const ero__run *r, float *const *mrow)
 {
@@ -1997,82 +2052,131 @@ static void ero__erosion_heights(ero__run *r)
     }
 }
 
-/* row j's averaged geometry, its H, H filtered along x into its ring slot */
+/* H of a ring row (MODEL, as ero__h_row) from the box sums a0..a2 of ero__hf_texel's normal
+   channels and ak of its curvature's: the exposure e = (a0 w0 + a1 w1 - a2 w2) / |a|, c from
+   ak kf rowf (the mean curvature times curvature_length), R(c) = m0 + c (m1 + c m2) (the Bezier
+   in powers of c), H = (force e + ambient) / R windward, ambient / R leeward (force e taken as 0
+   there), the deposition ramp t = min(max(-c' / deposit_ramp, 0), 1) with c' the unclamped c (0
+   on convex and flat texels, where it leaves H as it is); the branches as selects */
+typedef struct ero__ring_hp {
+    float w0, w1, w2, force, mr, ratio, rowf;
+    int constant, literal;
+} ero__ring_hp;
+
+ERO__INLINE float ero__ring_h(const ero__ring_hp *p, float a0, float a1, float a2, float ak, float kf, float m0,
+                              float m1, float m2, float amb)
+{
+    float inv = ero__rsqrt((a0 * a0 + a1 * a1) + a2 * a2);
+    float e = ((a0 * p->w0 + a1 * p->w1) + a2 * p->w2) * inv;
+    float ck = (ak * kf) * p->rowf, c0 = ck > 0.0f ? ck : 0.0f, c = c0 < 1.0f ? c0 : 1.0f;
+    float ir = 1.0f / (m0 + c * (m1 + c * m2));
+    float fe = p->constant ? p->force : p->force * e, pe = e > 0.0f ? fe : 0.0f, hw = (pe + amb) * ir;
+    float h = p->literal && !(e > 0.0f) ? amb : hw;
+    float t0 = ck * p->mr, t1 = t0 > 0.0f ? t0 : 0.0f, t = t1 < 1.0f ? t1 : 1.0f;
+    float hd = h * ((1.0f - t) - p->ratio * t);
+    return ero__fin(hd) ? hd : 0.0f;
+}
+
+static void ero__ring_h_row(const ero__ring_hp *p, long W, const float *ERO__RESTRICT a0, const float *ERO__RESTRICT a1,
+                            const float *ERO__RESTRICT a2, const float *ERO__RESTRICT ak, const float *ERO__RESTRICT kf,
+                            float *const *mr, float *ERO__RESTRICT out)
+{
+    const float *ERO__RESTRICT m0 = mr[0], *ERO__RESTRICT m1 = mr[1], *ERO__RESTRICT m2 = mr[2], *ERO__RESTRICT amb = mr[3];
+    ero__ring_hp q = *p;
+    long x;
+    for (x = 0; x < W; x++) out[x] = ero__ring_h(&q, a0[x], a1[x], a2[x], ak[x], kf[x], m0[x], m1[x], m2[x], amb[x]);
+}
+
+/* the resistance's coefficients and ambient of a row's texels (ids mat; NULL: material 0) */
+static void ero__ring_materials(const ero__rows *q, const uint8_t *mat, long W)
+{
+    long x;
+    int k;
+    for (k = 0; k < 4; k++)
+        for (x = 0; x < W; x++) q->mrow[k][x] = q->coef[mat ? mat[x] : 0][k];
+}
+
+/* row j's box sums along y then x, its H into its ring slot */
 static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
 {
     float *rows[2 * ERO__MAXR + 1];
     long W = r->W, y = ero__mod(j, r->H);
-    const uint8_t *mat = r->mat ? r->mat + (size_t)y * (size_t)W : NULL;
+    ero__ring_hp p;
     int k;
+    float ws = 0.0f;
     for (k = 0; k < 4; k++) {
-        ero__ring_window(r, q->gx[k], q->Wp, j, r->box_r, rows);
-        ero__ring_ypass(q, rows, q->avg[k], q->wb, r->box_r);
+        ero__ring_window(r, q->geo[k], q->Wp, j, r->box_r, rows);
+        ws = ero__ring_ypass(r, q, rows, q->ty[k], q->wb, r->box_r, 1);
+        ero__ring_xpass(r, q, q->ty[k], q->avg[k], q->wb, r->box_r, 1);
     }
-    ero__ring_h(r, q, mat);
-    ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, q->wg, r->gau_r,
-                    q->ws_gau);
+    if (r->mat_count > 1) ero__ring_materials(q, r->mat ? r->mat + (size_t)y * (size_t)W : NULL, W);
+    p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = -r->wind[2];
+    p.force = r->o.force;
+    p.mr = r->o.deposit_ratio >= 0.0f ? -1.0f / r->o.deposit_ramp : 0.0f;
+    p.ratio = r->o.deposit_ratio;
+    p.rowf = r->box_sum / ws;
+    p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
+    p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
+    ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow,
+                    q->hr + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp);
 }
 
-/* a row's change applied to the heights h (bounded above by bv; beyond float's range: as it
-   was), chg overwritten by the change made (old - new; 0 where not finite) */
-static void ero__hf_change_row(float *ERO__RESTRICT h, float *ERO__RESTRICT chg, long W, float rate, float bv)
+/* a row's change applied to the heights h: the Gaussian's sums g times the column factors gf
+   (bounded above by bv; beyond float's range: as it was); the change made (old - new; 0 where
+   not finite) added to the columns' sums of its eroded part er and deposited part de, and its
+   size to their largest mx */
+static void ero__hf_change_row(float *ERO__RESTRICT h, const float *ERO__RESTRICT g, const float *ERO__RESTRICT gf,
+                               long W, float bv, float *ERO__RESTRICT er, float *ERO__RESTRICT de,
+                               float *ERO__RESTRICT mx)
 {
     long x;
     for (x = 0; x < W; x++) {
-        float d0 = h[x], d = d0 - rate * chg[x], lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d;
-        float h1 = ero__fin(d1) ? d1 : d0, a = d0 - h1;
+        float d0 = h[x], d = d0 - g[x] * gf[x], lim = d0 > bv ? d0 : bv, d1 = d > lim ? lim : d;
+        float h1 = ero__fin(d1) ? d1 : d0, a0 = d0 - h1, a = ero__fin(a0) ? a0 : 0.0f;
+        float ea = a > 0.0f ? a : 0.0f, da = -a > 0.0f ? -a : 0.0f, fa = ea + da; /* one is 0: fa = |a| */
         h[x] = h1;
-        chg[x] = ero__fin(a) ? a : 0.0f;
+        er[x] += ea;
+        de[x] += da;
+        mx[x] = fa > mx[x] ? fa : mx[x];
     }
 }
 
-/* the report's sums over a row's changes a (overwritten): the eroded part into er, the deposited
-   into de, |a| into mx, then each row halved onto its first half (elementwise loops that
-   vectorise; pairwise sums), down to one value */
-static void ero__hf_report_row(float *ERO__RESTRICT a, long W, float *ERO__RESTRICT er, float *ERO__RESTRICT de,
-                               float *ERO__RESTRICT mx)
+/* the columns' sums into the report (in double, in column order), the columns cleared */
+static void ero__hf_report(const ero__run *r, ero__rows *q, ero_report *rep)
 {
-    long x, len, h;
-    for (x = 0; x < W; x++) {
-        float f = a[x], g = -f;
-        er[x] = f > 0.0f ? f : 0.0f;
-        de[x] = g > 0.0f ? g : 0.0f;
-        a[x] = er[x] > de[x] ? er[x] : de[x];
+    double s2 = (double)r->s * r->s, e = 0.0, d = 0.0;
+    long x;
+    float mx = 0.0f;
+    for (x = 0; x < r->W; x++) {
+        e += q->er[x];
+        d += q->de[x];
+        mx = q->mx[x] > mx ? q->mx[x] : mx;
     }
-    for (len = W; len > 1; len = h) {
-        h = (len + 1) / 2;
-        for (x = 0; x < len - h; x++) {
-            er[x] += er[x + h];
-            de[x] += de[x + h];
-            a[x] = a[x + h] > a[x] ? a[x + h] : a[x];
-        }
-    }
-    mx[0] = a[0];
-}
-
-/* a row's change applied, the report's sums (ero__apply's column volume: s^2 times the change)
-   in float over the row, in double over the rows; er and de are scratch rows */
-static void ero__hf_apply_row(const ero__run *r, float *h, float *chg, float *er, float *de, long W, ero_report *rep)
-{
-    float mx;
-    double s2 = (double)r->s * r->s;
-    ero__hf_change_row(h, chg, W, r->o.rate, r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF);
-    ero__hf_report_row(chg, W, er, de, &mx);
+    rep->eroded += s2 * e;
+    rep->deposited += s2 * d;
     if (mx > rep->max_change) rep->max_change = mx;
-    rep->eroded += s2 * er[0];
-    rep->deposited += s2 * de[0];
+    memset(q->er, 0, 3 * q->Wp * sizeof(float));
 }
 
-/* row m's filtered H applied to the heights (the row kept first: the geometry may still read it) */
+/* row m's H filtered (y then x) and applied to the heights (the row kept first: the geometry may
+   still read it); the report's sums in float over ERO__REPORT_ROWS rows per column, then in double */
+#define ERO__REPORT_ROWS 32
 static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *rep)
 {
-    float *rows[2 * ERO__MAXR + 1];
-    size_t W = (size_t)r->W, i0 = (size_t)m * W;
-    ero__ring_window(r, q->hx, q->Wp, m, r->gau_r, rows);
-    ero__ring_ypass(q, rows, q->chg, q->wg, r->gau_r);
+    float *rows[2 * ERO__MAXR + 1], ws;
+    size_t W = (size_t)r->W, i0 = (size_t)m * W, x;
+    ero__ring_window(r, q->hr, q->Wp, m, r->gau_r, rows);
+    ws = ero__ring_ypass(r, q, rows, q->tg, q->wg, r->gau_r, 0);
+    if (!r->wrap && (m < r->gau_r || m >= r->H - r->gau_r)) { /* over the weights of the rows there are */
+        float sc = 1.0f / ws;
+        for (x = 0; x < W; x++) q->tg[x] *= sc;
+    }
+    ero__ring_xpass(r, q, q->tg, q->chg, q->wg, r->gau_r, 0);
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
-    ero__hf_apply_row(r, r->disp + i0, q->chg, q->er, q->de, (long)W, rep);
+    ero__hf_change_row(r->disp + i0, q->chg, q->gf, (long)W, r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF,
+                       q->er, q->de, q->mx);
+    if (m % ERO__REPORT_ROWS == ERO__REPORT_ROWS - 1 || m == r->H - 1) ero__hf_report(r, q, rep);
 }
 
 /* one time step of a plain height field: row v's geometry, row v - box_r's H, row
@@ -2082,11 +2186,11 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
     ero__rows q;
     long H = r->H, lag = r->box_r + r->gau_r, v;
     ero__ring_carve(r, &q, r->hh);
-    ero__ring_weights(r, q.ws_box, q.wb, r->box_w, r->box_r, r->box_sum);
-    ero__ring_weights(r, q.ws_gau, q.wg, r->gau_w, r->gau_r, r->gau_sum);
+    ero__ring_weights(r, &q);
     memset(q.zero, 0, q.Wp * sizeof(float));
+    memset(q.er, 0, 3 * q.Wp * sizeof(float));
     memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
-    if (r->mat_count == 1) ero__one_material(r, q.mrow, r->W);
+    if (r->mat_count == 1) ero__ring_materials(&q, NULL, r->W);
     q.applied = 0;
     memset(rep, 0, sizeof *rep);
     for (v = r->wrap ? -lag : 0; v < H + lag; v++) {
