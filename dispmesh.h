@@ -165,8 +165,8 @@
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 40 bytes per
-     original vertex near the widest candidate.
+     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 48 bytes per
+     original vertex near the widest candidate and 132 bytes per triangle of the widest one-ring.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
@@ -2572,7 +2572,7 @@ static double dm__segment_d2(const double p[3], const double a[3], const double 
 /* Squared distance from p to triangle (a, b, c) and the closest point's barycentrics u (of b)
    and v (of c). Ericson's Voronoi-region walk; a degenerate triangle, where the interior
    formula divides by zero, takes the nearest of its three edges. */
-static double dm__triangle_d2(const double p[3], const float *tri, double *u_out, double *v_out)
+static double dm__triangle_d2_dbl(const double p[3], const double *tri, double *u_out, double *v_out)
 {
     double a[3], b[3], c[3], ab[3], ac[3], ap[3], bp[3], cp[3];
     double d1, d2, d3, d4, d5, d6, va, vb, vc, u, v, q[3], dist2 = 0.0, s;
@@ -2637,6 +2637,15 @@ static double dm__triangle_d2(const double p[3], const float *tri, double *u_out
     *u_out = u;
     *v_out = v;
     return dist2;
+}
+
+/* the same for a triangle of floats (converted exactly) */
+static double dm__triangle_d2(const double p[3], const float *tri, double *u_out, double *v_out)
+{
+    double t[9];
+    int k;
+    for (k = 0; k < 9; k++) t[k] = tri[k];
+    return dm__triangle_d2_dbl(p, t, u_out, v_out);
 }
 
 static double dm__box_d2(const dm__node *n, const double p[3])
@@ -7763,7 +7772,8 @@ DMDEF dm_result dm_coverage_weights(const float *bp, size_t bnv, const uint32_t 
    from these only where the check needs it). */
 typedef struct dm__sh_pt {
     float p[3];
-    uint32_t bt;
+    uint32_t bt;       /* its nearest old triangle (bu, bv, d2 its closest point and distance) */
+    uint32_t nt;       /* its nearest new triangle at the proposed position (UINT32_MAX: none) */
     double bu, bv, d2;
 } dm__sh_pt;
 
@@ -7783,8 +7793,10 @@ typedef struct dm__sh_internal {
     size_t last_level;   /* the level of the last candidate or collapse seen */
     dm__sh_pt *pts;      /* the original's vertices near one candidate */
     size_t pts_cap;
-    float *tri;          /* the candidate's old and new triangles: 9 coordinates and a bounding
-                            sphere (centre, radius) each */
+    double *tri;         /* the candidate's old and new triangles: 9 coordinates, a bounding
+                            sphere (centre, radius) and the unit normal each, float values */
+    uint32_t *tri_new;   /* per old triangle: the new one on the same two other corners (or
+                            UINT32_MAX), a first guess for the nearest new triangle */
     size_t tri_cap;      /* in triangles */
     /* a uniform grid of the original's (referenced) vertices */
     double lo[3], cell;
@@ -7816,6 +7828,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->pts);
         a.free(a.user, in->vsum);
         a.free(a.user, in->tri);
+        a.free(a.user, in->tri_new);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_pos);
         a.free(a.user, in);
@@ -8421,14 +8434,14 @@ static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const 
     return cl.distance <= h + in->margin;
 }
 
-/* Fills 16 floats per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0)
-   into out. */
-static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], float *out)
+/* Fills 16 values per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0),
+   each rounded to float, into out. */
+static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out)
 {
     size_t i;
     int j, k;
     for (i = 0; i < n; i++) {
-        float *f = out + 16 * i;
+        double *f = out + 16 * i;
         double p[3][3], r2 = 0.0, n[3];
         for (j = 0; j < 3; j++) {
             dm__sh_at(c, tris[3 * i + (size_t)j], x, p[j]);
@@ -8440,7 +8453,7 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
             for (k = 0; k < 3; k++) d2 += (p[j][k] - f[9 + k]) * (p[j][k] - f[9 + k]);
             if (d2 > r2) r2 = d2;
         }
-        f[12] = (float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f;
+        f[12] = (float)((float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f);
         if (!dm__sh_plane(p[0], p[1], p[2], n)) n[0] = n[1] = n[2] = 0.0;
         for (k = 0; k < 3; k++) f[13 + k] = (float)n[k];
     }
@@ -8451,14 +8464,14 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
    of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
    first, so that the others are mostly skipped by their bounding spheres and planes; the answer
    is the one a scan in order gives. */
-static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, size_t hint,
+static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], double max_dist, size_t hint,
                              double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, k, bt = (size_t)-1;
     *bu = *bv = 0.0;
     for (k = 0; k <= n; k++) {
-        const float *f;
+        const double *f;
         double u, v, d2, cs, pd;
         if (k == 0 && !(hint < n)) continue;
         i = k == 0 ? hint : k - 1;
@@ -8468,7 +8481,7 @@ static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], doubl
         if (cs > (rb + f[12]) * (rb + f[12])) continue; /* its bounding sphere lies beyond the best */
         pd = (p[0] - f[0]) * f[13] + (p[1] - f[1]) * f[14] + (p[2] - f[2]) * f[15];
         if (pd * pd * 0.99999 > best) continue; /* so does its plane (the factor covers the unit normal's rounding) */
-        d2 = dm__triangle_d2(p, f, &u, &v);
+        d2 = dm__triangle_d2_dbl(p, f, &u, &v);
         if (d2 < best || (d2 == best && i < bt)) {
             best = d2;
             rb = sqrt(d2);
@@ -8503,7 +8516,7 @@ static int dm__sh_feature(const dm_collapse *c, const uint32_t *tris, size_t bt,
 /* The sign of p's distance dist to the one-ring at its closest feature fv (nf vertices) of
    triangle bt, taken with the angle-weighted pseudonormal (Baerentzen and Aanaes 2005) computed
    from these triangles only: +dist outside, -dist inside. */
-static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_t bt, double bu, double bv,
+static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size_t bt, double bu, double bv,
                           const uint32_t fv[3], int nf, const double p[3], double dist)
 {
     double q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
@@ -8548,7 +8561,7 @@ static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
    is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
-static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3], size_t *hint)
+static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double p[3], size_t *hint)
 {
     double d2, bu, bv;
     uint32_t fv[3];
@@ -8587,23 +8600,55 @@ static void dm__sh_enclose_box(const dm_shell *sh, const dm__sh_internal *in, co
     b->grow = 0.1 * span + 4.0 * in->margin;
 }
 
-/* in->tri: the old triangles with keep where it is now, then the new ones with keep at x0;
-   0 when out of memory */
+/* in->tri_new: old triangle i's other corners than keep and remove, found in a new triangle */
+static void dm__sh_old_to_new(dm__sh_internal *in, const dm_collapse *c)
+{
+    size_t i, j;
+    int k;
+    for (i = 0; i < c->old_triangle_count; i++) {
+        const uint32_t *t = c->old_triangles + 3 * i;
+        uint32_t o[2];
+        int n = 0;
+        in->tri_new[i] = UINT32_MAX;
+        for (k = 0; k < 3; k++)
+            if (t[k] != c->keep && t[k] != c->remove && n < 2) o[n++] = t[k];
+        for (j = 0; n == 2 && j < c->triangle_count; j++) {
+            const uint32_t *u = c->triangles + 3 * j;
+            int h = 0;
+            for (k = 0; k < 3; k++) h += u[k] == o[0] || u[k] == o[1];
+            if (h == 2) {
+                in->tri_new[i] = (uint32_t)j;
+                break;
+            }
+        }
+    }
+}
+
+/* in->tri: the old triangles with keep where it is now, then the new ones with keep at x0; and
+   in->tri_new; 0 when out of memory */
 static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x0[3])
 {
     size_t no = c->old_triangle_count, nr = c->triangle_count;
     double xk[3];
     if (no + nr > in->tri_cap) {
         int of = 0;
-        float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
-        if (!nt2) return 0;
+        double *nt2 = (double *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(double), &of);
+        uint32_t *nm = (uint32_t *)dm__alloc_array(&sh->allocator, 2 * (no + nr), sizeof(uint32_t), &of);
+        if (!nt2 || !nm) {
+            sh->allocator.free(sh->allocator.user, nt2);
+            sh->allocator.free(sh->allocator.user, nm);
+            return 0;
+        }
         sh->allocator.free(sh->allocator.user, in->tri);
+        sh->allocator.free(sh->allocator.user, in->tri_new);
         in->tri = nt2;
+        in->tri_new = nm;
         in->tri_cap = 2 * (no + nr);
     }
     dm__load3(c->positions, c->keep, xk);
     dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
     dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
+    dm__sh_old_to_new(in, c);
     return 1;
 }
 
@@ -8660,6 +8705,7 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                     memcpy(pt.p, in->cell_pos + 3 * q, sizeof pt.p);
                     pt.bt = (uint32_t)bt;
                     pt.bu = bu;
+                    pt.nt = UINT32_MAX;
                     pt.bv = bv;
                     pt.d2 = d2;
                     if (!dm__sh_push_pt(sh, in, *npts, &pt)) return 0;
@@ -8670,9 +8716,9 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
 }
 
 /* one plane per relevant vertex p, from its nearest new triangle (keep, u, w) at the proposed
-   position: the plane through p, u, w, pushed out by 2 margins (4 doubles each into pl);
-   returns their number */
-static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
+   position (kept in its nt): the plane through p, u, w, pushed out by 2 margins (4 doubles each
+   into pl); returns their number */
+static size_t dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
 {
     size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
     int k;
@@ -8682,7 +8728,9 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
         int j;
         const uint32_t *tr;
         dm__load3(in->pts[i].p, 0, pp);
+        if (in->tri_new[in->pts[i].bt] != UINT32_MAX) hint = in->tri_new[in->pts[i].bt]; /* the same answer, sooner */
         t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, hint, &d2, &bu, &bv);
+        in->pts[i].nt = t == (size_t)-1 ? UINT32_MAX : (uint32_t)t;
         if (t == (size_t)-1) continue;
         hint = t;
         tr = c->triangles + 3 * t;
@@ -8708,12 +8756,11 @@ static size_t dm__sh_planes(const dm__sh_internal *in, const dm_collapse *c, siz
    quadric does not see it), its triangles lose their shape and the charts stretch. */
 #define DM__SH_TANGENT 1.0
 
-/* For each of the np planes in pl, the step direction of a projection onto it in the metric M
-   (DM__SH_TANGENT): M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
-static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
+/* The metric M of the projection: the quadric's matrix plus DM__SH_TANGENT times its mean
+   eigenvalue (the identity when there is no quadric). */
+static void dm__sh_metric(const double metric[6], double M[3][3])
 {
-    double M[3][3], Mi[3][3], tr, det;
-    size_t i;
+    double tr;
     int j, k;
     M[0][0] = metric[0]; M[0][1] = M[1][0] = metric[1]; M[0][2] = M[2][0] = metric[2];
     M[1][1] = metric[3]; M[1][2] = M[2][1] = metric[4]; M[2][2] = metric[5];
@@ -8723,6 +8770,16 @@ static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np
             for (k = 0; k < 3; k++) M[j][k] = j == k;
     else
         for (j = 0; j < 3; j++) M[j][j] += DM__SH_TANGENT * tr;
+}
+
+/* For each of the np planes in pl, the step direction of a projection onto it in the metric M:
+   M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
+static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
+{
+    double M[3][3], Mi[3][3], det;
+    size_t i;
+    int k;
+    dm__sh_metric(metric, M);
     Mi[0][0] = M[1][1] * M[2][2] - M[1][2] * M[2][1];
     Mi[0][1] = M[0][2] * M[2][1] - M[0][1] * M[2][2];
     Mi[0][2] = M[0][1] * M[1][2] - M[0][2] * M[1][1];
@@ -8775,7 +8832,7 @@ static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], do
 }
 
 /* pt's old signed distance, as a float (the old triangles of in->tri) */
-static float dm__sh_old_signed(const dm_collapse *c, const float *tf, const dm__sh_pt *pt)
+static float dm__sh_old_signed(const dm_collapse *c, const double *tf, const dm__sh_pt *pt)
 {
     uint32_t fv[3];
     double pp[3];
@@ -8796,6 +8853,7 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         const dm__sh_pt *pt = in->pts + i;
         double pp[3], sd;
         dm__load3(pt->p, 0, pp);
+        if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
         sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
         if (sd > 4.0 * in->margin && sd > (double)dm__sh_old_signed(c, in->tri, pt) + in->margin) {
             sh->vetoed_enclose++;
