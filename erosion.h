@@ -100,7 +100,11 @@
      rest gives the same bits as one call.
 
    OPTIONS
-     Compile time: ERO_STATIC (all functions static), ERO_MALLOC(sz)/ERO_FREE(p) (both or none).
+     Compile time: ERO_STATIC (all functions static), ERO_MALLOC(sz)/ERO_FREE(p) (both or none),
+     ERO_USE_AVX2 (needs -mavx2): the height field's ring loops (no valid map) in AVX2 on 8 texels
+     at once, with its x passes fused with H and the change: the same bits as the portable path
+     (the same operations in the same order; a group of 8 whose lengths are not normal floats
+     falls back to it), recommended where available.
      ero_options (zero = default; ero_default_options() gives them, ero_resolve_options the
      grid-derived lengths):
        wind[3]          the direction the wind blows toward (required, nonzero)
@@ -333,6 +337,12 @@ ERODEF ero_result ero_paint_sphere(const ero_grid *g, uint8_t *material, const f
 
 #include <string.h>
 #include <math.h>
+#if defined(ERO_USE_AVX2)
+#if !defined(__AVX2__)
+#error "erosion.h: ERO_USE_AVX2 needs AVX2 code generation (gcc/clang -mavx2, MSVC /arch:AVX2)"
+#endif
+#include <immintrin.h>
+#endif
 
 #if defined(ERO_MALLOC) && defined(ERO_FREE)
 /* both given */
@@ -625,9 +635,11 @@ static ero_result ero__check_materials(ero__run *r, const uint8_t *material, con
     }
     r->mat = material;
     r->mat_count = count;
-    if (material)
-        for (i = 0; i < r->n; i++)
-            if (material[i] >= count) return ERO_ERR_BAD_MATERIAL;
+    if (material && count < 256) { /* the largest id, in a loop that vectorises */
+        uint8_t top = 0;
+        for (i = 0; i < r->n; i++) top = material[i] > top ? material[i] : top;
+        if (top >= count) return ERO_ERR_BAD_MATERIAL;
+    }
     return ERO_OK;
 }
 
@@ -1677,13 +1689,14 @@ static size_t ero__ring_floats(const ero__run *r)
 {
     size_t Wp = ero__ring_stride(r), rows, padded = Wp + 2 * (size_t)ero__ring_pad(r);
     rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 1 + 3 + 2 + 4 + 1;
-    return rows * Wp + 5 * padded + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W;
+    return rows * Wp + 5 * padded + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W + 16;
 }
 
 static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
 {
     size_t Wp = ero__ring_stride(r), padded;
     int k;
+    f += (64 - (size_t)((uintptr_t)f % 64)) % 64 / sizeof(float); /* rows on cache lines: 8-float loads do not split */
     q->Wp = Wp;
     q->pad = ero__ring_pad(r);
     padded = Wp + 2 * (size_t)q->pad;
@@ -1824,6 +1837,7 @@ static void ero__ring_pad_row(const ero__run *r, const ero__rows *q, float *p)
     }
 }
 
+#if !defined(ERO_USE_AVX2) /* (its AVX2 form below) */
 /* one padded row filtered along x (its pads set first) into out (box: by ero__box_taps) */
 static void ero__ring_xpass(const ero__run *r, const ero__rows *q, float *p, float *ERO__RESTRICT out, const float *w, int R,
                             int box)
@@ -1836,6 +1850,7 @@ static void ero__ring_xpass(const ero__run *r, const ero__rows *q, float *p, flo
     if (box) ero__box_taps(up, dn, p, out, r->W, w, R);
     else ero__taps(up, dn, p, out, r->W, w, R);
 }
+#endif
 
 /* the y pass: rows[R + k] is the row at offset k (NULL beyond an unwrapped border: zeros);
    returns the weights of the rows there are */
@@ -1894,6 +1909,7 @@ ERO__INLINE void ero__hf_texel(float hc, float hr, float hl, float hu, float hd,
     *g3 = ero__fin(k) ? k : 0.0f;
 }
 
+#if !defined(ERO_USE_AVX2) /* (its AVX2 form below) */
 /* the texels 1 .. W - 2 of a row with rows on both sides, in a loop that vectorises */
 static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RESTRICT m, const float *ERO__RESTRICT u,
                              float s, long W, float *ERO__RESTRICT g0, float *ERO__RESTRICT g1, float *ERO__RESTRICT g2,
@@ -1903,13 +1919,77 @@ static void ero__hf_interior(const float *ERO__RESTRICT d, const float *ERO__RES
     float S = 2.0f * s, s2 = S * S, q0 = 2.0f * (s * s);
     for (x = 1; x < W - 1; x++) ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], S, s2, q0, &g0[x], &g1[x], &g2[x], &g3[x]);
 }
+#endif
+
+#if defined(ERO_USE_AVX2)
+/* ---- the ring's row loops in AVX2: the portable loops' operations, in their order, on 8 texels
+   at once (so the same bits), the x passes fused with H and with the change; a group of 8 whose
+   squared lengths are not all normal floats runs the portable code texel by texel ---- */
+
+#define ERO__V8(f) _mm256_set1_ps(f)
+/* ero__rsqrt for x in [FLT_MIN, inf): the same operations without its special cases */
+ERO__INLINE __m256 ero__rsqrt8(__m256 x)
+{
+    __m256 hx = _mm256_mul_ps(ERO__V8(0.5f), x), th = ERO__V8(1.5f);
+    __m256i i = _mm256_sub_epi32(_mm256_set1_epi32(0x5f375a86), _mm256_srli_epi32(_mm256_castps_si256(x), 1));
+    __m256 y = _mm256_castsi256_ps(i);
+    y = _mm256_mul_ps(y, _mm256_sub_ps(th, _mm256_mul_ps(_mm256_mul_ps(hx, y), y)));
+    y = _mm256_mul_ps(y, _mm256_sub_ps(th, _mm256_mul_ps(_mm256_mul_ps(hx, y), y)));
+    return _mm256_mul_ps(y, _mm256_sub_ps(th, _mm256_mul_ps(_mm256_mul_ps(hx, y), y)));
+}
+/* all 8 lanes in [FLT_MIN, inf) */
+ERO__INLINE int ero__normal8(__m256 x)
+{
+    __m256 lo = _mm256_cmp_ps(x, ERO__V8(1.17549435e-38f), _CMP_GE_OQ), hi = _mm256_cmp_ps(x, ERO__V8(HUGE_VALF), _CMP_LT_OQ);
+    return _mm256_movemask_ps(_mm256_and_ps(lo, hi)) == 0xff;
+}
+/* v where finite (v - v == 0), else 0 */
+ERO__INLINE __m256 ero__fin8(__m256 v) { return _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(v, v), _mm256_setzero_ps(), _CMP_EQ_OQ), v); }
+
+/* ero__hf_interior */
+static void ero__hf_interior8(const float *d, const float *m, const float *u, float s, long W, float *g0, float *g1,
+                              float *g2, float *g3)
+{
+    long x = 1;
+    float S = 2.0f * s, s2 = S * S, q0 = 2.0f * (s * s);
+    __m256 vS = ERO__V8(S), vs2 = ERO__V8(s2), vq0 = ERO__V8(q0);
+    for (; x + 8 <= W - 1; x += 8) {
+        __m256 hc = _mm256_loadu_ps(m + x), dr = _mm256_sub_ps(_mm256_loadu_ps(m + x + 1), hc);
+        __m256 dl = _mm256_sub_ps(_mm256_loadu_ps(m + x - 1), hc), du = _mm256_sub_ps(_mm256_loadu_ps(u + x), hc);
+        __m256 dd = _mm256_sub_ps(_mm256_loadu_ps(d + x), hc), A = _mm256_sub_ps(dr, dl), B = _mm256_sub_ps(du, dd);
+        __m256 len = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(A, A), _mm256_mul_ps(B, B)), vs2), inv, nz, qx, qy, k;
+        if (!ero__normal8(len)) {
+            long e;
+            for (e = x; e < x + 8; e++)
+                ero__hf_texel(m[e], m[e + 1], m[e - 1], u[e], d[e], S, s2, q0, &g0[e], &g1[e], &g2[e], &g3[e]);
+            continue;
+        }
+        inv = ero__rsqrt8(len);
+        nz = _mm256_mul_ps(vS, inv);
+        qx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dr, dr), _mm256_mul_ps(dl, dl)), vq0);
+        qy = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(du, du), _mm256_mul_ps(dd, dd)), vq0);
+        k = _mm256_mul_ps(nz, _mm256_add_ps(_mm256_div_ps(_mm256_add_ps(dr, dl), qx), _mm256_div_ps(_mm256_add_ps(du, dd), qy)));
+        _mm256_storeu_ps(g0 + x, _mm256_mul_ps(A, inv));
+        _mm256_storeu_ps(g1 + x, _mm256_mul_ps(B, inv));
+        _mm256_storeu_ps(g2 + x, nz);
+        _mm256_storeu_ps(g3 + x, ero__fin8(k));
+    }
+    for (; x < W - 1; x++) ero__hf_texel(m[x], m[x + 1], m[x - 1], u[x], d[x], S, s2, q0, &g0[x], &g1[x], &g2[x], &g3[x]);
+}
+
+#undef ERO__V8
+#endif
 
 /* the geometry of row y from the rows dn (y - 1), mid, up (y + 1; NULL beyond a border) into g */
 static void ero__ring_geometry(const ero__run *r, float *const *g, const float *dn, const float *mid, const float *up)
 {
     long W = r->W, x;
     float s = r->s, S = 2.0f * s, s2 = S * S, q0 = 2.0f * (s * s);
+#if defined(ERO_USE_AVX2)
+    if (up && dn) ero__hf_interior8(dn, mid, up, s, W, g[0], g[1], g[2], g[3]);
+#else
     if (up && dn) ero__hf_interior(dn, mid, up, s, W, g[0], g[1], g[2], g[3]);
+#endif
     for (x = 0; x < W; x++) {
         float e[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, nb[3] = {0.0f, 0.0f, 1.0f}, n[4];
         int have = 0;
@@ -2077,6 +2157,7 @@ ERO__INLINE float ero__ring_h(const ero__ring_hp *p, float a0, float a1, float a
     return ero__fin(hd) ? hd : 0.0f;
 }
 
+#if !defined(ERO_USE_AVX2) /* (its AVX2 form below) */
 static void ero__ring_h_row(const ero__ring_hp *p, long W, const float *ERO__RESTRICT a0, const float *ERO__RESTRICT a1,
                             const float *ERO__RESTRICT a2, const float *ERO__RESTRICT ak, const float *ERO__RESTRICT kf,
                             float *const *mr, float *ERO__RESTRICT out)
@@ -2086,6 +2167,7 @@ static void ero__ring_h_row(const ero__ring_hp *p, long W, const float *ERO__RES
     long x;
     for (x = 0; x < W; x++) out[x] = ero__ring_h(&q, a0[x], a1[x], a2[x], ak[x], kf[x], m0[x], m1[x], m2[x], amb[x]);
 }
+#endif
 
 /* the resistance's coefficients and ambient of a row's texels (ids mat; NULL: material 0) */
 static void ero__ring_materials(const ero__rows *q, const uint8_t *mat, long W)
@@ -2094,31 +2176,6 @@ static void ero__ring_materials(const ero__rows *q, const uint8_t *mat, long W)
     int k;
     for (k = 0; k < 4; k++)
         for (x = 0; x < W; x++) q->mrow[k][x] = q->coef[mat ? mat[x] : 0][k];
-}
-
-/* row j's box sums along y then x, its H into its ring slot */
-static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
-{
-    float *rows[2 * ERO__MAXR + 1];
-    long W = r->W, y = ero__mod(j, r->H);
-    ero__ring_hp p;
-    int k;
-    float ws = 0.0f;
-    for (k = 0; k < 4; k++) {
-        ero__ring_window(r, q->geo[k], q->Wp, j, r->box_r, rows);
-        ws = ero__ring_ypass(r, q, rows, q->ty[k], q->wb, r->box_r, 1);
-        ero__ring_xpass(r, q, q->ty[k], q->avg[k], q->wb, r->box_r, 1);
-    }
-    if (r->mat_count > 1) ero__ring_materials(q, r->mat ? r->mat + (size_t)y * (size_t)W : NULL, W);
-    p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = -r->wind[2];
-    p.force = r->o.force;
-    p.mr = r->o.deposit_ratio >= 0.0f ? -1.0f / r->o.deposit_ramp : 0.0f;
-    p.ratio = r->o.deposit_ratio;
-    p.rowf = r->box_sum / ws;
-    p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
-    p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
-    ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow,
-                    q->hr + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp);
 }
 
 /* a row's change applied to the heights h: the Gaussian's sums g times the column factors gf
@@ -2158,12 +2215,175 @@ static void ero__hf_report(const ero__run *r, ero__rows *q, ero_report *rep)
     memset(q->er, 0, 3 * q->Wp * sizeof(float));
 }
 
+#if defined(ERO_USE_AVX2)
+#define ERO__V8(f) _mm256_set1_ps(f)
+/* ero__box_taps at column x of the padded row p (we: the end tap's weight), one column */
+static float ero__box1(const float *p, int R, float we)
+{
+    float acc = p[0];
+    int k;
+    if (R == 0) return acc;
+    for (k = 1; k < R; k++) acc = acc + (p[k] + p[-k]);
+    return acc + we * (p[R] + p[-R]);
+}
+
+/* ero__ring_h of 8 texels at x from their box sums a0..ak; 0 (nothing stored) when a squared
+   length is not normal */
+ERO__INLINE int ero__ring_h8(const ero__ring_hp *p, __m256 a0, __m256 a1, __m256 a2, __m256 ak, __m256 kf,
+                             const float *m0, const float *m1, const float *m2, const float *mamb, float *out)
+{
+    __m256 zero = _mm256_setzero_ps(), one = ERO__V8(1.0f), amb = _mm256_loadu_ps(mamb);
+    __m256 len = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a0, a0), _mm256_mul_ps(a1, a1)), _mm256_mul_ps(a2, a2));
+    __m256 inv, e, ck, c, ir, fe, pos, h, t, hd;
+    if (!ero__normal8(len)) return 0;
+    inv = ero__rsqrt8(len);
+    e = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a0, ERO__V8(p->w0)), _mm256_mul_ps(a1, ERO__V8(p->w1))),
+                      _mm256_mul_ps(a2, ERO__V8(p->w2)));
+    e = _mm256_mul_ps(e, inv);
+    ck = _mm256_mul_ps(_mm256_mul_ps(ak, kf), ERO__V8(p->rowf));
+    c = _mm256_min_ps(_mm256_max_ps(ck, zero), one);
+    ir = _mm256_mul_ps(c, _mm256_add_ps(_mm256_loadu_ps(m1), _mm256_mul_ps(c, _mm256_loadu_ps(m2))));
+    ir = _mm256_div_ps(one, _mm256_add_ps(_mm256_loadu_ps(m0), ir));
+    fe = p->constant ? ERO__V8(p->force) : _mm256_mul_ps(ERO__V8(p->force), e);
+    pos = _mm256_cmp_ps(e, zero, _CMP_GT_OQ);
+    h = _mm256_mul_ps(_mm256_add_ps(_mm256_and_ps(pos, fe), amb), ir);
+    if (p->literal) h = _mm256_blendv_ps(amb, h, pos);
+    t = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(ck, ERO__V8(p->mr)), zero), one);
+    hd = _mm256_mul_ps(h, _mm256_sub_ps(_mm256_sub_ps(one, t), _mm256_mul_ps(ERO__V8(p->ratio), t)));
+    _mm256_storeu_ps(out, ero__fin8(hd));
+    return 1;
+}
+
+/* ero__box8 of the four channels' padded rows t at column x: the taps in the same order, a
+   loop over them for the four at once */
+#define ERO__TAP8(t, k) _mm256_add_ps(_mm256_loadu_ps((t) + (k)), _mm256_loadu_ps((t) - (k)))
+ERO__INLINE void ero__box8x4(const float *t0, const float *t1, const float *t2, const float *t3, int R, __m256 we,
+                             __m256 *s)
+{
+    int k;
+    s[0] = _mm256_loadu_ps(t0); s[1] = _mm256_loadu_ps(t1); s[2] = _mm256_loadu_ps(t2); s[3] = _mm256_loadu_ps(t3);
+    if (R == 0) return;
+    for (k = 1; k < R; k++) {
+        s[0] = _mm256_add_ps(s[0], ERO__TAP8(t0, k)); s[1] = _mm256_add_ps(s[1], ERO__TAP8(t1, k));
+        s[2] = _mm256_add_ps(s[2], ERO__TAP8(t2, k)); s[3] = _mm256_add_ps(s[3], ERO__TAP8(t3, k));
+    }
+    s[0] = _mm256_add_ps(s[0], _mm256_mul_ps(we, ERO__TAP8(t0, R)));
+    s[1] = _mm256_add_ps(s[1], _mm256_mul_ps(we, ERO__TAP8(t1, R)));
+    s[2] = _mm256_add_ps(s[2], _mm256_mul_ps(we, ERO__TAP8(t2, R)));
+    s[3] = _mm256_add_ps(s[3], _mm256_mul_ps(we, ERO__TAP8(t3, R)));
+}
+
+/* the box's x pass over the padded rows ty and H (ero__ring_h_row) in one loop */
+static void ero__ring_hx8(const ero__rows *q, const ero__ring_hp *hp, long W, int R, float *ERO__RESTRICT out)
+{
+    const float *t0 = q->ty[0], *t1 = q->ty[1], *t2 = q->ty[2], *t3 = q->ty[3], *kf = q->kf;
+    const float *m0 = q->mrow[0], *m1 = q->mrow[1], *m2 = q->mrow[2], *m3 = q->mrow[3];
+    ero__ring_hp p = *hp;
+    float we = q->wb[R], a[4][8];
+    __m256 vwe = ERO__V8(we), sv[4];
+    long x = 0;
+    int l;
+    for (; x + 8 <= W; x += 8) {
+        __m256 s0, s1, s2, s3;
+        ero__box8x4(t0 + x, t1 + x, t2 + x, t3 + x, R, vwe, sv);
+        s0 = sv[0]; s1 = sv[1]; s2 = sv[2]; s3 = sv[3];
+        if (ero__ring_h8(&p, s0, s1, s2, s3, _mm256_loadu_ps(kf + x), m0 + x, m1 + x, m2 + x, m3 + x, out + x)) continue;
+        _mm256_storeu_ps(a[0], s0); _mm256_storeu_ps(a[1], s1); _mm256_storeu_ps(a[2], s2); _mm256_storeu_ps(a[3], s3);
+        for (l = 0; l < 8; l++)
+            out[x + l] = ero__ring_h(&p, a[0][l], a[1][l], a[2][l], a[3][l], kf[x + l], m0[x + l], m1[x + l], m2[x + l],
+                                     m3[x + l]);
+    }
+    for (; x < W; x++)
+        out[x] = ero__ring_h(&p, ero__box1(t0 + x, R, we), ero__box1(t1 + x, R, we), ero__box1(t2 + x, R, we),
+                             ero__box1(t3 + x, R, we), kf[x], m0[x], m1[x], m2[x], m3[x]);
+}
+
+/* ero__taps along x at column x of the padded row p, 8 columns at once; and one column */
+ERO__INLINE __m256 ero__gau8(const float *p, const float *w, int R)
+{
+    __m256 acc = _mm256_mul_ps(ERO__V8(w[0]), _mm256_loadu_ps(p));
+    int k;
+    for (k = 1; k + 1 <= R; k += 2) {
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k]), ERO__TAP8(p, k)));
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k + 1]), ERO__TAP8(p, k + 1)));
+    }
+    if (k == R) acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k]), ERO__TAP8(p, k)));
+    return acc;
+}
+static float ero__gau1(const float *p, const float *w, int R)
+{
+    float acc = w[0] * p[0];
+    int k;
+    for (k = 1; k <= R; k++) acc = acc + w[k] * (p[k] + p[-k]);
+    return acc;
+}
+
+/* the Gaussian's x pass over the padded row p and ero__hf_change_row in one loop */
+static void ero__ring_change8(const ero__rows *q, const float *p, const float *w, int R, float *ERO__RESTRICT h, long W,
+                              float bv)
+{
+    float *ERO__RESTRICT er = q->er, *ERO__RESTRICT de = q->de, *ERO__RESTRICT mx = q->mx;
+    const float *gf = q->gf;
+    __m256 vbv = ERO__V8(bv), zero = _mm256_setzero_ps(), sign = ERO__V8(-0.0f);
+    long x = 0;
+    for (; x + 8 <= W; x += 8) {
+        __m256 g = ero__gau8(p + x, w, R), d0 = _mm256_loadu_ps(h + x);
+        __m256 d = _mm256_sub_ps(d0, _mm256_mul_ps(g, _mm256_loadu_ps(gf + x))), lim = _mm256_max_ps(d0, vbv);
+        __m256 d1 = _mm256_min_ps(lim, d), fin = _mm256_cmp_ps(_mm256_sub_ps(d1, d1), zero, _CMP_EQ_OQ);
+        __m256 h1 = _mm256_blendv_ps(d0, d1, fin), a = ero__fin8(_mm256_sub_ps(d0, h1));
+        __m256 ea = _mm256_max_ps(a, zero), da = _mm256_max_ps(_mm256_xor_ps(a, sign), zero);
+        _mm256_storeu_ps(h + x, h1);
+        _mm256_storeu_ps(er + x, _mm256_add_ps(_mm256_loadu_ps(er + x), ea));
+        _mm256_storeu_ps(de + x, _mm256_add_ps(_mm256_loadu_ps(de + x), da));
+        _mm256_storeu_ps(mx + x, _mm256_max_ps(_mm256_add_ps(ea, da), _mm256_loadu_ps(mx + x)));
+    }
+    for (; x < W; x++) {
+        float g = ero__gau1(p + x, w, R);
+        ero__hf_change_row(h + x, &g, gf + x, 1, bv, er + x, de + x, mx + x);
+    }
+}
+#undef ERO__V8
+#undef ERO__TAP8
+#endif
+
+/* row j's box sums along y then x, its H into its ring slot */
+static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
+{
+    float *rows[2 * ERO__MAXR + 1], *out = q->hr + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp;
+    long W = r->W, y = ero__mod(j, r->H);
+    ero__ring_hp p;
+    int k;
+    float ws = 0.0f;
+    for (k = 0; k < 4; k++) {
+        ero__ring_window(r, q->geo[k], q->Wp, j, r->box_r, rows);
+        ws = ero__ring_ypass(r, q, rows, q->ty[k], q->wb, r->box_r, 1);
+#if defined(ERO_USE_AVX2)
+        ero__ring_pad_row(r, q, q->ty[k]);
+#else
+        ero__ring_xpass(r, q, q->ty[k], q->avg[k], q->wb, r->box_r, 1);
+#endif
+    }
+    if (r->mat_count > 1) ero__ring_materials(q, r->mat ? r->mat + (size_t)y * (size_t)W : NULL, W);
+    p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = -r->wind[2];
+    p.force = r->o.force;
+    p.mr = r->o.deposit_ratio >= 0.0f ? -1.0f / r->o.deposit_ramp : 0.0f;
+    p.ratio = r->o.deposit_ratio;
+    p.rowf = r->box_sum / ws;
+    p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
+    p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
+#if defined(ERO_USE_AVX2)
+    ero__ring_hx8(q, &p, W, r->box_r, out);
+#else
+    ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow, out);
+#endif
+}
+
 /* row m's H filtered (y then x) and applied to the heights (the row kept first: the geometry may
    still read it); the report's sums in float over ERO__REPORT_ROWS rows per column, then in double */
 #define ERO__REPORT_ROWS 32
 static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *rep)
 {
-    float *rows[2 * ERO__MAXR + 1], ws;
+    float *rows[2 * ERO__MAXR + 1], ws, bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF;
     size_t W = (size_t)r->W, i0 = (size_t)m * W, x;
     ero__ring_window(r, q->hr, q->Wp, m, r->gau_r, rows);
     ws = ero__ring_ypass(r, q, rows, q->tg, q->wg, r->gau_r, 0);
@@ -2171,11 +2391,15 @@ static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *r
         float sc = 1.0f / ws;
         for (x = 0; x < W; x++) q->tg[x] *= sc;
     }
-    ero__ring_xpass(r, q, q->tg, q->chg, q->wg, r->gau_r, 0);
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
-    ero__hf_change_row(r->disp + i0, q->chg, q->gf, (long)W, r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF,
-                       q->er, q->de, q->mx);
+#if defined(ERO_USE_AVX2)
+    ero__ring_pad_row(r, q, q->tg);
+    ero__ring_change8(q, q->tg, q->wg, r->gau_r, r->disp + i0, (long)W, bv);
+#else
+    ero__ring_xpass(r, q, q->tg, q->chg, q->wg, r->gau_r, 0);
+    ero__hf_change_row(r->disp + i0, q->chg, q->gf, (long)W, bv, q->er, q->de, q->mx);
+#endif
     if (m % ERO__REPORT_ROWS == ERO__REPORT_ROWS - 1 || m == r->H - 1) ero__hf_report(r, q, rep);
 }
 

@@ -7,7 +7,10 @@
    commutes with circular shifts bit for bit; a stopped and resumed run gives the same bits; bad
    input gets its named error with the map untouched; no allocation failure leaks; on a cylinder
    with bosses the windward side wears more than the leeward (Fig 5.2.2), and raised letters of a
-   hard material lose less than those of a soft one (Fig 5.2.3). */
+   hard material lose less than those of a soft one (Fig 5.2.3).
+   --digest: prints a hash of the maps and reports of height fields eroded under varied options
+   (the ring with and without wrap, materials, flags, bound, radii; the walk with a valid map), for
+   tests/erosion_simd_same.sh to compare the portable build with the ERO_USE_AVX2 one. */
 #define ERO_IMPLEMENTATION
 #include "erosion.h"
 #define DM_IMPLEMENTATION
@@ -862,9 +865,61 @@ static void test_cylinder_letters(void)
     cyl_free(&c);
 }
 
+/* ---- --digest: the bits of varied runs ------------------------------------------------------ */
+
+static uint64_t fnv_bytes(const void *p, size_t n, uint64_t h)
+{
+    const unsigned char *c = (const unsigned char *)p;
+    size_t i;
+    for (i = 0; i < n; i++) { h ^= c[i]; h *= 1099511628211ull; }
+    return h;
+}
+
+static int print_digest(void)
+{
+    static const ero_material mats[3] = {{1, 4, 0, 0}, {2, 5, 3, 0.5f}, {0.5f, 8, 0, 0}};
+    uint64_t hash = 1469598103934665603ull;
+    int cfg;
+    for (cfg = 0; cfg < 10; cfg++) {
+        int W = cfg < 4 ? 256 : 133 + 17 * cfg, H = cfg < 4 ? 256 : 61 + 9 * cfg, wrap = cfg & 1, k;
+        size_t n = (size_t)W * H, i;
+        float *h = analytic_field(W > H ? W : H);
+        uint8_t *mat = (uint8_t *)malloc(n), *valid = (uint8_t *)malloc(n);
+        ero_grid g;
+        ero_options o = ero_default_options();
+        ero_report per[3], total;
+        ero_result e;
+        for (i = 0; i < n; i++) {
+            h[i] += (i * 2654435761u >> 27) % 7 == 0 ? 0.01f : 0.0f; /* texel-scale bumps */
+            mat[i] = (uint8_t)((i * 2654435761u >> 28) % 3);
+            valid[i] = (i * 40503u >> 9) % 11 != 0;
+        }
+        g = ero_heightfield_grid(W, H, h, 1.0f / (float)W, wrap);
+        if (cfg == 8) g.valid = valid; /* the walk */
+        o.wind[0] = 1.0f; o.wind[1] = 0.3f; o.wind[2] = -1.0f;
+        if (cfg % 3 == 0) { o.normal_radius = 2.0f / (float)W; o.filter_sigma = 1.0f / (float)W; }
+        if (cfg == 2) o.flags = ERO_CONSTANT_WINDWARD;
+        if (cfg == 5) { o.bound = ERO_BOUND_VALUE; o.bound_value = 0.015f; o.flags = ERO_LEEWARD_LITERAL; }
+        if (cfg == 7) { o.deposit_ratio = -1.0f; o.normal_radius = 3.7f / (float)W; o.filter_sigma = 2.3f / (float)W; }
+        if (cfg == 9) { o.normal_radius = 0.4f / (float)W; o.filter_sigma = 0.5f / (float)W; o.wind[2] = 1.0f; }
+        e = ero_erode(&g, (cfg & 2) ? mat : NULL, mats, (cfg & 2) ? 3 : 1, 3, &o, per, &total);
+        hash = fnv_bytes(&e, sizeof e, hash);
+        hash = fnv_bytes(h, n * sizeof(float), hash);
+        for (k = 0; k < 3; k++) {
+            hash = fnv_bytes(&per[k].eroded, sizeof per[k].eroded, hash);
+            hash = fnv_bytes(&per[k].deposited, sizeof per[k].deposited, hash);
+            hash = fnv_bytes(&per[k].max_change, sizeof per[k].max_change, hash);
+        }
+        free(h); free(mat); free(valid);
+    }
+    printf("digest %016llx\n", (unsigned long long)hash);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     torus_map t;
+    if (argc > 1 && strcmp(argv[1], "--digest") == 0) return print_digest();
     T_BEGIN(argc, argv);
     test_flat_patches();
     test_pit_ridge();
