@@ -102,7 +102,7 @@
    OPTIONS
      Compile time: ERO_STATIC (all functions static), ERO_MALLOC(sz)/ERO_FREE(p) (both or none),
      ERO_USE_AVX2 (needs -mavx2): the height field's ring loops (no valid map) in AVX2 on 8 texels
-     at once, with its x passes fused with H and the change: the same bits as the portable path
+     at once, with its y passes fused with H and the change: the same bits as the portable path
      (the same operations in the same order; a group of 8 whose lengths are not normal floats
      falls back to it), recommended where available.
      ero_options (zero = default; ero_default_options() gives them, ero_resolve_options the
@@ -1643,9 +1643,10 @@ static void ero__extend_invalid(ero__run *r)
 /* Every texel of a wrapped field, and every texel off a border of an unwrapped one, has the four
    grid neighbours: its geometry, filters and H run row by row on short rows that stay in cache,
    in loops that vectorise, the same sums for every texel (so a circular shift shifts the bits).
-   A row's geometry goes into a ring of 2 box_r + 1 rows; box_r rows later the box's y pass over
-   them, its x pass and H, which goes into a ring of 2 gau_r + 1 rows; gau_r rows later the
-   Gaussian's y and x passes and the change. The rows the geometry still reads after they changed
+   A row's geometry is box-filtered along x as it is made, into a ring of 2 box_r + 1 rows; box_r
+   rows later the box's y pass over them and H, H's Gaussian along x into a ring of 2 gau_r + 1
+   rows; gau_r rows later the Gaussian's y pass and the change (each y pass reads its rows in
+   place, so it fuses with what follows). The rows the geometry still reads after they changed
    come from copies (the first ones, for the wrap; the last four).
    The box sums are not divided by the weights' sum: the averaged normal's direction does not
    depend on its length, and the curvature's sum is divided through kf (per column: minus
@@ -1656,17 +1657,18 @@ static void ero__extend_invalid(ero__run *r)
 typedef struct ero__rows {
     size_t Wp;            /* the row length (ero__ring_stride) */
     int pad;              /* columns before x = 0 in a padded row: the larger radius, rounded up to 8 */
-    float *geo[4];        /* (2 box_r + 1) rows each: the geometry of the rows (ero__hf_texel's channels) */
-    float *hr;            /* (2 gau_r + 1) rows of H */
-    float *ty[4];         /* padded: one row's box sums along y */
-    float *tg;            /* padded: one row's Gaussian along y */
-    float *avg[4];        /* one row's box sums (along y, then x) */
-    float *chg;           /* one row's Gaussian (along y, then x) */
+    float *geo[4];        /* padded: one row's geometry (ero__hf_texel's channels) */
+    float *gx[4];         /* 2 box_r + 2 rows each, chs floats apart: the geometry's box sums along x
+                             (the last row zeros: the rows beyond an unwrapped border) */
+    size_t chs;
+    float *hrow;          /* padded: one row's H */
+    float *hx;            /* 2 gau_r + 2 rows: H's Gaussian along x (the last row zeros) */
+    float *avg[4];        /* one row's box sums (along x, then y) */
+    float *chg;           /* one row's Gaussian (along x, then y) */
     float *er, *de, *mx;  /* per column: the report's sums and largest change over the last rows */
     float *kf;            /* per column: -curvature_length / (the box's x weights inside the row times all of them) */
     float *gf;            /* per column: rate / the Gaussian's x weights inside the row (over their full sum) */
     float *mrow[4];       /* a row's resistance R(c) = m0 + c (m1 + c m2), and ambient */
-    float *zero;          /* a row of zeros: the taps beyond an unwrapped border */
     float wb[ERO__MAXR + 1], wg[ERO__MAXR + 1]; /* the box's weights; the Gaussian's over their sum */
     float coef[256][4];   /* per material: m0, m1, m2, ambient */
     float *head;          /* the first rows before the step (a wrapped field reads them last) */
@@ -1688,7 +1690,7 @@ static int ero__ring_pad(const ero__run *r) { return ((r->box_r > r->gau_r ? r->
 static size_t ero__ring_floats(const ero__run *r)
 {
     size_t Wp = ero__ring_stride(r), rows, padded = Wp + 2 * (size_t)ero__ring_pad(r);
-    rows = 4 * (2 * (size_t)r->box_r + 1) + (2 * (size_t)r->gau_r + 1) + 4 + 1 + 3 + 2 + 4 + 1;
+    rows = 4 * (2 * (size_t)r->box_r + 2) + (2 * (size_t)r->gau_r + 2) + 4 + 1 + 3 + 2 + 4;
     return rows * Wp + 5 * padded + ((size_t)(r->box_r + r->gau_r + 2) + 4) * (size_t)r->W + 16;
 }
 
@@ -1700,10 +1702,11 @@ static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
     q->Wp = Wp;
     q->pad = ero__ring_pad(r);
     padded = Wp + 2 * (size_t)q->pad;
-    for (k = 0; k < 4; k++) { q->geo[k] = f; f += (2 * (size_t)r->box_r + 1) * Wp; }
-    q->hr = f; f += (2 * (size_t)r->gau_r + 1) * Wp;
-    for (k = 0; k < 4; k++) { q->ty[k] = f + q->pad; f += padded; }
-    q->tg = f + q->pad; f += padded;
+    q->chs = (2 * (size_t)r->box_r + 2) * Wp;
+    for (k = 0; k < 4; k++) { q->gx[k] = f; f += q->chs; }
+    q->hx = f; f += (2 * (size_t)r->gau_r + 2) * Wp;
+    for (k = 0; k < 4; k++) { q->geo[k] = f + q->pad; f += padded; }
+    q->hrow = f + q->pad; f += padded;
     for (k = 0; k < 4; k++) { q->avg[k] = f; f += Wp; }
     q->chg = f; f += Wp;
     q->er = f; f += Wp;
@@ -1712,7 +1715,6 @@ static void ero__ring_carve(ero__run *r, ero__rows *q, float *f)
     q->kf = f; f += Wp;
     q->gf = f; f += Wp;
     for (k = 0; k < 4; k++) { q->mrow[k] = f; f += Wp; }
-    q->zero = f; f += Wp;
     q->head_rows = r->box_r + r->gau_r + 2;
     q->head = f; f += (size_t)q->head_rows * (size_t)r->W;
     q->orig = f;
@@ -1837,7 +1839,6 @@ static void ero__ring_pad_row(const ero__run *r, const ero__rows *q, float *p)
     }
 }
 
-#if !defined(ERO_USE_AVX2) /* (its AVX2 form below) */
 /* one padded row filtered along x (its pads set first) into out (box: by ero__box_taps) */
 static void ero__ring_xpass(const ero__run *r, const ero__rows *q, float *p, float *ERO__RESTRICT out, const float *w, int R,
                             int box)
@@ -1850,27 +1851,19 @@ static void ero__ring_xpass(const ero__run *r, const ero__rows *q, float *p, flo
     if (box) ero__box_taps(up, dn, p, out, r->W, w, R);
     else ero__taps(up, dn, p, out, r->W, w, R);
 }
-#endif
 
-/* the y pass: rows[R + k] is the row at offset k (NULL beyond an unwrapped border: zeros);
-   returns the weights of the rows there are */
-static float ero__ring_ypass(const ero__run *r, const ero__rows *q, float *const *rows, float *ERO__RESTRICT out,
-                             const float *w, int R, int box)
+#if !defined(ERO_USE_AVX2) /* (its AVX2 form fused with H and the change, below) */
+/* the y pass: rows[R + k] is the row at offset k (ero__ring_window) */
+static void ero__ring_ypass(float *const *rows, float *ERO__RESTRICT out, long W, const float *w, int R, int box)
 {
     const float *up[ERO__MAXR], *dn[ERO__MAXR];
     int k;
-    float ws = w[0];
     up[0] = dn[0] = rows[R]; /* unread when R = 0 */
-    for (k = 1; k <= R; k++) {
-        up[k - 1] = rows[R + k] ? rows[R + k] : q->zero;
-        dn[k - 1] = rows[R - k] ? rows[R - k] : q->zero;
-        if (rows[R + k]) ws += w[k];
-        if (rows[R - k]) ws += w[k];
-    }
-    if (box) ero__box_taps(up, dn, rows[R], out, r->W, w, R);
-    else ero__taps(up, dn, rows[R], out, r->W, w, R);
-    return ws;
+    for (k = 1; k <= R; k++) { up[k - 1] = rows[R + k]; dn[k - 1] = rows[R - k]; }
+    if (box) ero__box_taps(up, dn, rows[R], out, W, w, R);
+    else ero__taps(up, dn, rows[R], out, W, w, R);
 }
+#endif
 /* 1 / sqrt(x) for x >= 0 without sqrtf (whose errno keeps a loop from vectorising): the exponent
    halved on the bits (Lomont's constant), three Newton steps (relative error below 2e-7, about
    3 ulp; subnormal x scaled by 2^48 first); 0 for x = +inf, as 1 / sqrtf gives, and for x = 0
@@ -2018,29 +2011,36 @@ static const float *ero__ring_row(const ero__run *r, const ero__rows *q, long y)
     return q->orig + (size_t)(y & 3) * (size_t)r->W;
 }
 
-/* geometry of row v (wrapped into the field) into its ring slot */
+/* geometry of row v (wrapped into the field), its box sums along x into its ring slot */
 static void ero__ring_row_geometry(ero__run *r, ero__rows *q, long v)
 {
     long H = r->H, y = ero__mod(v, H);
     size_t at = (size_t)ero__mod(v, 2 * (long)r->box_r + 1) * q->Wp;
     const float *dn = y > 0 ? ero__ring_row(r, q, y - 1) : r->wrap ? ero__ring_row(r, q, H - 1) : NULL;
     const float *up = y + 1 < H ? ero__ring_row(r, q, y + 1) : r->wrap ? ero__ring_row(r, q, 0) : NULL;
-    float *g[4];
     int k;
-    for (k = 0; k < 4; k++) g[k] = q->geo[k] + at;
-    ero__ring_geometry(r, g, dn, ero__ring_row(r, q, y), up);
+    ero__ring_geometry(r, q->geo, dn, ero__ring_row(r, q, y), up);
+    for (k = 0; k < 4; k++) ero__ring_xpass(r, q, q->geo[k], q->gx[k] + at, q->wb, r->box_r, 1);
 }
 
-/* the rows at offsets -R..R from v in a ring of 2R + 1 slots (NULL beyond an unwrapped border) */
-static void ero__ring_window(const ero__run *r, float *ring, size_t Wp, long v, int R, float **rows)
+/* the rows at offsets -R..R from v in a ring of 2R + 1 slots (its zero row 2R + 1 beyond an
+   unwrapped border); returns the weights w of the rows there are, summed as ero__kernels sums them */
+static float ero__ring_window(const ero__run *r, const ero__rows *q, float *ring, long v, int R, const float *w,
+                              float **rows)
 {
     long slot = ero__mod(v - R, 2 * (long)R + 1);
+    float ws = w[0], *zero = ring + (2 * (size_t)R + 1) * q->Wp;
     int k;
     for (k = -R; k <= R; k++) {
         long y = v + k;
-        rows[R + k] = !r->wrap && (y < 0 || y >= r->H) ? NULL : ring + (size_t)slot * Wp;
+        rows[R + k] = !r->wrap && (y < 0 || y >= r->H) ? zero : ring + (size_t)slot * q->Wp;
         slot = slot == 2 * R ? 0 : slot + 1;
     }
+    for (k = 1; k <= R; k++) {
+        if (rows[R + k] != zero) ws += w[k];
+        if (rows[R - k] != zero) ws += w[k];
+    }
+    return ws;
 }
 /* H of a row (MODEL: exposure e = -n_a . w / |n_a|, c the normalised convex curvature, R the
    Bezier, W_f / R windward, ambient / R leeward, the deposition ramp where kap < 0; the branches
@@ -2217,17 +2217,7 @@ static void ero__hf_report(const ero__run *r, ero__rows *q, ero_report *rep)
 
 #if defined(ERO_USE_AVX2)
 #define ERO__V8(f) _mm256_set1_ps(f)
-/* ero__box_taps at column x of the padded row p (we: the end tap's weight), one column */
-static float ero__box1(const float *p, int R, float we)
-{
-    float acc = p[0];
-    int k;
-    if (R == 0) return acc;
-    for (k = 1; k < R; k++) acc = acc + (p[k] + p[-k]);
-    return acc + we * (p[R] + p[-R]);
-}
-
-/* ero__ring_h of 8 texels at x from their box sums a0..ak; 0 (nothing stored) when a squared
+/* ero__ring_h of 8 texels from their box sums a0..ak and kf; 0 (nothing stored) when a squared
    length is not normal */
 ERO__INLINE int ero__ring_h8(const ero__ring_hp *p, __m256 a0, __m256 a1, __m256 a2, __m256 ak, __m256 kf,
                              const float *m0, const float *m1, const float *m2, const float *mamb, float *out)
@@ -2254,115 +2244,125 @@ ERO__INLINE int ero__ring_h8(const ero__ring_hp *p, __m256 a0, __m256 a1, __m256
     return 1;
 }
 
-/* ero__box8 of the four channels' padded rows t at column x: the taps in the same order, a
-   loop over them for the four at once */
-#define ERO__TAP8(t, k) _mm256_add_ps(_mm256_loadu_ps((t) + (k)), _mm256_loadu_ps((t) - (k)))
-ERO__INLINE void ero__box8x4(const float *t0, const float *t1, const float *t2, const float *t3, int R, __m256 we,
-                             __m256 *s)
+/* ero__box_taps along y at column x: rows[R + k] is the first channel's row at offset k, the
+   others' chs floats after each other's; the four channels at once, s gets their sums */
+#define ERO__ROW4(p, s, c) _mm256_loadu_ps((p) + (c) * (s))
+ERO__INLINE void ero__box8x4(float *const *rows, size_t chs, long x, int R, __m256 we, __m256 *s)
 {
+    const float *p = rows[R] + x, *u, *d;
     int k;
-    s[0] = _mm256_loadu_ps(t0); s[1] = _mm256_loadu_ps(t1); s[2] = _mm256_loadu_ps(t2); s[3] = _mm256_loadu_ps(t3);
+    s[0] = ERO__ROW4(p, chs, 0); s[1] = ERO__ROW4(p, chs, 1); s[2] = ERO__ROW4(p, chs, 2); s[3] = ERO__ROW4(p, chs, 3);
     if (R == 0) return;
     for (k = 1; k < R; k++) {
-        s[0] = _mm256_add_ps(s[0], ERO__TAP8(t0, k)); s[1] = _mm256_add_ps(s[1], ERO__TAP8(t1, k));
-        s[2] = _mm256_add_ps(s[2], ERO__TAP8(t2, k)); s[3] = _mm256_add_ps(s[3], ERO__TAP8(t3, k));
+        u = rows[R + k] + x; d = rows[R - k] + x;
+        s[0] = _mm256_add_ps(s[0], _mm256_add_ps(ERO__ROW4(u, chs, 0), ERO__ROW4(d, chs, 0)));
+        s[1] = _mm256_add_ps(s[1], _mm256_add_ps(ERO__ROW4(u, chs, 1), ERO__ROW4(d, chs, 1)));
+        s[2] = _mm256_add_ps(s[2], _mm256_add_ps(ERO__ROW4(u, chs, 2), ERO__ROW4(d, chs, 2)));
+        s[3] = _mm256_add_ps(s[3], _mm256_add_ps(ERO__ROW4(u, chs, 3), ERO__ROW4(d, chs, 3)));
     }
-    s[0] = _mm256_add_ps(s[0], _mm256_mul_ps(we, ERO__TAP8(t0, R)));
-    s[1] = _mm256_add_ps(s[1], _mm256_mul_ps(we, ERO__TAP8(t1, R)));
-    s[2] = _mm256_add_ps(s[2], _mm256_mul_ps(we, ERO__TAP8(t2, R)));
-    s[3] = _mm256_add_ps(s[3], _mm256_mul_ps(we, ERO__TAP8(t3, R)));
+    u = rows[R + R] + x; d = rows[0] + x;
+    s[0] = _mm256_add_ps(s[0], _mm256_mul_ps(we, _mm256_add_ps(ERO__ROW4(u, chs, 0), ERO__ROW4(d, chs, 0))));
+    s[1] = _mm256_add_ps(s[1], _mm256_mul_ps(we, _mm256_add_ps(ERO__ROW4(u, chs, 1), ERO__ROW4(d, chs, 1))));
+    s[2] = _mm256_add_ps(s[2], _mm256_mul_ps(we, _mm256_add_ps(ERO__ROW4(u, chs, 2), ERO__ROW4(d, chs, 2))));
+    s[3] = _mm256_add_ps(s[3], _mm256_mul_ps(we, _mm256_add_ps(ERO__ROW4(u, chs, 3), ERO__ROW4(d, chs, 3))));
+}
+#undef ERO__ROW4
+/* the same, one column of channel c */
+static float ero__box1(float *const *rows, size_t c, long x, int R, float we)
+{
+    float acc = rows[R][c + x];
+    int k;
+    if (R == 0) return acc;
+    for (k = 1; k < R; k++) acc = acc + (rows[R + k][c + x] + rows[R - k][c + x]);
+    return acc + we * (rows[R + R][c + x] + rows[0][c + x]);
 }
 
-/* the box's x pass over the padded rows ty and H (ero__ring_h_row) in one loop */
-static void ero__ring_hx8(const ero__rows *q, const ero__ring_hp *hp, long W, int R, float *ERO__RESTRICT out)
+/* the box's y pass over the rings' rows (ero__box8x4) and H (ero__ring_h_row) in one loop */
+static void ero__ring_yh8(const ero__rows *q, const ero__ring_hp *hp, float *const *rows, long W, int R,
+                          float *ERO__RESTRICT out)
 {
-    const float *t0 = q->ty[0], *t1 = q->ty[1], *t2 = q->ty[2], *t3 = q->ty[3], *kf = q->kf;
-    const float *m0 = q->mrow[0], *m1 = q->mrow[1], *m2 = q->mrow[2], *m3 = q->mrow[3];
+    const float *kf = q->kf, *m0 = q->mrow[0], *m1 = q->mrow[1], *m2 = q->mrow[2], *m3 = q->mrow[3];
     ero__ring_hp p = *hp;
+    size_t chs = q->chs;
     float we = q->wb[R], a[4][8];
     __m256 vwe = ERO__V8(we), sv[4];
     long x = 0;
-    int l;
+    int l, c;
     for (; x + 8 <= W; x += 8) {
-        __m256 s0, s1, s2, s3;
-        ero__box8x4(t0 + x, t1 + x, t2 + x, t3 + x, R, vwe, sv);
-        s0 = sv[0]; s1 = sv[1]; s2 = sv[2]; s3 = sv[3];
-        if (ero__ring_h8(&p, s0, s1, s2, s3, _mm256_loadu_ps(kf + x), m0 + x, m1 + x, m2 + x, m3 + x, out + x)) continue;
-        _mm256_storeu_ps(a[0], s0); _mm256_storeu_ps(a[1], s1); _mm256_storeu_ps(a[2], s2); _mm256_storeu_ps(a[3], s3);
+        ero__box8x4(rows, chs, x, R, vwe, sv);
+        if (ero__ring_h8(&p, sv[0], sv[1], sv[2], sv[3], _mm256_loadu_ps(kf + x), m0 + x, m1 + x, m2 + x, m3 + x, out + x))
+            continue;
+        for (c = 0; c < 4; c++) _mm256_storeu_ps(a[c], sv[c]);
         for (l = 0; l < 8; l++)
             out[x + l] = ero__ring_h(&p, a[0][l], a[1][l], a[2][l], a[3][l], kf[x + l], m0[x + l], m1[x + l], m2[x + l],
                                      m3[x + l]);
     }
     for (; x < W; x++)
-        out[x] = ero__ring_h(&p, ero__box1(t0 + x, R, we), ero__box1(t1 + x, R, we), ero__box1(t2 + x, R, we),
-                             ero__box1(t3 + x, R, we), kf[x], m0[x], m1[x], m2[x], m3[x]);
+        out[x] = ero__ring_h(&p, ero__box1(rows, 0, x, R, we), ero__box1(rows, chs, x, R, we),
+                             ero__box1(rows, 2 * chs, x, R, we), ero__box1(rows, 3 * chs, x, R, we), kf[x], m0[x], m1[x],
+                             m2[x], m3[x]);
 }
 
-/* ero__taps along x at column x of the padded row p, 8 columns at once; and one column */
-ERO__INLINE __m256 ero__gau8(const float *p, const float *w, int R)
+/* ero__taps along y at column x (rows[R + k]: the row at offset k), 8 columns at once; and one */
+ERO__INLINE __m256 ero__gau8(float *const *rows, long x, const float *w, int R)
 {
-    __m256 acc = _mm256_mul_ps(ERO__V8(w[0]), _mm256_loadu_ps(p));
+    __m256 acc = _mm256_mul_ps(ERO__V8(w[0]), _mm256_loadu_ps(rows[R] + x));
     int k;
-    for (k = 1; k + 1 <= R; k += 2) {
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k]), ERO__TAP8(p, k)));
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k + 1]), ERO__TAP8(p, k + 1)));
-    }
-    if (k == R) acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k]), ERO__TAP8(p, k)));
+    for (k = 1; k <= R; k++)
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(ERO__V8(w[k]), _mm256_add_ps(_mm256_loadu_ps(rows[R + k] + x),
+                                                                           _mm256_loadu_ps(rows[R - k] + x))));
     return acc;
 }
-static float ero__gau1(const float *p, const float *w, int R)
+static float ero__gau1(float *const *rows, long x, const float *w, int R)
 {
-    float acc = w[0] * p[0];
+    float acc = w[0] * rows[R][x];
     int k;
-    for (k = 1; k <= R; k++) acc = acc + w[k] * (p[k] + p[-k]);
+    for (k = 1; k <= R; k++) acc = acc + w[k] * (rows[R + k][x] + rows[R - k][x]);
     return acc;
 }
 
-/* the Gaussian's x pass over the padded row p and ero__hf_change_row in one loop */
-static void ero__ring_change8(const ero__rows *q, const float *p, const float *w, int R, float *ERO__RESTRICT h, long W,
-                              float bv)
+/* the Gaussian's y pass over the ring's rows (times sc on an unwrapped border's rows, border != 0)
+   and ero__hf_change_row in one loop */
+static void ero__ring_ychange8(const ero__rows *q, float *const *rows, const float *w, int R, int border, float sc,
+                               float *ERO__RESTRICT h, long W, float bv)
 {
     float *ERO__RESTRICT er = q->er, *ERO__RESTRICT de = q->de, *ERO__RESTRICT mx = q->mx;
     const float *gf = q->gf;
-    __m256 vbv = ERO__V8(bv), zero = _mm256_setzero_ps(), sign = ERO__V8(-0.0f);
+    __m256 vbv = ERO__V8(bv), zero = _mm256_setzero_ps(), sign = ERO__V8(-0.0f), vsc = ERO__V8(sc);
     long x = 0;
     for (; x + 8 <= W; x += 8) {
-        __m256 g = ero__gau8(p + x, w, R), d0 = _mm256_loadu_ps(h + x);
-        __m256 d = _mm256_sub_ps(d0, _mm256_mul_ps(g, _mm256_loadu_ps(gf + x))), lim = _mm256_max_ps(d0, vbv);
-        __m256 d1 = _mm256_min_ps(lim, d), fin = _mm256_cmp_ps(_mm256_sub_ps(d1, d1), zero, _CMP_EQ_OQ);
-        __m256 h1 = _mm256_blendv_ps(d0, d1, fin), a = ero__fin8(_mm256_sub_ps(d0, h1));
-        __m256 ea = _mm256_max_ps(a, zero), da = _mm256_max_ps(_mm256_xor_ps(a, sign), zero);
+        __m256 g = ero__gau8(rows, x, w, R), d0 = _mm256_loadu_ps(h + x), d, lim, d1, fin, h1, a, ea, da;
+        if (border) g = _mm256_mul_ps(g, vsc);
+        d = _mm256_sub_ps(d0, _mm256_mul_ps(g, _mm256_loadu_ps(gf + x)));
+        lim = _mm256_max_ps(d0, vbv);
+        d1 = _mm256_min_ps(lim, d);
+        fin = _mm256_cmp_ps(_mm256_sub_ps(d1, d1), zero, _CMP_EQ_OQ);
+        h1 = _mm256_blendv_ps(d0, d1, fin);
+        a = ero__fin8(_mm256_sub_ps(d0, h1));
+        ea = _mm256_max_ps(a, zero);
+        da = _mm256_max_ps(_mm256_xor_ps(a, sign), zero);
         _mm256_storeu_ps(h + x, h1);
         _mm256_storeu_ps(er + x, _mm256_add_ps(_mm256_loadu_ps(er + x), ea));
         _mm256_storeu_ps(de + x, _mm256_add_ps(_mm256_loadu_ps(de + x), da));
         _mm256_storeu_ps(mx + x, _mm256_max_ps(_mm256_add_ps(ea, da), _mm256_loadu_ps(mx + x)));
     }
     for (; x < W; x++) {
-        float g = ero__gau1(p + x, w, R);
+        float g = ero__gau1(rows, x, w, R);
+        if (border) g *= sc;
         ero__hf_change_row(h + x, &g, gf + x, 1, bv, er + x, de + x, mx + x);
     }
 }
 #undef ERO__V8
-#undef ERO__TAP8
 #endif
 
-/* row j's box sums along y then x, its H into its ring slot */
+/* row j's box sums along y (of the rows' sums along x), its H, H's Gaussian along x into its ring slot */
 static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
 {
-    float *rows[2 * ERO__MAXR + 1], *out = q->hr + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp;
+    float *rows[4][2 * ERO__MAXR + 1], ws = 0.0f;
     long W = r->W, y = ero__mod(j, r->H);
     ero__ring_hp p;
     int k;
-    float ws = 0.0f;
-    for (k = 0; k < 4; k++) {
-        ero__ring_window(r, q->geo[k], q->Wp, j, r->box_r, rows);
-        ws = ero__ring_ypass(r, q, rows, q->ty[k], q->wb, r->box_r, 1);
-#if defined(ERO_USE_AVX2)
-        ero__ring_pad_row(r, q, q->ty[k]);
-#else
-        ero__ring_xpass(r, q, q->ty[k], q->avg[k], q->wb, r->box_r, 1);
-#endif
-    }
+    for (k = 0; k < 4; k++) ws = ero__ring_window(r, q, q->gx[k], j, r->box_r, q->wb, rows[k]);
     if (r->mat_count > 1) ero__ring_materials(q, r->mat ? r->mat + (size_t)y * (size_t)W : NULL, W);
     p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = -r->wind[2];
     p.force = r->o.force;
@@ -2372,32 +2372,33 @@ static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
     p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
     p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
 #if defined(ERO_USE_AVX2)
-    ero__ring_hx8(q, &p, W, r->box_r, out);
+    ero__ring_yh8(q, &p, rows[0], W, r->box_r, q->hrow);
 #else
-    ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow, out);
+    for (k = 0; k < 4; k++) ero__ring_ypass(rows[k], q->avg[k], W, q->wb, r->box_r, 1);
+    ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow, q->hrow);
 #endif
+    ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, q->wg, r->gau_r, 0);
 }
 
-/* row m's H filtered (y then x) and applied to the heights (the row kept first: the geometry may
+/* row m's H filtered (x then y) and applied to the heights (the row kept first: the geometry may
    still read it); the report's sums in float over ERO__REPORT_ROWS rows per column, then in double */
 #define ERO__REPORT_ROWS 32
 static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *rep)
 {
-    float *rows[2 * ERO__MAXR + 1], ws, bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF;
-    size_t W = (size_t)r->W, i0 = (size_t)m * W, x;
-    ero__ring_window(r, q->hr, q->Wp, m, r->gau_r, rows);
-    ws = ero__ring_ypass(r, q, rows, q->tg, q->wg, r->gau_r, 0);
-    if (!r->wrap && (m < r->gau_r || m >= r->H - r->gau_r)) { /* over the weights of the rows there are */
-        float sc = 1.0f / ws;
-        for (x = 0; x < W; x++) q->tg[x] *= sc;
-    }
+    float *rows[2 * ERO__MAXR + 1], bv = r->o.bound == ERO_BOUND_VALUE ? r->o.bound_value : HUGE_VALF;
+    float sc = 1.0f / ero__ring_window(r, q, q->hx, m, r->gau_r, q->wg, rows);
+    size_t W = (size_t)r->W, i0 = (size_t)m * W;
+    int border = !r->wrap && (m < r->gau_r || m >= r->H - r->gau_r); /* over the weights of the rows there are */
     memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
 #if defined(ERO_USE_AVX2)
-    ero__ring_pad_row(r, q, q->tg);
-    ero__ring_change8(q, q->tg, q->wg, r->gau_r, r->disp + i0, (long)W, bv);
+    ero__ring_ychange8(q, rows, q->wg, r->gau_r, border, sc, r->disp + i0, (long)W, bv);
 #else
-    ero__ring_xpass(r, q, q->tg, q->chg, q->wg, r->gau_r, 0);
+    ero__ring_ypass(rows, q->chg, (long)W, q->wg, r->gau_r, 0);
+    if (border) {
+        size_t x;
+        for (x = 0; x < W; x++) q->chg[x] *= sc;
+    }
     ero__hf_change_row(r->disp + i0, q->chg, q->gf, (long)W, bv, q->er, q->de, q->mx);
 #endif
     if (m % ERO__REPORT_ROWS == ERO__REPORT_ROWS - 1 || m == r->H - 1) ero__hf_report(r, q, rep);
@@ -2409,9 +2410,11 @@ static void ero__ring_step(ero__run *r, ero_report *rep)
 {
     ero__rows q;
     long H = r->H, lag = r->box_r + r->gau_r, v;
+    int k;
     ero__ring_carve(r, &q, r->hh);
     ero__ring_weights(r, &q);
-    memset(q.zero, 0, q.Wp * sizeof(float));
+    for (k = 0; k < 4; k++) memset(q.gx[k] + (2 * (size_t)r->box_r + 1) * q.Wp, 0, q.Wp * sizeof(float));
+    memset(q.hx + (2 * (size_t)r->gau_r + 1) * q.Wp, 0, q.Wp * sizeof(float));
     memset(q.er, 0, 3 * q.Wp * sizeof(float));
     memcpy(q.head, r->disp, (size_t)q.head_rows * (size_t)r->W * sizeof(float));
     if (r->mat_count == 1) ero__ring_materials(&q, NULL, r->W);
