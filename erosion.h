@@ -1672,7 +1672,7 @@ typedef struct ero__rows {
     float wb[ERO__MAXR + 1], wg[ERO__MAXR + 1]; /* the box's weights; the Gaussian's over their sum */
     float coef[256][4];   /* per material: m0, m1, m2, ambient */
     float *head;          /* the first rows before the step (a wrapped field reads them last) */
-    float *orig;          /* the last four applied rows before the step */
+    float *orig;          /* the last four applied rows before the step (box_r = gau_r = 0 only) */
     long head_rows, applied;
 } ero__rows;
 
@@ -2003,7 +2003,8 @@ static void ero__ring_geometry(const ero__run *r, float *const *g, const float *
 
 static long ero__mod(long a, long m) { return ((a % m) + m) % m; }
 
-/* row y of the heights as they were before this step */
+/* row y of the heights as they were before this step (with box_r + gau_r >= 1 the geometry reads
+   no applied row but the first ones, at the end of a wrapped field) */
 static const float *ero__ring_row(const ero__run *r, const ero__rows *q, long y)
 {
     if (y >= q->applied) return r->disp + (size_t)y * (size_t)r->W;
@@ -2358,11 +2359,9 @@ static void ero__ring_ychange8(const ero__rows *q, float *const *rows, const flo
 /* row j's box sums along y (of the rows' sums along x), its H, H's Gaussian along x into its ring slot */
 static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
 {
-    float *rows[4][2 * ERO__MAXR + 1], ws = 0.0f;
+    float *rows[2 * ERO__MAXR + 1], ws = ero__ring_window(r, q, q->gx[0], j, r->box_r, q->wb, rows);
     long W = r->W, y = ero__mod(j, r->H);
     ero__ring_hp p;
-    int k;
-    for (k = 0; k < 4; k++) ws = ero__ring_window(r, q, q->gx[k], j, r->box_r, q->wb, rows[k]);
     if (r->mat_count > 1) ero__ring_materials(q, r->mat ? r->mat + (size_t)y * (size_t)W : NULL, W);
     p.w0 = r->wind[0]; p.w1 = r->wind[1]; p.w2 = -r->wind[2];
     p.force = r->o.force;
@@ -2372,9 +2371,16 @@ static void ero__ring_row_h(ero__run *r, ero__rows *q, long j)
     p.constant = (r->o.flags & ERO_CONSTANT_WINDWARD) != 0;
     p.literal = (r->o.flags & ERO_LEEWARD_LITERAL) != 0;
 #if defined(ERO_USE_AVX2)
-    ero__ring_yh8(q, &p, rows[0], W, r->box_r, q->hrow);
+    ero__ring_yh8(q, &p, rows, W, r->box_r, q->hrow);
 #else
-    for (k = 0; k < 4; k++) ero__ring_ypass(rows[k], q->avg[k], W, q->wb, r->box_r, 1);
+    {
+        float *ck[2 * ERO__MAXR + 1];
+        int k, i;
+        for (k = 0; k < 4; k++) { /* channel k's rows: channel 0's, k chs floats on */
+            for (i = 0; i <= 2 * r->box_r; i++) ck[i] = rows[i] + (size_t)k * q->chs;
+            ero__ring_ypass(ck, q->avg[k], W, q->wb, r->box_r, 1);
+        }
+    }
     ero__ring_h_row(&p, W, q->avg[0], q->avg[1], q->avg[2], q->avg[3], q->kf, q->mrow, q->hrow);
 #endif
     ero__ring_xpass(r, q, q->hrow, q->hx + (size_t)ero__mod(j, 2 * (long)r->gau_r + 1) * q->Wp, q->wg, r->gau_r, 0);
@@ -2389,7 +2395,7 @@ static void ero__ring_row_apply(ero__run *r, ero__rows *q, long m, ero_report *r
     float sc = 1.0f / ero__ring_window(r, q, q->hx, m, r->gau_r, q->wg, rows);
     size_t W = (size_t)r->W, i0 = (size_t)m * W;
     int border = !r->wrap && (m < r->gau_r || m >= r->H - r->gau_r); /* over the weights of the rows there are */
-    memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
+    if (r->box_r + r->gau_r == 0) memcpy(q->orig + (size_t)(m & 3) * W, r->disp + i0, W * sizeof(float));
     q->applied = m + 1;
 #if defined(ERO_USE_AVX2)
     ero__ring_ychange8(q, rows, q->wg, r->gau_r, border, sc, r->disp + i0, (long)W, bv);
