@@ -2572,7 +2572,7 @@ static double dm__segment_d2(const double p[3], const double a[3], const double 
 /* Squared distance from p to triangle (a, b, c) and the closest point's barycentrics u (of b)
    and v (of c). Ericson's Voronoi-region walk; a degenerate triangle, where the interior
    formula divides by zero, takes the nearest of its three edges. */
-static double dm__triangle_d2_dbl(const double p[3], const double *tri, double *u_out, double *v_out)
+static double dm__triangle_d2(const double p[3], const float *tri, double *u_out, double *v_out)
 {
     double a[3], b[3], c[3], ab[3], ac[3], ap[3], bp[3], cp[3];
     double d1, d2, d3, d4, d5, d6, va, vb, vc, u, v, q[3], dist2 = 0.0, s;
@@ -2637,15 +2637,6 @@ static double dm__triangle_d2_dbl(const double p[3], const double *tri, double *
     *u_out = u;
     *v_out = v;
     return dist2;
-}
-
-/* the same for a triangle of floats (converted exactly) */
-static double dm__triangle_d2(const double p[3], const float *tri, double *u_out, double *v_out)
-{
-    double t[9];
-    int k;
-    for (k = 0; k < 9; k++) t[k] = tri[k];
-    return dm__triangle_d2_dbl(p, t, u_out, v_out);
 }
 
 static double dm__box_d2(const dm__node *n, const double p[3])
@@ -7793,8 +7784,8 @@ typedef struct dm__sh_internal {
     size_t last_level;   /* the level of the last candidate or collapse seen */
     dm__sh_pt *pts;      /* the original's vertices near one candidate */
     size_t pts_cap;
-    double *tri;         /* the candidate's old and new triangles: 9 coordinates, a bounding
-                            sphere (centre, radius) and the unit normal each, float values */
+    float *tri;          /* the candidate's old and new triangles: 9 coordinates, a bounding
+                            sphere (centre, radius) and the unit normal each */
     uint32_t *tri_new;   /* per old triangle: the new one on the same two other corners (or
                             UINT32_MAX), a first guess for the nearest new triangle */
     size_t tri_cap;      /* in triangles */
@@ -8434,14 +8425,16 @@ static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const 
     return cl.distance <= h + in->margin;
 }
 
-/* Fills 16 values per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0),
-   each rounded to float, into out. */
-static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out)
+/* Fills 16 floats per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0)
+   into out. (A table of doubles holding these float values would be as good, but GCC 12.2's SLP
+   vectoriser drops (double)(float) round trips from such stores: the bits would then depend on
+   the compiler.) */
+static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], float *out)
 {
     size_t i;
     int j, k;
     for (i = 0; i < n; i++) {
-        double *f = out + 16 * i;
+        float *f = out + 16 * i;
         double p[3][3], r2 = 0.0, n[3];
         for (j = 0; j < 3; j++) {
             dm__sh_at(c, tris[3 * i + (size_t)j], x, p[j]);
@@ -8453,7 +8446,7 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
             for (k = 0; k < 3; k++) d2 += (p[j][k] - f[9 + k]) * (p[j][k] - f[9 + k]);
             if (d2 > r2) r2 = d2;
         }
-        f[12] = (float)((float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f);
+        f[12] = (float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f;
         if (!dm__sh_plane(p[0], p[1], p[2], n)) n[0] = n[1] = n[2] = 0.0;
         for (k = 0; k < 3; k++) f[13 + k] = (float)n[k];
     }
@@ -8464,15 +8457,15 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
    of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
    first, so that the others are mostly skipped by their bounding spheres and planes; the answer
    is the one a scan in order gives. */
-static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], double max_dist, size_t hint,
+static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, size_t hint,
                              double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, k, bt = (size_t)-1;
     *bu = *bv = 0.0;
     for (k = 0; k <= n; k++) {
-        const double *f;
-        double u, v, d2, cs, pd;
+        const float *f;
+        double u, v, d2, cs, pd, del;
         if (k == 0 && !(hint < n)) continue;
         i = k == 0 ? hint : k - 1;
         if (k > 0 && i == hint) continue;
@@ -8480,8 +8473,12 @@ static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], doub
         cs = (p[0] - f[9]) * (p[0] - f[9]) + (p[1] - f[10]) * (p[1] - f[10]) + (p[2] - f[11]) * (p[2] - f[11]);
         if (cs > (rb + f[12]) * (rb + f[12])) continue; /* its bounding sphere lies beyond the best */
         pd = (p[0] - f[0]) * f[13] + (p[1] - f[1]) * f[14] + (p[2] - f[2]) * f[15];
-        if (pd * pd * 0.99999 > best) continue; /* so does its plane (the factor covers the unit normal's rounding) */
-        d2 = dm__triangle_d2_dbl(p, f, &u, &v);
+        del = 3e-7 * (rb + 2.0 * f[12]); /* pd's error bound: the float unit normal is off by up to
+                                           1.1e-7, times |p - a| <= |p - c| + r <= rb + 2 r */
+        if (pd * pd * 0.99999 > best + (2.0 * rb + del) * del)
+            continue; /* so does its plane (|pd| - del > rb): never a triangle as near as the best,
+                         so the answer is the nearest whatever the order or the hint */
+        d2 = dm__triangle_d2(p, f, &u, &v);
         if (d2 < best || (d2 == best && i < bt)) {
             best = d2;
             rb = sqrt(d2);
@@ -8516,7 +8513,7 @@ static int dm__sh_feature(const dm_collapse *c, const uint32_t *tris, size_t bt,
 /* The sign of p's distance dist to the one-ring at its closest feature fv (nf vertices) of
    triangle bt, taken with the angle-weighted pseudonormal (Baerentzen and Aanaes 2005) computed
    from these triangles only: +dist outside, -dist inside. */
-static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size_t bt, double bu, double bv,
+static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_t bt, double bu, double bv,
                           const uint32_t fv[3], int nf, const double p[3], double dist)
 {
     double q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
@@ -8561,7 +8558,7 @@ static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
    is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
-static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double p[3], size_t *hint)
+static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3], size_t *hint)
 {
     double d2, bu, bv;
     uint32_t fv[3];
@@ -8632,7 +8629,7 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
     double xk[3];
     if (no + nr > in->tri_cap) {
         int of = 0;
-        double *nt2 = (double *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(double), &of);
+        float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
         uint32_t *nm = (uint32_t *)dm__alloc_array(&sh->allocator, 2 * (no + nr), sizeof(uint32_t), &of);
         if (!nt2 || !nm) {
             sh->allocator.free(sh->allocator.user, nt2);
@@ -8832,7 +8829,7 @@ static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], do
 }
 
 /* pt's old signed distance, as a float (the old triangles of in->tri) */
-static float dm__sh_old_signed(const dm_collapse *c, const double *tf, const dm__sh_pt *pt)
+static float dm__sh_old_signed(const dm_collapse *c, const float *tf, const dm__sh_pt *pt)
 {
     uint32_t fv[3];
     double pp[3];
