@@ -1763,7 +1763,14 @@ static void ero__taps(const float *const *up, const float *const *dn, const floa
     long x;
     int k = 1;
     float w0 = w[0];
-    if (R >= 2) {
+    if (R >= 3 && R % 2 == 1) { /* three taps first, then pairs: no single tap left */
+        const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0], *ERO__RESTRICT u2 = up[1],
+                                   *ERO__RESTRICT d2 = dn[1], *ERO__RESTRICT u3 = up[2], *ERO__RESTRICT d3 = dn[2];
+        float w1 = w[1], w2 = w[2], w3 = w[3];
+        for (x = 0; x < n; x++)
+            out[x] = ((w0 * c[x] + w1 * (u1[x] + d1[x])) + w2 * (u2[x] + d2[x])) + w3 * (u3[x] + d3[x]);
+        k = 4;
+    } else if (R >= 2) {
         const float *ERO__RESTRICT u1 = up[0], *ERO__RESTRICT d1 = dn[0], *ERO__RESTRICT u2 = up[1],
                                    *ERO__RESTRICT d2 = dn[1];
         float w1 = w[1], w2 = w[2];
@@ -2235,7 +2242,7 @@ ERO__INLINE int ero__ring_h8(const ero__ring_hp *p, __m256 a0, __m256 a1, __m256
     c = _mm256_min_ps(_mm256_max_ps(ck, zero), one);
     ir = _mm256_mul_ps(c, _mm256_add_ps(_mm256_loadu_ps(m1), _mm256_mul_ps(c, _mm256_loadu_ps(m2))));
     ir = _mm256_div_ps(one, _mm256_add_ps(_mm256_loadu_ps(m0), ir));
-    fe = p->constant ? ERO__V8(p->force) : _mm256_mul_ps(ERO__V8(p->force), e);
+    fe = p->constant ? ERO__V8(p->force) : p->force == 1.0f ? e : _mm256_mul_ps(ERO__V8(p->force), e); /* 1 e = e */
     pos = _mm256_cmp_ps(e, zero, _CMP_GT_OQ);
     h = _mm256_mul_ps(_mm256_add_ps(_mm256_and_ps(pos, fe), amb), ir);
     if (p->literal) h = _mm256_blendv_ps(amb, h, pos);
@@ -2331,12 +2338,13 @@ static void ero__ring_ychange8(const ero__rows *q, float *const *rows, const flo
     const float *gf = q->gf;
     __m256 vbv = ERO__V8(bv), zero = _mm256_setzero_ps(), sign = ERO__V8(-0.0f), vsc = ERO__V8(sc);
     long x = 0;
+    int bounded = bv < HUGE_VALF;
     for (; x + 8 <= W; x += 8) {
         __m256 g = ero__gau8(rows, x, w, R), d0 = _mm256_loadu_ps(h + x), d, lim, d1, fin, h1, a, ea, da;
         if (border) g = _mm256_mul_ps(g, vsc);
         d = _mm256_sub_ps(d0, _mm256_mul_ps(g, _mm256_loadu_ps(gf + x)));
         lim = _mm256_max_ps(d0, vbv);
-        d1 = _mm256_min_ps(lim, d);
+        d1 = bounded ? _mm256_min_ps(lim, d) : d; /* unbounded: lim = inf, min(inf, d) = d */
         fin = _mm256_cmp_ps(_mm256_sub_ps(d1, d1), zero, _CMP_EQ_OQ);
         h1 = _mm256_blendv_ps(d0, d1, fin);
         a = ero__fin8(_mm256_sub_ps(d0, h1));

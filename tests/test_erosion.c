@@ -9,7 +9,7 @@
    with bosses the windward side wears more than the leeward (Fig 5.2.2), and raised letters of a
    hard material lose less than those of a soft one (Fig 5.2.3).
    --digest: prints a hash of the maps and reports of height fields eroded under varied options
-   (the ring with and without wrap, materials, flags, bound, radii; the walk with a valid map), for
+   (the ring with and without wrap, materials, flags, force, bound, radii; the walk with a valid map), for
    tests/erosion_simd_same.sh to compare the portable build with the ERO_USE_AVX2 one. */
 #define ERO_IMPLEMENTATION
 #include "erosion.h"
@@ -900,7 +900,7 @@ static int print_digest(void)
         if (cfg % 3 == 0) { o.normal_radius = 2.0f / (float)W; o.filter_sigma = 1.0f / (float)W; }
         if (cfg == 2) o.flags = ERO_CONSTANT_WINDWARD;
         if (cfg == 5) { o.bound = ERO_BOUND_VALUE; o.bound_value = 0.015f; o.flags = ERO_LEEWARD_LITERAL; }
-        if (cfg == 7) { o.deposit_ratio = -1.0f; o.normal_radius = 3.7f / (float)W; o.filter_sigma = 2.3f / (float)W; }
+        if (cfg == 7) { o.deposit_ratio = -1.0f; o.normal_radius = 3.7f / (float)W; o.filter_sigma = 2.3f / (float)W; o.force = 1.7f; }
         if (cfg == 9) { o.normal_radius = 0.4f / (float)W; o.filter_sigma = 0.5f / (float)W; o.wind[2] = 1.0f; }
         e = ero_erode(&g, (cfg & 2) ? mat : NULL, mats, (cfg & 2) ? 3 : 1, 3, &o, per, &total);
         hash = fnv_bytes(&e, sizeof e, hash);
