@@ -15,7 +15,9 @@
    one-call form: the input checks, scratch and tables of the workspace made and freed inside
    it). The three interleaved with bench_interleave, one thread.
    Fixed parameters (bench/README.md): normal-averaging radius 2 texels and filter sigma 1 texel at
-   1024^2 (the same world lengths at 4096^2), wind (1, 0.3, -1), one material {1, 4}. */
+   1024^2 (the same world lengths at 4096^2), wind (1, 0.3, -1), one material {1, 4}.
+   mk/erosion.mk builds it with erosion.h's ERO_USE_AVX2 and -mavx2 where the CPU has AVX2 (the
+   stream loop in the same binary); the flags are the first RESULT line. */
 #include "bench.h"
 #define ERO_IMPLEMENTATION
 #include "erosion.h"
