@@ -166,7 +166,7 @@
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
      dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 48 bytes per
-     original vertex near the widest candidate and 132 bytes per triangle of the widest one-ring.
+     original vertex near the widest candidate and 68 bytes per triangle of the widest one-ring.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
@@ -8753,11 +8753,12 @@ static size_t dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t np
    quadric does not see it), its triangles lose their shape and the charts stretch. */
 #define DM__SH_TANGENT 1.0
 
-/* The metric M of the projection: the quadric's matrix plus DM__SH_TANGENT times its mean
-   eigenvalue (the identity when there is no quadric). */
-static void dm__sh_metric(const double metric[6], double M[3][3])
+/* For each of the np planes in pl, the step direction of a projection onto it in the metric M
+   (DM__SH_TANGENT): M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
+static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
 {
-    double tr;
+    double M[3][3], Mi[3][3], tr, det;
+    size_t i;
     int j, k;
     M[0][0] = metric[0]; M[0][1] = M[1][0] = metric[1]; M[0][2] = M[2][0] = metric[2];
     M[1][1] = metric[3]; M[1][2] = M[2][1] = metric[4]; M[2][2] = metric[5];
@@ -8767,16 +8768,6 @@ static void dm__sh_metric(const double metric[6], double M[3][3])
             for (k = 0; k < 3; k++) M[j][k] = j == k;
     else
         for (j = 0; j < 3; j++) M[j][j] += DM__SH_TANGENT * tr;
-}
-
-/* For each of the np planes in pl, the step direction of a projection onto it in the metric M:
-   M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
-static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
-{
-    double M[3][3], Mi[3][3], det;
-    size_t i;
-    int k;
-    dm__sh_metric(metric, M);
     Mi[0][0] = M[1][1] * M[2][2] - M[1][2] * M[2][1];
     Mi[0][1] = M[0][2] * M[2][1] - M[0][1] * M[2][2];
     Mi[0][2] = M[0][1] * M[1][2] - M[0][2] * M[1][1];
