@@ -186,7 +186,8 @@
      Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional targets (triangle_weight,
      default each triangle's area; dm_coverage_weights gives the original's area over each base
      triangle, so texels go where the original's surface is), each kept only when the stretch
-     drops and nothing flips; a chart with no flip-free layout becomes lone triangles. Charts are
+     drops and nothing flips; a chart with no flip-free layout within L2 stretch 2 (one that
+     curls) is cut in two, each half laid out the same way, down to lone triangles. Charts are
      turned to their smallest box (12 angles) and packed at the largest scale that fits: shelves
      of boxes, then, larger where it fits, their footprints (rows grown by half the gutter) in a
      bitmap, largest first, each in the quarter turn whose lowest free place keeps its top
@@ -5004,6 +5005,7 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
     v = (uint32_t)start;
     do {
         double d[3];
+        if (ch->bnext[v] == DM_NO_HIT) return 0; /* an open chain (a pinched boundary) */
         dm__sub3(ch->x + 3 * ch->bnext[v], ch->x + 3 * v, d);
         total += dm__len3(d);
         v = ch->bnext[v];
@@ -5061,10 +5063,15 @@ static int dm__pz_place_boundary(dm__pz_chart *ch, int mode, const double nrm[3]
     return 1;
 }
 
+/* A chart whose layout stretches more than this (L2, against its targets) is not kept: a
+   grown chart that curls (its boundary on a convex polygon squeezes part of it) would get
+   almost no texels there. */
+#define DM__PZ_MAX_STRETCH 2.0
+
 /* Lays out one chart: boundary (projected, else circle), Floater's mean value interior, then
    Yoshizawa-Belyaev-Seidel rounds w_ij <- w_ij / sigma_j (sigma_j the area-weighted L2 stretch
    around vertex j against the targets), kept while the chart's stretch drops and nothing flips.
-   Returns 0 when no flip-free layout was found. */
+   Returns 0 when no flip-free layout was found, or none within DM__PZ_MAX_STRETCH. */
 static int dm__pz_layout(dm__pz_chart *ch, const double nrm[3], int rounds, double *sig_t)
 {
     int mode, r;
@@ -5077,7 +5084,7 @@ static int dm__pz_layout(dm__pz_chart *ch, const double nrm[3], int rounds, doub
         break;
     }
     if (mode == 2) return 0;
-    if (ch->n_int == 0) return 1;
+    if (ch->n_int == 0) return dm__pz_stretch(ch, sig_t) <= DM__PZ_MAX_STRETCH;
     {
         double cur = dm__pz_stretch(ch, sig_t);
         for (r = 0; r < rounds; r++) {
@@ -5106,8 +5113,8 @@ static int dm__pz_layout(dm__pz_chart *ch, const double nrm[3], int rounds, doub
             }
             cur = next;
         }
+        return cur <= DM__PZ_MAX_STRETCH;
     }
-    return 1;
 }
 
 /* lays out a lone triangle isometrically (an equilateral one for a degenerate triangle) */
@@ -5595,6 +5602,7 @@ typedef struct dm__pz_run {
     double *target, *cuv, *sig_t, *chart_n;     /* target areas, chart-space uv, true areas */
     double total_area;
     size_t nc0, maxc;                           /* grown charts, most triangles in one */
+    uint32_t next_label;                        /* chart0 label for the next half of a cut chart */
     dm__pz_pack *pk;
     dm__pz_chart ch;
 } dm__pz_run;
@@ -5754,20 +5762,20 @@ static dm_result dm__pz_alloc_chart(dm__pz_run *r)
     return DM_OK;
 }
 
-/* chart i's triangles and local vertices into ch, its boundary loop (bnext) and interior
-   numbering; nsum gets the chart's mean normal */
-static void dm__pz_gather_chart(dm__pz_run *r, size_t i, double nsum[3])
+/* the chart of triangles ctris[s..e) (chart0 = label) and its local vertices into ch, its
+   boundary loop (bnext) and interior numbering; nsum gets the chart's mean normal */
+static void dm__pz_gather_chart(dm__pz_run *r, size_t s, size_t e, uint32_t label, double nsum[3])
 {
     dm__pz_chart *ch = &r->ch;
     size_t k, lt, t;
     double ln;
     int c;
     nsum[0] = nsum[1] = nsum[2] = 0.0;
-    ch->nt = r->cstart[i + 1] - r->cstart[i];
+    ch->nt = e - s;
     ch->nv = 0;
     for (lt = 0; lt < ch->nt; lt++) {
         double fn[3];
-        t = r->ctris[r->cstart[i] + lt];
+        t = r->ctris[s + lt];
         ch->tri[lt] = (uint32_t)t;
         ch->target[lt] = r->target[t];
         dm__face_normal(r->positions, r->indices, t, fn);
@@ -5787,7 +5795,7 @@ static void dm__pz_gather_chart(dm__pz_run *r, size_t i, double nsum[3])
     for (lt = 0; lt < ch->nt; lt++)
         for (c = 0; c < 3; c++) {
             uint32_t o2 = r->pm->twin[3 * (size_t)ch->tri[lt] + (size_t)c];
-            if (o2 == DM_NO_HIT || r->chart0[o2] != i)
+            if (o2 == DM_NO_HIT || r->chart0[o2] != label)
                 ch->bnext[ch->lv[3 * lt + (size_t)c]] = ch->lv[3 * lt + (size_t)((c + 1) % 3)];
         }
     ch->n_int = 0;
@@ -5819,8 +5827,8 @@ static size_t dm__pz_keep_chart(dm__pz_run *r, size_t nc)
     return nc + 1;
 }
 
-/* the chart in ch, which has no flip-free layout, falls apart into lone triangles, numbered
-   from nc; returns the next number */
+/* the chart in ch, too small to cut further, falls apart into lone triangles, numbered from
+   nc; returns the next number */
 static size_t dm__pz_split_chart(dm__pz_run *r, size_t nc)
 {
     const dm__pz_chart *ch = &r->ch;
@@ -5836,22 +5844,79 @@ static size_t dm__pz_split_chart(dm__pz_run *r, size_t nc)
     return nc;
 }
 
+/* The chart ctris[s..e) (chart0 = label) in two: the first half of a breadth-first walk over
+   its edges from the triangle farthest along its widest axis (chart0 = fresh), then the rest
+   (label). Returns the split point. */
+static size_t dm__pz_bisect(dm__pz_run *r, size_t s, size_t e, uint32_t label, uint32_t fresh)
+{
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, best = DBL_MAX;
+    size_t k, head = 0, tail = 0, half = (e - s) / 2, m;
+    uint32_t seed = r->ctris[s];
+    int c, ax = 0;
+    for (k = s; k < e; k++)
+        for (c = 0; c < 3; c++) {
+            double q[3];
+            int j;
+            dm__load3(r->positions, r->indices[3 * (size_t)r->ctris[k] + (size_t)c], q);
+            for (j = 0; j < 3; j++) { lo[j] = q[j] < lo[j] ? q[j] : lo[j]; hi[j] = q[j] > hi[j] ? q[j] : hi[j]; }
+        }
+    for (c = 1; c < 3; c++) if (hi[c] - lo[c] > hi[ax] - lo[ax]) ax = c;
+    for (k = s; k < e; k++) {
+        const uint32_t *tr = r->indices + 3 * (size_t)r->ctris[k];
+        double x = (double)r->positions[3 * (size_t)tr[0] + (size_t)ax] + r->positions[3 * (size_t)tr[1] + (size_t)ax] +
+                   r->positions[3 * (size_t)tr[2] + (size_t)ax];
+        if (x < best) { best = x; seed = r->ctris[k]; }
+    }
+    r->chart0[seed] = fresh;
+    r->queue[tail++] = seed;
+    while (head < tail && tail < half) {
+        uint32_t t = r->queue[head++];
+        for (c = 0; c < 3 && tail < half; c++) {
+            uint32_t o2 = r->pm->twin[3 * (size_t)t + (size_t)c];
+            if (o2 == DM_NO_HIT || r->chart0[o2] != label) continue;
+            r->chart0[o2] = fresh;
+            r->queue[tail++] = o2;
+        }
+    }
+    m = s + tail;
+    for (k = s; k < e; k++) /* the rest, after the walk's triangles */
+        if (r->chart0[r->ctris[k]] == label) r->queue[tail++] = r->ctris[k];
+    for (k = s; k < e; k++) r->ctris[k] = r->queue[k - s];
+    return m;
+}
+
+/* lays out the chart ctris[s..e) (chart0 = label), kept as chart nc when it lays out (within
+   DM__PZ_MAX_STRETCH, nothing flipped), else cut in two and each half laid out the same way,
+   down to lone triangles; returns the next chart number */
+static size_t dm__pz_layout_part(dm__pz_run *r, size_t s, size_t e, uint32_t label, size_t nc, int depth)
+{
+    double nsum[3];
+    size_t k, m;
+    uint32_t fresh;
+    int ok;
+    dm__pz_gather_chart(r, s, e, label, nsum);
+    ok = r->ch.nt > 1 && dm__pz_layout(&r->ch, nsum, r->rounds, r->sig_t);
+    if (ok) nc = dm__pz_keep_chart(r, nc);
+    else if (e - s < 4 || depth >= 40) nc = dm__pz_split_chart(r, nc);
+    for (k = 0; k < r->ch.nv; k++) r->gl[r->ch.gv[k]] = DM_NO_HIT;
+    if (ok || e - s < 4 || depth >= 40) return nc;
+    fresh = r->next_label++;
+    m = dm__pz_bisect(r, s, e, label, fresh);
+    nc = dm__pz_layout_part(r, s, m, fresh, nc, depth + 1);
+    return dm__pz_layout_part(r, m, e, label, nc, depth + 1);
+}
+
 /* 4. lay out each grown chart; the charts are renumbered as they are kept or split */
 static dm_result dm__pz_layout_charts(dm__pz_run *r)
 {
-    size_t i, k, nc = 0;
+    size_t i, nc = 0;
     dm_result res = dm__pz_alloc_chart(r);
     if (res != DM_OK) return res;
     r->pm->stretch_l2 = 0.0f;
+    r->next_label = (uint32_t)r->nc0;
     for (i = 0; i < r->nc0; i++) {
-        double nsum[3];
         if (dm__pz_step_report(r, 0.6f * (float)i / (float)r->nc0) != DM_OK) return DM_CANCELLED;
-        dm__pz_gather_chart(r, i, nsum);
-        if (r->ch.nt > 1 && dm__pz_layout(&r->ch, nsum, r->rounds, r->sig_t))
-            nc = dm__pz_keep_chart(r, nc);
-        else
-            nc = dm__pz_split_chart(r, nc);
-        for (k = 0; k < r->ch.nv; k++) r->gl[r->ch.gv[k]] = DM_NO_HIT;
+        nc = dm__pz_layout_part(r, r->cstart[i], r->cstart[i + 1], (uint32_t)i, nc, 0);
     }
     r->pm->chart_count = nc;
     return DM_OK;

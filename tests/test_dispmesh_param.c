@@ -144,6 +144,49 @@ static int dist_progress(void *user, float done)
     return d->cancel_at > 0 && ++d->calls >= d->cancel_at;
 }
 
+/* A 500-face base of the bunny (a shell-constrained dm_simplify run) with one grown chart that
+   curls: laid out with its boundary on a convex polygon it was squeezed (stretch_l2 4.88, one
+   triangle 177, area ratios ok 0.890 at 1024^2). Such a chart must fall apart rather than be
+   kept: issue 16's packing bars hold on it. */
+static void test_curled_chart(void)
+{
+    const char *path = "tests/fixtures/curled_chart_base.off";
+    FILE *f = fopen(path, "r");
+    size_t nv = 0, nt = 0, i, zero = 0;
+    float *p = NULL;
+    uint32_t *t = NULL;
+    int ok;
+    dm_param_options po;
+    dm_param *pm = NULL;
+    ok = f && fscanf(f, "OFF %zu %zu %zu", &nv, &nt, &zero) == 3 && nv > 0 && nv < 100000 && nt > 0 && nt < 100000;
+    if (ok) {
+        p = (float *)malloc(3 * nv * sizeof(float));
+        t = (uint32_t *)malloc(3 * nt * sizeof(uint32_t));
+        ok = p && t;
+    }
+    for (i = 0; ok && i < nv; i++) ok = fscanf(f, "%f %f %f", p + 3 * i, p + 3 * i + 1, p + 3 * i + 2) == 3;
+    for (i = 0; ok && i < nt; i++) {
+        unsigned n, a, b, c;
+        ok = fscanf(f, "%u %u %u %u", &n, &a, &b, &c) == 4 && n == 3 && a < nv && b < nv && c < nv;
+        t[3 * i] = a; t[3 * i + 1] = b; t[3 * i + 2] = c;
+    }
+    if (f) fclose(f);
+    T_CHECK_MSG(ok, "%s: could not read it (the tests run from the repository's top)", path);
+    memset(&po, 0, sizeof po);
+    po.width = po.height = 1024;
+    if (ok && T_CHECK(dm_parameterize(p, nv, t, nt, &po, &pm) == DM_OK)) {
+        printf("  note: curled chart base: %zu charts, utilization %.3f, stretch_l2 %.4f (max %.3f), area ok %.3f\n",
+               pm->chart_count, pm->utilization, pm->stretch_l2, pm->stretch_max, pm->area_ratio_ok);
+        T_CHECK_MSG(pm->stretch_l2 <= 1.05f && pm->stretch_max <= 2.0f, "stretch_l2 %.4f, max %.3f", pm->stretch_l2,
+                    pm->stretch_max);
+        T_CHECK_MSG(pm->area_ratio_ok >= 0.95f, "area ratios ok %.3f", pm->area_ratio_ok);
+        T_CHECK_MSG(pm->utilization >= 0.6f, "utilization %.3f", pm->utilization);
+    }
+    dm_param_free(pm);
+    free(p);
+    free(t);
+}
+
 static void test_surface_distance(void)
 {
     mesh a = make_sphere(24, 0.0, 1.0), b = make_sphere(24, 0.0, 1.02);
@@ -583,5 +626,6 @@ int main(int argc, char **argv)
     mesh_free(&base);
     test_coverage_weights();
     test_surface_distance();
+    test_curled_chart();
     return T_END();
 }
