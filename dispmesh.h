@@ -5845,7 +5845,7 @@ static size_t dm__pz_split_chart(dm__pz_run *r, size_t nc)
 }
 
 /* The chart ctris[s..e) (chart0 = label) in two: the first half of a breadth-first walk over
-   its edges from the triangle farthest along its widest axis (chart0 = fresh), then the rest
+   its edges from the triangle at the low end of its widest axis (chart0 = fresh), then the rest
    (label). Returns the split point. */
 static size_t dm__pz_bisect(dm__pz_run *r, size_t s, size_t e, uint32_t label, uint32_t fresh)
 {

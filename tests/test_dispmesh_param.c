@@ -6,6 +6,8 @@
 #include "test.h"
 #include "hashrand.h"
 #include "testmesh.h"
+#define MIO_IMPLEMENTATION
+#include "meshio.h"
 
 static const dm_distance_options dist_20000 = {20000, NULL, NULL, NULL};
 #include <stdlib.h>
@@ -151,30 +153,16 @@ static int dist_progress(void *user, float done)
 static void test_curled_chart(void)
 {
     const char *path = "tests/fixtures/curled_chart_base.off";
-    FILE *f = fopen(path, "r");
-    size_t nv = 0, nt = 0, i, zero = 0;
-    float *p = NULL;
-    uint32_t *t = NULL;
-    int ok;
+    mio_mesh m;
+    mio_error err;
     dm_param_options po;
     dm_param *pm = NULL;
-    ok = f && fscanf(f, "OFF %zu %zu %zu", &nv, &nt, &zero) == 3 && nv > 0 && nv < 100000 && nt > 0 && nt < 100000;
-    if (ok) {
-        p = (float *)malloc(3 * nv * sizeof(float));
-        t = (uint32_t *)malloc(3 * nt * sizeof(uint32_t));
-        ok = p && t;
-    }
-    for (i = 0; ok && i < nv; i++) ok = fscanf(f, "%f %f %f", p + 3 * i, p + 3 * i + 1, p + 3 * i + 2) == 3;
-    for (i = 0; ok && i < nt; i++) {
-        unsigned n, a, b, c;
-        ok = fscanf(f, "%u %u %u %u", &n, &a, &b, &c) == 4 && n == 3 && a < nv && b < nv && c < nv;
-        t[3 * i] = a; t[3 * i + 1] = b; t[3 * i + 2] = c;
-    }
-    if (f) fclose(f);
-    T_CHECK_MSG(ok, "%s: could not read it (the tests run from the repository's top)", path);
+    if (!T_CHECK_MSG(mio_read_file(path, NULL, &m, &err) == MIO_OK, "%s: could not read it (the tests run from the "
+                     "repository's top)", path))
+        return;
     memset(&po, 0, sizeof po);
     po.width = po.height = 1024;
-    if (ok && T_CHECK(dm_parameterize(p, nv, t, nt, &po, &pm) == DM_OK)) {
+    if (T_CHECK(dm_parameterize(m.positions, m.vertex_count, m.indices, m.triangle_count, &po, &pm) == DM_OK)) {
         printf("  note: curled chart base: %zu charts, utilization %.3f, stretch_l2 %.4f (max %.3f), area ok %.3f\n",
                pm->chart_count, pm->utilization, pm->stretch_l2, pm->stretch_max, pm->area_ratio_ok);
         T_CHECK_MSG(pm->stretch_l2 <= 1.05f && pm->stretch_max <= 2.0f, "stretch_l2 %.4f, max %.3f", pm->stretch_l2,
@@ -183,8 +171,7 @@ static void test_curled_chart(void)
         T_CHECK_MSG(pm->utilization >= 0.6f, "utilization %.3f", pm->utilization);
     }
     dm_param_free(pm);
-    free(p);
-    free(t);
+    mio_free_mesh(&m);
 }
 
 static void test_surface_distance(void)
