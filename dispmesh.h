@@ -5893,13 +5893,13 @@ static size_t dm__pz_layout_part(dm__pz_run *r, size_t s, size_t e, uint32_t lab
     double nsum[3];
     size_t k, m;
     uint32_t fresh;
-    int ok;
+    int ok, last = e - s < 4 || depth >= 40; /* too small (or too deep) to cut again */
     dm__pz_gather_chart(r, s, e, label, nsum);
     ok = r->ch.nt > 1 && dm__pz_layout(&r->ch, nsum, r->rounds, r->sig_t);
     if (ok) nc = dm__pz_keep_chart(r, nc);
-    else if (e - s < 4 || depth >= 40) nc = dm__pz_split_chart(r, nc);
+    else if (last) nc = dm__pz_split_chart(r, nc);
     for (k = 0; k < r->ch.nv; k++) r->gl[r->ch.gv[k]] = DM_NO_HIT;
-    if (ok || e - s < 4 || depth >= 40) return nc;
+    if (ok || last) return nc;
     fresh = r->next_label++;
     m = dm__pz_bisect(r, s, e, label, fresh);
     nc = dm__pz_layout_part(r, s, m, fresh, nc, depth + 1);
