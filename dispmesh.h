@@ -104,8 +104,9 @@
      bases farther from the original); constraint, constraint_user, on_collapse (called just
      before each collapse is applied, for a constraint that follows the mesh), relax (called
      when no candidate is left above the target and some were vetoed: nonzero = the constraint
-     is less strict now, every vetoed edge is queued again); allocator; progress (the fraction
-     of the triangles to remove that are gone).
+     is less strict now, every vetoed edge is queued again), relax_cost (with relax, a vetoed
+     candidate also comes back at this times its cost, 0 = 16, asked with dm_collapse.relaxed);
+     allocator; progress (the fraction of the triangles to remove that are gone).
      dm_weld merges vertices at the same position (bit for bit, -0 = +0) in first-use order.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
@@ -153,14 +154,14 @@
      Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED) and keeps
      that answer for the call in full.
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
-     the constraint vetoes every collapse left above the face count. With opt.relax =
-     dm_shell_relax, dm_simplify then relaxes it: a candidate failing 1-3 passes when, from each
-     overlap sample, the nearest crossing of the original along the line (either way, within the
-     thickness) faces the way the base does, so that a bake both ways finds one depth (a second
-     relax leaves only the simplifier's checks). dm_shell_fallback_triangles gives the base
-     triangles at relaxed keeps: bake them both ways (dm_bake_options.both_ways; signed depth).
-     Once the constraints are stuck everywhere, every later collapse is relaxed; where the base
-     ends up inside the original, the baked depth is negative.
+     the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
+     relax_cost (16) times its cost, asked relaxed: it passes when, from each overlap sample,
+     the nearest crossing of the original along the line (either way, within the thickness)
+     faces the way the base does, so that a bake both ways finds one depth; keep stays where
+     the enclosure put it if that passes. Relaxing only once all were stuck left knots of small
+     triangles on thin parts while the rest coarsened. Still above the target, dm_simplify
+     relaxes it everywhere (then once more: the simplifier's checks only). Bake the triangles
+     of dm_shell_fallback_triangles both ways (dm_bake_options.both_ways; signed depth).
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
@@ -617,6 +618,9 @@ typedef struct dm_collapse {
     double metric[6];          /* how the error grows away from position: as (x - position)^T M
                                   (x - position), up to a scale, M = (m00 m01 m02 m11 m12 m22), the
                                   summed quadrics' matrix; all 0: as the plain distance does */
+    int relaxed;               /* 1: a candidate the constraint vetoed, queued again at relax_cost
+                                  times its cost (dm_simplify_options): the simplifier asks for the
+                                  check relax() would give, for this candidate alone; else 0 */
     int placement_only;        /* 1: only where keep would go is asked for. The constraint may
                                   answer DM_COLLAPSE_PLACED with that place in corrected[] before
                                   making the checks that do not move keep: the simplifier then
@@ -650,6 +654,12 @@ typedef struct dm_simplify_options {
                                          left above target_triangles and some were vetoed: nonzero
                                          = the constraint is now less strict, and every vetoed or
                                          refused edge is queued again (dm_shell_relax) */
+    double relax_cost;                /* with relax: a candidate the constraint vetoes is queued again
+                                         at this many times its cost and then asked relaxed
+                                         (dm_collapse.relaxed), so that the fallback takes the
+                                         collapses much cheaper than the strict ones left, not only
+                                         those left once every candidate is stuck; 0 = 16; < 0 = no
+                                         such retries */
     const dm_allocator *allocator;    /* NULL = DM_MALLOC/DM_FREE; kept in the result for dm_pm_free */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -767,10 +777,10 @@ typedef struct dm_shell {
     size_t stopped_vertices;   /* vertices stopped before the full thickness */
     size_t moved, vetoed_enclose, vetoed_shell, vetoed_overlap; /* dm_shell_constraint's verdicts in
                                   the current (or last) dm_simplify run */
-    int fallback;              /* 0: the paper's constraints; 1 after dm_shell_relax: the base may
-                                  cross the original (signed displacement); 2 after a second one:
-                                  the simplifier's own checks only */
-    uint8_t *fallback_vertex;  /* per original vertex: 1 = keep of a collapse done while relaxed;
+    int fallback;              /* 0: the paper's constraints (but the candidates asked relaxed);
+                                  1 after dm_shell_relax: the base may cross the original (signed
+                                  displacement); 2 after a second one: the simplifier's own checks */
+    uint8_t *fallback_vertex;  /* per original vertex: 1 = keep of a collapse done relaxed;
                                   the base triangles at such vertices need a bake both ways */
     size_t fallback_collapses; /* collapses done while relaxed (this run) */
     void *internal;            /* private: the original's BVH and a copy of its mesh */
@@ -800,8 +810,9 @@ DMDEF void dm_shell_collapsed(void *shell, const dm_collapse *done);
    candidate then needs, from each of its ray samples, the nearest crossing of the original along
    the line (either way, within the thickness) to face the same way as the base, which is what a
    bake both ways needs to be single-valued; the second leaves only the simplifier's own checks.
-   Returns 1 when it relaxed, 0 when it cannot relax further. The keep vertices of the collapses
-   done while relaxed are marked in fallback_vertex (dm_shell_fallback_triangles turns them into
+   Returns 1 when it relaxed, 0 when it cannot relax further. A candidate with
+   dm_collapse.relaxed gets the first call's check without it. The keep vertices of the collapses
+   done relaxed are marked in fallback_vertex (dm_shell_fallback_triangles turns them into
    the base triangles to bake both ways). */
 DMDEF int dm_shell_relax(void *shell);
 
@@ -2737,6 +2748,7 @@ done:
 #define DM__QEM_NONE 0xffffffffu
 #define DM__QEM_BOUNDARY_WEIGHT 10.0 /* boundary planes weigh this times the squared edge length */
 #define DM__QEM_REQUEUE 2.0          /* a moved candidate costing more than this times its queued cost waits */
+#define DM__QEM_RELAX_COST 16.0      /* dm_simplify_options.relax_cost's default */
 #define DM__QEM_MIN_COS 0.2          /* a triangle's normal may turn by at most acos(0.2) = 78 degrees */
 #define DM__QEM_MIN_SIN 1e-5         /* new triangles: 2 area > DM__QEM_MIN_SIN * longest edge^2 */
 #define DM__QEM_ADJ_MAX 0xfffffff0u  /* the corner pool's offsets are 32-bit */
@@ -2761,6 +2773,7 @@ typedef struct dm__qem_cand {
 } dm__qem_cand;
 
 #define DM__QEM_CAND_A(e) ((uint32_t)((e)->key & 0xffffffffu))
+#define DM__QEM_RETRY 0x80000000u /* in stamp: a vetoed candidate queued again, to be asked relaxed */
 /* the next and previous slot of a triangle (0 1 2), by shifts: a ternary here compiles to a
    branch that mispredicts a third of the time */
 #define DM__QEM_NEXT(slot) ((0x09u >> (2u * (slot))) & 3u)
@@ -2866,6 +2879,7 @@ typedef struct dm__qem_simp {
     double center[3], scale, inv_scale;
     double max_error;
     double min_quality;            /* new triangles' 2 area / longest edge^2 (0 = no guard) */
+    double relax_cost;             /* a vetoed candidate comes back at this times its cost (<= 0: never) */
     size_t rejected, vetoed, requeued;
 } dm__qem_simp;
 
@@ -3174,7 +3188,7 @@ static void dm__qem_chunk_free(dm__qem_simp *s, dm__qem_chunk *c)
 
 static int dm__qem_stale(const dm__qem_simp *s, const dm__qem_cand *e)
 {
-    return s->ver[DM__QEM_CAND_A(e)] + s->ver[e->b] != e->stamp;
+    return (((s->ver[DM__QEM_CAND_A(e)] + s->ver[e->b]) ^ e->stamp) & ~DM__QEM_RETRY) != 0;
 }
 
 /* DM_COUNT_OPS(n): a test hook (default: nothing) told the comparisons of the candidate queue's
@@ -3486,7 +3500,7 @@ static dm__qem_cand dm__qem_make_cand(const dm__qem_simp *s, uint32_t a, uint32_
     memcpy(&bits, &f, sizeof bits);
     e.key = (uint64_t)bits << 32 | lo;
     e.b = a < b ? b : a;
-    e.stamp = s->ver[lo] + s->ver[e.b];
+    e.stamp = (s->ver[lo] + s->ver[e.b]) & ~DM__QEM_RETRY;
     return e;
 }
 
@@ -4462,6 +4476,7 @@ static int dm__qem_requeue_if_dear(dm__qem_simp *s, const dm__qem_cand *e, uint3
     *cost = dm__qem_quadric_eval(&qs, q);
     *err = qs.w > 0.0 ? sqrt(*cost / qs.w) * s->scale : 0.0;
     e2 = dm__qem_make_cand(s, DM__QEM_CAND_A(e), e->b, *cost);
+    e2.stamp |= e->stamp & DM__QEM_RETRY;
     if (!((e2.key >> 32) > (e->key >> 32) && (double)*cost > DM__QEM_REQUEUE * (double)dm__qem_key_cost(e->key)))
         return 0;
     if (!dm__qem_heap_push(s, &e2)) return -1;
@@ -4505,6 +4520,7 @@ static void dm__qem_fill_collapse(dm__qem_simp *s, uint32_t keep, uint32_t rem, 
     c->metric[4] = qa->a12 + qb->a12;
     c->metric[5] = qa->a22 + qb->a22;
     c->placement_only = 0;
+    c->relaxed = 0;
 }
 
 /* the user's constraint on collapse (keep, rem) of candidate e to at: 1 = go on (at, cost and
@@ -4519,6 +4535,7 @@ static int dm__qem_ask_constraint(dm__qem_simp *s, const dm__qem_cand *e, uint32
     float corrected[3];
     int verdict, k, wait;
     dm__qem_fill_collapse(s, keep, rem, at, *err, ring_count, &cand);
+    cand.relaxed = (e->stamp & DM__QEM_RETRY) != 0;
     for (k = 0; k < 3; k++) corrected[k] = at[k];
     cand.placement_only = 1;
     verdict = opt->constraint(opt->constraint_user, &cand, corrected);
@@ -4544,6 +4561,11 @@ static int dm__qem_ask_constraint(dm__qem_simp *s, const dm__qem_cand *e, uint32
     }
     if (verdict == DM_COLLAPSE_VETO) {
         s->vetoed++;
+        if (opt->relax && !cand.relaxed && s->relax_cost > 0.0) { /* back later, to be asked relaxed */
+            dm__qem_cand e2 = dm__qem_make_cand(s, DM__QEM_CAND_A(e), e->b, s->relax_cost * *cost);
+            e2.stamp |= DM__QEM_RETRY;
+            if (!dm__qem_heap_push(s, &e2)) return -1;
+        }
         s->vx[DM__QEM_CAND_A(e)].flag |= DM__QEM_V_PARKED;
         s->vx[e->b].flag |= DM__QEM_V_PARKED;
         return 0;
@@ -4657,7 +4679,9 @@ DMDEF dm_result dm_simplify(const float *positions, size_t vertex_count, const u
     *out = NULL;
     if (!(opt.target_error >= 0.0)) return DM_ERR_INVALID_ARGUMENT; /* NaN or negative */
     if (!(opt.min_quality <= 0.5f)) return DM_ERR_INVALID_ARGUMENT; /* NaN or too strict */
+    if (opt.relax_cost != opt.relax_cost) return DM_ERR_INVALID_ARGUMENT; /* NaN */
     s.min_quality = opt.min_quality > 0.0f ? opt.min_quality : 0.0;
+    s.relax_cost = opt.relax_cost == 0.0 ? DM__QEM_RELAX_COST : opt.relax_cost;
     r = dm__qem_prepare(&s, positions, vertex_count, indices, triangle_count, &dropped, &frozen);
     if (r == DM_OK) r = dm__qem_seed_edges(&s, vertex_count); /* every edge a candidate */
     if (r == DM_OK) {
@@ -8447,7 +8471,7 @@ DMDEF void dm_shell_collapsed(void *user, const dm_collapse *done)
     if (done->keep >= in->nv || done->remove >= in->nv) return;
     dm__sh_run_check(sh, in, done->level);
     in->collapsed++;
-    if (sh->fallback && in->relaxed_keep == done->keep && in->relaxed_level == done->level) {
+    if (in->relaxed_keep == done->keep && in->relaxed_level == done->level) { /* set only when relaxed */
         sh->fallback_vertex[done->keep] = 1;
         sh->fallback_collapses++;
     }
@@ -9246,15 +9270,17 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
     dm_shell *sh = (dm_shell *)user;
     dm__sh_internal *in;
     double x[3], *vn;
-    int k, moved = 0, verdict;
+    int k, moved = 0, verdict, enclosed, fb;
     if (!sh || !c || !corrected || !sh->internal || !c->positions || !c->triangles || !c->old_triangles)
         return DM_COLLAPSE_VETO;
     in = (dm__sh_internal *)sh->internal;
     dm__sh_run_check(sh, in, c->level);
+    fb = sh->fallback ? sh->fallback : c->relaxed ? 1 : 0; /* relaxed everywhere, or for this one */
     in->relaxed_keep = UINT32_MAX;
     verdict = dm__sh_placed(sh, in, c, x, corrected, &moved);
+    enclosed = verdict == DM_COLLAPSE_ALLOW;
     if (c->placement_only) { /* where keep goes; where the enclosure fails, the relaxed check decides */
-        if (verdict != DM_COLLAPSE_ALLOW && !sh->fallback) return DM_COLLAPSE_VETO;
+        if (verdict != DM_COLLAPSE_ALLOW && !fb) return DM_COLLAPSE_VETO;
         if (verdict != DM_COLLAPSE_ALLOW)
             for (k = 0; k < 3; k++) corrected[k] = c->position[k];
         return DM_COLLAPSE_PLACED;
@@ -9269,11 +9295,17 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
     vn = verdict == DM_COLLAPSE_ALLOW ? dm__sh_ring_normals(sh, in, c, x) : NULL;
     if (vn) verdict = dm__sh_overlap(sh, in, c, x, vn);
     else verdict = DM_COLLAPSE_VETO;
-    if (verdict != DM_COLLAPSE_ALLOW && sh->fallback) { /* relaxed: where the paper's constraints fail */
-        for (k = 0; k < 3; k++) x[k] = corrected[k] = c->position[k];
-        moved = 0;
-        vn = sh->fallback >= 2 ? NULL : dm__sh_ring_normals(sh, in, c, x);
-        verdict = sh->fallback >= 2 ? DM_COLLAPSE_ALLOW : vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
+    if (verdict != DM_COLLAPSE_ALLOW && fb) { /* relaxed: where the paper's constraints fail */
+        if (enclosed && fb < 2) { /* the relaxed check where the enclosure put keep first */
+            vn = dm__sh_ring_normals(sh, in, c, x);
+            verdict = vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
+        }
+        if (verdict != DM_COLLAPSE_ALLOW) { /* then where the simplifier put it */
+            for (k = 0; k < 3; k++) x[k] = corrected[k] = c->position[k];
+            moved = 0;
+            vn = fb >= 2 ? NULL : dm__sh_ring_normals(sh, in, c, x);
+            verdict = fb >= 2 ? DM_COLLAPSE_ALLOW : vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
+        }
         if (verdict == DM_COLLAPSE_ALLOW) { /* dm_shell_collapsed marks it when it is done */
             in->relaxed_keep = c->keep;
             in->relaxed_level = c->level;

@@ -14,13 +14,15 @@
                  rule, the first hit along -normal (dm_bake_options.inward), right for a base that
                  encloses the original, as the shell constraint makes it
      --strict    the paper's constraints only: stop where they veto every collapse left. By
-                 default, where the shell constraint stops above --faces (the shell too thin for
-                 an enclosing base) it is relaxed there (dm_shell_relax): the base may cross the
-                 original, and its triangles there are baked both ways. RESULT's
-                 fallback_region= is the share of the original's area over them (by the coverage
-                 weights), fallback= the share where the base then lies inside the original
-                 (texels of negative depth, each triangle's share of its weight), the part of the
-                 surface that needs the signed displacement. --fallback names the default.
+                 default, where the shell is too thin for an enclosing base the constraint is
+                 relaxed there (dm_shell_relax: a vetoed collapse is done relaxed once it is 16
+                 times cheaper than the strict ones left, and everywhere if the target is still
+                 not reached): the base may cross the original, and its triangles there are
+                 baked both ways. RESULT's fallback_region= is the share of the original's area
+                 over them (by the coverage weights), fallback= the share where the base then
+                 lies inside the original (texels of negative depth, each triangle's share of
+                 its weight), the part of the surface that needs the signed displacement.
+                 --fallback names the default.
      --min-quality Q  the constrained simplifier's sliver guard (dm_simplify_options.min_quality,
                  2 area / longest edge^2; default 0.05: without it, the constraint's vetoes leave
                  knots of slivers that the parameterization stretches; the unconstrained
@@ -650,7 +652,8 @@ static void usage(FILE *to)
             "                     along -normal, right for a base that encloses the original)\n"
             "  --strict           the paper's constraints only, even where they stop above --faces (default:\n"
             "                     where the shell is too thin for an enclosing base, relax the constraint there\n"
-            "                     and bake those triangles both ways; --fallback names that default)\n"
+            "                     once a collapse there is 16x cheaper than the strict ones left, and bake those\n"
+            "                     triangles both ways; --fallback names that default)\n"
             "  --min-quality Q    the constrained simplifier's sliver guard, 2 area / longest edge^2, in [-1, 0.5]\n"
             "                     (default 0.05; 0 = none)\n"
             "  --samples N        surface-distance samples per side, 1000..100000000 (default 200000)\n"
@@ -819,9 +822,12 @@ int main(int argc, char **argv)
         stage_end(&st, note);
     }
     if (R.shell->fallback_collapses)
-        fprintf(stderr, "dispmesh: note: where the shell is too thin for an enclosing base, %zu collapses were done relaxed "
-                        "(level %d); %zu of %zu base triangles are baked both ways\n",
-                R.shell->fallback_collapses, R.shell->fallback, R.fallback_triangles, R.base.nt);
+        fprintf(stderr, "dispmesh: note: where the shell is too thin for an enclosing base, %zu collapses were done relaxed%s; "
+                        "%zu of %zu base triangles are baked both ways\n",
+                R.shell->fallback_collapses,
+                R.shell->fallback >= 2 ? " (at the end with the simplifier's own checks only)"
+                : R.shell->fallback ? " (at the end everywhere)" : "",
+                R.fallback_triangles, R.base.nt);
     if (!srep.reached_target)
         fprintf(stderr, "dispmesh: note: the simplifier stopped at %zu triangles, above --faces %ld: %s\n", R.base.nt, faces,
                 !srep.vetoed ? "no edge left passes the simplifier's own checks"

@@ -385,7 +385,7 @@ static void test_fallback(const mesh *m, size_t target)
     o.relax = dm_shell_relax;
     o.constraint_user = sh;
     if (!T_CHECK(dm_simplify(m->p, m->nv, m->t, m->nt, &o, &pm, &rep) == DM_OK)) goto done;
-    T_CHECK_MSG(rep.reached_target && rep.relaxed >= 1 && sh->fallback >= 1 && sh->fallback_collapses > 0,
+    T_CHECK_MSG(rep.reached_target && sh->fallback_collapses > 0, /* relaxed per candidate, or everywhere */
                 "relaxed: %zu faces (target %zu), relaxed %zu, level %d, %zu relaxed collapses", rep.triangle_count,
                 target, rep.relaxed, sh->fallback, sh->fallback_collapses);
     dm_pm_counts(pm, &bnv, &bnt);

@@ -593,13 +593,30 @@ static int stay(void *user, const dm_collapse *c, float corrected[3])
 
 /* a constraint with a strictness: at level 0 it vetoes the half x > 0, at level 1 nothing;
    relax moves it up once */
-typedef struct levels { int level; size_t relax_calls, vetoes_at_0; } levels;
+typedef struct levels {
+    int level, honour_relaxed;
+    size_t relax_calls, vetoes_at_0, relaxed_asks, relaxed_unmatched, nlog;
+    struct { uint32_t a, b; double error; } log[65536]; /* the vetoes: edge, error */
+} levels;
 static int veto_by_level(void *user, const dm_collapse *c, float corrected[3])
 {
     levels *l = (levels *)user;
     (void)corrected;
+    if (c->relaxed) { /* a candidate vetoed before, unchanged since: the same edge and error */
+        size_t i;
+        uint32_t a = c->keep < c->remove ? c->keep : c->remove, b = c->keep ^ c->remove ^ a;
+        l->relaxed_asks++;
+        for (i = 0; i < l->nlog && !(l->log[i].a == a && l->log[i].b == b && l->log[i].error == c->error); i++) {}
+        if (i == l->nlog) l->relaxed_unmatched++;
+        if (l->honour_relaxed) return DM_COLLAPSE_ALLOW;
+    }
     if (l->level == 0 && (c->positions[3 * c->keep] > 0.0f || c->positions[3 * c->remove] > 0.0f)) {
         l->vetoes_at_0++;
+        if (l->nlog < sizeof l->log / sizeof l->log[0]) {
+            l->log[l->nlog].a = c->keep < c->remove ? c->keep : c->remove;
+            l->log[l->nlog].b = c->keep < c->remove ? c->remove : c->keep;
+            l->log[l->nlog++].error = c->error;
+        }
         return DM_COLLAPSE_VETO;
     }
     return DM_COLLAPSE_ALLOW;
@@ -614,13 +631,14 @@ static int relax_once(void *user)
 }
 
 /* dm_simplify_options.relax: called only when the queue runs dry above the target with vetoes,
-   then every vetoed edge is tried again; without it the run stops there */
+   then every vetoed edge is tried again; without it the run stops there. With it, a vetoed
+   candidate also comes back at relax_cost times its cost, asked with dm_collapse.relaxed. */
 static void relax_checks(const mesh *in)
 {
     dm_simplify_options o;
     dm_simplify_report rep, rep_strict;
     dm_pm *pm = NULL;
-    levels l;
+    static levels l;
     memset(&o, 0, sizeof o);
     memset(&l, 0, sizeof l);
     o.target_triangles = in->nt / 20;
@@ -632,7 +650,9 @@ static void relax_checks(const mesh *in)
     pm = NULL;
     memset(&l, 0, sizeof l);
     o.relax = relax_once;
+    o.relax_cost = -1.0; /* no retries: relaxed only once stuck */
     T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK(l.relaxed_asks == 0);
     T_CHECK_MSG(rep.reached_target && rep.relaxed == 1 && l.relax_calls == 1 && l.level == 1,
                 "relaxed %zu times (%zu calls), reached %zu of target %zu", rep.relaxed, l.relax_calls,
                 rep.triangle_count, o.target_triangles);
@@ -646,6 +666,30 @@ static void relax_checks(const mesh *in)
     T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
     T_CHECK(rep.reached_target && rep.relaxed == 0 && l.relax_calls == 0);
     dm_pm_free(pm);
+    pm = NULL;
+    /* retries (relax_cost 0 = 16): the vetoed candidates come back asked relaxed, each one the
+       same edge with the same error as a veto before it; a constraint that lets them go reaches
+       the target without ever being stuck */
+    o.target_triangles = in->nt / 20;
+    o.relax_cost = 0.0;
+    memset(&l, 0, sizeof l);
+    l.honour_relaxed = 1;
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK_MSG(rep.reached_target && rep.relaxed == 0 && l.relax_calls == 0 && l.relaxed_asks > 0 &&
+                    l.relaxed_unmatched == 0 && l.nlog < sizeof l.log / sizeof l.log[0],
+                "reached %zu of %zu, relax called %zu times, %zu relaxed asks (%zu matching no veto of %zu)",
+                rep.triangle_count, o.target_triangles, l.relax_calls, l.relaxed_asks, l.relaxed_unmatched, l.nlog);
+    dm_pm_free(pm);
+    pm = NULL;
+    /* ... and a constraint that vetoes them again: back to the relax call once stuck */
+    memset(&l, 0, sizeof l);
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_OK);
+    T_CHECK(rep.reached_target && rep.relaxed == 1 && l.relax_calls == 1 && l.relaxed_asks > 0 && l.relaxed_unmatched == 0);
+    dm_pm_free(pm);
+    pm = NULL;
+    o.relax_cost = 0.0 / (in->nt ? 0.0 : 1.0); /* NaN */
+    T_EQ_INT(dm_simplify(in->pos, in->nv, in->idx, in->nt, &o, &pm, &rep), DM_ERR_INVALID_ARGUMENT);
+    T_CHECK(pm == NULL);
 }
 
 static void constraint_checks(const mesh *in)
