@@ -157,11 +157,12 @@
      the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
      relax_cost (16) times its cost, asked relaxed: it passes when, from each overlap sample,
      the nearest crossing of the original along the line (either way, within the thickness)
-     faces the way the base does, so that a bake both ways finds one depth; keep stays where
-     the enclosure put it if that passes. Relaxing only once all were stuck left knots of small
-     triangles on thin parts while the rest coarsened. Still above the target, dm_simplify
-     relaxes it everywhere (then once more: the simplifier's checks only). Bake the triangles
-     of dm_shell_fallback_triangles both ways (dm_bake_options.both_ways; signed depth).
+     faces the way the base does, so that a bake both ways finds one depth, and no vertex of the
+     original ends outside the base a quarter thickness beyond where it was (tips stay in reach);
+     keep stays where the enclosure put it if that passes. (Relaxing only once all were stuck
+     left knots of small triangles on thin parts while the rest coarsened.) Still above the
+     target, dm_simplify relaxes it everywhere (then once more: the simplifier's checks only).
+     Bake the triangles of dm_shell_fallback_triangles both ways (dm_bake_options.both_ways).
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
@@ -7891,6 +7892,7 @@ typedef struct dm__sh_internal {
     size_t placed_level;
     float placed_at[3];
     double placed_x[3];
+    size_t gathered;       /* the relevant vertices in pts from the last enclosure (dm__sh_reach) */
 } dm__sh_internal;
 
 DMDEF void dm_shell_free(dm_shell *shell)
@@ -8940,6 +8942,33 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     return DM_COLLAPSE_ALLOW;
 }
 
+/* A candidate asked relaxed for itself alone may leave the original's relevant vertices (those of
+   its enclosure) outside the new one-ring by at most this many thicknesses beyond where they
+   were: the cheap relaxed collapses must not cut off the tips of thin parts (horns, ears), which
+   the bake's rays then miss. */
+#define DM__SH_REACH 0.25
+
+/* the check of DM__SH_REACH at x, on the vertices the enclosure gathered for c */
+static int dm__sh_reach(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3])
+{
+    size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
+    double tau = DM__SH_REACH * (double)sh->thickness;
+    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
+    for (i = 0; i < in->gathered; i++) {
+        const dm__sh_pt *pt = in->pts + i;
+        double pp[3], sd, old;
+        dm__load3(pt->p, 0, pp);
+        if (pt->nt != UINT32_MAX) hint = pt->nt;
+        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
+        old = (double)dm__sh_old_signed(c, in->tri, pt);
+        if (sd > (old > 0.0 ? old : 0.0) + tau) {
+            sh->vetoed_enclose++;
+            return DM_COLLAPSE_VETO;
+        }
+    }
+    return DM_COLLAPSE_ALLOW;
+}
+
 /* (1) of dm_shell_constraint. Enclosure: the original's vertices near the collapse whose
    closest feature of the old triangles is at keep or remove (not on the ring's rim, which
    belongs to the rest of the mesh) must stay on the inner side of the new one-ring: their
@@ -8958,7 +8987,9 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     dm__sh_enclose_box(sh, in, c, &b);
     for (k = 0; k < 3; k++) x0[k] = x[k] = c->position[k];
     if (!dm__sh_old_new_tris(sh, in, c, x0)) return DM_COLLAPSE_VETO;
+    in->gathered = 0;
     if (!dm__sh_gather(sh, in, c, &b, &npts)) return DM_COLLAPSE_VETO;
+    in->gathered = npts;
     if (!dm__sh_grow_scratch(sh, in, 10 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
     pl = in->scratch;
     np = dm__sh_planes(in, c, npts, pl);
@@ -9306,6 +9337,7 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             vn = fb >= 2 ? NULL : dm__sh_ring_normals(sh, in, c, x);
             verdict = fb >= 2 ? DM_COLLAPSE_ALLOW : vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
         }
+        if (verdict == DM_COLLAPSE_ALLOW && !sh->fallback) verdict = dm__sh_reach(sh, in, c, x); /* asked relaxed */
         if (verdict == DM_COLLAPSE_ALLOW) { /* dm_shell_collapsed marks it when it is done */
             in->relaxed_keep = c->keep;
             in->relaxed_level = c->level;
