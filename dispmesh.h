@@ -155,14 +155,13 @@
      that answer for the call in full.
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
-     relax_cost (16) times its cost, asked relaxed: it passes when, from each overlap sample,
-     the nearest crossing of the original along the line (either way, within the thickness)
-     faces the way the base does, so that a bake both ways finds one depth, and no vertex of the
-     original ends outside the base a quarter thickness beyond where it was (tips stay in reach);
-     keep stays where the enclosure put it if that passes. (Relaxing only once all were stuck
-     left knots of small triangles on thin parts while the rest coarsened.) Still above the
-     target, dm_simplify relaxes it everywhere (then once more: the simplifier's checks only).
-     Bake the triangles of dm_shell_fallback_triangles both ways (dm_bake_options.both_ways).
+     relax_cost (16) times its cost, asked relaxed (relaxing only once all are stuck leaves knots
+     of small triangles there): it passes when, from each overlap sample, the nearest crossing
+     of the original along the line (either way, within the thickness) faces the way the base
+     does (a bake both ways finds one depth) and no vertex of the original ends outside the base
+     a quarter thickness beyond where it was (tips stay in reach); keep stays where the
+     enclosure put it if that passes. Still above the target, dm_simplify relaxes it everywhere
+     (then once more: the simplifier's checks only). Bake dm_shell_fallback_triangles both ways.
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
@@ -220,9 +219,9 @@
      grid of level sqrt(2 x its uv area in texels) inside, as many points along each base edge
      as its longer uv side has texels (shared by the triangles on the edge), strips between; its
      triangles are then made Delaunay in the map by edge flips, border fixed (the strips' and
-     corners' slivers made the surface's normals jump at base edges). A
-     vertex is its base point moved along the base normal by the map's bilinear depth, averaged
-     over the triangles sharing it, with the map's normal. A closed manifold base gives a closed
+     corners' slivers made the surface's normals jump at base edges). A vertex is its base point
+     moved along the base normal by the map's bilinear depth, averaged over the triangles sharing
+     it, with the map's normal. A closed manifold base gives a closed
      manifold result with no T-junction; nothing is dropped at depth breaks. Vertex v <
      base_vertex_count is base vertex v; face_base gives each triangle's base triangle.
      dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
