@@ -7891,7 +7891,7 @@ typedef struct dm__sh_internal {
     size_t placed_level;
     float placed_at[3];
     double placed_x[3];
-    size_t gathered;       /* the relevant vertices in pts from the last enclosure (dm__sh_reach) */
+    size_t gathered;       /* the relevant vertices in pts from the last enclosure (DM__SH_REACH) */
 } dm__sh_internal;
 
 DMDEF void dm_shell_free(dm_shell *shell)
@@ -8921,9 +8921,11 @@ static float dm__sh_old_signed(const dm_collapse *c, const float *tf, const dm__
                               sqrt(pt->d2));
 }
 
-/* the check at the rounded position x: no relevant vertex ends outside (its signed distance
-   beyond 4 margins and beyond its old one by a margin) */
-static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3], size_t npts)
+/* the check at the rounded position x: no relevant vertex (of the npts in pts) ends outside, its
+   signed distance beyond `outside` and beyond its old one by `slack` (the enclosure: 4 margins and
+   one; a candidate asked relaxed: DM__SH_REACH thicknesses, both) */
+static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3], size_t npts,
+                          double outside, double slack)
 {
     size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
@@ -8933,7 +8935,7 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         dm__load3(pt->p, 0, pp);
         if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
         sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
-        if (sd > 4.0 * in->margin && sd > (double)dm__sh_old_signed(c, in->tri, pt) + in->margin) {
+        if (sd > outside && sd > (double)dm__sh_old_signed(c, in->tri, pt) + slack) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
         }
@@ -8946,27 +8948,6 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
    were: the cheap relaxed collapses must not cut off the tips of thin parts (horns, ears), which
    the bake's rays then miss. */
 #define DM__SH_REACH 0.25
-
-/* the check of DM__SH_REACH at x, on the vertices the enclosure gathered for c */
-static int dm__sh_reach(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const double x[3])
-{
-    size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
-    double tau = DM__SH_REACH * (double)sh->thickness;
-    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
-    for (i = 0; i < in->gathered; i++) {
-        const dm__sh_pt *pt = in->pts + i;
-        double pp[3], sd, old;
-        dm__load3(pt->p, 0, pp);
-        if (pt->nt != UINT32_MAX) hint = pt->nt;
-        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
-        old = (double)dm__sh_old_signed(c, in->tri, pt);
-        if (sd > (old > 0.0 ? old : 0.0) + tau) {
-            sh->vetoed_enclose++;
-            return DM_COLLAPSE_VETO;
-        }
-    }
-    return DM_COLLAPSE_ALLOW;
-}
 
 /* (1) of dm_shell_constraint. Enclosure: the original's vertices near the collapse whose
    closest feature of the old triangles is at keep or remove (not on the ring's rim, which
@@ -9002,7 +8983,7 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
             return DM_COLLAPSE_VETO;
         }
     }
-    return dm__sh_recheck(sh, in, c, x, npts);
+    return dm__sh_recheck(sh, in, c, x, npts, 4.0 * in->margin, in->margin);
 }
 
 /* The corner normals of the new one-ring, 9 doubles per triangle, into the scratch (keep at x):
@@ -9336,7 +9317,10 @@ DMDEF int dm_shell_constraint(void *user, const dm_collapse *c, float corrected[
             vn = fb >= 2 ? NULL : dm__sh_ring_normals(sh, in, c, x);
             verdict = fb >= 2 ? DM_COLLAPSE_ALLOW : vn ? dm__sh_crossings(sh, in, c, x, vn) : DM_COLLAPSE_VETO;
         }
-        if (verdict == DM_COLLAPSE_ALLOW && !sh->fallback) verdict = dm__sh_reach(sh, in, c, x); /* asked relaxed */
+        if (verdict == DM_COLLAPSE_ALLOW && !sh->fallback) { /* asked relaxed: tips stay in reach */
+            double tau = DM__SH_REACH * (double)sh->thickness;
+            verdict = dm__sh_recheck(sh, in, c, x, in->gathered, tau, tau);
+        }
         if (verdict == DM_COLLAPSE_ALLOW) { /* dm_shell_collapsed marks it when it is done */
             in->relaxed_keep = c->keep;
             in->relaxed_level = c->level;
