@@ -43,9 +43,8 @@
      (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out is NULL and
      nothing is left allocated. No global state; every call is re-entrant and deterministic (the
      same input gives the same bits; ties go to the lower index). Do not build with -ffast-math.
-     FMA contraction changes nothing (C or C++, any -ffp-contract): the implementation turns it
-     off for its own code and restores the user's setting, except under clang's -ffp-contract=
-     fast, which ignores that pragma (rays can then slip through shared edges; bits change).
+     FMA contraction is turned off for the implementation's code and the user's setting restored
+     (C or C++), except under clang's -ffp-contract=fast, which ignores that pragma (bits change).
 
    PART 1: BVH RAY CASTER
      WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
@@ -62,8 +61,7 @@
      nearest child first; conservative box test (Ize 2013); t from the triangle's plane in double.
      OPTIONS (dm_bvh_options). quality: DM_BVH_QUALITY_DEFAULT (16 bins over the widest axis) or
      _HIGH (64 bins over three axes, a slower build); bins (0 = from quality, [4, 256]);
-     max_leaf_size (0 = 8, [1, 16]); allocator (large meshes trace faster with one that backs big
-     blocks with huge pages); progress.
+     max_leaf_size (0 = 8, [1, 16]); allocator (huge pages help large meshes); progress.
      MEMORY. About 120 bytes per triangle allocated, 70 touched (dm_bvh_get_info reports it);
      queries never allocate (a ray keeps a 10 KB stack).
      ERRORS. As above for dm_bvh_build and dm_bvh_refit (which needs the same triangle count).
@@ -95,19 +93,18 @@
      new position to the planes merged into it (mesh units; the report gives the largest). Level
      k is bit for bit the mesh after the (split_count - k)-th collapse, triangles in input order.
      dm_pm_merged_vertices gives a base vertex's sorted input vertices (a partition of them all).
-     OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error
-     (no collapse above it, mesh units; 0 none; neither: until no collapse passes the checks);
-     flags (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes);
-     max_collapses (0 none; the first k collapses are the same whatever the limit);
-     min_quality (a sliver guard: no collapse makes a triangle's 2 area / longest edge^2 drop
-     below it while others are left; off by default, as beside the shell constraint it gives
-     bases farther from the original); constraint, constraint_user, on_collapse (called just
-     before each collapse is applied, for a constraint that follows the mesh), relax (called
-     when no candidate is left above the target and some were vetoed: nonzero = the constraint
-     is less strict now, every vetoed edge is queued again), relax_cost (with relax, a vetoed
-     candidate also comes back at this times its cost, 0 = 16, asked with dm_collapse.relaxed);
-     allocator; progress (the fraction of the triangles to remove that are gone).
-     dm_weld merges vertices at the same position (bit for bit, -0 = +0) in first-use order.
+     OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error (no
+     collapse above it, mesh units; 0 none; neither: until no collapse passes the checks); flags
+     (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes); max_collapses
+     (0 none; the first k collapses are the same whatever the limit); min_quality (a sliver guard:
+     no collapse drops a triangle's 2 area / longest edge^2 below it while others are left; off by
+     default: beside the shell it costs closeness); constraint, constraint_user, on_collapse (called
+     just before each collapse is applied, for a constraint that follows the mesh), relax (called
+     when no candidate is left above the target and some were vetoed: nonzero = the constraint is
+     less strict now, every vetoed edge is queued again), relax_cost (with relax, a vetoed candidate
+     also comes back at this times its cost, 0 = 16, asked with dm_collapse.relaxed); allocator;
+     progress (the fraction of the triangles to remove that are gone). dm_weld merges vertices at
+     the same position (bit for bit, -0 = +0) in first-use order.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
      the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
@@ -129,10 +126,9 @@
      dm_shell_grow grows the shell; dm_shell_constraint and dm_shell_collapsed keep the base in it.
      METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
      `thickness`, and stops for good when its next offset point would come closer to the
-     original than 90% of its offset (it would run into another part). That test runs on the
-     triangles cut into fragments about a thickness long, each node bounded by a box and a slab
-     (mean normal, interval of n.x), so a vertex of high valence costs time linear in it. The
-     paper's smoothing pass is not done: nothing needs it. Per candidate collapse, in order:
+     original than 90% of its offset (it would run into another part; tested on fragments about
+     a thickness long in a tree of boxes and normal slabs). The paper's smoothing pass is not
+     done: nothing needs it. Per candidate collapse, in order:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
@@ -155,111 +151,108 @@
      that answer for the call in full.
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
-     relax_cost (16) times its cost, asked relaxed (relaxing only once all are stuck leaves knots
-     of small triangles there): it passes when, from each overlap sample, the nearest crossing
-     of the original along the line (either way, within the thickness) faces the way the base
-     does (a bake both ways finds one depth) and no vertex of the original ends outside the base
-     a quarter thickness beyond where it was (tips stay in reach); keep stays where the
-     enclosure put it if that passes. Still above the target, dm_simplify relaxes it everywhere
-     (then once more: the simplifier's checks only). Bake dm_shell_fallback_triangles both ways.
+     relax_cost (16) times its cost, asked relaxed (relaxing only once all are stuck leaves knots of
+     small triangles there): it passes when, from each overlap sample, the nearest crossing of the
+     original along the line (either way, within the thickness) faces the way the base does (a bake
+     both ways finds one depth) and no vertex of the original ends outside the base a quarter
+     thickness beyond where it was (tips stay in reach); keep stays where the enclosure put it if
+     that passes. Still above the target, dm_simplify relaxes it everywhere (then once more: the
+     simplifier's checks only). Bake dm_shell_fallback_triangles both ways.
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 48 bytes per
-     original vertex near the widest candidate and 68 bytes per triangle of the widest one-ring.
+     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 48 bytes per original
+     vertex near the widest candidate and 68 bytes per triangle of the widest one-ring.
      ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
      arguments, allocation failure).
      THREAD SAFETY. One dm_simplify run at a time per shell.
-     LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's
-     own vertex normals (without it, normals come from the one-ring). The overlap is checked on
-     the new one-ring only: a later collapse beside a triangle turns its corners' normals without
-     checking it again, so a few base triangles can fail it at the end (their texels then miss:
+     LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
+     vertex normals (without it, normals come from the one-ring). The overlap is checked on the new
+     one-ring only: a later collapse beside a triangle turns its corners' normals without checking
+     it again, so a few base triangles can fail it at the end (their texels then miss:
      dm_dispmap.miss_count).
 
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
      WHAT. A base mesh laid out in one width x height map, the displacement and the original's
      normals baked into it, the surface sample grid other headers filter on, the dense mesh again.
-     PARAMETERIZATION. Charts that are topological disks grow breadth first (a triangle joins
-     within max_chart_angle of the chart's mean normal, up to max_chart_triangles). A chart's
-     boundary is fixed at its projection on the chart's plane (or on a circle by arc length when
-     that is not a simple counter-clockwise loop), its interior is Floater's mean value map, then
+     PARAMETERIZATION. Charts that are topological disks grow breadth first (a triangle joins within
+     max_chart_angle of the chart's mean normal, up to max_chart_triangles). A chart's boundary is
+     fixed at its projection on the chart's plane (or on a circle by arc length when that is not a
+     simple counter-clockwise loop), its interior is Floater's mean value map, then
      Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional targets (triangle_weight,
      default each triangle's area; dm_coverage_weights gives the original's area over each base
-     triangle, so texels go where the original's surface is), each kept only when the stretch
-     drops and nothing flips; a chart with no flip-free layout within L2 stretch 2 (one that
-     curls) is cut in two, each half laid out the same way, down to lone triangles. Charts are
-     turned to their smallest box (12 angles) and packed at the largest scale that fits: shelves
-     of boxes, then, larger where it fits, their footprints (rows grown by half the gutter) in a
-     bitmap, largest first, each in the quarter turn whose lowest free place keeps its top
-     lowest. dm_param reports utilization, L2 and max stretch (Sander et al. 2001), and the share
-     of triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
+     triangle, so texels go where the original's surface is), each kept only when the stretch drops
+     and nothing flips; a chart with no flip-free layout within L2 stretch 2 (one that curls) is cut
+     in two, each half laid out the same way, down to lone triangles. Charts are turned to their
+     smallest box (12 angles) and packed at the largest scale that fits: shelves of boxes or, larger
+     where it fits, their footprints in a bitmap (largest first, each in its best quarter turn).
+     dm_param reports utilization, L2 and max stretch (Sander et al. 2001), and the share of
+     triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
      seams, not its one global chart (its text omits the cut); neighbour lookups go through nbr.
-     BAKE. For each texel whose centre lies in a base triangle (the first in index order on a
-     shared edge): the base point p and the interpolated angle-weighted base normal n; the line
-     p - t n, |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world
-     units, positive inward) and the original's interpolated normal at the hit: the first hit
-     along -n with inward (the paper's rule, for a base that encloses the original), otherwise and
-     on both_ways triangles the nearest crossing either way. No crossing, or a depth more than 8
-     texel sizes off the median of its chart neighbours (a ray that slipped past a thin part), is
-     DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart are DM_TEXEL_BORDER,
-     baked from the nearest such triangle's plane extended, so that bilinear filtering (and the
-     first mip level) reads real samples. MISS and EMPTY texels get push-pull filled values
-     (Gortler et al. 1996) for filtering only.
+     BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
+     edge): the base point p and the interpolated angle-weighted base normal n; the line p - t n,
+     |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
+     positive inward) and the original's interpolated normal at the hit: the first hit along -n with
+     inward (the paper's rule, for a base that encloses the original), otherwise and on both_ways
+     triangles the nearest crossing either way. No crossing, or a depth more than 8 texel sizes off
+     the median of its chart neighbours (a ray that slipped past a thin part), is DM_TEXEL_MISS
+     (valid = 0). Gutter texels within 2 texels of a chart are DM_TEXEL_BORDER, baked from the
+     nearest such triangle's plane extended, so that bilinear filtering (and the first mip level)
+     reads real samples. MISS and EMPTY texels get push-pull filled values (Gortler et al. 1996) for
+     filtering only.
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
      stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
-     dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent
-     texel (rot 0); across a seam, the texel's centre is carried over the nearest chart-boundary
-     edge into the twin triangle's chart and nbr is the nearest texel there; UINT32_MAX at the
-     mesh's boundary. nbr_rot = r: a step along d here continues as d turned r quarter turns
-     counter-clockwise in the neighbour's axes; to step back, go along -(d turned r). The walk
-     back lands where it started; where one texel cannot serve two charts (chart corners), nbr
-     is the texel itself with a half turn (a mirror, as a clamped filter sees it).
-     RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric
-     grid of level sqrt(2 x its uv area in texels) inside, as many points along each base edge
-     as its longer uv side has texels (shared by the triangles on the edge), strips between; its
-     triangles are then made Delaunay in the map by edge flips, border fixed (the strips' and
-     corners' slivers made the surface's normals jump at base edges). A vertex is its base point
-     moved along the base normal by the map's bilinear depth, averaged over the triangles sharing
-     it, with the map's normal. A closed manifold base gives a closed
-     manifold result with no T-junction; nothing is dropped at depth breaks. Vertex v <
-     base_vertex_count is base vertex v; face_base gives each triangle's base triangle.
-     dm_surface_distance samples both meshes area-uniformly (deterministic) and measures with
-     dm_bvh_closest_point; its max also covers every vertex.
+     dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel
+     (rot 0); across a seam, the texel's centre is carried over the nearest chart-boundary edge into
+     the twin triangle's chart and nbr is the nearest texel there; UINT32_MAX at the mesh's
+     boundary. nbr_rot = r: a step along d here continues as d turned r quarter turns
+     counter-clockwise in the neighbour's axes; to step back, go along -(d turned r). The walk back
+     lands where it started; where one texel cannot serve two charts (chart corners), nbr is the
+     texel itself with a half turn (a mirror, as a clamped filter sees it).
+     RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric grid
+     of level sqrt(2 x its uv area in texels) inside, as many points along each base edge as its
+     longer uv side has texels (shared by the triangles on the edge), strips between; its triangles
+     are then made Delaunay in the map by edge flips, border fixed. A vertex is its base point moved
+     along the base normal by the map's bilinear depth, averaged over the triangles sharing it, with
+     the map's normal. A closed manifold base gives a closed manifold result with no T-junction;
+     nothing is dropped at depth breaks. Vertex v < base_vertex_count is base vertex v; face_base
+     gives each triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
+     (deterministic) and measures with dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
-     stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance,
-     inward, both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1).
-     dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
-     samples_per_side (0 = 200000, at most 10^9). Each with allocator and progress.
+     stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance, inward,
+     both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1). dm_coverage_options:
+     floor (0 = 5% of the mean weight). dm_distance_options: samples_per_side (0 = 200000, at most
+     10^9). Each with allocator and progress.
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
-     packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of
-     the original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per
-     covered texel), 60 more per vertex and up to 180 per triangle of the largest base
-     triangle's tessellation while dm_reconstruct runs.
-     ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with
-     their gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public
-     dm_param and dm_dispmap arrays they read (a caller may have edited them): an index out of
-     range, a missing array, or a NaN or infinite value (a depth beyond 1e18) is DM_ERR_BAD_MAP.
+     packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of the
+     original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per covered
+     texel), 60 more per vertex and up to 180 per triangle of the largest base triangle's
+     tessellation while dm_reconstruct runs.
+     ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with their
+     gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public dm_param
+     and dm_dispmap arrays they read (a caller may have edited them): an index out of range, a
+     missing array, or a NaN or infinite value (a depth beyond 1e18) is DM_ERR_BAD_MAP.
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
-     LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE),
-     at most 1024 segments along one base edge. Beside a sharp base edge, where the surface lies
-     deep and steep under a narrow triangle, the normal rays fold: a few reconstructed triangles
-     there face backwards (they are not repaired).
+     LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE), at
+     most 1024 segments along one base edge. Beside a sharp base edge, where the surface lies deep
+     and steep under a narrow triangle, the normal rays fold: a few reconstructed triangles there
+     face backwards (they are not repaired).
 
    REFERENCES
-     Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald, SAH-based BVH
-     construction, RT 2007. Ize, Robust BVH ray traversal, JCGT 2013. Ericson, Real-Time Collision
-     Detection 5.1.5, 2005. Bikker, tinybvh, 2024. Dammertz, Hanika, Keller, Shallow BVHs for SIMD
-     ray tracing, EGSR 2008. Garland, Heckbert, Quadric error metrics, SIGGRAPH 1997. Hoppe,
-     Progressive meshes, SIGGRAPH 1996. Dey, Edelsbrunner, Guha, Nekhayev, Topology preserving
-     edge contraction, 1999. Lindstrom, Turk, Fast and memory efficient simplification, Vis 1998.
-     Cohen et al., Simplification envelopes, SIGGRAPH 1996. Sander et al., Silhouette clipping
-     (progressive hulls), SIGGRAPH 2000. Baerentzen, Aanaes, Angle weighted pseudonormal, TVCG
-     2005. Floater, Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev, Seidel, Stretch-
-     minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture mapping
-     progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH 1996.
-     Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. */
+     Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald,
+     SAH-based BVH construction, RT 2007. Ize, Robust BVH ray traversal, JCGT 2013. Ericson,
+     Real-Time Collision Detection 5.1.5, 2005. Bikker, tinybvh, 2024. Dammertz, Hanika, Keller,
+     Shallow BVHs for SIMD ray tracing, EGSR 2008. Garland, Heckbert, Quadric error metrics,
+     SIGGRAPH 1997. Hoppe, Progressive meshes, SIGGRAPH 1996. Dey, Edelsbrunner, Guha, Nekhayev,
+     Topology preserving edge contraction, 1999. Lindstrom, Turk, Fast and memory efficient
+     simplification, Vis 1998. Cohen et al., Simplification envelopes, SIGGRAPH 1996. Sander et al.,
+     Silhouette clipping (progressive hulls), SIGGRAPH 2000. Baerentzen, Aanaes, Angle weighted
+     pseudonormal, TVCG 2005. Floater, Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev,
+     Seidel, Stretch-minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture
+     mapping progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH
+     1996. Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
