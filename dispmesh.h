@@ -145,7 +145,8 @@
           quarter thickness outside) must meet a front face of the original first, within 2.25
           thicknesses, and not go out and in again within that depth. The normals are the mesh's
           angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums).
-          A miss is a violation unless the original is open.
+          A miss is a violation unless the original is open and the sample lies within 0.05
+          thickness of it (beside its boundary: a base reaching farther out overhangs it).
      The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
      Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED) and keeps
      that answer for the call in full.
@@ -9089,10 +9090,24 @@ static int dm__sh_walk_next(const dm__sh_internal *in, dm__sh_walk *w, float fro
 }
 
 /* The overlap check of one sample: point y with normal n (not normalised). 0 when a ray from a
-   little outside y along -n meets the original's front side first (or nothing, on an open
-   original), within the offset grown at the hit, with no re-entry within that depth; else 1
-   (overlap: a back face first, a re-entry, a zero normal, a miss on a closed original) or 2 (the
-   hit lies deeper than the shell). */
+   little outside y along -n meets the original's front side first (or nothing, where
+   dm__sh_miss_ok), within the offset grown at the hit, with no re-entry within that depth; else 1
+   (overlap: a back face first, a re-entry, a zero normal, any other miss) or 2 (the hit lies
+   deeper than the shell). */
+/* May a ray from sample y miss the original? Only on an open original, and only where y lies
+   within DM__SH_EDGE_REACH thicknesses of it (beside its boundary): a base triangle that reaches
+   farther out overhangs the boundary, and the bake finds nothing under it. */
+#define DM__SH_EDGE_REACH 0.05f
+static int dm__sh_miss_ok(const dm_shell *sh, const dm__sh_internal *in, const double y[3])
+{
+    dm_closest cl;
+    float q[3];
+    int k;
+    if (!in->open) return 0;
+    for (k = 0; k < 3; k++) q[k] = (float)y[k];
+    return dm_bvh_closest_point(in->bvh, q, DM__SH_EDGE_REACH * sh->thickness, &cl);
+}
+
 static int dm__sh_sample_fails(const dm_shell *sh, const dm__sh_internal *in, const double y[3], const double n[3])
 {
     double len = dm__len3(n), h;
@@ -9109,7 +9124,7 @@ static int dm__sh_sample_fails(const dm_shell *sh, const dm__sh_internal *in, co
     ray.tmin = 0.0f;
     ray.tmax = 2.25f * sh->thickness;
     dm__sh_walk_start(in, &walk, &ray);
-    if (!dm__sh_walk_next(in, &walk, 0.0f, &hit)) return in->open ? 0 : 1;
+    if (!dm__sh_walk_next(in, &walk, 0.0f, &hit)) return !dm__sh_miss_ok(sh, in, y);
     ot = in->idx + 3 * (size_t)hit.triangle;
     if (dm__sh_side(in, hit.triangle, n) < 0) return 1;
     /* the shell along the ray: no deeper than the offset grown at the hit */
@@ -9201,7 +9216,7 @@ static int dm__sh_crossings(dm_shell *sh, const dm__sh_internal *in, const dm_co
             ray.tmin = -sh->thickness;
             ray.tmax = sh->thickness;
             if (!dm_bvh_intersect_line(in->bvh, &ray, &hit)) {
-                if (in->open) continue;
+                if (dm__sh_miss_ok(sh, in, y)) continue;
                 sh->vetoed_overlap++;
                 return DM_COLLAPSE_VETO;
             }
