@@ -29,8 +29,8 @@
                  reference base never has one)
      --samples N the surface distances' area-uniform samples per side (default 200000; fewer
                  run faster, the RMS figures to about 1/sqrt(N), the max from fewer points)
-   The pipeline (dispmesh.h): meshio's mio_weld when the triangles do not share their vertices (an STL file),
-   dm_shell_grow (the bounding shell of the original), dm_simplify with
+   The pipeline (dispmesh.h): vertices at equal positions joined where they close a seam (an STL
+   soup is welded whole; vertices that meet only at a point stay apart, said on stderr), dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
    mesh) and dm_surface_distance (--samples points a side) against the original.
@@ -633,6 +633,121 @@ static int result_usable(const run *R, long res, size_t inside, size_t missed)
     return 1;
 }
 
+/* ---- joining vertices at equal positions where they close a seam ------------------------------ */
+typedef struct { float p[3]; uint32_t v; } poskey;
+typedef struct { uint32_t k0, k1, a, b; } edgekey; /* sorted by (k0, k1, a, b); a -> b an edge */
+
+static int poskey_cmp(const void *pa, const void *pb)
+{
+    const poskey *x = (const poskey *)pa, *y = (const poskey *)pb;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
+    return x->v < y->v ? -1 : x->v > y->v;
+}
+
+static int edgekey_cmp(const void *pa, const void *pb)
+{
+    const edgekey *x = (const edgekey *)pa, *y = (const edgekey *)pb;
+    if (x->k0 != y->k0) return x->k0 < y->k0 ? -1 : 1;
+    if (x->k1 != y->k1) return x->k1 < y->k1 ? -1 : 1;
+    if (x->a != y->a) return x->a < y->a ? -1 : 1;
+    return x->b < y->b ? -1 : x->b > y->b;
+}
+
+static uint32_t uf_find(uint32_t *up, uint32_t v)
+{
+    while (up[v] != v) v = up[v] = up[up[v]];
+    return v;
+}
+
+static void uf_join(uint32_t *up, uint32_t a, uint32_t b)
+{
+    a = uf_find(up, a);
+    b = uf_find(up, b);
+    if (a < b) up[b] = a; /* the first vertex of a set represents it */
+    else if (b < a) up[a] = b;
+}
+
+/* Join vertices at exactly equal positions (-0 = +0) where they close a seam: boundary edges (of
+   one triangle each) whose ends lie at the same two positions become one edge. A triangle soup
+   (an STL file) is so welded whole and a mesh split along seams stitched, as mio_weld would; but
+   vertices at one position that meet only at a point (holes touching at a corner) stay apart:
+   joined, they would make a non-manifold vertex, which dm_simplify freezes with its neighbours.
+   The first vertex of each joined set stays, the kept ones in their order. Returns the number of
+   vertices kept apart that a weld by position would have joined, or -1 when out of memory. */
+static long stitch(mio_mesh *m)
+{
+    size_t nv = m->vertex_count, nt = m->triangle_count, i, j, q, ne = 0, nb = 0, kept = 0;
+    poskey *pk = (poskey *)malloc((nv + 1) * sizeof *pk);
+    edgekey *ek = (edgekey *)malloc((3 * nt + 1) * sizeof *ek);
+    uint32_t *first = (uint32_t *)malloc((nv + 1) * sizeof *first), *up = (uint32_t *)malloc((nv + 1) * sizeof *up);
+    long apart = 0;
+    if (!pk || !ek || !first || !up) {
+        free(pk); free(ek); free(first); free(up);
+        return -1;
+    }
+    /* 1. each vertex's position class: the first vertex at its position */
+    for (i = 0; i < nv; i++) {
+        for (q = 0; q < 3; q++) pk[i].p[q] = m->positions[3 * i + q] + 0.0f; /* -0 + 0 = +0 */
+        pk[i].v = (uint32_t)i;
+        up[i] = (uint32_t)i;
+    }
+    qsort(pk, nv, sizeof *pk, poskey_cmp);
+    for (i = 0; i < nv; i = j) {
+        for (j = i + 1; j < nv && memcmp(pk[j].p, pk[i].p, sizeof pk[i].p) == 0; j++) {}
+        for (q = i; q < j; q++) first[pk[q].v] = pk[i].v;
+    }
+    /* 2. the boundary edges (by vertex index, an edge of exactly one triangle), keyed by their
+       ends' position classes */
+    for (i = 0; i < nt; i++)
+        for (j = 0; j < 3; j++) {
+            uint32_t a = m->indices[3 * i + j], b = m->indices[3 * i + (j + 1) % 3];
+            if (a == b) continue;
+            ek[ne].k0 = a < b ? a : b;
+            ek[ne].k1 = a < b ? b : a;
+            ek[ne].a = a;
+            ek[ne].b = b;
+            ne++;
+        }
+    qsort(ek, ne, sizeof *ek, edgekey_cmp);
+    for (i = 0; i < ne; i = j) {
+        for (j = i + 1; j < ne && ek[j].k0 == ek[i].k0 && ek[j].k1 == ek[i].k1; j++) {}
+        if (j == i + 1) {
+            uint32_t ca = first[ek[i].a], cb = first[ek[i].b];
+            ek[nb] = ek[i];
+            ek[nb].k0 = ca < cb ? ca : cb;
+            ek[nb].k1 = ca < cb ? cb : ca;
+            nb++;
+        }
+    }
+    /* 3. boundary edges on the same two positions close a seam: their ends are joined */
+    qsort(ek, nb, sizeof *ek, edgekey_cmp);
+    for (i = 0; i < nb; i = j)
+        for (j = i + 1; j < nb && ek[j].k0 == ek[i].k0 && ek[j].k1 == ek[i].k1; j++) {
+            if (ek[i].k0 == ek[i].k1) continue; /* both ends at one position */
+            if (first[ek[i].a] == first[ek[j].a]) {
+                uf_join(up, ek[i].a, ek[j].a);
+                uf_join(up, ek[i].b, ek[j].b);
+            } else {
+                uf_join(up, ek[i].a, ek[j].b);
+                uf_join(up, ek[i].b, ek[j].a);
+            }
+        }
+    /* 4. keep each set's first vertex, in order; the triangles refer to the kept ones */
+    for (i = 0; i < nv; i++) {
+        uint32_t r = uf_find(up, (uint32_t)i);
+        if (r != i) continue;
+        apart += first[i] != i;
+        memmove(m->positions + 3 * kept, m->positions + 3 * i, 3 * sizeof(float));
+        first[i] = (uint32_t)kept++; /* first[] now maps a kept vertex to its new index */
+    }
+    for (i = 0; i < 3 * nt; i++) m->indices[i] = first[uf_find(up, m->indices[i])];
+    m->vertex_count = kept;
+    free(pk); free(ek); free(first); free(up);
+    return apart;
+}
+
 static void usage(FILE *to)
 {
     fprintf(to,
@@ -755,6 +870,7 @@ int main(int argc, char **argv)
         mio_error err;
         mio_result mr;
         size_t before;
+        long apart;
         errno = 0;
         if ((mr = mio_read_file(in, NULL, &R.loaded, &err)) != MIO_OK) {
             cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr),
@@ -763,12 +879,15 @@ int main(int argc, char **argv)
         }
         /* a triangle soup (an STL file) shares no vertex: dm_simplify needs them joined */
         before = R.loaded.vertex_count;
-        if ((mr = mio_weld(&R.loaded, &err)) != MIO_OK) {
-            cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr), 0);
+        if ((apart = stitch(&R.loaded)) < 0) {
+            fprintf(stderr, "dispmesh: out of memory\n");
             goto done;
         }
         if (R.loaded.vertex_count != before)
             fprintf(stderr, "dispmesh: welded vertices at equal positions: %zu -> %zu vertices\n", before, R.loaded.vertex_count);
+        if (apart > 0)
+            fprintf(stderr, "dispmesh: %ld vertices share a position with another but meet it only at a point: "
+                            "kept apart (joined, they would be non-manifold)\n", apart);
         R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
