@@ -30,7 +30,8 @@
      --samples N the surface distances' area-uniform samples per side (default 200000; fewer
                  run faster, the RMS figures to about 1/sqrt(N), the max from fewer points)
    The pipeline (dispmesh.h): vertices at equal positions joined where they close a seam (an STL
-   soup is welded whole; vertices that meet only at a point stay apart, said on stderr), dm_shell_grow (the bounding shell of the original), dm_simplify with
+   soup is welded whole; vertices that meet only at a point stay apart, said on stderr),
+   dm_shell_grow (the bounding shell of the original), dm_simplify with
    dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
    R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
    mesh) and dm_surface_distance (--samples points a side) against the original.

@@ -4,7 +4,8 @@
 #   --brick --faces 12 --res 128: exit 0; the five files exist and are not empty; the PNGs pass pngcheck
 #   (counted skip without it); the RESULT line has every field, numeric; faces <= 12; rms < base_only_rms;
 #   flagged <= 0.01; target = 12.
-#   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12.
+#   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12;
+#   two octahedra whose corners share a position: the two vertices stay apart (no weld into a pinch).
 #   bad input (missing file, malformed files of our own and, when installed, of assimp-testmodels,
 #   a mesh without extent, an unwritable prefix, a map too coarse for the base so that base triangles
 #   get no texel): exit 1 (failure); bad arguments (--res 0, a bad number, no input, an unknown
@@ -94,6 +95,19 @@ if "$prog" --brick --faces 496 --res 256 --no-views -o "$tmp/full" >/dev/null 2>
 else
   bad "brick at --faces 496 failed: $(tail -n 3 "$tmp/full_err.txt")"
 fi
+
+# ---- two octahedra whose corners share a position: kept apart, not welded into a pinch ------------
+awk 'BEGIN { print "OFF"; print "12 16 0"
+  for (o = 0; o < 2; o++) { c = 2 * o
+    print c + 1, 0, 0; print c - 1, 0, 0; print c, 1, 0; print c, -1, 0; print c, 0, 1; print c, 0, -1 }
+  for (o = 0; o < 2; o++) { b = 6 * o
+    print 3, b + 0, b + 2, b + 4; print 3, b + 2, b + 1, b + 4; print 3, b + 1, b + 3, b + 4; print 3, b + 3, b + 0, b + 4
+    print 3, b + 2, b + 0, b + 5; print 3, b + 1, b + 2, b + 5; print 3, b + 3, b + 1, b + 5; print 3, b + 0, b + 3, b + 5 } }' \
+  >"$tmp/pinch.off"
+"$prog" "$tmp/pinch.off" --faces 16 --res 64 --no-views -o "$tmp/pinch" >/dev/null 2>"$tmp/pinch_err.txt"
+check "corners meeting at a point stay apart: $(grep -m1 apart "$tmp/pinch_err.txt")" \
+  grep -q '^dispmesh: 1 vertices share a position with another but meet it only at a point' "$tmp/pinch_err.txt"
+check "and are not welded: $(grep -m1 'vertices,' "$tmp/pinch_err.txt")" grep -q 'pinch.off: 12 vertices, 16 triangles' "$tmp/pinch_err.txt"
 
 # ---- a target the paper's constraints cannot reach: the brick's box has 12 faces -----------------
 "$prog" --brick --strict --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"
