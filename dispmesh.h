@@ -126,9 +126,10 @@
      dm_shell_grow grows the shell; dm_shell_constraint and dm_shell_collapsed keep the base in it.
      METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
      `thickness`, and stops for good when its next offset point would come closer to the
-     original than 90% of its offset (it would run into another part; tested on fragments about
-     a thickness long in a tree of boxes and normal slabs). The paper's smoothing pass is not
-     done: nothing needs it. Per candidate collapse, in order:
+     original than 90% of what its own neighbourhood allows (the offset, less where the surface is
+     concave): it would run into another part (tested on fragments about a thickness long in a
+     tree of boxes and normal slabs). The paper's smoothing pass is not done: nothing needs it.
+     Per candidate collapse, in order:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
@@ -196,12 +197,13 @@
      |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
      positive inward) and the original's interpolated normal at the hit: the first hit along -n with
      inward (the paper's rule, for a base that encloses the original), otherwise and on both_ways
-     triangles the nearest crossing either way. No crossing, or a depth more than 8 texel sizes off
-     the median of its chart neighbours (a ray that slipped past a thin part), is DM_TEXEL_MISS
-     (valid = 0). Gutter texels within 2 texels of a chart are DM_TEXEL_BORDER, baked from the
-     nearest such triangle's plane extended, so that bilinear filtering (and the first mip level)
-     reads real samples. MISS and EMPTY texels get push-pull filled values (Gortler et al. 1996) for
-     filtering only.
+     triangles the nearest crossing either way. No crossing, or a depth more than 8 texel sizes
+     beyond more than half of its chart neighbours within 2 texels (a ray that slipped past a thin
+     part), is DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart are
+     DM_TEXEL_BORDER, baked from the nearest such triangle's plane extended (the chart's field
+     extended where that ray meets a crease or lands 8 texel sizes off it), so that bilinear
+     filtering (and the first mip level) reads real samples. MISS and EMPTY texels get push-pull
+     filled values (Gortler et al. 1996) for filtering only.
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
      stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
      dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel
@@ -6856,10 +6858,11 @@ static void dm__bk_border_triangle(const dm_param *pm, size_t t, float *best, ui
 }
 
 /* Hits that do not belong to their neighbourhood: a hit texel whose depth lies more than
-   DM__BK_OUTLIER texel sizes from the median of its hit neighbours in the chart (8 around, at
-   least 3 of them) had its ray slip past a thin part of the original to another sheet; it becomes
-   a MISS (filled from its neighbours). Decided on the depths as cast, so the order does not
-   matter. */
+   DM__BK_OUTLIER texel sizes beyond more than half of its hit neighbours in the chart, all on one
+   side (the 24 within two texels, at least 5 of them; at a chart's edge a group of slipped rays
+   fills a 3 x 3 window), had its ray slip past a thin part of the original to another sheet; it
+   becomes a MISS (filled from its neighbours). Decided on the depths as cast, so the order does
+   not matter. */
 #define DM__BK_OUTLIER 8.0
 static dm_result dm__bk_outliers(dm__bk_run *r)
 {
@@ -6873,23 +6876,24 @@ static dm_result dm__bk_outliers(dm__bk_run *r)
     for (y = 0; y < H; y++)
         for (x = 0; x < W; x++) {
             size_t id = (size_t)y * (size_t)W + (size_t)x;
-            double v[8], med;
-            int dx, dy, k = 0, a, b;
+            double d, tol;
+            int dx, dy, k = 0, below = 0, above = 0;
             uint32_t chart;
             if (!m->valid[id]) continue;
             chart = param->chart[param->texel_triangle[id]];
-            for (dy = -1; dy <= 1; dy++)
-                for (dx = -1; dx <= 1; dx++) {
+            d = m->disp[id];
+            tol = DM__BK_OUTLIER * sqrt((double)m->area[id]);
+            for (dy = -2; dy <= 2; dy++)
+                for (dx = -2; dx <= 2; dx++) {
                     size_t j;
                     if ((dx == 0 && dy == 0) || x + dx < 0 || y + dy < 0 || x + dx >= W || y + dy >= H) continue;
                     j = (size_t)(y + dy) * (size_t)W + (size_t)(x + dx);
-                    if (m->valid[j] && param->chart[param->texel_triangle[j]] == chart) v[k++] = m->disp[j];
+                    if (!m->valid[j] || param->chart[param->texel_triangle[j]] != chart) continue;
+                    k++;
+                    below += m->disp[j] < d - tol;
+                    above += m->disp[j] > d + tol;
                 }
-            if (k < 3) continue;
-            for (a = 1; a < k; a++) /* insertion sort of at most 8 */
-                for (b = a; b > 0 && v[b - 1] > v[b]; b--) { double t = v[b]; v[b] = v[b - 1]; v[b - 1] = t; }
-            med = k % 2 ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
-            odd[id] = fabs((double)m->disp[id] - med) > DM__BK_OUTLIER * sqrt((double)m->area[id]);
+            odd[id] = k >= 5 && (2 * below > k || 2 * above > k);
         }
     for (y = 0; y < H; y++)
         for (x = 0; x < W; x++) {
@@ -6938,22 +6942,31 @@ static int dm__bk_chart_extension(const dm__bk_run *r, size_t id, uint32_t chart
 }
 
 /* border texel id of base triangle tt at (bu, bv): the ray from the triangle's plane extended,
-   unless it misses or lands on a face of the original more than 60 degrees from the base
-   triangle: the original has a crease along the chart's edge (the ray reached the face beyond
-   it), and the chart's own field extended linearly is what a filter at the edge must read */
+   unless it misses, lands on a face of the original more than 60 degrees from the base triangle
+   (the original has a crease along the chart's edge: the ray reached the face beyond it) or lands
+   DM__BK_OUTLIER texel sizes off the chart's own field extended linearly (it slipped past a thin
+   part to another sheet): then that extension is what a filter at the edge must read */
 #define DM__BORDER_CREASE_COS 0.5
 static void dm__bk_border_texel(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv)
 {
     dm_dispmap *m = r->m;
     double ext[4], l, fo[3], fb[3];
     uint32_t hit = dm__bk_shoot(r, id, tt, dm__bk_base_point(r, id, tt, bu, bv, 0), 1);
-    int k;
+    int k, have = 0;
     if (hit != DM_NO_HIT) {
         dm__face_normal(r->opos, r->oidx, hit, fo);
         dm__face_normal(r->bpos, r->bidx, tt, fb);
-        if (dm__dot3(fo, fb) >= DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fb)) return;
+        if (dm__dot3(fo, fb) >= DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fb)) {
+            /* unless it slipped to another sheet (the hits' outlier rule, against the extension) */
+            const float *uv = r->param->uv + 6 * (size_t)tt;
+            double uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
+                         (double)r->param->width * (double)r->param->height;
+            double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fb) / uva) : 0.0; /* world size of tt's texels */
+            have = dm__bk_chart_extension(r, id, r->param->chart[tt], ext);
+            if (!have || fabs((double)m->disp[id] - ext[0]) <= DM__BK_OUTLIER * texel) return;
+        }
     }
-    if (!dm__bk_chart_extension(r, id, r->param->chart[tt], ext)) return;
+    if (!have && !dm__bk_chart_extension(r, id, r->param->chart[tt], ext)) return;
     l = sqrt(ext[1] * ext[1] + ext[2] * ext[2] + ext[3] * ext[3]);
     if (!(l > 1e-12)) return;
     if (m->status[id] != DM_TEXEL_BORDER) m->border_count++;
@@ -8304,6 +8317,41 @@ static int dm__sh_near_hit(const dm__sh_near *nr, const float *pos, const uint32
     return 0;
 }
 
+/* How far from the original a vertex's own neighbourhood lets its offset point lie, per unit of
+   offset: 1 where the surface is convex or flat, the smallest cosine between the vertex normal and
+   an adjacent face's normal where it is concave (the offset point is nearer those faces' planes),
+   at least DM__SH_CONCAVE. Growth compares the distance with this, so that a concave vertex stops
+   where another part comes near, not at its first step. */
+#define DM__SH_CONCAVE 0.75f
+static void dm__sh_local_reach(const dm__sh_run *r, float *near)
+{
+    size_t v, t;
+    int j, k;
+    for (v = 0; v < r->nv; v++) near[v] = 1.0f;
+    for (t = 0; t < r->nt; t++) {
+        const uint32_t *tv = r->idx + 3 * t;
+        double p[3][3], fn[3], e1[3], e2[3], len;
+        for (j = 0; j < 3; j++) dm__load3(r->pos, tv[j], p[j]);
+        dm__sub3(p[1], p[0], e1);
+        dm__sub3(p[2], p[0], e2);
+        dm__cross3(e1, e2, fn);
+        len = dm__len3(fn);
+        if (!(len > 0.0)) continue;
+        for (k = 0; k < 3; k++) fn[k] /= len;
+        for (j = 0; j < 3; j++) {
+            const float *n = r->sh->normals + 3 * (size_t)tv[j];
+            double c = 0.0, e[3];
+            float cf;
+            /* concave at this corner: the other corners lie on the normal's side of the tangent plane */
+            for (k = 0; k < 3; k++) e[k] = p[(j + 1) % 3][k] + p[(j + 2) % 3][k] - 2.0 * p[j][k];
+            if (e[0] * n[0] + e[1] * n[1] + e[2] * n[2] <= 0.0) continue;
+            for (k = 0; k < 3; k++) c += (double)n[k] * fn[k];
+            cf = (float)c < DM__SH_CONCAVE ? DM__SH_CONCAVE : (float)c;
+            if (cf < near[tv[j]]) near[tv[j]] = cf;
+        }
+    }
+}
+
 /* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
    normal; a vertex whose next offset point comes closer to another part of the original than
    90% of its offset would make the offset surface run into itself, and stops. Then the shell's
@@ -8316,7 +8364,10 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
     int steps = r->opt.steps == 0 ? 8 : r->opt.steps > 256 ? 256 : r->opt.steps, step, k;
     size_t v, nv = r->nv;
     dm__sh_near nr;
-    dm_result res = dm__sh_near_build(r, &nr);
+    float *near = (float *)dm__take(&r->sc, nv, sizeof(float));
+    dm_result res;
+    memset(&nr, 0, sizeof nr);
+    res = near ? dm__sh_near_build(r, &nr) : dm__scratch_fail(&r->sc);
     if (res != DM_OK) {
         dm_bvh_free(nr.bvh);
         return res;
@@ -8325,13 +8376,14 @@ static dm_result dm__sh_grow_offsets(dm__sh_run *r)
         sh->offset[v] = 0.0f;
         stopped[v] = sh->normals[3 * v] == 0.0f && sh->normals[3 * v + 1] == 0.0f && sh->normals[3 * v + 2] == 0.0f;
     }
+    dm__sh_local_reach(r, near);
     for (step = 1; step <= steps; step++) {
         float h = sh->thickness * (float)step / (float)steps;
         for (v = 0; v < nv; v++) {
             float q[3];
             if (stopped[v]) continue;
             for (k = 0; k < 3; k++) q[k] = pos[3 * v + (size_t)k] + h * sh->normals[3 * v + (size_t)k];
-            if (dm__sh_near_hit(&nr, pos, r->idx, q, 0.9f * h)) {
+            if (dm__sh_near_hit(&nr, pos, r->idx, q, 0.9f * h * near[v])) {
                 stopped[v] = 1;
                 sh->stopped_vertices++;
             } else {

@@ -39,10 +39,10 @@ static const expected table[] = {
     {"torus bake", 0xc9e4b3e8d396ca72ull},
     {"torus reconstruct", 0xcbc86d81f02bc005ull},
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
-    {"thin torus simplify shell", 0xaf62b4d9e1d8d84bull},
-    {"thin torus parameterize", 0x2aa6458a410ebd87ull},
-    {"thin torus bake", 0x6bfacd7ad2905e25ull},
-    {"thin torus reconstruct", 0xa2cfdaa5af2daf35ull},
+    {"thin torus simplify shell", 0x108136a851d0f249ull},
+    {"thin torus parameterize", 0xc181ad843f43f85eull},
+    {"thin torus bake", 0xb58ad145c6182ea9ull},
+    {"thin torus reconstruct", 0x56191e508f838a00ull},
 };
 
 #define STAGES 5
