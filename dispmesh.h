@@ -125,11 +125,9 @@
      envelopes), and each texel must get one depth (no overlap, the paper's Fig 4.1.3).
      dm_shell_grow grows the shell; dm_shell_constraint and dm_shell_collapsed keep the base in it.
      METHOD. Growth: every vertex moves out along its angle-weighted normal in `steps` steps up to
-     `thickness`, and stops for good when its next offset point would come closer to the
-     original than 90% of what its own neighbourhood allows (the offset, less where the surface is
-     concave): it would run into another part (tested on fragments about a thickness long in a
-     tree of boxes and normal slabs). The paper's smoothing pass is not done: nothing needs it.
-     Per candidate collapse, in order:
+     `thickness`, and stops for good when its next offset point comes closer to the original than
+     90% of what its own faces allow (less than the offset where the surface is concave): it would
+     run into another part. The paper's smoothing pass is not needed. Per candidate collapse:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
@@ -149,8 +147,7 @@
           A miss is a violation unless the original is open and the sample lies within 0.05
           thickness of it (beside its boundary: a base reaching farther out overhangs it).
      The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
-     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED) and keeps
-     that answer for the call in full.
+     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED).
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
      relax_cost (16) times its cost, asked relaxed (relaxing only once all are stuck leaves knots of
@@ -164,10 +161,9 @@
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 bytes per fragment besides; the constraint 48 bytes per original
-     vertex near the widest candidate and 68 bytes per triangle of the widest one-ring.
-     ERRORS. dm_shell_grow as in COMMON. The constraint vetoes what it cannot check (NULL
-     arguments, allocation failure).
+     dm_shell_grow runs, about 100 per fragment besides; the constraint 48 per original vertex near
+     the widest candidate and 68 per triangle of the widest one-ring.
+     ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
      vertex normals (without it, normals come from the one-ring). The overlap is checked on the new
