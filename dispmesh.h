@@ -8349,9 +8349,9 @@ static void dm__sh_local_reach(const dm__sh_run *r, float *near)
 }
 
 /* Growth (Cohen et al. 1996, in steps of thickness / steps): every vertex moves out along its
-   normal; a vertex whose next offset point comes closer to another part of the original than
-   90% of its offset would make the offset surface run into itself, and stops. Then the shell's
-   positions. */
+   normal; a vertex whose next offset point comes closer to the original than 90% of what its own
+   faces allow (dm__sh_local_reach) would make the offset surface run into another part, and
+   stops. Then the shell's positions. */
 static dm_result dm__sh_grow_offsets(dm__sh_run *r)
 {
     dm_shell *sh = r->sh;
