@@ -6698,13 +6698,20 @@ static dm_result dm__bk_prepare(dm__bk_run *r)
    texels; 0 otherwise). A border texel's (bu, bv) lie outside the triangle: the point is the
    triangle's plane extended, the normal the one at the nearest point of the triangle. Returns
    the normal's length before normalizing (0: no direction to search). */
+/* base triangle tt's area in the map, in texels */
+static double dm__bk_uv_area(const dm_param *param, uint32_t tt)
+{
+    const float *uv = param->uv + 6 * (size_t)tt;
+    return 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
+           (double)param->width * (double)param->height;
+}
+
 static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv, int area)
 {
     const dm_param *param = r->param;
     dm_dispmap *m = r->m;
     const uint32_t *bi = r->bidx + 3 * (size_t)tt;
     double p[3][3], nv[3], b0, len, fnv[3], e1[3], e2[3], uva, nu = bu, nw = bv, nb;
-    const float *uv;
     int k, c;
     b0 = 1.0 - bu - bv;
     if (nu < 0.0) nu = 0.0;
@@ -6725,9 +6732,7 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu
     len = dm__len3(nv);
     if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__len3(nv); }
     for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
-    uv = param->uv + 6 * (size_t)tt;
-    uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
-          (double)param->width * (double)param->height;
+    uva = dm__bk_uv_area(param, tt);
     m->area[id] = area && uva > 0.0 ? (float)(0.5 * dm__len3(fnv) / uva) : 0.0f;
     return len;
 }
@@ -6954,10 +6959,7 @@ static void dm__bk_border_texel(dm__bk_run *r, size_t id, uint32_t tt, double bu
         dm__face_normal(r->bpos, r->bidx, tt, fb);
         if (dm__dot3(fo, fb) >= DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fb)) {
             /* unless it slipped to another sheet (the hits' outlier rule, against the extension) */
-            const float *uv = r->param->uv + 6 * (size_t)tt;
-            double uva = 0.5 * fabs(((double)uv[2] - uv[0]) * ((double)uv[5] - uv[1]) - ((double)uv[4] - uv[0]) * ((double)uv[3] - uv[1])) *
-                         (double)r->param->width * (double)r->param->height;
-            double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fb) / uva) : 0.0; /* world size of tt's texels */
+            double uva = dm__bk_uv_area(r->param, tt), texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fb) / uva) : 0.0; /* world size of tt's texels */
             have = dm__bk_chart_extension(r, id, r->param->chart[tt], ext);
             if (!have || fabs((double)m->disp[id] - ext[0]) <= DM__BK_OUTLIER * texel) return;
         }
