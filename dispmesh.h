@@ -167,9 +167,7 @@
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
      vertex normals (without it, normals come from the one-ring). The overlap is checked on the new
-     one-ring only: a later collapse beside a triangle turns its corners' normals without checking
-     it again, so a few base triangles can fail it at the end (their texels then miss:
-     dm_dispmap.miss_count).
+     one-ring only: a later collapse that turns a triangle's corner normals can make its texels miss.
 
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
      WHAT. A base mesh laid out in one width x height map, the displacement and the original's
@@ -197,9 +195,11 @@
      beyond more than half of its chart neighbours within 2 texels (a ray that slipped past a thin
      part), is DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart are
      DM_TEXEL_BORDER, baked from the nearest such triangle's plane extended (the chart's field
-     extended where that ray meets a crease or lands 8 texel sizes off it), so that bilinear
-     filtering (and the first mip level) reads real samples. MISS and EMPTY texels get push-pull
-     filled values (Gortler et al. 1996) for filtering only.
+     extended where that ray meets a crease or lands 8 texel sizes off it) for filtering and the
+     first mip level, then fitted (least squares) so that a chart's bilinear read along its
+     boundary gives the depth of the edge point's own ray: the charts on a seam read one depth
+     there (on a crease of the original each keeps its own face). MISS and EMPTY texels get
+     push-pull filled values (Gortler et al. 1996) for filtering only.
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
      stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
      dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel
@@ -6693,11 +6693,6 @@ static dm_result dm__bk_prepare(dm__bk_run *r)
     return dm_bvh_build(r->opos, r->onv, r->oidx, r->ont, &bo, &r->bvh);
 }
 
-/* texel id at barycentrics (bu, bv) of base triangle tt: its base point, unit interpolated
-   normal and, when area is set, the surface area it stands for (3D area over the UV area in
-   texels; 0 otherwise). A border texel's (bu, bv) lie outside the triangle: the point is the
-   triangle's plane extended, the normal the one at the nearest point of the triangle. Returns
-   the normal's length before normalizing (0: no direction to search). */
 /* base triangle tt's area in the map, in texels */
 static double dm__bk_uv_area(const dm_param *param, uint32_t tt)
 {
@@ -6706,12 +6701,16 @@ static double dm__bk_uv_area(const dm_param *param, uint32_t tt)
            (double)param->width * (double)param->height;
 }
 
-static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv, int area)
+/* the point of base triangle tt at barycentrics (bu, bv) into pos, its unit interpolated normal
+   into nrm (the face's where the interpolated one vanishes) and the face's normal (twice the
+   area) into fnv. (bu, bv) outside the triangle (a border texel's): the point is the triangle's
+   plane extended, the normal the one at the nearest point of the triangle. Returns the normal's
+   length before normalizing (0: no direction to search). */
+static double dm__bk_point(const dm__bk_run *r, uint32_t tt, double bu, double bv, float pos[3], float nrm[3],
+                           double fnv[3])
 {
-    const dm_param *param = r->param;
-    dm_dispmap *m = r->m;
     const uint32_t *bi = r->bidx + 3 * (size_t)tt;
-    double p[3][3], nv[3], b0, len, fnv[3], e1[3], e2[3], uva, nu = bu, nw = bv, nb;
+    double p[3][3], nv[3], b0, len, e1[3], e2[3], nu = bu, nw = bv, nb;
     int k, c;
     b0 = 1.0 - bu - bv;
     if (nu < 0.0) nu = 0.0;
@@ -6723,7 +6722,7 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu
         const float *n0 = r->bnrm + 3 * (size_t)bi[0];
         const float *n1 = r->bnrm + 3 * (size_t)bi[1];
         const float *n2 = r->bnrm + 3 * (size_t)bi[2];
-        m->pos[3 * id + (size_t)k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
+        pos[k] = (float)(b0 * p[0][k] + bu * p[1][k] + bv * p[2][k]);
         nv[k] = nb * n0[k] + nu * n1[k] + nw * n2[k];
     }
     dm__sub3(p[1], p[0], e1);
@@ -6731,36 +6730,52 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu
     dm__cross3(e1, e2, fnv);
     len = dm__len3(nv);
     if (!(len > 1e-12)) { for (k = 0; k < 3; k++) nv[k] = fnv[k]; len = dm__len3(nv); }
-    for (k = 0; k < 3; k++) m->nrm[3 * id + (size_t)k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
-    uva = dm__bk_uv_area(param, tt);
+    for (k = 0; k < 3; k++) nrm[k] = len > 0.0 ? (float)(nv[k] / len) : 0.0f;
+    return len;
+}
+
+/* texel id at barycentrics (bu, bv) of base triangle tt: its point and normal (dm__bk_point)
+   and, when area is set, the surface area it stands for (3D area over the UV area in texels; 0
+   otherwise); returns the normal's length before normalizing */
+static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu, double bv, int area)
+{
+    dm_dispmap *m = r->m;
+    double fnv[3], uva, len = dm__bk_point(r, tt, bu, bv, m->pos + 3 * id, m->nrm + 3 * id, fnv);
+    uva = dm__bk_uv_area(r->param, tt);
     m->area[id] = area && uva > 0.0 ? (float)(0.5 * dm__len3(fnv) / uva) : 0.0f;
     return len;
 }
 
-/* the ray from texel id's base point along -normal (inward first where asked, else the whole
-   line): the depth and the original's normal at the hit, or a miss (a border texel that
-   misses stays EMPTY); returns the original's triangle hit, or DM_NO_HIT */
-static uint32_t dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len, int border)
+/* the ray from point pos along -nrm, by the rule of base triangle tt (inward first where asked,
+   else the whole line): 1 and its hit, or 0 */
+static int dm__bk_trace(const dm__bk_run *r, const float pos[3], const float nrm[3], uint32_t tt, dm_hit *hit)
 {
-    dm_dispmap *m = r->m;
     float maxd = r->maxd;
     dm_ray ray;
-    dm_hit hit;
-    int got, in_t, k;
+    int got = 0, in_t, k;
     for (k = 0; k < 3; k++) {
-        ray.org[k] = m->pos[3 * id + (size_t)k];
-        ray.dir[k] = -m->nrm[3 * id + (size_t)k];
+        ray.org[k] = pos[k];
+        ray.dir[k] = -nrm[k];
     }
     in_t = r->o.inward && !(r->o.both_ways && r->o.both_ways[tt]);
     ray.tmin = in_t ? -0.1f * maxd : -maxd;
     ray.tmax = maxd;
-    got = 0;
-    if (len > 0.0 && in_t) got = dm_bvh_intersect(r->bvh, &ray, &hit);
-    if (len > 0.0 && !got) {
+    if (in_t) got = dm_bvh_intersect(r->bvh, &ray, hit);
+    if (!got) {
         ray.tmin = -maxd;
-        got = dm_bvh_intersect_line(r->bvh, &ray, &hit);
+        got = dm_bvh_intersect_line(r->bvh, &ray, hit);
     }
-    if (got) {
+    return got;
+}
+
+/* texel id's ray (dm__bk_trace): the depth and the original's normal at the hit, or a miss (a
+   border texel that misses stays EMPTY); returns the original's triangle hit, or DM_NO_HIT */
+static uint32_t dm__bk_shoot(dm__bk_run *r, size_t id, uint32_t tt, double len, int border)
+{
+    dm_dispmap *m = r->m;
+    dm_hit hit;
+    int k;
+    if (len > 0.0 && dm__bk_trace(r, m->pos + 3 * id, m->nrm + 3 * id, tt, &hit)) {
         const uint32_t *oi = r->oidx + 3 * (size_t)hit.triangle;
         const float *onrm = r->onrm;
         double hn[3], hl, w0 = 1.0 - (double)hit.u - (double)hit.v;
@@ -6995,6 +7010,163 @@ static dm_result dm__bk_border(dm__bk_run *r)
     return DM_OK;
 }
 
+/* The seams. The charts on a seam read the map at the same edge points, each from its own
+   texels, and the reconstruction averages what they read. Where the depth bends within the last
+   texel before the edge, each chart's border texels (its field extended) continue its own side,
+   the reads disagree and the average lies off the surface. So the border texels are fitted: at
+   points along every chart boundary edge, DM__BK_SEAM_STEP texels apart (its ends included), the
+   bilinear read should give the depth of the ray shot from that edge point, the same ray for both
+   sides. Least squares over the border texels (the hits stay), each held to its rule's value with
+   weight DM__BK_SEAM_HOLD; Gauss-Seidel sweeps in texel order. A point is left out where its ray
+   slipped (DM__BK_OUTLIER texel sizes off the read) or lands on a face turned more than the border
+   rule's crease angle from the triangle: on a crease of the original along the edge, each chart
+   keeps its own face up to the edge. */
+#define DM__BK_SEAM_STEP 0.5
+#define DM__BK_SEAM_HOLD 0.05
+#define DM__BK_SEAM_SWEEPS 16
+#define DM__BK_SEAM_MAX ((size_t)UINT32_MAX / 4 - 1) /* points (their texel slots count in 32 bits) */
+
+typedef struct dm__bk_edge_sample {
+    size_t id[4]; /* the texels the read uses */
+    double w[4];  /* and their bilinear weights */
+    double depth; /* the edge point's own ray */
+} dm__bk_edge_sample;
+
+/* sample (u, v) in the map: its 4 texels and weights, as the reconstruction reads them */
+static void dm__bk_read_weights(const dm_param *pm, double u, double v, dm__bk_edge_sample *s)
+{
+    int W = pm->width, H = pm->height, i;
+    double fx = u * W - 0.5, fy = v * H - 0.5, ix = floor(fx), iy = floor(fy), tx = fx - ix, ty = fy - iy;
+    long x0 = (long)ix, y0 = (long)iy, xs[2], ys[2];
+    xs[0] = x0 < 0 ? 0 : x0 >= W ? W - 1 : x0;
+    xs[1] = x0 + 1 < 0 ? 0 : x0 + 1 >= W ? W - 1 : x0 + 1;
+    ys[0] = y0 < 0 ? 0 : y0 >= H ? H - 1 : y0;
+    ys[1] = y0 + 1 < 0 ? 0 : y0 + 1 >= H ? H - 1 : y0 + 1;
+    for (i = 0; i < 4; i++) {
+        s->id[i] = (size_t)ys[i / 2] * (size_t)W + (size_t)xs[i % 2];
+        s->w[i] = (i % 2 ? tx : 1.0 - tx) * (i / 2 ? ty : 1.0 - ty);
+    }
+}
+
+/* the samples along chart boundary edges into *out (count *n); each reads a border texel, and
+   only texels already baked (hits and border texels) */
+static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, size_t *n)
+{
+    const dm_param *pm = r->param;
+    const dm_dispmap *m = r->m;
+    size_t t, cap = 0, ns = 0;
+    int c, pass;
+    dm__bk_edge_sample *smp = NULL;
+    for (pass = 0; pass < 2; pass++) {
+        for (t = 0; t < r->bnt; t++)
+            for (c = 0; c < 3; c++) {
+                const float *uv = pm->uv + 6 * t;
+                uint32_t tw = pm->twin[3 * t + (size_t)c];
+                int c1 = (c + 1) % 3;
+                double du = (uv[2 * c1] - uv[2 * c]) * pm->width, dv = (uv[2 * c1 + 1] - uv[2 * c + 1]) * pm->height;
+                size_t j, cnt;
+                if (tw != DM_NO_HIT && tw < r->bnt && pm->chart[tw] == pm->chart[t]) continue; /* inside a chart */
+                cnt = (size_t)ceil(sqrt(du * du + dv * dv) / DM__BK_SEAM_STEP) + 1;
+                if (cnt > 1u << 20) cnt = 1u << 20;
+                if (pass == 0) { cap += cnt; continue; }
+                for (j = 0; j < cnt && ns < DM__BK_SEAM_MAX; j++) {
+                    double sv = cnt > 1 ? (double)j / (double)(cnt - 1) : 0.5, w[3] = {0.0, 0.0, 0.0}, fnv[3];
+                    float pos[3], nrm[3];
+                    dm__bk_edge_sample *e = smp + ns;
+                    dm_hit hit;
+                    int i, border = 0, known = 1;
+                    w[c] = 1.0 - sv;
+                    w[c1] = sv;
+                    if (!(dm__bk_point(r, (uint32_t)t, w[1], w[2], pos, nrm, fnv) > 0.0) ||
+                        !dm__bk_trace(r, pos, nrm, (uint32_t)t, &hit))
+                        continue;
+                    dm__bk_read_weights(pm, w[0] * uv[0] + w[1] * uv[2] + w[2] * uv[4],
+                                        w[0] * uv[1] + w[1] * uv[3] + w[2] * uv[5], e);
+                    for (i = 0; i < 4; i++) {
+                        border |= m->status[e->id[i]] == DM_TEXEL_BORDER && e->w[i] > 0.0;
+                        known &= m->valid[e->id[i]] || m->status[e->id[i]] == DM_TEXEL_BORDER || !(e->w[i] > 0.0);
+                    }
+                    if (!border || !known) continue;
+                    {   /* a ray that slipped past a thin part to another sheet (dm__bk_border_texel's rule) */
+                        double rd = 0.0, uva = dm__bk_uv_area(pm, (uint32_t)t);
+                        double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fnv) / uva) : 0.0;
+                        for (i = 0; i < 4; i++) rd += e->w[i] * m->disp[e->id[i]];
+                        if (fabs((double)hit.t - rd) > DM__BK_OUTLIER * texel) continue;
+                    }
+                    {   /* on a face of the original turned from the base triangle (a crease at the edge): the border rule's extension stays */
+                        double fo[3];
+                        dm__face_normal(r->opos, r->oidx, hit.triangle, fo);
+                        if (dm__dot3(fo, fnv) < DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fnv)) continue;
+                    }
+                    e->depth = hit.t;
+                    ns++;
+                }
+            }
+        if (pass == 0) {
+            smp = (dm__bk_edge_sample *)dm__take(&r->sc, cap ? cap : 1, sizeof(dm__bk_edge_sample));
+            if (!smp) return dm__scratch_fail(&r->sc);
+        }
+    }
+    *out = smp;
+    *n = ns;
+    return DM_OK;
+}
+
+/* a border texel's place in an edge sample's read: sorted by texel, then sample */
+typedef struct dm__bk_slot {
+    size_t id;     /* the texel */
+    uint32_t slot; /* 4 x its sample + its place in the read */
+} dm__bk_slot;
+
+static int dm__bk_slot_cmp(const void *a, const void *b)
+{
+    const dm__bk_slot *x = (const dm__bk_slot *)a, *y = (const dm__bk_slot *)b;
+    if (x->id != y->id) return x->id < y->id ? -1 : 1;
+    return x->slot < y->slot ? -1 : x->slot > y->slot;
+}
+
+static dm_result dm__bk_seams(dm__bk_run *r)
+{
+    dm_dispmap *m = r->m;
+    size_t ns = 0, nl = 0, s, a, b, g;
+    dm__bk_edge_sample *smp;
+    dm__bk_slot *sl;
+    float *hold;
+    int sweep, k;
+    dm_result res = dm__bk_edge_samples(r, &smp, &ns);
+    if (res != DM_OK) return res;
+    sl = (dm__bk_slot *)dm__take(&r->sc, 4 * ns + 1, sizeof(dm__bk_slot));
+    hold = (float *)dm__take(&r->sc, 4 * ns + 1, sizeof(float));
+    if (!sl || !hold) return dm__scratch_fail(&r->sc);
+    for (s = 0; s < ns; s++) /* the border texels each sample reads, grouped by texel */
+        for (k = 0; k < 4; k++)
+            if (m->status[smp[s].id[k]] == DM_TEXEL_BORDER && smp[s].w[k] > 0.0) {
+                sl[nl].id = smp[s].id[k];
+                sl[nl++].slot = (uint32_t)(4 * s + (size_t)k);
+            }
+    if (nl > 1) qsort(sl, nl, sizeof *sl, dm__bk_slot_cmp);
+    for (a = 0, g = 0; a < nl; a = b, g++) { /* each texel's value by its rule, to hold it to */
+        for (b = a + 1; b < nl && sl[b].id == sl[a].id; b++) {}
+        hold[g] = m->disp[sl[a].id];
+    }
+    for (sweep = 0; sweep < DM__BK_SEAM_SWEEPS; sweep++)
+        for (a = 0, g = 0; a < nl; a = b, g++) {
+            double num = DM__BK_SEAM_HOLD * hold[g], den = DM__BK_SEAM_HOLD;
+            for (b = a; b < nl && sl[b].id == sl[a].id; b++) {
+                const dm__bk_edge_sample *e = smp + sl[b].slot / 4;
+                int own = (int)(sl[b].slot % 4), j;
+                double rest = e->depth; /* what this texel's share of the read should be */
+                for (j = 0; j < 4; j++)
+                    if (j != own) rest -= e->w[j] * m->disp[e->id[j]];
+                num += e->w[own] * rest;
+                den += e->w[own] * e->w[own];
+            }
+            m->disp[sl[a].id] = (float)(num / den);
+        }
+    if (r->o.progress && r->o.progress(r->o.progress_user, 0.98f)) return DM_CANCELLED;
+    return DM_OK;
+}
+
 /* push-pull fill of everything that is not a hit or a border texel, for filtering only */
 static dm_result dm__bk_fill(dm__bk_run *r)
 {
@@ -7059,6 +7231,7 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
     if (res == DM_OK) res = dm__bk_cast(&r);     /* one ray per texel */
     if (res == DM_OK) res = dm__bk_outliers(&r); /* rays that slipped to another sheet */
     if (res == DM_OK) res = dm__bk_border(&r);   /* and per texel of the charts' borders */
+    if (res == DM_OK) res = dm__bk_seams(&r);    /* border texels fitted to the seams' rays */
     if (res == DM_OK) res = dm__bk_fill(&r);     /* push-pull over the misses */
     dm_bvh_free(r.bvh);
     dm__release(&r.sc);
