@@ -47,7 +47,8 @@
             unconstrained_rms= equal_bytes_rms= equal_bytes_max= flagged= bake_ms= total_ms=
    with distances as fractions of the original's bounding-box diagonal (see print_result).
    The stage notes say which constraint vetoed how many collapses (enclosure, shell, overlap) and
-   whether the target was reached; RESULT's target= is --faces and faces= what was reached.
+   whether the target was reached; RESULT's target= is --faces and faces= what was reached. A
+   note says when the input runs through itself (its edges that pass through its triangles).
    Exit status (as every program in examples/): 0 done; 1 failure: unreadable input, a stage
    failed, a failed write, or the result is unusable: base triangles without a texel (the map is
    too coarse for the base; the reconstruction would have holes) or more than 1% of the texels
@@ -749,6 +750,44 @@ static long stitch(mio_mesh *m)
     return apart;
 }
 
+/* How often the surface runs through itself: the edges of m that pass through one of its
+   triangles (away from the edge's own ends), each counted once; -1 when out of memory. No
+   enclosing base can follow such a surface, and its shell cannot grow there. */
+static long self_crossings(const mesh *m)
+{
+    dm_bvh *bvh = NULL;
+    size_t t;
+    long n = 0;
+    int c, k;
+    if (dm_bvh_build(m->p, m->nv, m->t, m->nt, NULL, &bvh) != DM_OK) return -1;
+    for (t = 0; t < m->nt; t++)
+        for (c = 0; c < 3; c++) {
+            uint32_t a = m->t[3 * t + (size_t)c], b = m->t[3 * t + (size_t)(c + 1) % 3];
+            const float *pa = m->p + 3 * (size_t)a, *pb = m->p + 3 * (size_t)b;
+            double d[3], len = 0.0;
+            dm_ray ray;
+            dm_hit hit;
+            if (a > b) continue; /* an edge of two triangles once (a boundary edge may be skipped) */
+            for (k = 0; k < 3; k++) {
+                d[k] = (double)pb[k] - pa[k];
+                len += d[k] * d[k];
+            }
+            len = sqrt(len);
+            if (!(len > 0.0)) continue;
+            for (k = 0; k < 3; k++) {
+                ray.org[k] = pa[k];
+                ray.dir[k] = (float)(d[k] / len);
+            }
+            ray.tmin = (float)(1e-3 * len);
+            ray.tmax = (float)((1.0 - 1e-3) * len);
+            if (!dm_bvh_intersect(bvh, &ray, &hit)) continue;
+            for (k = 0; k < 3 && m->t[3 * (size_t)hit.triangle + (size_t)k] != a && m->t[3 * (size_t)hit.triangle + (size_t)k] != b; k++) {}
+            n += k == 3;
+        }
+    dm_bvh_free(bvh);
+    return n;
+}
+
 static void usage(FILE *to)
 {
     fprintf(to,
@@ -871,7 +910,7 @@ int main(int argc, char **argv)
         mio_error err;
         mio_result mr;
         size_t before;
-        long apart;
+        long apart, crossings;
         errno = 0;
         if ((mr = mio_read_file(in, NULL, &R.loaded, &err)) != MIO_OK) {
             cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr),
@@ -892,6 +931,14 @@ int main(int argc, char **argv)
         R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
+        if ((crossings = self_crossings(&R.orig)) < 0) {
+            fprintf(stderr, "dispmesh: out of memory\n");
+            goto done;
+        }
+        if (crossings > 0)
+            fprintf(stderr, "dispmesh: note: the surface runs through itself: %ld of its edges pass through another of its "
+                            "triangles (the shell cannot grow there, and no enclosing base can follow the surface)\n",
+                    crossings);
     }
     diag = bbox_diagonal(&R.orig, lo, hi);
     if (!(diag > 0.0) || !isfinite(diag)) {

@@ -5,7 +5,8 @@
 #   (counted skip without it); the RESULT line has every field, numeric; faces <= 12; rms < base_only_rms;
 #   flagged <= 0.01; target = 12.
 #   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12;
-#   two octahedra whose corners share a position: the two vertices stay apart (no weld into a pinch).
+#   two octahedra whose corners share a position: the two vertices stay apart (no weld into a pinch);
+#   two octahedra that run through each other: a note says so (not for the touching pair, nor the brick).
 #   bad input (missing file, malformed files of our own and, when installed, of assimp-testmodels,
 #   a mesh without extent, an unwritable prefix, a map too coarse for the base so that base triangles
 #   get no texel): exit 1 (failure); bad arguments (--res 0, a bad number, no input, an unknown
@@ -108,6 +109,20 @@ awk 'BEGIN { print "OFF"; print "12 16 0"
 check "corners meeting at a point stay apart: $(grep -m1 apart "$tmp/pinch_err.txt")" \
   grep -q '^dispmesh: 1 vertices share a position with another but meet it only at a point' "$tmp/pinch_err.txt"
 check "and are not welded: $(grep -m1 'vertices,' "$tmp/pinch_err.txt")" grep -q 'pinch.off: 12 vertices, 16 triangles' "$tmp/pinch_err.txt"
+
+# ---- two octahedra that run through each other: said; the corner-touching pair and the brick are not --
+awk 'BEGIN { print "OFF"; print "12 16 0"
+  for (o = 0; o < 2; o++) { c = 0.8 * o
+    print c + 1, 0, 0; print c - 1, 0, 0; print c, 1, 0; print c, -1, 0; print c, 0, 1; print c, 0, -1 }
+  for (o = 0; o < 2; o++) { b = 6 * o
+    print 3, b + 0, b + 2, b + 4; print 3, b + 2, b + 1, b + 4; print 3, b + 1, b + 3, b + 4; print 3, b + 3, b + 0, b + 4
+    print 3, b + 2, b + 0, b + 5; print 3, b + 1, b + 2, b + 5; print 3, b + 3, b + 1, b + 5; print 3, b + 0, b + 3, b + 5 } }' \
+  >"$tmp/cross.off"
+"$prog" "$tmp/cross.off" --faces 16 --res 64 --no-views -o "$tmp/cross" >/dev/null 2>"$tmp/cross_err.txt"
+check "two interpenetrating octahedra: the note says the surface runs through itself ($(grep -m1 'runs through' "$tmp/cross_err.txt"))" \
+  grep -q '^dispmesh: note: the surface runs through itself: [1-9][0-9]* of its edges' "$tmp/cross_err.txt"
+check "octahedra touching at a corner: no such note" sh -c "! grep -q 'runs through itself' '$tmp/pinch_err.txt'"
+check "the brick: no such note" sh -c "! grep -q 'runs through itself' '$tmp/full_err.txt'"
 
 # ---- a target the paper's constraints cannot reach: the brick's box has 12 faces -----------------
 "$prog" --brick --strict --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"
