@@ -225,7 +225,7 @@
      floor (0 = 5% of the mean weight). dm_distance_options: samples_per_side (0 = 200000, at most
      10^9). Each with allocator and progress.
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
-     packing); dm_dispmap: 46 bytes per texel (about 38 more while dm_bake runs) plus a BVH of the
+     packing); dm_dispmap: 46 bytes per texel (about 42 more while dm_bake runs) plus a BVH of the
      original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per covered
      texel), 60 more per vertex and up to 180 per triangle of the largest base triangle's
      tessellation while dm_reconstruct runs.
@@ -7112,56 +7112,56 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
     return DM_OK;
 }
 
-/* a border texel's place in an edge sample's read: sorted by texel, then sample */
-typedef struct dm__bk_slot {
-    size_t id;     /* the texel */
-    uint32_t slot; /* 4 x its sample + its place in the read */
-} dm__bk_slot;
-
-static int dm__bk_slot_cmp(const void *a, const void *b)
-{
-    const dm__bk_slot *x = (const dm__bk_slot *)a, *y = (const dm__bk_slot *)b;
-    if (x->id != y->id) return x->id < y->id ? -1 : 1;
-    return x->slot < y->slot ? -1 : x->slot > y->slot;
-}
-
 static dm_result dm__bk_seams(dm__bk_run *r)
 {
     dm_dispmap *m = r->m;
-    size_t ns = 0, nl = 0, s, a, b, g;
+    size_t n = (size_t)m->width * (size_t)m->height, ns = 0, na = 0, s, i;
     dm__bk_edge_sample *smp;
-    dm__bk_slot *sl;
+    uint32_t *first, *slot, *act;
     float *hold;
     int sweep, k;
     dm_result res = dm__bk_edge_samples(r, &smp, &ns);
     if (res != DM_OK) return res;
-    sl = (dm__bk_slot *)dm__take(&r->sc, 4 * ns + 1, sizeof(dm__bk_slot));
-    hold = (float *)dm__take(&r->sc, 4 * ns + 1, sizeof(float));
-    if (!sl || !hold) return dm__scratch_fail(&r->sc);
-    for (s = 0; s < ns; s++) /* the border texels each sample reads, grouped by texel */
+    first = (uint32_t *)dm__take(&r->sc, n + 1, sizeof(uint32_t));
+    slot = (uint32_t *)dm__take(&r->sc, 4 * ns + 1, sizeof(uint32_t));
+    if (!first || !slot) return dm__scratch_fail(&r->sc);
+    /* each border texel's places in the samples' reads (4 x sample + place), in sample order */
+    memset(first, 0, (n + 1) * sizeof(uint32_t));
+    for (s = 0; s < ns; s++)
         for (k = 0; k < 4; k++)
-            if (m->status[smp[s].id[k]] == DM_TEXEL_BORDER && smp[s].w[k] > 0.0) {
-                sl[nl].id = smp[s].id[k];
-                sl[nl++].slot = (uint32_t)(4 * s + (size_t)k);
-            }
-    if (nl > 1) qsort(sl, nl, sizeof *sl, dm__bk_slot_cmp);
-    for (a = 0, g = 0; a < nl; a = b, g++) { /* each texel's value by its rule, to hold it to */
-        for (b = a + 1; b < nl && sl[b].id == sl[a].id; b++) {}
-        hold[g] = m->disp[sl[a].id];
+            if (m->status[smp[s].id[k]] == DM_TEXEL_BORDER && smp[s].w[k] > 0.0) first[smp[s].id[k] + 1]++;
+    for (i = 0; i < n; i++) {
+        na += first[i + 1] > 0;
+        first[i + 1] += first[i];
     }
+    for (s = 0; s < ns; s++)
+        for (k = 0; k < 4; k++)
+            if (m->status[smp[s].id[k]] == DM_TEXEL_BORDER && smp[s].w[k] > 0.0)
+                slot[first[smp[s].id[k]]++] = (uint32_t)(4 * s + (size_t)k);
+    for (i = n; i > 0; i--) first[i] = first[i - 1];
+    first[0] = 0;
+    act = (uint32_t *)dm__take(&r->sc, na + 1, sizeof(uint32_t));
+    hold = (float *)dm__take(&r->sc, na + 1, sizeof(float));
+    if (!act || !hold) return dm__scratch_fail(&r->sc);
+    for (i = 0, na = 0; i < n; i++) /* the texels to fit, each held to its rule's value */
+        if (first[i] < first[i + 1]) {
+            hold[na] = m->disp[i];
+            act[na++] = (uint32_t)i;
+        }
     for (sweep = 0; sweep < DM__BK_SEAM_SWEEPS; sweep++)
-        for (a = 0, g = 0; a < nl; a = b, g++) {
-            double num = DM__BK_SEAM_HOLD * hold[g], den = DM__BK_SEAM_HOLD;
-            for (b = a; b < nl && sl[b].id == sl[a].id; b++) {
-                const dm__bk_edge_sample *e = smp + sl[b].slot / 4;
-                int own = (int)(sl[b].slot % 4), j;
+        for (i = 0; i < na; i++) {
+            double num = DM__BK_SEAM_HOLD * hold[i], den = DM__BK_SEAM_HOLD;
+            uint32_t q;
+            for (q = first[act[i]]; q < first[act[i] + 1]; q++) {
+                const dm__bk_edge_sample *e = smp + slot[q] / 4;
+                int own = (int)(slot[q] % 4), j;
                 double rest = e->depth; /* what this texel's share of the read should be */
                 for (j = 0; j < 4; j++)
                     if (j != own) rest -= e->w[j] * m->disp[e->id[j]];
                 num += e->w[own] * rest;
                 den += e->w[own] * e->w[own];
             }
-            m->disp[sl[a].id] = (float)(num / den);
+            m->disp[act[i]] = (float)(num / den);
         }
     if (r->o.progress && r->o.progress(r->o.progress_user, 0.98f)) return DM_CANCELLED;
     return DM_OK;
