@@ -7018,12 +7018,15 @@ static dm_result dm__bk_border(dm__bk_run *r)
    bilinear read should give the depth of the ray shot from that edge point, the same ray for both
    sides. Least squares over the border texels (the hits stay), each held to its rule's value with
    weight DM__BK_SEAM_HOLD; Gauss-Seidel sweeps in texel order. A point is left out where its ray
-   slipped (DM__BK_OUTLIER texel sizes off the read) or lands on a face turned more than the border
-   rule's crease angle from the triangle: on a crease of the original along the edge, each chart
-   keeps its own face up to the edge. */
+   slipped (DM__BK_OUTLIER texel sizes off the read) or lands on a face turned more than 75 degrees
+   (DM__BK_SEAM_CREASE_COS) from the triangle: on a crease of the original along the edge, each
+   chart keeps its own face up to the edge (a bilinear read cannot have both that face and the
+   edge's depth). The border rule's 60 degrees would leave out more points beside sharp base edges
+   of smooth surfaces, where the fit helps. */
 #define DM__BK_SEAM_STEP 0.5
 #define DM__BK_SEAM_HOLD 0.05
 #define DM__BK_SEAM_SWEEPS 16
+#define DM__BK_SEAM_CREASE_COS 0.26
 #define DM__BK_SEAM_MAX ((size_t)UINT32_MAX / 4 - 1) /* points (their texel slots count in 32 bits) */
 
 typedef struct dm__bk_edge_sample {
@@ -7096,7 +7099,7 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
                     {   /* on a face of the original turned from the base triangle (a crease at the edge): the border rule's extension stays */
                         double fo[3];
                         dm__face_normal(r->opos, r->oidx, hit.triangle, fo);
-                        if (dm__dot3(fo, fnv) < DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fnv)) continue;
+                        if (dm__dot3(fo, fnv) < DM__BK_SEAM_CREASE_COS * dm__len3(fo) * dm__len3(fnv)) continue;
                     }
                     e->depth = hit.t;
                     ns++;
