@@ -98,26 +98,22 @@ else
 fi
 
 # ---- two octahedra whose corners share a position: kept apart, not welded into a pinch ------------
-awk 'BEGIN { print "OFF"; print "12 16 0"
-  for (o = 0; o < 2; o++) { c = 2 * o
-    print c + 1, 0, 0; print c - 1, 0, 0; print c, 1, 0; print c, -1, 0; print c, 0, 1; print c, 0, -1 }
-  for (o = 0; o < 2; o++) { b = 6 * o
-    print 3, b + 0, b + 2, b + 4; print 3, b + 2, b + 1, b + 4; print 3, b + 1, b + 3, b + 4; print 3, b + 3, b + 0, b + 4
-    print 3, b + 2, b + 0, b + 5; print 3, b + 1, b + 2, b + 5; print 3, b + 3, b + 1, b + 5; print 3, b + 0, b + 3, b + 5 } }' \
-  >"$tmp/pinch.off"
+octahedra() { # octahedra SPACING FILE: two unit octahedra as one OFF mesh, centres SPACING apart along x
+  awk -v sp="$1" 'BEGIN { print "OFF"; print "12 16 0"
+    for (o = 0; o < 2; o++) { c = sp * o
+      print c + 1, 0, 0; print c - 1, 0, 0; print c, 1, 0; print c, -1, 0; print c, 0, 1; print c, 0, -1 }
+    for (o = 0; o < 2; o++) { b = 6 * o
+      print 3, b + 0, b + 2, b + 4; print 3, b + 2, b + 1, b + 4; print 3, b + 1, b + 3, b + 4; print 3, b + 3, b + 0, b + 4
+      print 3, b + 2, b + 0, b + 5; print 3, b + 1, b + 2, b + 5; print 3, b + 3, b + 1, b + 5; print 3, b + 0, b + 3, b + 5 } }' >"$2"
+}
+octahedra 2 "$tmp/pinch.off"
 "$prog" "$tmp/pinch.off" --faces 16 --res 64 --no-views -o "$tmp/pinch" >/dev/null 2>"$tmp/pinch_err.txt"
 check "corners meeting at a point stay apart: $(grep -m1 apart "$tmp/pinch_err.txt")" \
   grep -q '^dispmesh: 1 vertices share a position with another but meet it only at a point' "$tmp/pinch_err.txt"
 check "and are not welded: $(grep -m1 'vertices,' "$tmp/pinch_err.txt")" grep -q 'pinch.off: 12 vertices, 16 triangles' "$tmp/pinch_err.txt"
 
 # ---- two octahedra that run through each other: said; the corner-touching pair and the brick are not --
-awk 'BEGIN { print "OFF"; print "12 16 0"
-  for (o = 0; o < 2; o++) { c = 0.8 * o
-    print c + 1, 0, 0; print c - 1, 0, 0; print c, 1, 0; print c, -1, 0; print c, 0, 1; print c, 0, -1 }
-  for (o = 0; o < 2; o++) { b = 6 * o
-    print 3, b + 0, b + 2, b + 4; print 3, b + 2, b + 1, b + 4; print 3, b + 1, b + 3, b + 4; print 3, b + 3, b + 0, b + 4
-    print 3, b + 2, b + 0, b + 5; print 3, b + 1, b + 2, b + 5; print 3, b + 3, b + 1, b + 5; print 3, b + 0, b + 3, b + 5 } }' \
-  >"$tmp/cross.off"
+octahedra 0.8 "$tmp/cross.off"
 "$prog" "$tmp/cross.off" --faces 16 --res 64 --no-views -o "$tmp/cross" >/dev/null 2>"$tmp/cross_err.txt"
 check "two interpenetrating octahedra: the note says the surface runs through itself ($(grep -m1 'runs through' "$tmp/cross_err.txt"))" \
   grep -q '^dispmesh: note: the surface runs through itself: [1-9][0-9]* of its edges' "$tmp/cross_err.txt"
