@@ -7090,13 +7090,13 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
                         known &= m->valid[e->id[i]] || m->status[e->id[i]] == DM_TEXEL_BORDER || !(e->w[i] > 0.0);
                     }
                     if (!border || !known) continue;
-                    {   /* a ray that slipped past a thin part to another sheet (dm__bk_border_texel's rule) */
+                    { /* a ray that slipped past a thin part to another sheet (as dm__bk_border_texel) */
                         double rd = 0.0, uva = dm__bk_uv_area(pm, (uint32_t)t);
                         double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fnv) / uva) : 0.0;
                         for (i = 0; i < 4; i++) rd += e->w[i] * m->disp[e->id[i]];
                         if (fabs((double)hit.t - rd) > DM__BK_OUTLIER * texel) continue;
                     }
-                    {   /* on a face of the original turned from the base triangle (a crease at the edge): the border rule's extension stays */
+                    { /* on a face turned from the triangle (a crease along the edge): left as it is */
                         double fo[3];
                         dm__face_normal(r->opos, r->oidx, hit.triangle, fo);
                         if (dm__dot3(fo, fnv) < DM__BK_SEAM_CREASE_COS * dm__len3(fo) * dm__len3(fnv)) continue;
