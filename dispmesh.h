@@ -6487,6 +6487,23 @@ DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, con
    Section: displacement bake, push-pull fill, surface sample grid
    --------------------------------------------------------------------------------------------- */
 
+/* A bilinear read of a width x height map at (u, v) in [0, 1]^2 (texel centres at half
+   integers, clamped at the map's edges): its 4 texels (row by row) and their weights. */
+static void dm__bilinear(int W, int H, double u, double v, size_t id[4], double w[4])
+{
+    double fx = u * W - 0.5, fy = v * H - 0.5, ix = floor(fx), iy = floor(fy), tx = fx - ix, ty = fy - iy;
+    long x0 = (long)ix, y0 = (long)iy, xs[2], ys[2];
+    int i;
+    xs[0] = x0 < 0 ? 0 : x0 >= W ? W - 1 : x0;
+    xs[1] = x0 + 1 < 0 ? 0 : x0 + 1 >= W ? W - 1 : x0 + 1;
+    ys[0] = y0 < 0 ? 0 : y0 >= H ? H - 1 : y0;
+    ys[1] = y0 + 1 < 0 ? 0 : y0 + 1 >= H ? H - 1 : y0 + 1;
+    for (i = 0; i < 4; i++) {
+        id[i] = (size_t)ys[i / 2] * (size_t)W + (size_t)xs[i % 2];
+        w[i] = (i % 2 ? tx : 1.0 - tx) * (i / 2 ? ty : 1.0 - ty);
+    }
+}
+
 DMDEF void dm_dispmap_free(dm_dispmap *m)
 {
     dm_allocator a;
@@ -7035,22 +7052,6 @@ typedef struct dm__bk_edge_sample {
     double depth; /* the edge point's own ray */
 } dm__bk_edge_sample;
 
-/* sample (u, v) in the map: its 4 texels and weights, as the reconstruction reads them */
-static void dm__bk_read_weights(const dm_param *pm, double u, double v, dm__bk_edge_sample *s)
-{
-    int W = pm->width, H = pm->height, i;
-    double fx = u * W - 0.5, fy = v * H - 0.5, ix = floor(fx), iy = floor(fy), tx = fx - ix, ty = fy - iy;
-    long x0 = (long)ix, y0 = (long)iy, xs[2], ys[2];
-    xs[0] = x0 < 0 ? 0 : x0 >= W ? W - 1 : x0;
-    xs[1] = x0 + 1 < 0 ? 0 : x0 + 1 >= W ? W - 1 : x0 + 1;
-    ys[0] = y0 < 0 ? 0 : y0 >= H ? H - 1 : y0;
-    ys[1] = y0 + 1 < 0 ? 0 : y0 + 1 >= H ? H - 1 : y0 + 1;
-    for (i = 0; i < 4; i++) {
-        s->id[i] = (size_t)ys[i / 2] * (size_t)W + (size_t)xs[i % 2];
-        s->w[i] = (i % 2 ? tx : 1.0 - tx) * (i / 2 ? ty : 1.0 - ty);
-    }
-}
-
 /* the samples along chart boundary edges into *out (count *n); each reads a border texel, and
    only texels already baked (hits and border texels) */
 static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, size_t *n)
@@ -7083,8 +7084,8 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
                     if (!(dm__bk_point(r, (uint32_t)t, w[1], w[2], pos, nrm, fnv) > 0.0) ||
                         !dm__bk_trace(r, pos, nrm, (uint32_t)t, &hit))
                         continue;
-                    dm__bk_read_weights(pm, w[0] * uv[0] + w[1] * uv[2] + w[2] * uv[4],
-                                        w[0] * uv[1] + w[1] * uv[3] + w[2] * uv[5], e);
+                    dm__bilinear(pm->width, pm->height, w[0] * uv[0] + w[1] * uv[2] + w[2] * uv[4],
+                                 w[0] * uv[1] + w[1] * uv[3] + w[2] * uv[5], e->id, e->w);
                     for (i = 0; i < 4; i++) {
                         border |= m->status[e->id[i]] == DM_TEXEL_BORDER && e->w[i] > 0.0;
                         known &= m->valid[e->id[i]] || m->status[e->id[i]] == DM_TEXEL_BORDER || !(e->w[i] > 0.0);
@@ -7428,23 +7429,15 @@ static dm_result dm__rc_alloc(dm__rc_run *r)
    at every point of a chart */
 static void dm__rc_lookup(const dm_dispmap *map, double u, double v, double *d, double n[3])
 {
-    int W = map->width, H = map->height, k, i;
-    double fx = u * W - 0.5, fy = v * H - 0.5, ix = floor(fx), iy = floor(fy), tx = fx - ix, ty = fy - iy;
-    long x0 = (long)ix, y0 = (long)iy, xs[2], ys[2];
-    double wx[2], wy[2];
-    xs[0] = x0 < 0 ? 0 : x0 >= W ? W - 1 : x0;
-    xs[1] = x0 + 1 < 0 ? 0 : x0 + 1 >= W ? W - 1 : x0 + 1;
-    ys[0] = y0 < 0 ? 0 : y0 >= H ? H - 1 : y0;
-    ys[1] = y0 + 1 < 0 ? 0 : y0 + 1 >= H ? H - 1 : y0 + 1;
-    wx[0] = 1.0 - tx; wx[1] = tx;
-    wy[0] = 1.0 - ty; wy[1] = ty;
+    size_t id[4];
+    double w[4];
+    int k, i;
+    dm__bilinear(map->width, map->height, u, v, id, w);
     *d = 0.0;
     n[0] = n[1] = n[2] = 0.0;
     for (i = 0; i < 4; i++) {
-        size_t id = (size_t)ys[i / 2] * (size_t)W + (size_t)xs[i % 2];
-        double w = wx[i % 2] * wy[i / 2];
-        *d += w * map->disp[id];
-        for (k = 0; k < 3; k++) n[k] += w * map->normal[3 * id + (size_t)k];
+        *d += w[i] * map->disp[id[i]];
+        for (k = 0; k < 3; k++) n[k] += w[i] * map->normal[3 * id[i] + (size_t)k];
     }
 }
 
