@@ -7039,17 +7039,20 @@ static dm_result dm__bk_border(dm__bk_run *r)
    (DM__BK_SEAM_CREASE_COS) from the triangle: on a crease of the original along the edge, each
    chart keeps its own face up to the edge (a bilinear read cannot have both that face and the
    edge's depth). The border rule's 60 degrees would leave out more points beside sharp base edges
-   of smooth surfaces, where the fit helps. */
+   of smooth surfaces, where the fit helps. A texel moves at most DM__BK_SEAM_REACH texel sizes
+   from its rule's value (where the base's normals swing, the edge rays disagree with the hits). */
 #define DM__BK_SEAM_STEP 0.5
 #define DM__BK_SEAM_HOLD 0.05
 #define DM__BK_SEAM_SWEEPS 16
 #define DM__BK_SEAM_CREASE_COS 0.26
+#define DM__BK_SEAM_REACH 2.0
 #define DM__BK_SEAM_MAX ((size_t)UINT32_MAX / 4 - 1) /* points (their texel slots count in 32 bits) */
 
 typedef struct dm__bk_edge_sample {
     size_t id[4]; /* the texels the read uses */
     double w[4];  /* and their bilinear weights */
     double depth; /* the edge point's own ray */
+    double texel; /* the world size of its triangle's texels */
 } dm__bk_edge_sample;
 
 /* the samples along chart boundary edges into *out (count *n); each reads a border texel, and
@@ -7096,6 +7099,7 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
                         double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fnv) / uva) : 0.0;
                         for (i = 0; i < 4; i++) rd += e->w[i] * m->disp[e->id[i]];
                         if (fabs((double)hit.t - rd) > DM__BK_OUTLIER * texel) continue;
+                        e->texel = texel;
                     }
                     { /* on a face turned from the triangle (a crease along the edge): left as it is */
                         double fo[3];
@@ -7122,7 +7126,7 @@ static dm_result dm__bk_seams(dm__bk_run *r)
     size_t n = (size_t)m->width * (size_t)m->height, ns = 0, na = 0, s, i;
     dm__bk_edge_sample *smp;
     uint32_t *first, *slot, *act;
-    float *hold;
+    float *hold, *lim;
     int sweep, k;
     dm_result res = dm__bk_edge_samples(r, &smp, &ns);
     if (res != DM_OK) return res;
@@ -7146,10 +7150,16 @@ static dm_result dm__bk_seams(dm__bk_run *r)
     first[0] = 0;
     act = (uint32_t *)dm__take(&r->sc, na + 1, sizeof(uint32_t));
     hold = (float *)dm__take(&r->sc, na + 1, sizeof(float));
-    if (!act || !hold) return dm__scratch_fail(&r->sc);
-    for (i = 0, na = 0; i < n; i++) /* the texels to fit, each held to its rule's value */
+    lim = (float *)dm__take(&r->sc, na + 1, sizeof(float));
+    if (!act || !hold || !lim) return dm__scratch_fail(&r->sc);
+    for (i = 0, na = 0; i < n; i++) /* the texels to fit, each held to its rule's value, and how far it may go */
         if (first[i] < first[i + 1]) {
+            uint32_t q;
             hold[na] = m->disp[i];
+            lim[na] = FLT_MAX;
+            for (q = first[i]; q < first[i + 1]; q++)
+                if (DM__BK_SEAM_REACH * smp[slot[q] / 4].texel < lim[na])
+                    lim[na] = (float)(DM__BK_SEAM_REACH * smp[slot[q] / 4].texel);
             act[na++] = (uint32_t)i;
         }
     for (sweep = 0; sweep < DM__BK_SEAM_SWEEPS; sweep++)
@@ -7165,7 +7175,10 @@ static dm_result dm__bk_seams(dm__bk_run *r)
                 num += e->w[own] * rest;
                 den += e->w[own] * e->w[own];
             }
-            m->disp[act[i]] = (float)(num / den);
+            num /= den;
+            if (num > hold[i] + lim[i]) num = hold[i] + lim[i];
+            if (num < hold[i] - lim[i]) num = hold[i] - lim[i];
+            m->disp[act[i]] = (float)num;
         }
     if (r->o.progress && r->o.progress(r->o.progress_user, 0.98f)) return DM_CANCELLED;
     return DM_OK;
