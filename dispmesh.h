@@ -6718,6 +6718,13 @@ static double dm__bk_uv_area(const dm_param *param, uint32_t tt)
            (double)param->width * (double)param->height;
 }
 
+/* the world size of base triangle tt's texels, from its face normal fnv (twice its area) */
+static double dm__bk_texel_size(const dm_param *param, uint32_t tt, const double fnv[3])
+{
+    double uva = dm__bk_uv_area(param, tt);
+    return uva > 0.0 ? sqrt(0.5 * dm__len3(fnv) / uva) : 0.0;
+}
+
 /* the point of base triangle tt at barycentrics (bu, bv) into pos, its unit interpolated normal
    into nrm (the face's where the interpolated one vanishes) and the face's normal (twice the
    area) into fnv. (bu, bv) outside the triangle (a border texel's): the point is the triangle's
@@ -6991,7 +6998,7 @@ static void dm__bk_border_texel(dm__bk_run *r, size_t id, uint32_t tt, double bu
         dm__face_normal(r->bpos, r->bidx, tt, fb);
         if (dm__dot3(fo, fb) >= DM__BORDER_CREASE_COS * dm__len3(fo) * dm__len3(fb)) {
             /* unless it slipped to another sheet (the hits' outlier rule, against the extension) */
-            double uva = dm__bk_uv_area(r->param, tt), texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fb) / uva) : 0.0; /* world size of tt's texels */
+            double texel = dm__bk_texel_size(r->param, tt, fb);
             have = dm__bk_chart_extension(r, id, r->param->chart[tt], ext);
             if (!have || fabs((double)m->disp[id] - ext[0]) <= DM__BK_OUTLIER * texel) return;
         }
@@ -7095,8 +7102,7 @@ static dm_result dm__bk_edge_samples(dm__bk_run *r, dm__bk_edge_sample **out, si
                     }
                     if (!border || !known) continue;
                     { /* a ray that slipped past a thin part to another sheet (as dm__bk_border_texel) */
-                        double rd = 0.0, uva = dm__bk_uv_area(pm, (uint32_t)t);
-                        double texel = uva > 0.0 ? sqrt(0.5 * dm__len3(fnv) / uva) : 0.0;
+                        double rd = 0.0, texel = dm__bk_texel_size(pm, (uint32_t)t, fnv);
                         for (i = 0; i < 4; i++) rd += e->w[i] * m->disp[e->id[i]];
                         if (fabs((double)hit.t - rd) > DM__BK_OUTLIER * texel) continue;
                         e->texel = texel;
