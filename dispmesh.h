@@ -181,8 +181,8 @@
      triangle, so texels go where the original's surface is), each kept only when the stretch drops
      and nothing flips; a chart with no flip-free layout within L2 stretch 2 (one that curls) is cut
      in two, each half laid out the same way, down to lone triangles. Charts are turned to their
-     smallest box (12 angles) and packed at the largest scale that fits: shelves of boxes or, larger
-     where it fits, their footprints in a bitmap (largest first, each in its best quarter turn).
+     smallest box (12 angles) and packed at the largest scale that fits: shelves of boxes, or their
+     footprints in a bitmap, interlocking or as silhouettes (largest first, in its best quarter turn).
      dm_param reports utilization, L2 and max stretch (Sander et al. 2001), and the share of
      triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
      seams, not its one global chart (its text omits the cut); neighbour lookups go through nbr.
@@ -224,7 +224,7 @@
      both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1). dm_coverage_options:
      floor (0 = 5% of the mean weight). dm_distance_options: samples_per_side (0 = 200000, at most
      10^9). Each with allocator and progress.
-     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (a bit per texel more while
+     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (2 bytes per texel more while
      packing); dm_dispmap: 46 bytes per texel (about 42 more while dm_bake runs) plus a BVH of the
      original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per covered
      texel), 60 more per vertex and up to 180 per triangle of the largest base triangle's
@@ -5177,23 +5177,34 @@ static int dm__square_meets(const double P[3][2], const double c[2], double h)
 }
 
 /* Bitmap packing (the approach of xatlas and of Levy et al. 2002's "Tetris" packer, our own
-   code): each chart's footprint at scale s is the set of texels within half a gutter of it; per
-   row of texels only its first and last count (a silhouette). Charts go largest first, each in
-   the quarter turn whose lowest free place (rows from the bottom, then columns) puts its top
-   lowest; a place is free when no row of the footprint meets a taken texel. */
+   code): each chart's footprint at scale s is the set of texels within half a gutter of it, kept
+   exactly (each row's runs of texels), so that charts interlock, or as its silhouette (each row
+   from its first texel to its last). Charts go largest first, each in the quarter turn whose
+   lowest free place (rows from the bottom, then columns) puts its top lowest; a place is free
+   when no run of the footprint meets a taken texel. */
 typedef struct dm__pz_shape {
     int w, h;           /* footprint size in texels */
-    int *lo, *hi;       /* per row: first and last texel (lo > hi: none) */
+    const int *lo, *hi; /* per row: its first and last texel (lo > hi: none) */
+    const int *longest; /* per row: its longest run */
+    const int *rstart;  /* per row r: its runs are rstart[r] .. rstart[r + 1] - 1 */
+    const int *run;     /* run k: row run[3k], texels run[3k + 1] .. run[3k + 2] */
+    int wide;           /* the row with the longest run */
+    int wide_run;       /* that run */
 } dm__pz_shape;
 
 typedef struct dm__pz_bitpack {
     int W, H, words;    /* map size; 64-bit words per row */
     uint64_t *taken;    /* H rows of taken texels */
-    int *grid_col;      /* a chart's columns' extents (2 * rows_cap) */
-    int *lo[4], *hi[4]; /* its rows in each quarter turn */
+    uint16_t *free_run; /* per map texel: the free texels from it to the right (0: taken) */
+    uint64_t *foot;     /* a chart's footprint, unturned: rows of `words` words */
+    int *lo[4], *hi[4], *longest[4], *rstart[4]; /* its rows in each quarter turn */
+    int *run[4];        /* its runs in each quarter turn (3 ints each, run_cap runs) */
+    size_t run_cap;
     int *first_free;    /* per map row: its first free texel (W: none) */
     int *longest_free;  /* per map row: its longest run of free texels */
-    int rows_cap;       /* entries in each lo / hi */
+    int rows_cap;       /* entries in each lo / hi / longest (rstart: one more) */
+    int silhouette;     /* 1: each row's runs as one, from its first texel to its last */
+    dm_allocator al;    /* for run[] */
 } dm__pz_bitpack;
 
 /* the index of the highest set bit of m (nonzero) */
@@ -5234,45 +5245,32 @@ static long dm__pz_first_bit(const dm__pz_bitpack *b, int y, long x, int taken)
     return b->W;
 }
 
-/* the first x at or after `from` where texels x .. x + need - 1 of row y are all free, or -1 */
+/* the first x at or after `from` where texels x .. x + need - 1 of row y are all free, or -1:
+   from each free run too short, on past the taken texels after it */
 static long dm__pz_next_fit(const dm__pz_bitpack *b, int y, long from, long need)
 {
-    for (;;) {
-        long z = dm__pz_first_bit(b, y, from, 0), o;
-        if (z + need > b->W) return -1;
-        o = dm__pz_first_bit(b, y, z, 1);
-        if (o - z >= need) return z;
-        from = o;
-    }
-}
-
-/* the last taken texel in row y between x0 and x1 (inclusive), or -1 */
-static long dm__pz_last_taken(const dm__pz_bitpack *b, int y, long x0, long x1)
-{
-    const uint64_t *row = b->taken + (size_t)y * (size_t)b->words;
-    long w;
-    for (w = x1 >> 6; w >= (x0 >> 6); w--) {
-        uint64_t m = row[w];
-        if (w == (x1 >> 6) && (x1 & 63) != 63) m &= ((uint64_t)1 << ((x1 & 63) + 1)) - 1;
-        if (w == (x0 >> 6)) m &= ~(((uint64_t)1 << (x0 & 63)) - 1);
-        if (m) return w * 64 + dm__highest_bit(m);
+    const uint16_t *fr = b->free_run + (size_t)y * (size_t)b->W;
+    while (from + need <= b->W) {
+        if (fr[from] >= need) return from;
+        from = dm__pz_first_bit(b, y, from + fr[from], 0);
     }
     return -1;
 }
 
 /* the lowest free place for the shape with its bottom row at most y_max: 1 and (*px, *py), or
-   0. Rows whose longest free run is too short for the shape's row there are skipped whole. */
+   0. Rows whose longest free run is shorter than the shape's longest run there are skipped
+   whole; a run that meets a taken texel moves the shape on to where that run fits next. */
 static int dm__pz_find_place(const dm__pz_bitpack *b, const dm__pz_shape *sh, int y_max, int *px, int *py)
 {
-    int y, r, hint = 0;
+    int y, r, hint = 0, nrun = sh->rstart[sh->h];
     if (y_max > b->H - sh->h) y_max = b->H - sh->h;
     for (y = 0; y <= y_max; y++) {
         long x = 0;
-        int fits = 1;
+        int fits = b->longest_free[y + sh->wide] >= sh->longest[sh->wide]; /* the likeliest to refuse */
         for (r = 0; r < sh->h && fits; r++) { /* a start at each row's first free texel at the least */
-            long need = (long)sh->hi[r] - sh->lo[r] + 1, x0;
+            long x0;
             if (sh->lo[r] > sh->hi[r]) continue;
-            if (b->longest_free[y + r] < need) fits = 0;
+            if (b->longest_free[y + r] < sh->longest[r]) fits = 0;
             x0 = (long)b->first_free[y + r] - sh->lo[r];
             if (x0 > x) x = x0;
         }
@@ -5280,15 +5278,13 @@ static int dm__pz_find_place(const dm__pz_bitpack *b, const dm__pz_shape *sh, in
         while (x + sh->w <= b->W) {
             long jump = -1;
             int k;
-            for (k = 0; k < sh->h && jump < 0; k++) { /* the row that refused last, first */
-                long t;
-                r = (k + hint) % sh->h;
-                if (sh->lo[r] > sh->hi[r]) continue;
-                t = dm__pz_last_taken(b, y + r, x + sh->lo[r], x + sh->hi[r]);
-                if (t >= 0) { /* no place for this row before its next free run long enough */
-                    t = dm__pz_next_fit(b, y + r, t + 1, (long)sh->hi[r] - sh->lo[r] + 1);
-                    jump = t < 0 ? b->W : t - sh->lo[r];
-                    hint = r;
+            for (k = nrun ? -1 : 0; k < nrun && jump < 0; k++) { /* the widest run, then the one that refused last */
+                int q = k < 0 ? sh->wide_run : (k + hint) % nrun, yq = y + sh->run[3 * q];
+                long a = sh->run[3 * q + 1], len = sh->run[3 * q + 2] - a + 1;
+                if (b->free_run[(size_t)yq * (size_t)b->W + (size_t)(x + a)] < len) { /* on to where this run fits next */
+                    long t = dm__pz_next_fit(b, yq, x + a, len);
+                    jump = t < 0 ? b->W : t - a;
+                    hint = q;
                 }
             }
             if (jump < 0) { *px = (int)x; *py = y; return 1; }
@@ -5317,12 +5313,19 @@ static void dm__pz_row_runs(dm__pz_bitpack *b, int y)
 
 static void dm__pz_take_place(dm__pz_bitpack *b, const dm__pz_shape *sh, int px, int py)
 {
-    int r;
+    int r, k;
     for (r = 0; r < sh->h; r++) {
-        long x;
         uint64_t *row = b->taken + (size_t)(py + r) * (size_t)b->words;
-        if (sh->lo[r] > sh->hi[r]) continue;
-        for (x = px + sh->lo[r]; x <= px + sh->hi[r]; x++) row[x >> 6] |= (uint64_t)1 << (x & 63);
+        if (sh->rstart[r] == sh->rstart[r + 1]) continue;
+        for (k = sh->rstart[r]; k < sh->rstart[r + 1]; k++) {
+            long x, x0 = px + sh->run[3 * k + 1];
+            uint16_t *fr = b->free_run + (size_t)(py + r) * (size_t)b->W;
+            for (x = x0; x <= px + sh->run[3 * k + 2]; x++) {
+                row[x >> 6] |= (uint64_t)1 << (x & 63);
+                fr[x] = 0;
+            }
+            for (x = x0 - 1; x >= 0 && fr[x] > x0 - x; x--) fr[x] = (uint16_t)(x0 - x); /* the free run before it ends here now */
+        }
         dm__pz_row_runs(b, py + r);
     }
 }
@@ -6032,76 +6035,122 @@ static int dm__pz_band_extent(const double P[3][2], double y0, double y1, double
     return any;
 }
 
+/* the footprint bit of shape texel (tx, ty) in quarter turn q (the unturned footprint w x h) */
+static int dm__pz_foot_bit(const dm__pz_bitpack *b, int q, int w, int h, int tx, int ty)
+{
+    int x = q == 0 ? tx : q == 1 ? ty : q == 2 ? w - 1 - tx : w - 1 - ty;
+    int y = q == 0 ? ty : q == 1 ? h - 1 - tx : q == 2 ? h - 1 - ty : tx;
+    return (int)(b->foot[(size_t)y * (size_t)b->words + (size_t)(x >> 6)] >> (x & 63) & 1);
+}
+
+/* the runs of the footprint in quarter turn q: counted (fill 0) or written (fill 1); returns
+   their number */
+static size_t dm__pz_foot_runs(dm__pz_bitpack *b, int q, int w, int h, int fill)
+{
+    int sw = q & 1 ? h : w, sh = q & 1 ? w : h, tx, ty;
+    size_t n = 0;
+    for (ty = 0; ty < sh; ty++) {
+        int lo = INT32_MAX, hi = -1, longest = 0;
+        if (fill) b->rstart[q][ty] = (int)n;
+        for (tx = 0; tx < sw; tx++) {
+            int start;
+            if (!dm__pz_foot_bit(b, q, w, h, tx, ty)) continue;
+            for (start = tx; tx + 1 < sw && dm__pz_foot_bit(b, q, w, h, tx + 1, ty); tx++) {}
+            if (b->silhouette) /* on to the row's last texel */
+                for (tx = sw - 1; !dm__pz_foot_bit(b, q, w, h, tx, ty); tx--) {}
+            if (fill) {
+                b->run[q][3 * n] = ty;
+                b->run[q][3 * n + 1] = start;
+                b->run[q][3 * n + 2] = tx;
+            }
+            if (start < lo) lo = start;
+            hi = tx;
+            if (tx - start + 1 > longest) longest = tx - start + 1;
+            n++;
+        }
+        if (fill) {
+            b->lo[q][ty] = lo;
+            b->hi[q][ty] = hi;
+            b->longest[q][ty] = longest;
+        }
+    }
+    if (fill) b->rstart[q][sh] = (int)n;
+    return n;
+}
+
 /* chart i's footprint at scale s with margin o (texels): the texels whose square grown by o
-   meets one of its triangles, as each row's first and last texel in each of the four quarter
-   turns (from the rows' and the columns' extents); 0 when it does not fit the map */
+   meets one of its triangles, as runs of each row in each of the four quarter turns; 1 done,
+   0 when it does not fit the map, -1 when out of memory */
 static int dm__pz_footprint(dm__pz_run *r, dm__pz_bitpack *b, size_t i, double s, double o, int *w, int *h)
 {
     const uint32_t *ctris = r->ctris, *bstart = r->bstart;
     double fw = ceil(s * r->pk[i].bw + 2.0 * o - 1e-9), fh = ceil(s * r->pk[i].bh + 2.0 * o - 1e-9);
-    int *rlo = b->lo[0], *rhi = b->hi[0], *clo = b->lo[3], *chi = b->hi[3], x, y, c, q;
-    size_t k;
+    size_t k, n0, n1;
+    int y, c, q;
     if (!(fw <= (double)b->W && fh <= (double)b->H)) return 0;
     *w = fw < 1.0 ? 1 : (int)fw;
     *h = fh < 1.0 ? 1 : (int)fh;
-    for (y = 0; y < *h; y++) { rlo[y] = INT32_MAX; rhi[y] = -1; }
-    for (x = 0; x < *w; x++) { clo[x] = INT32_MAX; chi[x] = -1; }
+    memset(b->foot, 0, (size_t)*h * (size_t)b->words * sizeof(uint64_t));
     for (k = bstart[i]; k < bstart[i + 1]; k++) {
-        double P[3][2], Q[3][2], mn = HUGE_VAL, mx = -HUGE_VAL, e0, e1;
+        double P[3][2], mn = HUGE_VAL, mx = -HUGE_VAL, e0, e1;
         for (c = 0; c < 3; c++) {
             P[c][0] = o + s * r->cuv[6 * (size_t)ctris[k] + 2 * (size_t)c];
             P[c][1] = o + s * r->cuv[6 * (size_t)ctris[k] + 2 * (size_t)c + 1];
-            Q[c][0] = P[c][1]; /* the same triangle with x and y swapped, for the columns */
-            Q[c][1] = P[c][0];
             mn = fmin(mn, P[c][1]);
             mx = fmax(mx, P[c][1]);
         }
         for (y = (int)floor(mn - o); y <= (int)floor(mx + o); y++) {
-            long x0, x1;
+            long x0, x1, x;
+            uint64_t *row = b->foot + (size_t)y * (size_t)b->words;
             if (y < 0 || y >= *h || !dm__pz_band_extent((const double(*)[2])P, y - o, y + 1 + o, &e0, &e1)) continue;
             x0 = (long)ceil(e0 - 1.0 - o);
             x1 = (long)floor(e1 + o);
             if (x0 < 0) x0 = 0;
             if (x1 > *w - 1) x1 = *w - 1;
-            if (x0 < rlo[y]) rlo[y] = (int)x0;
-            if (x1 > rhi[y]) rhi[y] = (int)x1;
-        }
-        mn = fmin(P[0][0], fmin(P[1][0], P[2][0]));
-        mx = fmax(P[0][0], fmax(P[1][0], P[2][0]));
-        for (x = (int)floor(mn - o); x <= (int)floor(mx + o); x++) {
-            long y0, y1;
-            if (x < 0 || x >= *w || !dm__pz_band_extent((const double(*)[2])Q, x - o, x + 1 + o, &e0, &e1)) continue;
-            y0 = (long)ceil(e0 - 1.0 - o);
-            y1 = (long)floor(e1 + o);
-            if (y0 < 0) y0 = 0;
-            if (y1 > *h - 1) y1 = *h - 1;
-            if (y0 < clo[x]) clo[x] = (int)y0;
-            if (y1 > chi[x]) chi[x] = (int)y1;
+            for (x = x0; x <= x1; x++) row[x >> 6] |= (uint64_t)1 << (x & 63);
         }
     }
-    /* turn 2: the rows reversed; turn 1: row x is column x, from the top; turn 3: column x from the bottom */
-    for (y = 0; y < *h; y++) {
-        b->lo[2][*h - 1 - y] = rhi[y] < 0 ? INT32_MAX : *w - 1 - rhi[y];
-        b->hi[2][*h - 1 - y] = rhi[y] < 0 ? -1 : *w - 1 - rlo[y];
+    n0 = dm__pz_foot_runs(b, 0, *w, *h, 0); /* turn 2 has turn 0's runs mirrored, turn 3 turn 1's */
+    n1 = dm__pz_foot_runs(b, 1, *w, *h, 0);
+    if (n1 > n0) n0 = n1;
+    if (n0 > b->run_cap) {
+        size_t cap = 2 * n0;
+        int of = 0;
+        for (q = 0; q < 4; q++) {
+            b->al.free(b->al.user, b->run[q]);
+            b->run[q] = (int *)dm__alloc_array(&b->al, cap, 3 * sizeof(int), &of);
+        }
+        b->run_cap = b->run[0] && b->run[1] && b->run[2] && b->run[3] ? cap : 0;
+        if (!b->run_cap) return -1;
     }
-    for (x = 0; x < *w; x++) {
-        b->lo[1][x] = chi[x] < 0 ? INT32_MAX : *h - 1 - chi[x];
-        b->hi[1][x] = chi[x] < 0 ? -1 : *h - 1 - clo[x];
-    }
-    for (x = 0; x < *w; x++) { /* turn 3 in place of the columns: row w-1-x holds column x */
-        b->grid_col[x] = clo[x];
-        b->grid_col[*w + x] = chi[x];
-    }
-    for (x = 0; x < *w; x++) {
-        q = *w - 1 - x;
-        b->lo[3][q] = b->grid_col[*w + x] < 0 ? INT32_MAX : b->grid_col[x];
-        b->hi[3][q] = b->grid_col[*w + x] < 0 ? -1 : b->grid_col[*w + x];
-    }
+    for (q = 0; q < 4; q++) dm__pz_foot_runs(b, q, *w, *h, 1);
     return 1;
 }
 
+/* footprint quarter turn q of a chart w x h texels unturned, as a shape, with its widest run
+   (the likeliest to refuse a place, the first asked) */
+static dm__pz_shape dm__pz_turned(const dm__pz_bitpack *b, int q, int w, int h)
+{
+    dm__pz_shape sh;
+    int r;
+    sh.w = q & 1 ? h : w;
+    sh.h = q & 1 ? w : h;
+    sh.lo = b->lo[q];
+    sh.hi = b->hi[q];
+    sh.longest = b->longest[q];
+    sh.rstart = b->rstart[q];
+    sh.run = b->run[q];
+    sh.wide = 0;
+    for (r = 1; r < sh.h; r++)
+        if (sh.longest[r] > sh.longest[sh.wide]) sh.wide = r;
+    for (sh.wide_run = sh.rstart[sh.wide]; sh.wide_run + 1 < sh.rstart[sh.wide + 1] &&
+                                           sh.run[3 * sh.wide_run + 2] - sh.run[3 * sh.wide_run + 1] + 1 < sh.longest[sh.wide];
+         sh.wide_run++) {}
+    return sh;
+}
+
 /* every chart at scale s: its quarter turn and place into pk[i].turn, ox, oy, and the highest
-   row used into *top; 0 when one does not fit */
+   row used into *top; 1 done, 0 when one does not fit, -1 when out of memory */
 static int dm__pz_bitmap_pack(dm__pz_run *r, dm__pz_bitpack *b, double s, double o, int *top)
 {
     size_t n, nc = r->pm->chart_count;
@@ -6109,20 +6158,19 @@ static int dm__pz_bitmap_pack(dm__pz_run *r, dm__pz_bitpack *b, double s, double
     *top = 0;
     memset(b->taken, 0, (size_t)b->H * (size_t)b->words * sizeof(uint64_t));
     for (y = 0; y < b->H; y++) {
+        int x;
         b->first_free[y] = 0;
         b->longest_free[y] = b->W;
+        for (x = 0; x < b->W; x++) b->free_run[(size_t)y * (size_t)b->W + (size_t)x] = (uint16_t)(b->W - x);
     }
     for (n = 0; n < nc; n++) {
         size_t i = r->order[n];
-        int w, h, q, best_q = -1, bx = 0, by = 0;
-        if (!dm__pz_footprint(r, b, i, s, o, &w, &h)) return 0;
+        int w, h, q, best_q = -1, bx = 0, by = 0, got = dm__pz_footprint(r, b, i, s, o, &w, &h);
+        dm__pz_shape sh;
+        if (got <= 0) return got;
         for (q = 0; q < 4; q++) {
-            dm__pz_shape sh;
             int px, py;
-            sh.w = q & 1 ? h : w;
-            sh.h = q & 1 ? w : h;
-            sh.lo = b->lo[q];
-            sh.hi = b->hi[q];
+            sh = dm__pz_turned(b, q, w, h);
             if (!dm__pz_find_place(b, &sh, best_q < 0 ? b->H : by + (best_q & 1 ? w : h) - sh.h, &px, &py)) continue;
             if (best_q < 0 || py + sh.h < by + (best_q & 1 ? w : h) || (py + sh.h == by + (best_q & 1 ? w : h) && px < bx)) {
                 best_q = q;
@@ -6131,68 +6179,94 @@ static int dm__pz_bitmap_pack(dm__pz_run *r, dm__pz_bitpack *b, double s, double
             }
         }
         if (best_q < 0) return 0;
-        {
-            dm__pz_shape sh;
-            sh.w = best_q & 1 ? h : w;
-            sh.h = best_q & 1 ? w : h;
-            sh.lo = b->lo[best_q];
-            sh.hi = b->hi[best_q];
-            dm__pz_take_place(b, &sh, bx, by);
-        }
+        sh = dm__pz_turned(b, best_q, w, h);
+        dm__pz_take_place(b, &sh, bx, by);
         r->pk[i].turn = best_q;
         r->pk[i].ox = bx;
         r->pk[i].oy = by;
         r->pk[i].fw = w;
         r->pk[i].fh = h;
-        if (by + (best_q & 1 ? w : h) > *top) *top = by + (best_q & 1 ? w : h);
+        if (by + sh.h > *top) *top = by + sh.h;
     }
     return 1;
 }
 
-/* the largest scale at which the charts fit as bitmap footprints, by bisection from s_lo (the
-   shelves' scale) up; 0 when they fit at no scale tried. The places of the best are in pk. */
+/* the largest scale above s_lo at which the charts fit as b's footprints, by bisection from
+   s_first up: into *s_best (0 when they fit at no scale tried), their places into saved; 0 when
+   out of memory */
+static int dm__pz_bitmap_search(dm__pz_run *r, dm__pz_bitpack *b, double s_lo, double s_first, double o,
+                                dm__pz_pack *saved, double *s_best)
+{
+    size_t nc = r->pm->chart_count;
+    double s_hi = 1.6 * s_lo;
+    int it, top = 0;
+    *s_best = 0.0;
+    for (it = 0; it < 8; it++) { /* from s_first: the scale that fills the rows the last fit left
+                                    unused, else halfway to the least that failed */
+        double s = it == 0 ? s_first : *s_best > 0.0 ? *s_best * sqrt((double)b->H / (double)(top > 0 ? top : 1)) * 0.998 : s_lo;
+        int t2, got;
+        if (*s_best > 0.0 && !(s < s_hi)) s = 0.5 * (*s_best + s_hi);
+        if (*s_best > 0.0 && !(s > *s_best * 1.002)) break;
+        got = dm__pz_bitmap_pack(r, b, s, o, &t2);
+        if (got < 0) return 0;
+        if (got) {
+            *s_best = s;
+            top = t2;
+            memcpy(saved, r->pk, nc * sizeof(dm__pz_pack));
+        } else {
+            s_hi = s;
+            if (s <= s_lo) break; /* not even at the shelves' scale */
+        }
+    }
+    return 1;
+}
+
+/* the largest scale at which the charts fit as bitmap footprints, exact or, when there are at
+   most DM__PZ_FEW charts, also as silhouettes (interlocking charts mostly pack tighter, but not
+   always when they are few; few pack fast): the larger; 0 when they fit at no scale tried, -1
+   when out of memory. The places of the best are in pk. */
+#define DM__PZ_FEW 64
 static double dm__pz_bitmap_scale(dm__pz_run *r, double s_lo, double o)
 {
     dm__pz_bitpack b;
     size_t nc = r->pm->chart_count;
-    double s_hi = 1.6 * s_lo, s_best = 0.0;
-    int q, it, top = 0;
-    dm__pz_pack *saved;
+    double best = 0.0, s = 0.0, res = -1.0;
+    int q, ok = 1;
+    dm__pz_pack *saved, *found;
     memset(&b, 0, sizeof b);
     b.W = r->W;
     b.H = r->H;
     b.words = (r->W + 63) / 64;
     b.rows_cap = r->W > r->H ? r->W : r->H;
+    b.al = r->sc.a;
     b.taken = (uint64_t *)dm__take(&r->sc, (size_t)b.H * (size_t)b.words, sizeof(uint64_t));
-    b.grid_col = (int *)dm__take(&r->sc, 2 * (size_t)b.rows_cap, sizeof(int));
+    b.foot = (uint64_t *)dm__take(&r->sc, (size_t)b.H * (size_t)b.words, sizeof(uint64_t));
+    b.free_run = (uint16_t *)dm__take(&r->sc, (size_t)b.H * (size_t)b.W, sizeof(uint16_t));
     for (q = 0; q < 4; q++) {
         b.lo[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap, sizeof(int));
         b.hi[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap, sizeof(int));
-        if (!b.lo[q] || !b.hi[q]) return -1.0;
+        b.longest[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap, sizeof(int));
+        b.rstart[q] = (int *)dm__take(&r->sc, (size_t)b.rows_cap + 1, sizeof(int));
+        ok &= b.lo[q] && b.hi[q] && b.longest[q] && b.rstart[q];
     }
     b.first_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
     b.longest_free = (int *)dm__take(&r->sc, (size_t)b.H, sizeof(int));
-    if (!b.taken || !b.grid_col || !b.first_free || !b.longest_free) return -1.0;
     saved = (dm__pz_pack *)dm__take(&r->sc, nc, sizeof(dm__pz_pack));
-    if (!saved) return -1.0;
+    found = (dm__pz_pack *)dm__take(&r->sc, nc, sizeof(dm__pz_pack));
+    if (!ok || !b.taken || !b.foot || !b.free_run || !b.first_free || !b.longest_free || !saved || !found) return -1.0;
     dm__pz_order(r->pk, nc, 1, r->order, r->otmp);
-    for (it = 0; it < 8; it++) { /* from 1.15 x the shelves' scale: the scale that fills the rows
-                                    the last fit left unused, else halfway to the least that failed */
-        double s = it == 0 ? 1.15 * s_lo : s_best > 0.0 ? s_best * sqrt((double)b.H / (double)(top > 0 ? top : 1)) * 0.998 : s_lo;
-        int t2;
-        if (s_best > 0.0 && !(s < s_hi)) s = 0.5 * (s_best + s_hi);
-        if (s_best > 0.0 && !(s > s_best * 1.002)) break;
-        if (dm__pz_bitmap_pack(r, &b, s, o, &t2)) {
-            s_best = s;
-            top = t2;
-            memcpy(saved, r->pk, nc * sizeof(dm__pz_pack));
-        } else {
-            s_hi = s;
-            if (s <= s_lo) return 0.0; /* not even at the shelves' scale */
+    for (b.silhouette = 0; b.silhouette < (nc <= DM__PZ_FEW ? 2 : 1); b.silhouette++) {
+        if (!dm__pz_bitmap_search(r, &b, s_lo, 1.15 * s_lo, o, found, &s)) goto done;
+        if (s > best) {
+            best = s;
+            memcpy(saved, found, nc * sizeof(dm__pz_pack));
         }
     }
-    if (s_best > 0.0) memcpy(r->pk, saved, nc * sizeof(dm__pz_pack));
-    return s_best;
+    if (best > 0.0) memcpy(r->pk, saved, nc * sizeof(dm__pz_pack));
+    res = best;
+done:
+    for (q = 0; q < 4; q++) b.al.free(b.al.user, b.run[q]);
+    return res;
 }
 
 /* chart point (u, v) of chart p (chart units) at scale s and margin o, turned and placed: texels */
