@@ -6191,19 +6191,19 @@ static int dm__pz_bitmap_pack(dm__pz_run *r, dm__pz_bitpack *b, double s, double
     return 1;
 }
 
-/* the largest scale above s_lo at which the charts fit as b's footprints, by bisection from
-   s_first up: into *s_best (0 when they fit at no scale tried), their places into saved; 0 when
-   out of memory */
-static int dm__pz_bitmap_search(dm__pz_run *r, dm__pz_bitpack *b, double s_lo, double s_first, double o,
-                                dm__pz_pack *saved, double *s_best)
+/* the largest scale at which the charts fit as b's footprints, by bisection from s_lo (the
+   shelves' scale) up: into *s_best (0 when they fit at no scale tried), their places into saved;
+   0 when out of memory */
+static int dm__pz_bitmap_search(dm__pz_run *r, dm__pz_bitpack *b, double s_lo, double o, dm__pz_pack *saved,
+                                double *s_best)
 {
     size_t nc = r->pm->chart_count;
     double s_hi = 1.6 * s_lo;
     int it, top = 0;
     *s_best = 0.0;
-    for (it = 0; it < 8; it++) { /* from s_first: the scale that fills the rows the last fit left
-                                    unused, else halfway to the least that failed */
-        double s = it == 0 ? s_first : *s_best > 0.0 ? *s_best * sqrt((double)b->H / (double)(top > 0 ? top : 1)) * 0.998 : s_lo;
+    for (it = 0; it < 8; it++) { /* from 1.15 x the shelves' scale: the scale that fills the rows
+                                    the last fit left unused, else halfway to the least that failed */
+        double s = it == 0 ? 1.15 * s_lo : *s_best > 0.0 ? *s_best * sqrt((double)b->H / (double)(top > 0 ? top : 1)) * 0.998 : s_lo;
         int t2, got;
         if (*s_best > 0.0 && !(s < s_hi)) s = 0.5 * (*s_best + s_hi);
         if (*s_best > 0.0 && !(s > *s_best * 1.002)) break;
@@ -6256,7 +6256,7 @@ static double dm__pz_bitmap_scale(dm__pz_run *r, double s_lo, double o)
     if (!ok || !b.taken || !b.foot || !b.free_run || !b.first_free || !b.longest_free || !saved || !found) return -1.0;
     dm__pz_order(r->pk, nc, 1, r->order, r->otmp);
     for (b.silhouette = 0; b.silhouette < (nc <= DM__PZ_FEW ? 2 : 1); b.silhouette++) {
-        if (!dm__pz_bitmap_search(r, &b, s_lo, 1.15 * s_lo, o, found, &s)) goto done;
+        if (!dm__pz_bitmap_search(r, &b, s_lo, o, found, &s)) goto done;
         if (s > best) {
             best = s;
             memcpy(saved, found, nc * sizeof(dm__pz_pack));
