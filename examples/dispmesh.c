@@ -465,10 +465,11 @@ static void view_setup(view *vw, const mesh *orig, int size)
     vw->size = size;
 }
 
-/* Renders a mesh into img (RGB, allocated here). smooth: area-weighted vertex normals, else face
-   normals; wire: wireframe overlay. */
+/* Renders a mesh into img (RGB, allocated here). smooth: the mesh's own vertex normals when it has
+   them (the reconstruction's come from the map, as a renderer of base + map shades it), else
+   area-weighted vertex normals; not smooth: face normals. wire: wireframe overlay. */
 static sr_result view_render(const view *vw, const float *p, size_t nv, const uint32_t *t, size_t nt, int smooth,
-                             int wire, const float rgb[3], sr_image8 *img)
+                             const float *own_normals, int wire, const float rgb[3], sr_image8 *img)
 {
     sr_framebuffer fb;
     sr_draw_desc d;
@@ -476,7 +477,11 @@ static sr_result view_render(const view *vw, const float *p, size_t nv, const ui
     sr_result r;
     int i;
     memset(img, 0, sizeof *img);
-    if (smooth) {
+    if (smooth && own_normals) {
+        normals = (float *)malloc(nv * 3 * sizeof(float) + 1);
+        if (!normals) return SR_ERR_OUT_OF_MEMORY;
+        memcpy(normals, own_normals, nv * 3 * sizeof(float));
+    } else if (smooth) {
         normals = (float *)malloc(nv * 3 * sizeof(float) + 1);
         if (!normals) return SR_ERR_OUT_OF_MEMORY;
         if ((r = sr_compute_vertex_normals(p, nv, t, nt, normals)) != SR_OK) { free(normals); return r; }
@@ -518,11 +523,11 @@ static int write_views(const char *path, const char *tmp, const run *R, int size
     memset(img, 0, sizeof img);
     memset(&sheet, 0, sizeof sheet);
     view_setup(&vw, &R->orig, size);
-    r = view_render(&vw, R->orig.p, R->orig.nv, R->orig.t, R->orig.nt, smooth, 0, grey, &img[0]);
-    if (r == SR_OK) r = view_render(&vw, R->base.p, R->base.nv, R->base.t, R->base.nt, 0, 1, blue, &img[1]);
+    r = view_render(&vw, R->orig.p, R->orig.nv, R->orig.t, R->orig.nt, smooth, NULL, 0, grey, &img[0]);
+    if (r == SR_OK) r = view_render(&vw, R->base.p, R->base.nv, R->base.t, R->base.nt, 0, NULL, 1, blue, &img[1]);
     if (r == SR_OK)
         r = view_render(&vw, R->dense->positions, R->dense->vertex_count, R->dense->indices, R->dense->triangle_count, smooth,
-                        0, warm, &img[2]);
+                        R->dense->normals, 0, warm, &img[2]);
     if (r != SR_OK) { fprintf(stderr, "\n"); cli_result_error("dispmesh", "rendering the views", sr_result_string(r), 0); goto done; }
     snprintf(cap[0], sizeof cap[0], "ORIGINAL %zu TRIANGLES", R->orig.nt);
     snprintf(cap[1], sizeof cap[1], "BASE %zu TRIANGLES", R->base.nt);
