@@ -15,6 +15,8 @@
    - the same in a crease-aware form: each edge's angle less the angle between the original's
      normals at the two faces' closest points (the turn the original itself makes there), so that
      a seam laid along one of the original's creases is measured by what the reconstruction adds;
+   - the same for the shading normals (the reconstruction's own, the map's; per face the mean of
+     its vertices'): plainly, or crease-aware on the grooved box;
    - no seam lines: rendered beside the original from three views with the same lights (the
      original with its area-weighted vertex normals, the reconstruction with its own, the map's, as
      a renderer of base + map shades it), the mean |dRGB| within 1 pixel of the visible seam edges
@@ -132,6 +134,7 @@ done:
 /* which checks a case asserts; the others are printed and counted as skipped */
 typedef struct case_checks {
     int folds, plain, crease, render;
+    int shade; /* the shading normals across seams: 1 plainly, 2 less the original's own turn */
     const char *why; /* why the ones not asserted are not */
 } case_checks;
 
@@ -151,6 +154,18 @@ static void tri_normal(const float *p, const uint32_t *idx, size_t t, double n[3
 static void face_normal(const dm_trimesh *m, size_t f, double n[3])
 {
     tri_normal(m->positions, m->indices, f, n);
+}
+
+/* the mean of face f's vertex normals (the map's, which shade it), unit */
+static void face_shading_normal(const dm_trimesh *m, size_t f, double n[3])
+{
+    double l;
+    int j, k;
+    n[0] = n[1] = n[2] = 0.0;
+    for (j = 0; j < 3; j++)
+        for (k = 0; k < 3; k++) n[k] += m->normals[3 * (size_t)m->indices[3 * f + (size_t)j] + (size_t)k];
+    l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (l > 0.0) { n[0] /= l; n[1] /= l; n[2] /= l; }
 }
 
 static double angle_between(const double a[3], const double b[3])
@@ -225,28 +240,37 @@ static size_t seam_edges(const char *name, const mesh *orig, const dm_trimesh *m
     hedge *e = sorted_edges(m->indices, m->triangle_count);
     double *as = (double *)malloc((n / 2 + 1) * sizeof(double)), *ai = (double *)malloc((n / 2 + 1) * sizeof(double));
     double *xs = (double *)malloc((n / 2 + 1) * sizeof(double)), *xi = (double *)malloc((n / 2 + 1) * sizeof(double));
+    double *hs = (double *)malloc((n / 2 + 1) * sizeof(double)), *hi = (double *)malloc((n / 2 + 1) * sizeof(double));
+    double *ks = (double *)malloc((n / 2 + 1) * sizeof(double)), *ki = (double *)malloc((n / 2 + 1) * sizeof(double));
     double *on = original_normals(orig, m);
     *seam = (uint32_t *)malloc((n + 2) * sizeof(uint32_t));
     on_seam = (uint8_t *)calloc(m->triangle_count + 1, 1);
-    if (!T_CHECK(e && as && ai && xs && xi && on && *seam && on_seam)) { ns = 0; goto done; }
+    if (!T_CHECK(e && as && ai && xs && xi && hs && hi && ks && ki && on && *seam && on_seam)) { ns = 0; goto done; }
     for (i = 0; i < n; i = j) {
         for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
         if (j - i == 2) {
             size_t f0 = e[i].he / 3, f1 = e[i + 1].he / 3;
-            double n0[3], n1[3], c, x;
+            double n0[3], n1[3], c, x, h;
             face_normal(m, f0, n0);
             face_normal(m, f1, n1);
             c = angle_between(n0, n1);
             x = c - angle_between(on + 3 * f0, on + 3 * f1);
+            face_shading_normal(m, f0, n0);
+            face_shading_normal(m, f1, n1);
+            h = angle_between(n0, n1);
             if (pm->chart[m->face_base[f0]] != pm->chart[m->face_base[f1]]) {
                 as[ns] = c;
                 xs[ns] = x;
+                hs[ns] = h;
+                ks[ns] = h - angle_between(on + 3 * f0, on + 3 * f1);
                 (*seam)[2 * ns] = (uint32_t)(e[i].key >> 32);
                 (*seam)[2 * ns + 1] = (uint32_t)(e[i].key & 0xffffffffu);
                 on_seam[f0] = on_seam[f1] = 1;
                 ns++;
             } else {
                 ai[ni] = c;
+                hi[ni] = h;
+                ki[ni] = h - angle_between(on + 3 * f0, on + 3 * f1);
                 xi[ni++] = x;
             }
         }
@@ -256,6 +280,14 @@ static size_t seam_edges(const char *name, const mesh *orig, const dm_trimesh *m
         printf("  note: %s: 99th percentile normal angle across %zu seam edges %.4f rad, across %zu others %.4f rad\n", name,
                ns, ps, ni, pi);
         printf("  note: %s: less the original's own turn there: %.4f rad across seams, %.4f across others\n", name, px, pxi);
+        {
+            double phs = percentile99(hs, ns), phi = percentile99(hi, ni), pks = percentile99(ks, ns), pki = percentile99(ki, ni);
+            printf("  note: %s: the shading normals (the map's, per face): %.4f rad across seams, %.4f across others; "
+                   "less the original's turn: %.4f, %.4f\n", name, phs, phi, pks, pki);
+            if (cc->shade == 1) T_CHECK_MSG(phs <= 1.5 * phi, "%s: shading normals: seams %.4f vs interior %.4f", name, phs, phi);
+            if (cc->shade == 2)
+                T_CHECK_MSG(pks <= 1.5 * pki, "%s: shading normals, crease-aware: seams %.4f vs interior %.4f", name, pks, pki);
+        }
         T_CHECK(ns > 0);
         if (cc->plain) T_CHECK_MSG(ps <= 1.5 * pi, "%s: seams %.4f vs interior %.4f", name, ps, pi);
         if (cc->crease) T_CHECK_MSG(px <= 1.5 * pxi, "%s: crease-aware: seams %.4f vs interior %.4f", name, px, pxi);
@@ -266,6 +298,10 @@ done:
     free(ai);
     free(xs);
     free(xi);
+    free(hs);
+    free(hi);
+    free(ks);
+    free(ki);
     free(on);
     return ns;
 }
@@ -617,8 +653,8 @@ int main(int argc, char **argv)
         /* the grooved box's charts end at its creases, so its seam edges carry its 90-degree
            edges: the crease-aware form stands for the plain one. Its creases that are not base
            edges (the grooves') are rounded over a texel, which the seams' pixels see most */
-        static const case_checks all = {1, 1, 1, 1, ""},
-                                 box = {0, 0, 1, 0, "seams on the box's creases (the plain angle measures the creases); "
+        static const case_checks all = {1, 1, 1, 1, 1, ""},
+                                 box = {0, 0, 1, 0, 2, "seams on the box's creases (the plain angle measures the creases); "
                                                     "a few corner slivers turned; the creases off the base's edges are "
                                                     "rounded over a texel, and the pixels along the seams see them most"};
         run_case("sphere", &s, 500, 512, &all);
@@ -634,7 +670,7 @@ int main(int argc, char **argv)
         mio_error err;
         FILE *f = fopen(path, "rb");
         if (!f) {
-            T_SKIP_N(13, "bunny", "glmark2-data is not installed");
+            T_SKIP_N(14, "bunny", "glmark2-data is not installed");
         } else {
             fclose(f);
             if (T_CHECK(mio_read_file(path, NULL, &mm, &err) == MIO_OK)) {
@@ -643,7 +679,7 @@ int main(int argc, char **argv)
                 b.nv = mm.vertex_count;
                 b.t = mm.indices;
                 b.nt = mm.triangle_count;
-                static const case_checks bunny = {0, 0, 0, 1, "the base -> surface mapping folds along the base's "
+                static const case_checks bunny = {0, 0, 0, 1, 1, "the base -> surface mapping folds along the base's "
                                                                 "sharpest edges (where the charts end): normal p99 1.08 vs 0.30 rad"};
                 run_case("bunny", &b, 500, 512, &bunny);
                 mio_free_mesh(&mm);
