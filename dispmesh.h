@@ -214,8 +214,10 @@
      longer uv side has texels (shared by the triangles on the edge), strips between; its triangles
      are then made Delaunay in the map by edge flips, border fixed. A vertex is its base point moved
      along the base normal by the map's bilinear depth, averaged over the triangles sharing it, with
-     the map's normal. A closed manifold base gives a closed manifold result with no T-junction;
-     nothing is dropped at depth breaks. Vertex v < base_vertex_count is base vertex v; face_base
+     the map's normal. Shade it with those normals: its geometry samples the original at the
+     map's resolution, so normals computed from it show the original's own facets. A closed
+     manifold base gives a closed manifold result with no T-junction; nothing is dropped at depth
+     breaks. Vertex v < base_vertex_count is base vertex v; face_base
      gives each triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
      (deterministic) and measures with dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
