@@ -40,7 +40,7 @@
                          map's row 0, which is the bottom row of the PFM and of the PNG)
      PREFIX_disp.pfm     the displacement, 1 channel, world units along -normal (positive inward)
      PREFIX_normal.png   the original's normals at the hits, n * 0.5 + 0.5 (gutter texels black)
-     PREFIX_recon.obj    the reconstruction (positions only)
+     PREFIX_recon.obj    the reconstruction, with the map's normals (shade with them)
      PREFIX_views.png    original | base with wireframe | reconstruction, one camera, captions
    Progress goes to stderr; the last line on stdout is
      RESULT dispmesh target= faces= fallback= fallback_region= res= rms= max= base_only_rms= base_only_max=
@@ -1176,7 +1176,8 @@ int main(int argc, char **argv)
                 break;
             case 2: wr = write_normal_png(path, tmp[f], R.map) ? SR_OK : SR_ERR_IO; break;
             case 3:
-                mr = mio_write_obj(tmp[f], R.dense->positions, R.dense->vertex_count, R.dense->indices, R.dense->triangle_count, &err);
+                mr = mio_write_obj_normals(tmp[f], R.dense->positions, R.dense->normals, R.dense->vertex_count,
+                                           R.dense->indices, R.dense->triangle_count, &err);
                 saved = errno;
                 if (mr != MIO_OK) {
                     fprintf(stderr, "\n");

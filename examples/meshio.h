@@ -209,6 +209,12 @@ MIODEF mio_result mio_read_memory(const void *data, size_t size, const mio_read_
 MIODEF mio_result mio_write_obj(const char *path, const float *positions, size_t vertex_count,
                                 const uint32_t *indices, size_t triangle_count, mio_error *err);
 
+/* As mio_write_obj, with a "vn x y z" line per vertex after its "v" lines (normals: 3 per vertex,
+   finite; NULL = none) and faces "f a//a b//b c//c", so that viewers shade with these normals. */
+MIODEF mio_result mio_write_obj_normals(const char *path, const float *positions, const float *normals,
+                                        size_t vertex_count, const uint32_t *indices, size_t triangle_count,
+                                        mio_error *err);
+
 /* Writes PLY with float x,y,z and a "list uchar uint vertex_indices" face element.
    binary: 0 = ascii (%.9g), 1 = binary little-endian (on any host). Other parameters as OBJ. */
 MIODEF mio_result mio_write_ply(const char *path, const float *positions, size_t vertex_count,
@@ -1860,19 +1866,36 @@ static int mio__write_xyz_line(FILE *f, const char *prefix, const float *xyz)
 MIODEF mio_result mio_write_obj(const char *path, const float *positions, size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, mio_error *err)
 {
+    return mio_write_obj_normals(path, positions, NULL, vertex_count, indices, triangle_count, err);
+}
+
+MIODEF mio_result mio_write_obj_normals(const char *path, const float *positions, const float *normals,
+                                        size_t vertex_count, const uint32_t *indices, size_t triangle_count,
+                                        mio_error *err)
+{
     mio_result r = mio__check_write(path, positions, vertex_count, indices, triangle_count, err);
     FILE *f;
     size_t i;
     int failed = 0;
     if (r != MIO_OK) return r;
+    for (i = 0; normals && i < 3 * vertex_count; i++) {
+        uint32_t u;
+        memcpy(&u, normals + i, 4);
+        if ((u & 0x7F800000u) == 0x7F800000u)
+            return mio__set_error(err, MIO_ERR_INVALID_ARGUMENT, "normal %llu is not finite", (unsigned long long)(i / 3));
+    }
     f = fopen(path, "wb");
     if (!f) return mio__set_error(err, MIO_ERR_IO, "cannot create %.140s", path);
     failed |= fprintf(f, "# written by meshio.h: %llu vertices, %llu triangles\n", (unsigned long long)vertex_count,
                       (unsigned long long)triangle_count) < 0;
     for (i = 0; i < vertex_count && !failed; i++) failed |= mio__write_xyz_line(f, "v ", positions + 3 * i);
-    for (i = 0; i < triangle_count && !failed; i++)
-        failed |= fprintf(f, "f %llu %llu %llu\n", (unsigned long long)indices[3 * i] + 1, (unsigned long long)indices[3 * i + 1] + 1,
-                          (unsigned long long)indices[3 * i + 2] + 1) < 0;
+    for (i = 0; normals && i < vertex_count && !failed; i++) failed |= mio__write_xyz_line(f, "vn ", normals + 3 * i);
+    for (i = 0; i < triangle_count && !failed; i++) {
+        unsigned long long a = (unsigned long long)indices[3 * i] + 1, b = (unsigned long long)indices[3 * i + 1] + 1,
+                           c = (unsigned long long)indices[3 * i + 2] + 1;
+        if (normals) failed |= fprintf(f, "f %llu//%llu %llu//%llu %llu//%llu\n", a, a, b, b, c, c) < 0;
+        else failed |= fprintf(f, "f %llu %llu %llu\n", a, b, c) < 0;
+    }
     return mio__finish_write(f, failed, path, err);
 }
 

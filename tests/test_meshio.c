@@ -666,6 +666,8 @@ static void test_detect_and_arguments(void)
         memcpy(bad, tri_pos, sizeof bad);
         bad[4] = (float)HUGE_VAL;
         T_CHECK(mio_write_obj("/nonexistent/dir/x.obj", bad, 3, tri_idx, 1, &e) == MIO_ERR_INVALID_ARGUMENT);
+        T_CHECK(mio_write_obj_normals("/nonexistent/dir/x.obj", tri_pos, bad, 3, tri_idx, 1, &e) == MIO_ERR_INVALID_ARGUMENT);
+        T_CHECK(strstr(e.message, "normal 1") != NULL);
     }
     mio_free_mesh(NULL);
     memset(&m, 0, sizeof m);
@@ -796,6 +798,7 @@ static mio_result write_kind(int kind, const char *path, const float *pos, size_
     case 0: return mio_write_obj(path, pos, nv, idx, nt, e);
     case 1: case 2: return mio_write_ply(path, pos, nv, idx, nt, kind - 1, e);
     case 3: return mio_write_off(path, pos, nv, idx, nt, e);
+    case 6: return mio_write_obj_normals(path, pos, pos, nv, idx, nt, e); /* any finite floats serve as normals */
     default: return mio_write_stl(path, pos, nv, idx, nt, kind - 4, e);
     }
 }
@@ -811,10 +814,11 @@ static int same_soup(const mio_mesh *m, const float *pos, const uint32_t *idx, s
     return 1;
 }
 
-#define ROUND_TRIP_KINDS 6
+#define ROUND_TRIP_KINDS 7
 static void round_trip(const char *what, const float *pos, size_t nv, const uint32_t *idx, size_t nt)
 {
-    static const char *const tags[ROUND_TRIP_KINDS] = { "rt.obj", "rt_ascii.ply", "rt_binary.ply", "rt.off", "rt_ascii.stl", "rt_binary.stl" };
+    static const char *const tags[ROUND_TRIP_KINDS] = { "rt.obj", "rt_ascii.ply", "rt_binary.ply", "rt.off", "rt_ascii.stl", "rt_binary.stl",
+                                                        "rt_normals.obj" };
     int kind;
     for (kind = 0; kind < ROUND_TRIP_KINDS; kind++) {
         char path[512];
@@ -831,7 +835,7 @@ static void round_trip(const char *what, const float *pos, size_t nv, const uint
         memset(&opt, 0, sizeof opt);
         opt.allocator = &c.a;
         r = mio_read_file(path, &opt, &m, &e);
-        if (kind >= 4) same = r == MIO_OK && same_soup(&m, pos, idx, nt);
+        if (kind == 4 || kind == 5) same = r == MIO_OK && same_soup(&m, pos, idx, nt);
         else same = r == MIO_OK && m.vertex_count == nv && m.triangle_count == nt && same_floats(m.positions, pos, 3 * nv) &&
                     same_indices(m.indices, idx, 3 * nt);
         T_CHECK_MSG(same, "%s %s: read back %s (%s), not bit-exact", what, tags[kind], mio_result_string(r), e.message);
@@ -839,6 +843,31 @@ static void round_trip(const char *what, const float *pos, size_t nv, const uint
         T_CHECK(c.live == 0);
         remove(path);
     }
+}
+
+/* mio_write_obj_normals: one "vn" line per vertex, bit-exact, and faces naming them */
+static void test_obj_normals(void)
+{
+    static const float nrm[9] = { 0.0f, 0.0f, 1.0f, 0.6f, 0.0f, 0.8f, -1.0f / 3.0f, 2.0f / 3.0f, 2.0f / 3.0f };
+    char path[512], line[256];
+    FILE *f;
+    int nvn = 0, exact = 1, nf = 0;
+    mio_error e;
+    temp_path(path, sizeof path, "normals.obj");
+    T_CHECK(mio_write_obj_normals(path, tri_pos, nrm, 3, tri_idx, 1, &e) == MIO_OK);
+    f = fopen(path, "rb");
+    while (f && fgets(line, sizeof line, f)) {
+        if (strncmp(line, "vn ", 3) == 0 && nvn < 3) {
+            char *q = line + 3;
+            int k;
+            for (k = 0; k < 3; k++) exact &= strtof(q, &q) == nrm[3 * nvn + k];
+            nvn++;
+        }
+        if (strncmp(line, "f 1//1 2//2 3//3", 16) == 0) nf++;
+    }
+    if (f) fclose(f);
+    T_CHECK(nvn == 3 && exact && nf == 1);
+    remove(path);
 }
 
 static void test_round_trips(void)
@@ -1367,6 +1396,7 @@ int main(int argc, char **argv)
         test_truncations(&samples[i]);
         test_alloc_failures(&samples[i]);
     }
+    test_obj_normals(); /* strtof: before the round trips try a comma locale */
     test_round_trips();
     test_weld_cube();
     test_weld_unchanged_and_errors();
