@@ -8,7 +8,7 @@
      file (normals, texture coordinates, colours, materials, groups, lines, points) is ignored.
      Writes the same two arrays as OBJ, OFF, PLY or STL (PLY and STL ascii or binary
      little-endian) so that reading the file back gives the same bits (STL keeps no shared
-     vertices: it gives back each triangle's corners, bit-exact).
+     vertices: it gives back each triangle's corners, bit-exact); OBJ also with vertex normals.
      mio_weld() joins vertices with equal positions (an STL soup becomes a connected mesh).
 
    HOW TO USE (in ten lines)
