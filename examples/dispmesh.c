@@ -477,14 +477,11 @@ static sr_result view_render(const view *vw, const float *p, size_t nv, const ui
     sr_result r;
     int i;
     memset(img, 0, sizeof *img);
-    if (smooth && own_normals) {
+    if (smooth) {
         normals = (float *)malloc(nv * 3 * sizeof(float) + 1);
         if (!normals) return SR_ERR_OUT_OF_MEMORY;
-        memcpy(normals, own_normals, nv * 3 * sizeof(float));
-    } else if (smooth) {
-        normals = (float *)malloc(nv * 3 * sizeof(float) + 1);
-        if (!normals) return SR_ERR_OUT_OF_MEMORY;
-        if ((r = sr_compute_vertex_normals(p, nv, t, nt, normals)) != SR_OK) { free(normals); return r; }
+        if (own_normals) memcpy(normals, own_normals, nv * 3 * sizeof(float));
+        else if ((r = sr_compute_vertex_normals(p, nv, t, nt, normals)) != SR_OK) { free(normals); return r; }
     }
     if ((r = sr_framebuffer_create(&fb, vw->size, vw->size, NULL)) != SR_OK) { free(normals); return r; }
     sr_framebuffer_clear(&fb, bg, 1.0f);

@@ -209,7 +209,7 @@ MIODEF mio_result mio_read_memory(const void *data, size_t size, const mio_read_
 MIODEF mio_result mio_write_obj(const char *path, const float *positions, size_t vertex_count,
                                 const uint32_t *indices, size_t triangle_count, mio_error *err);
 
-/* As mio_write_obj, with a "vn x y z" line per vertex after its "v" lines (normals: 3 per vertex,
+/* As mio_write_obj, with a "vn x y z" line per vertex after the "v" lines (normals: 3 per vertex,
    finite; NULL = none) and faces "f a//a b//b c//c", so that viewers shade with these normals. */
 MIODEF mio_result mio_write_obj_normals(const char *path, const float *positions, const float *normals,
                                         size_t vertex_count, const uint32_t *indices, size_t triangle_count,
