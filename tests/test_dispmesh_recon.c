@@ -250,11 +250,11 @@ static size_t seam_edges(const char *name, const mesh *orig, const dm_trimesh *m
         for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
         if (j - i == 2) {
             size_t f0 = e[i].he / 3, f1 = e[i + 1].he / 3;
-            double n0[3], n1[3], c, x, h;
+            double n0[3], n1[3], c, x, h, turn = angle_between(on + 3 * f0, on + 3 * f1); /* the original's own */
             face_normal(m, f0, n0);
             face_normal(m, f1, n1);
             c = angle_between(n0, n1);
-            x = c - angle_between(on + 3 * f0, on + 3 * f1);
+            x = c - turn;
             face_shading_normal(m, f0, n0);
             face_shading_normal(m, f1, n1);
             h = angle_between(n0, n1);
@@ -262,7 +262,7 @@ static size_t seam_edges(const char *name, const mesh *orig, const dm_trimesh *m
                 as[ns] = c;
                 xs[ns] = x;
                 hs[ns] = h;
-                ks[ns] = h - angle_between(on + 3 * f0, on + 3 * f1);
+                ks[ns] = h - turn;
                 (*seam)[2 * ns] = (uint32_t)(e[i].key >> 32);
                 (*seam)[2 * ns + 1] = (uint32_t)(e[i].key & 0xffffffffu);
                 on_seam[f0] = on_seam[f1] = 1;
@@ -270,7 +270,7 @@ static size_t seam_edges(const char *name, const mesh *orig, const dm_trimesh *m
             } else {
                 ai[ni] = c;
                 hi[ni] = h;
-                ki[ni] = h - angle_between(on + 3 * f0, on + 3 * f1);
+                ki[ni] = h - turn;
                 xi[ni++] = x;
             }
         }
