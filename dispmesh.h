@@ -189,16 +189,16 @@
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
      edge): the base point p and the interpolated angle-weighted base normal n; the line p - t n,
      |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
-     positive inward) and the original's interpolated normal at the hit: the first hit along -n with
-     inward (the paper's rule, for a base that encloses the original), otherwise and on both_ways
-     triangles the nearest crossing either way. No crossing, or a depth more than 8 texel sizes
-     beyond more than half of its chart neighbours within 2 texels (a ray that slipped past a thin
-     part), is DM_TEXEL_MISS (valid = 0). Gutter texels within 2 texels of a chart are
-     DM_TEXEL_BORDER, baked from the nearest such triangle's plane extended (the chart's field
-     extended where that ray meets a crease or lands 8 texel sizes off it) for filtering and the
-     first mip level, then fitted (least squares) so that a chart's bilinear read along its
-     boundary gives the depth of the edge point's own ray: the charts on a seam read one depth
-     there (on a crease of the original each keeps its own face). MISS and EMPTY texels get
+     positive inward) and the original's interpolated normal at the hit: with inward the first hit
+     along -n (the paper's rule, for a base that encloses the original) unless a back face (p lies
+     inside), otherwise and on both_ways triangles the nearest crossing either way. No crossing, or
+     a depth more than 8 texel sizes beyond more than half of its chart neighbours within 2 texels
+     (a ray that slipped past a thin part), is DM_TEXEL_MISS (valid = 0). Gutter texels within 2
+     texels of a chart are DM_TEXEL_BORDER, baked from the nearest such triangle's plane extended
+     (the chart's field extended where that ray meets a crease or lands 8 texel sizes off it) for
+     filtering and the first mip level, then fitted (least squares) so that a chart's bilinear read
+     along its boundary gives the depth of the edge point's own ray: the charts on a seam read one
+     depth there (on a crease of the original each keeps its own face). MISS and EMPTY texels get
      push-pull filled values (Gortler et al. 1996) for filtering only.
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
      stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
@@ -450,9 +450,9 @@ typedef struct dm_bake_options {
                                   thin part of the original to another sheet */
     int inward;                /* nonzero: the paper's rule, the first hit along -n (t from
                                   -max_distance / 10, where a base triangle grazes the original,
-                                  up to max_distance), then, if none, the nearest either way; for
-                                  a base that encloses the original (dm_shell_constraint). 0: the
-                                  nearest either way */
+                                  up to max_distance), then, if none or a back face, the nearest
+                                  either way; for a base that encloses the original
+                                  (dm_shell_constraint). 0: the nearest either way */
     const uint8_t *both_ways;  /* NULL, or per base triangle: nonzero = the nearest crossing either
                                   way even when inward is set (the signed region of a relaxed
                                   shell constraint: dm_shell_fallback_triangles) */
@@ -6861,6 +6861,12 @@ static int dm__bk_trace(const dm__bk_run *r, const float pos[3], const float nrm
     ray.tmin = in_t ? -0.1f * maxd : -maxd;
     ray.tmax = maxd;
     if (in_t) got = dm_bvh_intersect(r->bvh, &ray, hit);
+    if (got) { /* a back face first: the ray starts inside the original, where the base does not
+                  enclose it (a thin part's far side lies ahead); the nearest crossing either way */
+        double fn[3];
+        dm__face_normal(r->opos, r->oidx, hit->triangle, fn);
+        if (fn[0] * ray.dir[0] + fn[1] * ray.dir[1] + fn[2] * ray.dir[2] > 0.0) got = 0;
+    }
     if (!got) {
         ray.tmin = -maxd;
         got = dm_bvh_intersect_line(r->bvh, &ray, hit);

@@ -41,7 +41,7 @@ static const expected table[] = {
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
     {"thin torus simplify shell", 0x108136a851d0f249ull},
     {"thin torus parameterize", 0xa9133a37ed6e2bbaull},
-    {"thin torus bake", 0x88990b7c250d3a7dull},
+    {"thin torus bake", 0x093d15f7a3ecee9eull},
     {"thin torus reconstruct", 0xbf9c6710ff061b98ull},
 };
 

@@ -463,6 +463,40 @@ done:
     dm_shell_free(sh);
 }
 
+/* The paper's inward rule where the base does not enclose the original (a relaxed collapse's
+   neighbourhood): a base plane inside a thin slab, 2 mm under its top face and 11 mm over its
+   bottom one. The inward ray's first hit is the bottom face seen from inside (a back face: the
+   slab's far side); the bake must take the nearest crossing either way, the top face, instead. */
+static void test_inside_start(void)
+{
+    static const float sp[8 * 3] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 0.02f, 1, 0, 0.02f, 1, 1, 0.02f, 0, 1, 0.02f};
+    static const uint32_t st[12 * 3] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                        1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+    static const float bp[4 * 3] = {0.1f, 0.1f, 0.011f, 0.9f, 0.1f, 0.011f, 0.9f, 0.9f, 0.011f, 0.1f, 0.9f, 0.011f};
+    static const uint32_t bi[2 * 3] = {0, 1, 2, 0, 2, 3};
+    dm_param *param = NULL;
+    dm_param_options po;
+    dm_bake_options bo;
+    dm_dispmap *map = NULL;
+    size_t k, n, hits = 0, off = 0;
+    memset(&po, 0, sizeof po);
+    po.width = po.height = 64;
+    if (!T_CHECK(dm_parameterize(bp, 4, bi, 2, &po, &param) == DM_OK)) return;
+    memset(&bo, 0, sizeof bo);
+    bo.inward = 1; /* max_distance: 5% of the slab's diagonal, 71 mm; the inward search starts 7 mm out */
+    if (T_CHECK(dm_bake(param, bp, 4, bi, 2, sp, 8, st, 12, &bo, &map) == DM_OK)) {
+        n = (size_t)po.width * (size_t)po.height;
+        for (k = 0; k < n; k++) {
+            if (map->status[k] != DM_TEXEL_HIT) continue;
+            hits++;
+            off += !(fabsf(map->disp[k] + 0.009f) < 1e-5f);
+        }
+        T_CHECK_MSG(hits > n / 4 && off == 0, "%zu of %zu texels hit, %zu not on the top face (9 mm out)", hits, n, off);
+    }
+    dm_dispmap_free(map);
+    dm_param_free(param);
+}
+
 static void test_bad_input(const mesh *m)
 {
     dm_shell *sh = (dm_shell *)1;
@@ -693,6 +727,7 @@ int main(int argc, char **argv)
     }
     check_mesh("fat torus", &torus, 400, 400, 1, 0);
     test_fallback(&torus, 120);
+    test_inside_start();
     {   /* sharp edges and narrow grooves: the QEM position of an edge collapse lands far from
            keep, which the enclosure's old triangles must not follow */
         mesh box = make_grooved_box(12, 0.03);
