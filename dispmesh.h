@@ -6847,7 +6847,7 @@ static double dm__bk_base_point(dm__bk_run *r, size_t id, uint32_t tt, double bu
 }
 
 /* the ray from point pos along -nrm, by the rule of base triangle tt (inward first where asked,
-   else the whole line): 1 and its hit, or 0 */
+   unless that hit is a back face; else the whole line): 1 and its hit, or 0 */
 static int dm__bk_trace(const dm__bk_run *r, const float pos[3], const float nrm[3], uint32_t tt, dm_hit *hit)
 {
     float maxd = r->maxd;
