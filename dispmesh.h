@@ -26,7 +26,7 @@
      PART 3  Bounding shell and paper 000's constraints: dm_shell_grow, dm_shell_constraint,
              dm_shell_collapsed, dm_shell_relax (the fallback), dm_shell_fallback_triangles.
      PART 4  Parameterization, bake, surface sample grid, reconstruction: dm_parameterize,
-             dm_bake, dm_reconstruct, dm_coverage_weights, dm_surface_distance.
+             dm_bake, dm_reconstruct, dm_base_normals, dm_coverage_weights, dm_surface_distance.
 
    COMMON TO ALL PARTS
      Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-
@@ -143,7 +143,8 @@
           points of its edge from keep, a ray along the inverted interpolated normal (started a
           quarter thickness outside) must meet a front face of the original first, within 2.25
           thicknesses, and not go out and in again within that depth. The normals are the mesh's
-          angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums).
+          angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums),
+          not the bake's turned ones (BASE NORMALS below), which differ at a few crease vertices.
           A miss is a violation unless the original is open and the sample lies within 0.05
           thickness of it (beside its boundary: a base reaching farther out overhangs it).
      The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
@@ -187,7 +188,7 @@
      triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
      seams, not its one global chart (its text omits the cut); neighbour lookups go through nbr.
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
-     edge): the base point p and the interpolated angle-weighted base normal n; the line p - t n,
+     edge): the base point p and the interpolated base normal n; the line p - t n,
      |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
      positive inward) and the original's interpolated normal at the hit: with inward the first hit
      along -n (the paper's rule, for a base that encloses the original) unless a back face (p lies
@@ -200,6 +201,11 @@
      along its boundary gives the depth of the edge point's own ray: the charts on a seam read one
      depth there (on a crease of the original each keeps its own face). MISS and EMPTY texels get
      push-pull filled values (Gortler et al. 1996) for filtering only.
+     BASE NORMALS (dm_base_normals, the bake's and the reconstruction's): angle-weighted, except
+     where a vertex sees one of its triangles beyond 60 degrees (a short wall by a wide flat part,
+     whose lines would run along it and fold): that normal turns toward the axis of its triangles'
+     smallest normal cone, just far enough to see each within 60 degrees, and at most 30 degrees.
+     Deviation: the paper names only "the interpolated vertex normal".
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
      stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
      dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel
@@ -513,7 +519,7 @@ DMDEF dm_result dm_parameterize(const float *positions, size_t vertex_count, con
 DMDEF void dm_param_free(dm_param *param);
 
 /* Bakes the displacement map: for every texel under a base triangle, the base point p and the
-   interpolated (angle-weighted, renormalised) base normal n; the line p - t n meets the original
+   interpolated (renormalised) base normal n of dm_base_normals; the line p - t n meets the original
    mesh at the smallest |t| within max_distance; disp = t (positive inward), normal = the
    original's interpolated vertex normal there. Misses are flagged and push-pull filled.
    param     from dm_parameterize on the same base mesh.
@@ -524,6 +530,12 @@ DMDEF dm_result dm_bake(const dm_param *param, const float *base_positions, size
                         const uint32_t *orig_indices, size_t orig_triangle_count,
                         const dm_bake_options *options, dm_dispmap **out);
 DMDEF void dm_dispmap_free(dm_dispmap *map);
+
+/* The directions dm_bake and dm_reconstruct displace the base along (a renderer that displaces
+   the base by the map itself needs the same): per base vertex, unit, into normals[3 vertex_count]
+   (zero for a vertex no triangle uses). See BAKE in the doc block. */
+DMDEF dm_result dm_base_normals(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const dm_allocator *allocator, float *normals);
 
 typedef struct dm_reconstruct_options {
     float density;             /* micro-edges per texel along each base edge; 0 = 1, at most 16 */
@@ -1022,6 +1034,155 @@ static void dm__vertex_normals(const float *pos, size_t nv, const uint32_t *idx,
         double len = dm__len3(acc + 3 * v);
         for (k = 0; k < 3; k++) nrm[3 * v + (size_t)k] = len > 0.0 ? (float)(acc[3 * v + (size_t)k] / len) : 0.0f;
     }
+}
+
+/* Base normals (dm_base_normals). A base vertex whose angle-weighted normal sees one of its
+   triangles at more than 60 degrees (a short wall beside a wide flat part, at a crease) would
+   send that triangle's displacement lines along its own plane, where they meet the original in
+   one point and fold. Such a vertex turns its normal toward the direction that sees all its
+   triangles best (the axis of the smallest cone holding their normals): the least turn that sees
+   each at 60 degrees, or as far as the axis, and never more than 30 degrees (in a crumpled part of
+   a base no direction sees every triangle, and a longer turn sends the lines across other
+   sheets). Every other vertex keeps its angle-weighted normal. Shell maps ask their directions
+   for the same visibility (Jiang et al. 2020, "Bijective projection in a shell"). */
+#define DM__CONE_MIN 0.5                   /* cos 60 degrees */
+#define DM__CONE_TURN 0.86602540378443865  /* cos 30 degrees */
+#define DM__CONE_FACES 32                  /* more triangles at a vertex: it keeps its normal */
+
+/* the smallest dot product of unit n with the k unit face normals fn */
+static double dm__cone_min(const double *fn, int k, const double n[3])
+{
+    double m = HUGE_VAL;
+    int i;
+    for (i = 0; i < k; i++) {
+        double d = dm__dot3(fn + 3 * i, n);
+        if (d < m) m = d;
+    }
+    return m;
+}
+
+/* the unit direction that maximises the smallest dot product with the k unit normals fn (one of
+   them, the bisector of two or the circumcentre of three: the optimum is one of these), into
+   axis; returns that dot product */
+static double dm__cone_axis(const double *fn, int k, double axis[3])
+{
+    double best = -HUGE_VAL;
+    int a, b, c, j;
+    for (a = 0; a < k; a++)
+        for (b = a; b < k; b++)
+            for (c = b; c < k; c++) {
+                double d[3], u[3], v[3], len, m;
+                if (a == b && b == c) {
+                    for (j = 0; j < 3; j++) d[j] = fn[3 * a + j];
+                } else if (a == b) {
+                    continue;
+                } else if (b == c) {
+                    for (j = 0; j < 3; j++) d[j] = fn[3 * a + j] + fn[3 * b + j];
+                } else {
+                    dm__sub3(fn + 3 * b, fn + 3 * a, u);
+                    dm__sub3(fn + 3 * c, fn + 3 * a, v);
+                    dm__cross3(u, v, d);
+                    if (dm__dot3(d, fn + 3 * a) < 0.0)
+                        for (j = 0; j < 3; j++) d[j] = -d[j];
+                }
+                len = dm__len3(d);
+                if (!(len > 1e-12)) continue;
+                for (j = 0; j < 3; j++) d[j] /= len;
+                m = dm__cone_min(fn, k, d);
+                if (m > best) {
+                    best = m;
+                    for (j = 0; j < 3; j++) axis[j] = d[j];
+                }
+            }
+    return best;
+}
+
+/* unit n0 turned toward unit axis by s in [0, 1] (the chord, renormalised), into out */
+static void dm__cone_step(const double n0[3], const double axis[3], double s, double out[3])
+{
+    double len;
+    int j;
+    for (j = 0; j < 3; j++) out[j] = (1.0 - s) * n0[j] + s * axis[j];
+    len = dm__len3(out);
+    for (j = 0; j < 3; j++) out[j] = len > 0.0 ? out[j] / len : n0[j];
+}
+
+/* one vertex's normal n (unit, seeing its k triangles fn at worst `worst`), turned as the
+   section's head says; n is left alone where the axis sees no better */
+static void dm__cone_turn(const double *fn, int k, double worst, double n[3])
+{
+    double axis[3], n0[3], d[3], best, target, lo = 0.0, hi = 1.0, lo2 = 0.0, hi2 = 1.0;
+    int it, j;
+    best = dm__cone_axis(fn, k, axis);
+    if (!(best > worst)) return;
+    target = best < DM__CONE_MIN ? best : DM__CONE_MIN;
+    for (j = 0; j < 3; j++) n0[j] = n[j];
+    for (it = 0; it < 40; it++) { /* the least turn that reaches target (hi) */
+        double s = 0.5 * (lo + hi);
+        dm__cone_step(n0, axis, s, d);
+        if (dm__cone_min(fn, k, d) >= target) hi = s;
+        else lo = s;
+    }
+    for (it = 0; it < 40; it++) { /* the longest turn within DM__CONE_TURN (lo2) */
+        double s = 0.5 * (lo2 + hi2);
+        dm__cone_step(n0, axis, s, d);
+        if (dm__dot3(d, n0) >= DM__CONE_TURN) lo2 = s;
+        else hi2 = s;
+    }
+    dm__cone_step(n0, axis, hi < lo2 ? hi : lo2, n);
+}
+
+/* dm__vertex_normals, then each vertex that sees one of its triangles at less than DM__CONE_MIN
+   turned (dm__cone_turn); the corner lists (first: nv + 1, corner: 3 nt) are taken from sc only
+   when a vertex needs them. acc: 3 nv doubles of work space. */
+static dm_result dm__base_normals(dm__scratch *sc, const float *pos, size_t nv, const uint32_t *idx, size_t nt,
+                                  double *acc, float *nrm)
+{
+    size_t t, v, nflag = 0;
+    uint32_t *first, *corner;
+    dm__vertex_normals(pos, nv, idx, nt, acc, nrm);
+    for (v = 0; v < nv; v++) acc[v] = HUGE_VAL; /* 1. each vertex's worst dot product with a triangle */
+    for (t = 0; t < nt; t++) {
+        double n[3], len, vn[3];
+        int c;
+        dm__face_normal(pos, idx, t, n);
+        len = dm__len3(n);
+        if (!(len > 0.0)) continue;
+        for (c = 0; c < 3; c++) {
+            size_t w = idx[3 * t + (size_t)c];
+            dm__load3(nrm, w, vn);
+            if (dm__dot3(vn, n) / len < acc[w]) acc[w] = dm__dot3(vn, n) / len;
+        }
+    }
+    for (v = 0; v < nv; v++) nflag += acc[v] < DM__CONE_MIN;
+    if (!nflag) return DM_OK;
+    first = (uint32_t *)dm__take(sc, nv + 1, sizeof(uint32_t)); /* 2. corners by vertex */
+    corner = (uint32_t *)dm__take(sc, 3 * nt + 1, sizeof(uint32_t));
+    if (!first || !corner) return dm__scratch_fail(sc);
+    memset(first, 0, (nv + 1) * sizeof(uint32_t));
+    for (t = 0; t < 3 * nt; t++) first[idx[t] + 1]++;
+    for (v = 0; v < nv; v++) first[v + 1] += first[v];
+    for (t = 0; t < 3 * nt; t++) corner[first[idx[t]]++] = (uint32_t)t;
+    for (v = nv; v > 0; v--) first[v] = first[v - 1];
+    first[0] = 0;
+    for (v = 0; v < nv; v++) { /* 3. the turns */
+        double fn[3 * DM__CONE_FACES], n[3];
+        int k = 0, j;
+        uint32_t q;
+        if (!(acc[v] < DM__CONE_MIN) || first[v + 1] - first[v] > DM__CONE_FACES) continue;
+        for (q = first[v]; q < first[v + 1]; q++) {
+            double len;
+            dm__face_normal(pos, idx, corner[q] / 3, fn + 3 * k);
+            len = dm__len3(fn + 3 * k);
+            if (!(len > 0.0)) continue;
+            for (j = 0; j < 3; j++) fn[3 * k + j] /= len;
+            k++;
+        }
+        dm__load3(nrm, v, n);
+        dm__cone_turn(fn, k, acc[v], n);
+        for (j = 0; j < 3; j++) nrm[3 * v + (size_t)j] = (float)n[j];
+    }
+    return DM_OK;
 }
 
 typedef struct dm__edge {
@@ -6768,7 +6929,8 @@ static dm_result dm__bk_prepare(dm__bk_run *r)
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, diag;
     dm_bvh_options bo;
     size_t t;
-    dm__vertex_normals(r->bpos, r->bnv, r->bidx, r->bnt, r->acc, r->bnrm);
+    dm_result res = dm__base_normals(&r->sc, r->bpos, r->bnv, r->bidx, r->bnt, r->acc, r->bnrm);
+    if (res != DM_OK) return res;
     dm__vertex_normals(r->opos, r->onv, r->oidx, r->ont, r->acc, r->onrm);
     for (t = 0; t < 3 * r->ont; t++) {
         int k;
@@ -7308,6 +7470,23 @@ static dm_result dm__bk_fill(dm__bk_run *r)
     return DM_OK;
 }
 
+DMDEF dm_result dm_base_normals(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const dm_allocator *allocator, float *normals)
+{
+    dm__scratch sc;
+    double *acc;
+    dm_result res = dm__check_mesh(positions, vertex_count, indices, triangle_count);
+    if (res == DM_OK && !normals) res = DM_ERR_INVALID_ARGUMENT;
+    if (res != DM_OK) return res;
+    memset(&sc, 0, sizeof sc);
+    sc.a = dm__resolve_allocator(allocator);
+    acc = (double *)dm__take(&sc, 3 * vertex_count + 1, sizeof(double));
+    res = acc ? dm__base_normals(&sc, positions, vertex_count, indices, triangle_count, acc, normals)
+              : dm__scratch_fail(&sc);
+    dm__release(&sc);
+    return res;
+}
+
 DMDEF dm_bake_options dm_bake_default_options(void)
 {
     dm_bake_options o; /* max_distance 0: 5% of the original's diagonal, which only the call knows */
@@ -7833,8 +8012,8 @@ DMDEF dm_result dm_reconstruct(const dm_dispmap *map, const dm_param *param, con
     if (!r.bnrm || !r.edges || !r.he_edge || !r.edge_level || !r.edge_first || !r.tri_level || !r.tri_first || !r.acc)
         res = dm__scratch_fail(&r.sc);
     if (res == DM_OK) {
-        dm__vertex_normals(r.bpos, r.bnv, r.bidx, r.bnt, r.acc, r.bnrm); /* as dm_bake's */
-        res = dm__rc_edges(&r);                                        /* 1. shared edges, levels */
+        res = dm__base_normals(&r.sc, r.bpos, r.bnv, r.bidx, r.bnt, r.acc, r.bnrm); /* as dm_bake's */
+        if (res == DM_OK) res = dm__rc_edges(&r);                                        /* 1. shared edges, levels */
     }
     if (res == DM_OK) res = dm__rc_count(&r);                          /* 2. sizes */
     if (res == DM_OK) res = dm__rc_alloc(&r);                          /* 3. arrays */

@@ -36,13 +36,13 @@ static const expected table[] = {
     {"torus simplify", 0xab7b78e3a557c32cull},
     {"torus simplify shell", 0xcca5ae4f5b9915a8ull},
     {"torus parameterize", 0x76f33e92024d215full},
-    {"torus bake", 0x547c578061793dafull},
-    {"torus reconstruct", 0x76603bddcf5ce79cull},
+    {"torus bake", 0xd03dc926ee04a8f1ull},
+    {"torus reconstruct", 0x83b18a5c639e3013ull},
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
     {"thin torus simplify shell", 0x108136a851d0f249ull},
     {"thin torus parameterize", 0xa9133a37ed6e2bbaull},
-    {"thin torus bake", 0x093d15f7a3ecee9eull},
-    {"thin torus reconstruct", 0xbf9c6710ff061b98ull},
+    {"thin torus bake", 0x22cd7c2a826d8306ull},
+    {"thin torus reconstruct", 0xe0ddbc71bc88a221ull},
 };
 
 #define STAGES 5

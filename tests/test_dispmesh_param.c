@@ -174,6 +174,175 @@ static void test_curled_chart(void)
     mio_free_mesh(&m);
 }
 
+/* the unit normal of triangle t of (p, idx) */
+static void unit_face_normal(const float *p, const uint32_t *idx, size_t t, double n[3])
+{
+    const float *a = p + 3 * idx[3 * t], *b = p + 3 * idx[3 * t + 1], *c = p + 3 * idx[3 * t + 2];
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]}, l;
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    n[0] /= l;
+    n[1] /= l;
+    n[2] /= l;
+}
+
+/* the test's own angle-weighted vertex normals (Thurmer and Wuthrich), unit, 3 doubles each */
+static void angle_weighted(const float *p, size_t nv, const uint32_t *idx, size_t nt, double *vn)
+{
+    size_t t, v;
+    int c, k;
+    memset(vn, 0, 3 * nv * sizeof(double));
+    for (t = 0; t < nt; t++) {
+        double n[3];
+        unit_face_normal(p, idx, t, n);
+        for (c = 0; c < 3; c++) {
+            const float *a = p + 3 * idx[3 * t + c], *b = p + 3 * idx[3 * t + (c + 1) % 3], *d = p + 3 * idx[3 * t + (c + 2) % 3];
+            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+            double cs = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) /
+                        sqrt((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+            double ang = acos(cs < -1.0 ? -1.0 : cs > 1.0 ? 1.0 : cs);
+            for (k = 0; k < 3; k++) vn[3 * idx[3 * t + c] + k] += ang * n[k];
+        }
+    }
+    for (v = 0; v < nv; v++) {
+        double l = sqrt(vn[3 * v] * vn[3 * v] + vn[3 * v + 1] * vn[3 * v + 1] + vn[3 * v + 2] * vn[3 * v + 2]);
+        for (k = 0; k < 3; k++) vn[3 * v + k] /= l;
+    }
+}
+
+/* vertex v's smallest dot product with its triangles' normals, for normal n */
+static double worst_face(const float *p, const uint32_t *idx, size_t nt, uint32_t v, const double n[3])
+{
+    double m = 2.0;
+    size_t t;
+    for (t = 0; t < nt; t++)
+        if (idx[3 * t] == v || idx[3 * t + 1] == v || idx[3 * t + 2] == v) {
+            double f[3], d;
+            unit_face_normal(p, idx, t, f);
+            d = f[0] * n[0] + f[1] * n[1] + f[2] * n[2];
+            if (d < m) m = d;
+        }
+    return m;
+}
+
+/* dm_base_normals, the directions of the bake and the reconstruction: the angle-weighted normals
+   where each vertex sees its triangles within 60 degrees (the bumpy sphere); at a crease between a
+   wide flat fan and a thin wall, where the angle-weighted normal lies along the wall, the least
+   turn that sees the wall at 60 degrees; where no direction sees all its triangles that well (a
+   thin wedge), toward the one that sees them best, by at most 30 degrees; the errors. */
+static void test_base_normals(void)
+{
+    mesh s = make_sphere(16, 0.03, 1.0);
+    float pos[3 * 9], *nrm = (float *)malloc(3 * s.nv * sizeof(float));
+    uint32_t idx[3 * 8];
+    double *vn = (double *)malloc(3 * s.nv * sizeof(double)), n[3], aw[3 * 9];
+    size_t v, off = 0, i, nt = 0;
+    if (!T_CHECK(nrm && vn)) goto done;
+    T_EQ_INT(dm_base_normals(s.p, s.nv, s.t, s.nt, NULL, nrm), DM_OK);
+    angle_weighted(s.p, s.nv, s.t, s.nt, vn);
+    for (v = 0; v < s.nv; v++) {
+        int k;
+        for (k = 0; k < 3; k++) off += fabs(nrm[3 * v + k] - vn[3 * v + k]) > 1e-6;
+    }
+    T_CHECK_MSG(off == 0, "bumpy sphere: %zu normal components differ from the angle-weighted ones", off);
+    { /* a crease: O at the origin, a fan of 270 degrees in the plane y = 0 facing -y, and one wall
+         triangle of a 3-degree corner facing -x */
+        pos[0] = pos[1] = pos[2] = 0.0f;
+        for (i = 0; i < 7; i++) {
+            double a = 1.5 * 3.14159265358979 * (double)i / 6.0;
+            pos[3 * (1 + i)] = (float)cos(a);
+            pos[3 * (1 + i) + 1] = 0.0f;
+            pos[3 * (1 + i) + 2] = (float)sin(a);
+        }
+        for (i = 0; i < 6; i++) {
+            idx[3 * nt] = 0;
+            idx[3 * nt + 1] = (uint32_t)(1 + i);
+            idx[3 * nt + 2] = (uint32_t)(2 + i);
+            nt++;
+        }
+        pos[24] = 0.0f; pos[25] = 0.05f; pos[26] = -1.0f; /* the wall: O, (0 0 -1), (0 .05 -1) */
+        pos[21] = 0.0f; pos[22] = 0.0f; pos[23] = -1.0f;
+        /* vertex 7 was the fan's last point at 270 degrees: (0, 0, -1), the wall's foot */
+        idx[3 * nt] = 0;
+        idx[3 * nt + 1] = 8;
+        idx[3 * nt + 2] = 7;
+        nt++;
+        {
+            float out[3 * 9];
+            double wall[3], worst_aw, worst;
+            unit_face_normal(pos, idx, 6, wall);
+            angle_weighted(pos, 9, idx, nt, aw);
+            worst_aw = worst_face(pos, idx, nt, 0, aw);
+            T_CHECK_MSG(worst_aw < 0.1, "the crease is not one: the angle-weighted normal sees the wall at %.3f", worst_aw);
+            if (T_EQ_INT(dm_base_normals(pos, 9, idx, nt, NULL, out), DM_OK)) {
+                for (i = 0; i < 3; i++) n[i] = out[i];
+                worst = worst_face(pos, idx, nt, 0, n);
+                printf("  note: crease: the angle-weighted normal sees the wall at %.4f, the base normal at %.4f\n",
+                       wall[0] * aw[0] + wall[1] * aw[1] + wall[2] * aw[2], wall[0] * n[0] + wall[1] * n[1] + wall[2] * n[2]);
+                T_CHECK_MSG(worst >= 0.5 - 1e-5 && worst <= 0.5 + 1e-3, "crease: the base normal sees its worst "
+                            "triangle at %.6f (the least turn reaching 0.5)", worst);
+                for (v = 1; v < 9; v++) { /* the others see their triangles within 60 degrees: unchanged */
+                    double d = 0.0;
+                    int k;
+                    for (k = 0; k < 3; k++) d += fabs(out[3 * v + k] - aw[3 * v + k]);
+                    T_CHECK_MSG(d < 1e-6, "crease: vertex %zu turned by %.3g", v, d);
+                }
+            }
+        }
+    }
+    { /* a thin wedge: O's two triangles face (0, 0.2, 1) and (0, 0.2, -1) nearly apart, and a third
+         (0, -1, 0); no direction sees all three at 60 degrees */
+        static const float wp[3 * 5] = {0, 0, 0, 1, 0, 0, -1, 1, 0.2f, -1, 1, -0.2f, -1, -1, 0};
+        static const uint32_t wi[3 * 3] = {0, 1, 2, 0, 3, 1, 0, 1, 4};
+        float out[3 * 5];
+        double waw[3 * 5], worst_aw, worst, turn;
+        angle_weighted(wp, 5, wi, 3, waw);
+        worst_aw = worst_face(wp, wi, 3, 0, waw);
+        if (T_EQ_INT(dm_base_normals(wp, 5, wi, 3, NULL, out), DM_OK)) {
+            for (i = 0; i < 3; i++) n[i] = out[i];
+            worst = worst_face(wp, wi, 3, 0, n);
+            turn = acos(n[0] * waw[0] + n[1] * waw[1] + n[2] * waw[2]) * 180.0 / 3.14159265358979;
+            printf("  note: wedge: worst triangle seen at %.4f (angle-weighted %.4f), turned %.2f degrees\n", worst,
+                   worst_aw, turn);
+            T_CHECK_MSG(worst >= worst_aw - 1e-6 && worst < 0.5, "wedge: worst %.4f, angle-weighted %.4f", worst, worst_aw);
+            T_CHECK_MSG(turn <= 30.0 + 1e-3, "wedge: turned by %.3f degrees", turn);
+        }
+    }
+    { /* errors, and nothing held after an allocation fails */
+        uint32_t bad[3] = {0, 1, 99};
+        float nanp[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        counting c = {0, 0, 0};
+        dm_allocator al;
+        long k;
+        int ok_seen = 0;
+        nanp[4] = (float)NAN;
+        T_EQ_INT(dm_base_normals(pos, 9, idx, nt, NULL, NULL), DM_ERR_INVALID_ARGUMENT);
+        T_EQ_INT(dm_base_normals(pos, 9, bad, 1, NULL, nrm), DM_ERR_BAD_INDEX);
+        T_EQ_INT(dm_base_normals(nanp, 3, idx, 1, NULL, nrm), DM_ERR_BAD_POSITION);
+        T_EQ_INT(dm_base_normals(pos, 9, idx, 0, NULL, nrm), DM_ERR_NO_TRIANGLES);
+        al.alloc = c_alloc;
+        al.free = c_free;
+        al.user = &c;
+        for (k = 0; k < 8 && !ok_seen; k++) { /* the crease needs the work space: fail each allocation */
+            float out[3 * 9];
+            dm_result r;
+            c.calls = 0;
+            c.fail_at = k;
+            r = dm_base_normals(pos, 9, idx, nt, &al, out);
+            T_CHECK_MSG(r == DM_OK || r == DM_ERR_OUT_OF_MEMORY, "allocation %ld failed: result %d", k, (int)r);
+            T_CHECK_MSG(c.live == 0, "allocation %ld failed: %ld blocks held", k, c.live);
+            ok_seen = r == DM_OK;
+        }
+        T_CHECK_MSG(ok_seen && k > 1, "dm_base_normals: never done, or done without its work space (%ld)", k);
+    }
+done:
+    free(nrm);
+    free(vn);
+    mesh_free(&s);
+}
+
 static void test_surface_distance(void)
 {
     mesh a = make_sphere(24, 0.0, 1.0), b = make_sphere(24, 0.0, 1.02);
@@ -613,6 +782,7 @@ int main(int argc, char **argv)
     mesh_free(&base);
     test_coverage_weights();
     test_surface_distance();
+    test_base_normals();
     test_curled_chart();
     return T_END();
 }
