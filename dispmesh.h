@@ -173,20 +173,17 @@
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
      WHAT. A base mesh laid out in one width x height map, the displacement and the original's
      normals baked into it, the surface sample grid other headers filter on, the dense mesh again.
-     PARAMETERIZATION. Charts that are topological disks grow breadth first (a triangle joins within
-     max_chart_angle of the chart's mean normal, up to max_chart_triangles). A chart's boundary is
-     fixed at its projection on the chart's plane (or on a circle by arc length when that is not a
-     simple counter-clockwise loop), its interior is Floater's mean value map, then
-     Yoshizawa-Belyaev-Seidel stretch rounds against area-proportional targets (triangle_weight,
-     default each triangle's area; dm_coverage_weights gives the original's area over each base
-     triangle, so texels go where the original's surface is), each kept only when the stretch drops
-     and nothing flips; a chart with no flip-free layout within L2 stretch 2 (one that curls) is cut
-     in two, each half laid out the same way, down to lone triangles. Charts are turned to their
-     smallest box (12 angles) and packed at the largest scale that fits: shelves of boxes, or their
-     footprints in a bitmap, interlocking or as silhouettes (largest first, in its best quarter turn).
-     dm_param reports utilization, L2 and max stretch (Sander et al. 2001), and the share of
-     triangles whose area ratio lies in [0.8, 1.25]. Deviation from the paper: many charts with
-     seams, not its one global chart (its text omits the cut); neighbour lookups go through nbr.
+     PARAMETERIZATION. Disk charts grow breadth first (within max_chart_angle of the chart's mean
+     normal, up to max_chart_triangles). A chart's boundary is its projection on the chart's plane
+     (or a circle by arc length), its inside Floater's mean value map, then Yoshizawa-Belyaev-Seidel
+     stretch rounds toward area targets (triangle_weight, default the areas; dm_coverage_weights
+     gives the original's area over each base triangle), kept while the stretch drops and nothing
+     flips; a chart that curls (no flip-free layout within L2 stretch 2) is cut in two, down to lone
+     triangles. Charts turned to their smallest box (12 angles) are packed at the largest scale that
+     fits: shelves of boxes, or footprints in a bitmap, interlocking or as silhouettes (largest
+     first, best quarter turn). dm_param reports utilization, L2 and max stretch (Sander et al.
+     2001) and the share of area ratios in [0.8, 1.25]. Deviation: many charts with seams, not the
+     paper's one global chart (its text omits the cut); neighbour lookups go through nbr.
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
      edge): the base point p and the interpolated base normal n; the line p - t n,
      |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
@@ -206,25 +203,24 @@
      whose lines would run along it and fold): that normal turns toward the axis of its triangles'
      smallest normal cone, just far enough to see each within 60 degrees, and at most 30 degrees.
      Deviation: the paper names only "the interpolated vertex normal".
-     SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area the texel
-     stands for, so sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the
-     dm_param's arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel
-     (rot 0); across a seam, the texel's centre is carried over the nearest chart-boundary edge into
-     the twin triangle's chart and nbr is the nearest texel there; UINT32_MAX at the mesh's
-     boundary. nbr_rot = r: a step along d here continues as d turned r quarter turns
-     counter-clockwise in the neighbour's axes; to step back, go along -(d turned r). The walk back
-     lands where it started; where one texel cannot serve two charts (chart corners), nbr is the
-     texel itself with a half turn (a mirror, as a clamped filter sees it).
+     SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area it stands
+     for: sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the dm_param's
+     arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel (rot 0);
+     across a seam, the texel's centre is carried over the nearest chart-boundary edge into the twin
+     triangle's chart and nbr is the nearest texel there; UINT32_MAX at the mesh's boundary. nbr_rot
+     = r: a step along d continues as d turned r quarter turns counter-clockwise in the neighbour's
+     axes; a step back along -(d turned r) lands where it started. Where one texel cannot serve two
+     charts (chart corners), nbr is the texel itself with a half turn (a mirror, as a clamped filter
+     sees it).
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric grid
      of level sqrt(2 x its uv area in texels) inside, as many points along each base edge as its
      longer uv side has texels (shared by the triangles on the edge), strips between; its triangles
      are then made Delaunay in the map by edge flips, border fixed. A vertex is its base point moved
      along the base normal by the map's bilinear depth, averaged over the triangles sharing it, with
-     the map's normal. Shade it with those normals: its geometry samples the original at the
-     map's resolution, so normals computed from it show the original's own facets. A closed
-     manifold base gives a closed manifold result with no T-junction; nothing is dropped at depth
-     breaks. Vertex v < base_vertex_count is base vertex v; face_base
-     gives each triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
+     the map's normal (shade with those: normals computed from the geometry show the original's
+     facets). A closed manifold base gives a closed manifold result with no T-junction; nothing is
+     dropped at depth breaks. Vertex v < base_vertex_count is base vertex v; face_base gives each
+     triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
      (deterministic) and measures with dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
@@ -243,9 +239,9 @@
      missing array, or a NaN or infinite value (a depth beyond 1e18) is DM_ERR_BAD_MAP.
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
      LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE), at
-     most 1024 segments along one base edge. Beside a sharp base edge, where the surface lies deep
-     and steep under a narrow triangle, the normal rays fold: a few reconstructed triangles there
-     face backwards (they are not repaired).
+     most 1024 segments along one base edge. Where no direction sees all of a base vertex's
+     triangles (the rim of a thin part at a coarse level) the normal lines fold: a few
+     reconstructed triangles there face backwards (they are not repaired).
 
    REFERENCES
      Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald,
@@ -259,7 +255,8 @@
      pseudonormal, TVCG 2005. Floater, Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev,
      Seidel, Stretch-minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture
      mapping progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH
-     1996. Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. */
+     1996. Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. Jiang, Schneider,
+     Zorin, Panozzo, Bijective projection in a shell, TOG 2020. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
