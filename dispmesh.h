@@ -530,7 +530,8 @@ DMDEF void dm_dispmap_free(dm_dispmap *map);
 
 /* The directions dm_bake and dm_reconstruct displace the base along (a renderer that displaces
    the base by the map itself needs the same): per base vertex, unit, into normals[3 vertex_count]
-   (zero for a vertex no triangle uses). See BAKE in the doc block. */
+   (zero for a vertex no triangle uses). The rule: BASE NORMALS in the doc block. Takes about 24
+   bytes per vertex while it runs, and 4 per vertex and 12 per triangle more where a vertex turns. */
 DMDEF dm_result dm_base_normals(const float *positions, size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, const dm_allocator *allocator, float *normals);
 
