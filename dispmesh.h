@@ -133,10 +133,11 @@
           feature of the old one-ring touches keep or remove, must stay on the inner side of the
           new one-ring (signed distance with the angle-weighted pseudonormal, Baerentzen-Aanaes
           2005). Each asks keep to lie outside one plane; the proposed position is projected on
-          those half-spaces (Dykstra, in the metric of the collapse's quadric plus its mean
-          eigenvalue: where the error grows least, without sliding far along flat parts) and
-          checked again (DM_COLLAPSE_MOVE, or a veto). It encloses the original itself, not the
-          previous level (Sander et al.'s progressive hulls), so offsets do not pile up.
+          those half-spaces exactly (a dual active set, in the metric of the collapse's quadric
+          plus its mean eigenvalue: where the error grows least, without sliding far along flat
+          parts) and checked again (DM_COLLAPSE_MOVE; a veto where no position meets them all).
+          It encloses the original itself, not the previous level (Sander et al.'s progressive
+          hulls), so offsets do not pile up.
        2. Shell: keep within the offset grown at its closest point of the original; along each
           ray of 3., the depth to the original no more than the offset grown at the hit.
        3. Overlap: from overlap_samples points of each new triangle and the middle and quarter
@@ -8317,7 +8318,7 @@ typedef struct dm__sh_internal {
     int open;            /* the original has an edge without a (consistently oriented) twin */
     int samples;         /* overlap samples per triangle */
     double margin;       /* how far outside a plane counts as outside (world units) */
-    double *scratch;     /* planes, Dykstra's corrections and one-ring normals of one candidate */
+    double *scratch;     /* planes, their normals in the metric's frame, one-ring normals */
     size_t scratch_cap;  /* in doubles */
     double *vsum;        /* per vertex: the angle-weighted normal sum of the simplified mesh, kept
                             by dm_shell_collapsed */
@@ -9334,12 +9335,11 @@ static size_t dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t np
    quadric does not see it), its triangles lose their shape and the charts stretch. */
 #define DM__SH_TANGENT 1.0
 
-/* For each of the np planes in pl, the step direction of a projection onto it in the metric M
-   (DM__SH_TANGENT): M^-1 n, scaled so that n . g = 1, 3 doubles each into g. */
-static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np, double *g)
+/* The metric M the enclosure projects in (DM__SH_TANGENT); the plain distance where there is no
+   quadric. */
+static void dm__sh_metric(const double metric[6], double M[3][3])
 {
-    double M[3][3], Mi[3][3], tr, det;
-    size_t i;
+    double tr;
     int j, k;
     M[0][0] = metric[0]; M[0][1] = M[1][0] = metric[1]; M[0][2] = M[2][0] = metric[2];
     M[1][1] = metric[3]; M[1][2] = M[2][1] = metric[4]; M[2][2] = metric[5];
@@ -9349,55 +9349,106 @@ static void dm__sh_step_dirs(const double metric[6], const double *pl, size_t np
             for (k = 0; k < 3; k++) M[j][k] = j == k;
     else
         for (j = 0; j < 3; j++) M[j][j] += DM__SH_TANGENT * tr;
-    Mi[0][0] = M[1][1] * M[2][2] - M[1][2] * M[2][1];
-    Mi[0][1] = M[0][2] * M[2][1] - M[0][1] * M[2][2];
-    Mi[0][2] = M[0][1] * M[1][2] - M[0][2] * M[1][1];
-    Mi[1][1] = M[0][0] * M[2][2] - M[0][2] * M[2][0];
-    Mi[1][2] = M[0][2] * M[1][0] - M[0][0] * M[1][2];
-    Mi[2][2] = M[0][0] * M[1][1] - M[0][1] * M[1][0];
-    Mi[1][0] = Mi[0][1];
-    Mi[2][0] = Mi[0][2];
-    Mi[2][1] = Mi[1][2];
-    det = M[0][0] * Mi[0][0] + M[0][1] * Mi[1][0] + M[0][2] * Mi[2][0]; /* > 0: M is positive definite */
-    for (i = 0; i < np; i++) {
-        const double *n = pl + 4 * i;
-        double *gi = g + 3 * i, ng;
-        for (k = 0; k < 3; k++) gi[k] = (Mi[k][0] * n[0] + Mi[k][1] * n[1] + Mi[k][2] * n[2]) / det;
-        ng = dm__dot3(n, gi);
-        for (k = 0; k < 3; k++) gi[k] /= ng;
-    }
 }
 
-/* x moved to the point nearest it in the metric (dm__sh_step_dirs) on the outer side of all np
-   planes (Dykstra's alternating projections, at most 200 sweeps, until none is violated by more
-   than half a margin); the corrections (3 per plane) and the step directions (3 per plane) follow
-   the planes in pl */
-static void dm__sh_dykstra(const dm__sh_internal *in, const double metric[6], double *pl, size_t np, double x[3])
+/* The exact projection (Goldfarb and Idnani's dual active set, 1983): x moved to the point nearest
+   it in the metric M (dm__sh_metric) on the outer side of all np planes in pl, in a few steps
+   (alternating projections crawl along nearly parallel planes). In y = L^T x (M = L L^T) the
+   metric is the plain distance and plane i reads a_i . y >= d_i (a_i = L^-1 n_i, 3 doubles each
+   into a). The active set holds at most three independent planes; a violated plane that cannot be
+   added (its normal in their span, no multiplier to give way) proves the planes inconsistent.
+   Returns 1 with x moved (every plane met within tol), 0 with x as it was when the planes are
+   inconsistent or the steps run out. */
+static int dm__sh_project(const double metric[6], const double *pl, size_t np, double tol, double *a, double x[3])
 {
-    double *yv = pl + 4 * np, *g = pl + 7 * np;
-    size_t i;
-    int k, iter;
-    dm__sh_step_dirs(metric, pl, np, g);
-    for (i = 0; i < 3 * np; i++) yv[i] = 0.0;
-    for (iter = 0; iter < 200 && np; iter++) {
-        double worst = 0.0;
-        for (i = 0; i < np; i++) {
-            const double *n = pl + 4 * i;
-            double z[3], sdist;
-            for (k = 0; k < 3; k++) z[k] = x[k] + yv[3 * i + (size_t)k];
-            sdist = pl[4 * i + 3] - dm__dot3(n, z);
-            for (k = 0; k < 3; k++) {
-                double nx = sdist > 0.0 ? z[k] + sdist * g[3 * i + (size_t)k] : z[k];
-                yv[3 * i + (size_t)k] = z[k] - nx;
-                x[k] = nx;
+    double M[3][3], L[3][3], y[3], u[4], z[3], r[3];
+    size_t i, act[4], nact = 0, p;
+    int k, steps = 0;
+    dm__sh_metric(metric, M);
+    L[0][0] = sqrt(M[0][0]); /* Cholesky: M is positive definite */
+    L[1][0] = M[1][0] / L[0][0];
+    L[2][0] = M[2][0] / L[0][0];
+    L[1][1] = sqrt(M[1][1] - L[1][0] * L[1][0]);
+    L[2][1] = (M[2][1] - L[2][0] * L[1][0]) / L[1][1];
+    L[2][2] = sqrt(M[2][2] - L[2][0] * L[2][0] - L[2][1] * L[2][1]);
+    if (!(L[0][0] > 0.0 && L[1][1] > 0.0 && L[2][2] > 0.0)) return 0;
+    for (i = 0; i < np; i++) { /* a_i = L^-1 n_i */
+        const double *n = pl + 4 * i;
+        double *ai = a + 3 * i;
+        ai[0] = n[0] / L[0][0];
+        ai[1] = (n[1] - L[1][0] * ai[0]) / L[1][1];
+        ai[2] = (n[2] - L[2][0] * ai[0] - L[2][1] * ai[1]) / L[2][2];
+    }
+    y[0] = L[0][0] * x[0] + L[1][0] * x[1] + L[2][0] * x[2]; /* y = L^T x */
+    y[1] = L[1][1] * x[1] + L[2][1] * x[2];
+    y[2] = L[2][2] * x[2];
+    for (;;) {
+        double worst = tol, up = 0.0;
+        p = np;
+        for (i = 0; i < np; i++) { /* the most violated plane not active */
+            double sd = pl[4 * i + 3] - dm__dot3(a + 3 * i, y);
+            size_t q;
+            if (!(sd > worst)) continue;
+            for (q = 0; q < nact && act[q] != i; q++) {}
+            if (q == nact) {
+                worst = sd;
+                p = i;
             }
         }
-        for (i = 0; i < np; i++) {
-            double sdist = pl[4 * i + 3] - dm__dot3(pl + 4 * i, x);
-            if (sdist > worst) worst = sdist;
+        if (p == np) break;
+        for (;;) { /* add p: full steps along z, partial ones that drop a plane whose multiplier ends */
+            const double *ap = a + 3 * p;
+            double G[3][4], t1 = DBL_MAX, t2 = DBL_MAX, t, zz;
+            size_t q, kd = 0;
+            if (++steps > 64) return 0;
+            for (q = 0; q < nact; q++) { /* r: the Gram system of the active normals */
+                size_t q2;
+                for (q2 = 0; q2 < nact; q2++) G[q][q2] = dm__dot3(a + 3 * act[q], a + 3 * act[q2]);
+                G[q][3] = dm__dot3(a + 3 * act[q], ap);
+            }
+            for (q = 0; q < nact; q++) { /* Gauss-Jordan; the Gram matrix is positive definite */
+                size_t q2, q3;
+                if (!(G[q][q] > 0.0)) return 0;
+                for (q2 = 0; q2 < nact; q2++) {
+                    double f;
+                    if (q2 == q) continue;
+                    f = G[q2][q] / G[q][q];
+                    for (q3 = q; q3 < 4; q3++) G[q2][q3] -= f * G[q][q3];
+                }
+            }
+            for (q = 0; q < nact; q++) r[q] = G[q][3] / G[q][q];
+            for (k = 0; k < 3; k++) {
+                z[k] = ap[k];
+                for (q = 0; q < nact; q++) z[k] -= r[q] * a[3 * act[q] + (size_t)k];
+            }
+            zz = dm__dot3(z, z);
+            if (nact < 3 && zz > 1e-12 * dm__dot3(ap, ap)) t1 = (pl[4 * p + 3] - dm__dot3(ap, y)) / zz;
+            for (q = 0; q < nact; q++)
+                if (r[q] > 0.0 && u[q] / r[q] < t2) {
+                    t2 = u[q] / r[q];
+                    kd = q;
+                }
+            if (t1 == DBL_MAX && t2 == DBL_MAX) return 0; /* inconsistent */
+            t = t1 < t2 ? t1 : t2;
+            if (t1 < DBL_MAX)
+                for (k = 0; k < 3; k++) y[k] += t * z[k];
+            for (q = 0; q < nact; q++) u[q] -= t * r[q];
+            up += t;
+            if (t1 <= t2) { /* full step: p is met and joins */
+                act[nact] = p;
+                u[nact++] = up;
+                break;
+            }
+            act[kd] = act[nact - 1]; /* partial step: plane kd gives way */
+            u[kd] = u[nact - 1];
+            nact--;
         }
-        if (worst <= 0.5 * in->margin) break;
     }
+    if (steps == 0) return 1; /* met as it was */
+    x[2] = y[2] / L[2][2]; /* x = L^-T y */
+    x[1] = (y[1] - L[2][1] * x[2]) / L[1][1];
+    x[0] = (y[0] - L[1][0] * x[1] - L[2][0] * x[2]) / L[0][0];
+    return 1;
 }
 
 /* pt's old signed distance, as a float (the old triangles of in->tri) */
@@ -9446,14 +9497,15 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
    signed distance, taken with the angle-weighted pseudonormal at the closest feature, must not
    become positive. Each such vertex p, nearest to new triangle (keep, u, w), asks keep to lie on
    the outer side of the plane through p, u, w (an exact, linear condition on keep's position);
-   the position is the point nearest the proposed one that meets all of them (Dykstra's
-   alternating projections), then everything is checked again at the rounded position. */
+   the position is the point nearest the proposed one that meets all of them (dm__sh_project;
+   where the planes have no common point even at the recheck's tolerance, a veto), then
+   everything is checked again at the rounded position. */
 static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
                           int *moved)
 {
     double x0[3], *pl;
     dm__sh_box b;
-    size_t npts = 0, np;
+    size_t npts = 0, np, i;
     int k;
     dm__sh_enclose_box(sh, in, c, &b);
     for (k = 0; k < 3; k++) x0[k] = x[k] = c->position[k];
@@ -9461,10 +9513,16 @@ static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     in->gathered = 0;
     if (!dm__sh_gather(sh, in, c, &b, &npts)) return DM_COLLAPSE_VETO;
     in->gathered = npts;
-    if (!dm__sh_grow_scratch(sh, in, 10 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
+    if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
     pl = in->scratch;
     np = dm__sh_planes(in, c, npts, pl);
-    dm__sh_dykstra(in, c->metric, pl, np, x);
+    if (!dm__sh_project(c->metric, pl, np, 1e-3 * in->margin, pl + 4 * np, x)) {
+        for (i = 0; i < np; i++) pl[4 * i + 3] -= 6.0 * in->margin; /* again at the recheck's tolerance */
+        if (!dm__sh_project(c->metric, pl, np, 1e-3 * in->margin, pl + 4 * np, x)) {
+            sh->vetoed_enclose++; /* no position keeps them all inside */
+            return DM_COLLAPSE_VETO;
+        }
+    }
     for (k = 0; k < 3; k++) {
         corrected[k] = (float)x[k];
         x[k] = corrected[k];

@@ -14,6 +14,8 @@
    - a fan of K long thin triangles around a cone's apex (K = 20k, 40k, 80k): the growth's
      proximity steps (DM_COUNT_OPS: nodes and triangles visited) at 80k are at most 6 times those
      at 20k, and at 20k every vertex's offsets agree with a brute-force distance to all triangles;
+   - the enclosure's exact projection against brute force (every independent set of at most three
+     planes), consistent and inconsistent plane sets, nearly parallel ones;
    - bad input, allocation failure at every point, cancel, determinism. */
 static unsigned long long g_ops; /* proximity and queue steps (DM_COUNT_OPS) */
 #define DM_COUNT_OPS(n) (g_ops += (unsigned long long)(n))
@@ -693,10 +695,150 @@ static void test_cancel_and_determinism(const mesh *m)
     dm_shell_free(b);
 }
 
+/* The enclosure's exact projection (dm__sh_project) against brute force: the nearest point in the
+   metric on the outer side of all planes lies in the relative interior of one face, the point
+   nearest x0 on the affine hull of some independent set of at most three of the planes; so the
+   nearest feasible point over all such sets (each solved as a small equality problem) is the
+   answer, and no feasible one means the planes are inconsistent. Random metrics (the quadric
+   part of rank 0 to 3), plane sets around a point (consistent), with opposite pairs (not),
+   fans of nearly parallel planes (where Dykstra's sweeps crawl). */
+static unsigned rnd_state = 12345u;
+static double rnd(void) { rnd_state = rnd_state * 1664525u + 1013904223u; return (rnd_state >> 8) / 16777216.0; }
+
+static int solve_small(double A[3][4], int n, double *out) /* Gauss with pivoting, n <= 3 */
+{
+    int i, j, k;
+    for (i = 0; i < n; i++) {
+        int pv = i;
+        for (j = i + 1; j < n; j++) if (fabs(A[j][i]) > fabs(A[pv][i])) pv = j;
+        if (fabs(A[pv][i]) < 1e-12) return 0;
+        for (k = 0; k < 4; k++) { double t = A[i][k]; A[i][k] = A[pv][k]; A[pv][k] = t; }
+        for (j = 0; j < n; j++) {
+            double f;
+            if (j == i) continue;
+            f = A[j][i] / A[i][i];
+            for (k = i; k < 4; k++) A[j][k] -= f * A[i][k];
+        }
+    }
+    for (i = 0; i < n; i++) out[i] = A[i][3] / A[i][i];
+    return 1;
+}
+
+/* brute force: 1 and *best at the answer, 0 when no point meets every plane */
+static int project_brute(double Mf[3][3], const double *pl, size_t np, const double x0[3], double best[3])
+{
+    double Mi[3][3], det, bd = 1e300;
+    size_t s[3], i;
+    int found = 0, k, j;
+    Mi[0][0] = Mf[1][1] * Mf[2][2] - Mf[1][2] * Mf[2][1];
+    Mi[0][1] = Mf[0][2] * Mf[2][1] - Mf[0][1] * Mf[2][2];
+    Mi[0][2] = Mf[0][1] * Mf[1][2] - Mf[0][2] * Mf[1][1];
+    Mi[1][1] = Mf[0][0] * Mf[2][2] - Mf[0][2] * Mf[2][0];
+    Mi[1][2] = Mf[0][2] * Mf[1][0] - Mf[0][0] * Mf[1][2];
+    Mi[2][2] = Mf[0][0] * Mf[1][1] - Mf[0][1] * Mf[1][0];
+    Mi[1][0] = Mi[0][1]; Mi[2][0] = Mi[0][2]; Mi[2][1] = Mi[1][2];
+    det = Mf[0][0] * Mi[0][0] + Mf[0][1] * Mi[1][0] + Mf[0][2] * Mi[2][0];
+    for (j = 0; j < 3; j++) for (k = 0; k < 3; k++) Mi[j][k] /= det;
+    for (s[0] = 0; s[0] <= np; s[0]++)
+        for (s[1] = s[0] < np ? s[0] + 1 : np; s[1] <= np; s[1]++)
+            for (s[2] = s[1] < np ? s[1] + 1 : np; s[2] <= np; s[2]++) {
+                /* x = x0 + Mi N lambda, with N^T x = d on the chosen planes */
+                size_t set[3];
+                int n = 0, a, b;
+                double A[3][4], lam[3] = {0, 0, 0}, x[3], md = 0, w[3];
+                for (k = 0; k < 3; k++) if (s[k] < np) set[n++] = s[k];
+                for (a = 0; a < n; a++) {
+                    const double *na = pl + 4 * set[a];
+                    for (b = 0; b < n; b++) {
+                        const double *nb = pl + 4 * set[b];
+                        double v = 0;
+                        for (j = 0; j < 3; j++) for (k = 0; k < 3; k++) v += na[j] * Mi[j][k] * nb[k];
+                        A[a][b] = v;
+                    }
+                    A[a][3] = na[3] - dot3(na, x0);
+                }
+                if (n && !solve_small(A, n, lam)) continue;
+                for (j = 0; j < 3; j++) {
+                    x[j] = x0[j];
+                    for (a = 0; a < n; a++) for (k = 0; k < 3; k++) x[j] += Mi[j][k] * pl[4 * set[a] + k] * lam[a];
+                }
+                for (i = 0; i < np; i++) if (dot3(pl + 4 * i, x) < pl[4 * i + 3] - 1e-9) break;
+                if (i < np) continue;
+                for (j = 0; j < 3; j++) w[j] = x[j] - x0[j];
+                for (j = 0; j < 3; j++) for (k = 0; k < 3; k++) md += w[j] * Mf[j][k] * w[k];
+                if (md < bd) { bd = md; for (j = 0; j < 3; j++) best[j] = x[j]; }
+                found = 1;
+            }
+    return found;
+}
+
+static void test_projection(void)
+{
+    int trial, agree = 0, inconsistent = 0, consistent = 0;
+    double worst = 0.0;
+    for (trial = 0; trial < 3000; trial++) {
+        double metric[6], Mf[3][3], pl[4 * 12], work[3 * 12], x0[3], x[3], xb[3];
+        size_t np = 1 + (size_t)(rnd() * 11), i;
+        int kind = trial % 3, rank = trial % 4, j, k, r1, r2;
+        for (j = 0; j < 6; j++) metric[j] = 0.0;
+        for (j = 0; j < rank; j++) { /* a quadric of rank `rank`: sum of outer products */
+            double v[3], l;
+            for (k = 0; k < 3; k++) v[k] = rnd() - 0.5;
+            l = sqrt(dot3(v, v));
+            for (k = 0; k < 3; k++) v[k] /= l;
+            metric[0] += v[0] * v[0]; metric[1] += v[0] * v[1]; metric[2] += v[0] * v[2];
+            metric[3] += v[1] * v[1]; metric[4] += v[1] * v[2]; metric[5] += v[2] * v[2];
+        }
+        for (i = 0; i < np; i++) {
+            double *n = pl + 4 * i, l;
+            if (kind == 2) { /* nearly parallel: normals within a few degrees of +z */
+                n[0] = 0.05 * (rnd() - 0.5); n[1] = 0.05 * (rnd() - 0.5); n[2] = 1.0;
+            } else {
+                for (k = 0; k < 3; k++) n[k] = rnd() - 0.5;
+            }
+            l = sqrt(dot3(n, n));
+            for (k = 0; k < 3; k++) n[k] /= l;
+            n[3] = kind == 1 ? 0.2 * rnd() : -0.3 * rnd(); /* around the origin, or pushed apart */
+            if (kind == 1 && i + 1 < np && rnd() < 0.3) { /* an opposite pair: inconsistent */
+                double *m = pl + 4 * (i + 1);
+                for (k = 0; k < 3; k++) m[k] = -n[k];
+                m[3] = 0.1 * rnd() - n[3] + 1e-3;
+                i++;
+            }
+        }
+        for (k = 0; k < 3; k++) x0[k] = 2.0 * (rnd() - 0.5);
+        if (kind == 2) x0[2] = -1.0 - rnd();
+        dm__sh_metric(metric, Mf);
+        for (k = 0; k < 3; k++) x[k] = x0[k];
+        r1 = project_brute(Mf, pl, np, x0, xb);
+        r2 = dm__sh_project(metric, pl, np, 1e-12, work, x);
+        if (r1) consistent++;
+        else inconsistent++;
+        if (r1 != r2) {
+            T_CHECK_MSG(0, "projection %d: brute force %s, dm__sh_project %s", trial, r1 ? "consistent" : "inconsistent",
+                        r2 ? "consistent" : "inconsistent");
+            continue;
+        }
+        if (!r1) { /* x as it was */
+            agree += x[0] == x0[0] && x[1] == x0[1] && x[2] == x0[2];
+            continue;
+        }
+        {
+            double d = sqrt((x[0] - xb[0]) * (x[0] - xb[0]) + (x[1] - xb[1]) * (x[1] - xb[1]) + (x[2] - xb[2]) * (x[2] - xb[2]));
+            if (d > worst) worst = d;
+            agree += d < 1e-7;
+        }
+    }
+    T_CHECK_MSG(agree == 3000 && consistent > 1000 && inconsistent > 300,
+                "exact projection: %d of 3000 agree with brute force (worst %.2g), %d consistent, %d not", agree, worst,
+                consistent, inconsistent);
+}
+
 int main(int argc, char **argv)
 {
     mesh sphere, torus;
     T_BEGIN(argc, argv);
+    test_projection();
     sphere = make_sphere(24, 0.08, 1.0);
     check_mesh("bumpy sphere", &sphere, 200, 200, 1, 0);
     torus = make_torus(96, 48, 0.9, 0.05);
