@@ -2738,7 +2738,7 @@ static double dm__segment_d2(const double p[3], const double a[3], const double 
 /* Squared distance from p to triangle (a, b, c) and the closest point's barycentrics u (of b)
    and v (of c). Ericson's Voronoi-region walk; a degenerate triangle, where the interior
    formula divides by zero, takes the nearest of its three edges. */
-static double dm__triangle_d2(const double p[3], const float *tri, double *u_out, double *v_out)
+static double dm__triangle_d2(const double p[3], const double tri[9], double *u_out, double *v_out)
 {
     double a[3], b[3], c[3], ab[3], ac[3], ap[3], bp[3], cp[3];
     double d1, d2, d3, d4, d5, d6, va, vb, vc, u, v, q[3], dist2 = 0.0, s;
@@ -2840,9 +2840,11 @@ DMDEF int dm_bvh_closest_point(const dm_bvh *bvh, const float point[3], float ma
             for (i = n->first; i < n->first + n->count; i++) {
                 float tri[9];
                 uint32_t id = bvh->blocks[i >> 2].id[i & 3];
-                double u, v, d2;
+                double u, v, d2, td[9];
+                int k;
                 dm__slot_triangle(bvh, i, tri);
-                d2 = dm__triangle_d2(p, tri, &u, &v);
+                for (k = 0; k < 9; k++) td[k] = tri[k];
+                d2 = dm__triangle_d2(p, td, &u, &v);
                 if (d2 < best || (d2 == best && id < best_id)) {
                     best = d2;
                     best_id = id;
@@ -8326,8 +8328,8 @@ typedef struct dm__sh_internal {
     size_t last_level;   /* the level of the last candidate or collapse seen */
     dm__sh_pt *pts;      /* the original's vertices near one candidate */
     size_t pts_cap;
-    float *tri;          /* the candidate's old and new triangles: 9 coordinates, a bounding
-                            sphere (centre, radius) and the unit normal each */
+    double *tri;         /* the candidate's old and new triangles: 9 coordinates, a bounding
+                            sphere (centre, radius) and the unit normal each, float values */
     uint32_t *tri_new;   /* per old triangle: the new one on the same two other corners (or
                             UINT32_MAX), a first guess for the nearest new triangle */
     size_t tri_cap;      /* in triangles */
@@ -8750,10 +8752,12 @@ static int dm__sh_near_hit(const dm__sh_near *nr, const float *pos, const uint32
             for (i = n->first; i < n->first + n->count; i++) {
                 uint32_t f = bvh->blocks[i >> 2].id[i & 3];
                 float tri[9];
-                double u, v;
+                double u, v, td[9];
+                int k;
                 DM_COUNT_OPS(1);
                 dm__load_triangle(pos, idx, nr->tri[f], tri);
-                if ((float)sqrt(dm__triangle_d2(q, tri, &u, &v)) < rad) return 1;
+                for (k = 0; k < 9; k++) td[k] = tri[k];
+                if ((float)sqrt(dm__triangle_d2(q, td, &u, &v)) < rad) return 1;
             }
         } else { /* the depth is below DM__STACK (dm__build) */
             stack[sp++] = n->first + 1;
@@ -9011,12 +9015,12 @@ static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const 
    into out. (A table of doubles holding these float values would be as good, but GCC 12.2's SLP
    vectoriser drops (double)(float) round trips from such stores: the bits would then depend on
    the compiler.) */
-static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], float *out)
+static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out)
 {
     size_t i;
     int j, k;
     for (i = 0; i < n; i++) {
-        float *f = out + 16 * i;
+        double *f = out + 16 * i;
         double p[3][3], r2 = 0.0, n[3];
         for (j = 0; j < 3; j++) {
             dm__sh_at(c, tris[3 * i + (size_t)j], x, p[j]);
@@ -9039,14 +9043,14 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
    of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
    first, so that the others are mostly skipped by their bounding spheres and planes; the answer
    is the one a scan in order gives. */
-static size_t dm__sh_nearest(const float *tf, size_t n, const double p[3], double max_dist, size_t hint,
+static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], double max_dist, size_t hint,
                              double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, k, bt = (size_t)-1;
     *bu = *bv = 0.0;
     for (k = 0; k <= n; k++) {
-        const float *f;
+        const double *f;
         double u, v, d2, cs, pd, del;
         if (k == 0 && !(hint < n)) continue;
         i = k == 0 ? hint : k - 1;
@@ -9095,7 +9099,7 @@ static int dm__sh_feature(const dm_collapse *c, const uint32_t *tris, size_t bt,
 /* The sign of p's distance dist to the one-ring at its closest feature fv (nf vertices) of
    triangle bt, taken with the angle-weighted pseudonormal (Baerentzen and Aanaes 2005) computed
    from these triangles only: +dist outside, -dist inside. */
-static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_t bt, double bu, double bv,
+static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size_t bt, double bu, double bv,
                           const uint32_t fv[3], int nf, const double p[3], double dist)
 {
     double q[3], w[3], N[3] = {0.0, 0.0, 0.0}, pt[3][3], d[3];
@@ -9140,7 +9144,7 @@ static double dm__sh_sign(const uint32_t *tris, const float *tf, size_t n, size_
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
    is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
-static double dm__sh_signed_new(const dm_collapse *c, const float *tf, const double p[3], size_t *hint)
+static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double p[3], size_t *hint)
 {
     double d2, bu, bv;
     uint32_t fv[3];
@@ -9211,7 +9215,7 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
     double xk[3];
     if (no + nr > in->tri_cap) {
         int of = 0;
-        float *nt2 = (float *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(float), &of);
+        double *nt2 = (double *)dm__alloc_array(&sh->allocator, 2 * (no + nr), 16 * sizeof(double), &of);
         uint32_t *nm = (uint32_t *)dm__alloc_array(&sh->allocator, 2 * (no + nr), sizeof(uint32_t), &of);
         if (!nt2 || !nm) {
             sh->allocator.free(sh->allocator.user, nt2);
@@ -9452,7 +9456,7 @@ static int dm__sh_project(const double metric[6], const double *pl, size_t np, d
 }
 
 /* pt's old signed distance, as a float (the old triangles of in->tri) */
-static float dm__sh_old_signed(const dm_collapse *c, const float *tf, const dm__sh_pt *pt)
+static float dm__sh_old_signed(const dm_collapse *c, const double *tf, const dm__sh_pt *pt)
 {
     uint32_t fv[3];
     double pp[3];

@@ -585,8 +585,7 @@ static double brute_d2(const mesh *m, const float q[3])
     int k;
     for (k = 0; k < 3; k++) p[k] = q[k];
     for (t = 0; t < m->nt; t++) {
-        float tri[9];
-        double u, v, d2;
+        double tri[9], u, v, d2;
         for (k = 0; k < 9; k++) tri[k] = m->p[3 * m->t[3 * t + (size_t)(k / 3)] + (size_t)(k % 3)];
         d2 = dm__triangle_d2(p, tri, &u, &v);
         if (d2 < best) best = d2;
