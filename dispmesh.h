@@ -257,7 +257,8 @@
      Seidel, Stretch-minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture
      mapping progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH
      1996. Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. Jiang, Schneider,
-     Zorin, Panozzo, Bijective projection in a shell, TOG 2020. */
+     Zorin, Panozzo, Bijective projection in a shell, TOG 2020. Goldfarb, Idnani, A numerically
+     stable dual method for strictly convex quadratic programs, Math. Programming 1983. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
