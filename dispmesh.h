@@ -163,8 +163,8 @@
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 per fragment besides; the constraint 48 per original vertex near
-     the widest candidate and 68 per triangle of the widest one-ring.
+     dm_shell_grow runs, about 100 per fragment besides; the constraint about 100 per original
+     vertex near the widest candidate and 340 per triangle of the widest one-ring.
      ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
