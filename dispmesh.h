@@ -9356,34 +9356,74 @@ static void dm__sh_metric(const double metric[6], double M[3][3])
         for (j = 0; j < 3; j++) M[j][j] += DM__SH_TANGENT * tr;
 }
 
-/* The exact projection (Goldfarb and Idnani's dual active set, 1983): x moved to the point nearest
-   it in the metric M (dm__sh_metric) on the outer side of all np planes in pl, in a few steps
-   (alternating projections crawl along nearly parallel planes). In y = L^T x (M = L L^T) the
-   metric is the plain distance and plane i reads a_i . y >= d_i (a_i = L^-1 n_i, 3 doubles each
-   into a). The active set holds at most three independent planes; a violated plane that cannot be
-   added (its normal in their span, no multiplier to give way) proves the planes inconsistent.
-   Returns 1 with x moved (every plane met within tol), 0 with x as it was when the planes are
-   inconsistent or the steps run out. */
-static int dm__sh_project(const double metric[6], const double *pl, size_t np, double tol, double *a, double x[3])
+/* The metric's frame for n planes in pl: L with M = L L^T (dm__sh_metric; Cholesky) and each
+   plane's normal in y = L^T x, a_i = L^-1 n_i (3 doubles each into a). 0 when M is not positive
+   definite. */
+static int dm__sh_frame(const double metric[6], const double *pl, size_t np, double L[3][3], double *a)
 {
-    double M[3][3], L[3][3], y[3], u[4], z[3], r[3];
-    size_t i, act[4], nact = 0, p;
-    int k, steps = 0;
+    double M[3][3];
+    size_t i;
     dm__sh_metric(metric, M);
-    L[0][0] = sqrt(M[0][0]); /* Cholesky: M is positive definite */
+    L[0][0] = sqrt(M[0][0]);
     L[1][0] = M[1][0] / L[0][0];
     L[2][0] = M[2][0] / L[0][0];
     L[1][1] = sqrt(M[1][1] - L[1][0] * L[1][0]);
     L[2][1] = (M[2][1] - L[2][0] * L[1][0]) / L[1][1];
     L[2][2] = sqrt(M[2][2] - L[2][0] * L[2][0] - L[2][1] * L[2][1]);
     if (!(L[0][0] > 0.0 && L[1][1] > 0.0 && L[2][2] > 0.0)) return 0;
-    for (i = 0; i < np; i++) { /* a_i = L^-1 n_i */
+    for (i = 0; i < np; i++) {
         const double *n = pl + 4 * i;
         double *ai = a + 3 * i;
         ai[0] = n[0] / L[0][0];
         ai[1] = (n[1] - L[1][0] * ai[0]) / L[1][1];
         ai[2] = (n[2] - L[2][0] * ai[0] - L[2][1] * ai[1]) / L[2][2];
     }
+    return 1;
+}
+
+/* ap split along the nact active normals (a, act): ap = sum r_q a_act[q] + z, z orthogonal to
+   them (their Gram system, by Gauss-Jordan: it is positive definite). 0 when it is not. */
+static int dm__sh_split_span(const double *a, const size_t *act, size_t nact, const double ap[3], double r[3],
+                             double z[3])
+{
+    double G[3][4];
+    size_t q, q2, q3;
+    int k;
+    for (q = 0; q < nact; q++) {
+        for (q2 = 0; q2 < nact; q2++) G[q][q2] = dm__dot3(a + 3 * act[q], a + 3 * act[q2]);
+        G[q][3] = dm__dot3(a + 3 * act[q], ap);
+    }
+    for (q = 0; q < nact; q++) {
+        if (!(G[q][q] > 0.0)) return 0;
+        for (q2 = 0; q2 < nact; q2++) {
+            double f;
+            if (q2 == q) continue;
+            f = G[q2][q] / G[q][q];
+            for (q3 = q; q3 < 4; q3++) G[q2][q3] -= f * G[q][q3];
+        }
+    }
+    for (q = 0; q < nact; q++) r[q] = G[q][3] / G[q][q];
+    for (k = 0; k < 3; k++) {
+        z[k] = ap[k];
+        for (q = 0; q < nact; q++) z[k] -= r[q] * a[3 * act[q] + (size_t)k];
+    }
+    return 1;
+}
+
+/* The exact projection (Goldfarb and Idnani's dual active set, 1983): x moved to the point nearest
+   it in the metric M (dm__sh_metric) on the outer side of all np planes in pl, in a few steps
+   (alternating projections crawl along nearly parallel planes). In y = L^T x the metric is the
+   plain distance and plane i reads a_i . y >= d_i (dm__sh_frame; a: 3 doubles per plane). The
+   active set holds at most three independent planes; a violated plane that cannot be added (its
+   normal in their span, no multiplier to give way) proves the planes inconsistent.
+   Returns 1 with x moved (every plane met within tol), 0 with x as it was when the planes are
+   inconsistent or the steps run out. */
+static int dm__sh_project(const double metric[6], const double *pl, size_t np, double tol, double *a, double x[3])
+{
+    double L[3][3], y[3], u[4], z[3], r[3];
+    size_t i, act[4], nact = 0, p;
+    int k, steps = 0;
+    if (!dm__sh_frame(metric, pl, np, L, a)) return 0;
     y[0] = L[0][0] * x[0] + L[1][0] * x[1] + L[2][0] * x[2]; /* y = L^T x */
     y[1] = L[1][1] * x[1] + L[2][1] * x[2];
     y[2] = L[2][2] * x[2];
@@ -9403,29 +9443,9 @@ static int dm__sh_project(const double metric[6], const double *pl, size_t np, d
         if (p == np) break;
         for (;;) { /* add p: full steps along z, partial ones that drop a plane whose multiplier ends */
             const double *ap = a + 3 * p;
-            double G[3][4], t1 = DBL_MAX, t2 = DBL_MAX, t, zz;
+            double t1 = DBL_MAX, t2 = DBL_MAX, t, zz;
             size_t q, kd = 0;
-            if (++steps > 64) return 0;
-            for (q = 0; q < nact; q++) { /* r: the Gram system of the active normals */
-                size_t q2;
-                for (q2 = 0; q2 < nact; q2++) G[q][q2] = dm__dot3(a + 3 * act[q], a + 3 * act[q2]);
-                G[q][3] = dm__dot3(a + 3 * act[q], ap);
-            }
-            for (q = 0; q < nact; q++) { /* Gauss-Jordan; the Gram matrix is positive definite */
-                size_t q2, q3;
-                if (!(G[q][q] > 0.0)) return 0;
-                for (q2 = 0; q2 < nact; q2++) {
-                    double f;
-                    if (q2 == q) continue;
-                    f = G[q2][q] / G[q][q];
-                    for (q3 = q; q3 < 4; q3++) G[q2][q3] -= f * G[q][q3];
-                }
-            }
-            for (q = 0; q < nact; q++) r[q] = G[q][3] / G[q][q];
-            for (k = 0; k < 3; k++) {
-                z[k] = ap[k];
-                for (q = 0; q < nact; q++) z[k] -= r[q] * a[3 * act[q] + (size_t)k];
-            }
+            if (++steps > 64 || !dm__sh_split_span(a, act, nact, ap, r, z)) return 0;
             zz = dm__dot3(z, z);
             if (nact < 3 && zz > 1e-12 * dm__dot3(ap, ap)) t1 = (pl[4 * p + 3] - dm__dot3(ap, y)) / zz;
             for (q = 0; q < nact; q++)
