@@ -135,7 +135,8 @@
           2005). Each asks keep to lie outside one plane; the proposed position is projected on
           those half-spaces exactly (a dual active set, in the metric of the collapse's quadric
           plus its mean eigenvalue: where the error grows least, without sliding far along flat
-          parts) and checked again (DM_COLLAPSE_MOVE; a veto where no position meets them all).
+          parts) and checked again (DM_COLLAPSE_MOVE; a veto where no position meets them all,
+          whose proof, at most four planes, is kept and tried first on the edge's next time).
           It encloses the original itself, not the previous level (Sander et al.'s progressive
           hulls), so offsets do not pile up.
        2. Shell: keep within the offset grown at its closest point of the original; along each
@@ -164,7 +165,8 @@
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
      dm_shell_grow runs, about 100 per fragment besides; the constraint about 100 per original
-     vertex near the widest candidate and 340 per triangle of the widest one-ring.
+     vertex near the widest candidate, 340 per triangle of the widest one-ring and 32 KB of
+     kept proofs.
      ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
@@ -8310,8 +8312,11 @@ typedef struct dm__sh_pt {
     float p[3];
     uint32_t bt;       /* its nearest old triangle (bu, bv, d2 its closest point and distance) */
     uint32_t nt;       /* its nearest new triangle at the proposed position (UINT32_MAX: none) */
+    uint32_t q;        /* which vertex: its index in the grid's cell order */
     double bu, bv, d2;
 } dm__sh_pt;
+
+#define DM__SH_PROOFS 1024 /* kept proofs of enclosure vetoes (a direct-mapped table by edge) */
 
 typedef struct dm__sh_internal {
     dm_bvh *bvh;         /* the original */
@@ -8348,6 +8353,9 @@ typedef struct dm__sh_internal {
     float placed_at[3];
     double placed_x[3];
     size_t gathered;       /* the relevant vertices in pts from the last enclosure (DM__SH_REACH) */
+    uint32_t *proof;       /* DM__SH_PROOFS slots of 8: an edge's ends (lower first), then the count and
+                              cell-order indices of the at most four vertices whose planes last had no
+                              common point (dm__sh_proof_holds); NULL until the first such veto */
 } dm__sh_internal;
 
 DMDEF void dm_shell_free(dm_shell *shell)
@@ -8366,6 +8374,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->vsum);
         a.free(a.user, in->tri);
         a.free(a.user, in->tri_new);
+        a.free(a.user, in->proof);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_pos);
         a.free(a.user, in);
@@ -8953,6 +8962,7 @@ static void dm__sh_run_check(dm_shell *sh, dm__sh_internal *in, size_t level)
         sh->fallback = 0;
         sh->fallback_collapses = 0;
         memset(sh->fallback_vertex, 0, in->nv);
+        if (in->proof) memset(in->proof, 0, DM__SH_PROOFS * 8 * sizeof(uint32_t)); /* a run owes nothing to the last */
     }
     in->last_level = level;
 }
@@ -9254,44 +9264,54 @@ static int dm__sh_push_pt(dm_shell *sh, dm__sh_internal *in, size_t npts, const 
     return 1;
 }
 
-/* the relevant original vertices, from the grid cells of the box: within reach of the old
-   triangles, their closest feature at keep or remove; *npts of them in in->pts, with their
-   nearest old triangle; 0 when out of memory */
-static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, size_t *npts)
+/* Is the original's vertex q (in cell order) relevant to candidate c: in the grown box b, within
+   reach of the old triangles, its closest feature of them at keep or remove (not on the ring's
+   rim)? 1 with pt filled (its nearest old triangle); *hint: the last point's nearest triangle, the
+   next one is near it. */
+static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, uint32_t q,
+                           size_t *hint, dm__sh_pt *pt)
 {
     const double *lo = b->lo, *hi = b->hi;
-    double grow = b->grow;
-    size_t hint = (size_t)-1; /* the last point's nearest triangle: the next one is near it */
+    double pp[3], d2, bu, bv, grow = b->grow;
+    uint32_t fv[3];
+    size_t bt;
+    int nf;
+    dm__load3(in->cell_pos, q, pp);
+    if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow || pp[1] > hi[1] + grow ||
+        pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
+        return 0;
+    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
+    if (bt != (size_t)-1) *hint = bt;
+    if (bt == (size_t)-1 || sqrt(d2) > b->reach || !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
+        return 0; /* beyond reach, or closest to the ring's rim */
+    memcpy(pt->p, in->cell_pos + 3 * (size_t)q, sizeof pt->p);
+    pt->bt = (uint32_t)bt;
+    pt->bu = bu;
+    pt->nt = UINT32_MAX;
+    pt->q = q;
+    pt->bv = bv;
+    pt->d2 = d2;
+    return 1;
+}
+
+/* the relevant original vertices (dm__sh_relevant), from the grid cells of the box: *npts of them
+   in in->pts; 0 when out of memory */
+static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, size_t *npts)
+{
+    size_t hint = (size_t)-1;
     int cl[3], ch[3], cx, cy, cz, k;
     for (k = 0; k < 3; k++) {
-        cl[k] = dm__sh_coord(in, lo[k] - grow, k);
-        ch[k] = dm__sh_coord(in, hi[k] + grow, k);
+        cl[k] = dm__sh_coord(in, b->lo[k] - b->grow, k);
+        ch[k] = dm__sh_coord(in, b->hi[k] + b->grow, k);
     }
     for (cz = cl[2]; cz <= ch[2]; cz++)
         for (cy = cl[1]; cy <= ch[1]; cy++)
             for (cx = cl[0]; cx <= ch[0]; cx++) {
-                size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx, q;
+                size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx;
+                uint32_t q;
                 for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
                     dm__sh_pt pt;
-                    double pp[3], d2, bu, bv;
-                    uint32_t fv[3];
-                    size_t bt;
-                    int nf;
-                    dm__load3(in->cell_pos, q, pp);
-                    if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow ||
-                        pp[1] > hi[1] + grow || pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
-                        continue;
-                    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, hint, &d2, &bu, &bv);
-                    if (bt != (size_t)-1) hint = bt;
-                    if (bt == (size_t)-1 || sqrt(d2) > b->reach ||
-                        !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
-                        continue; /* beyond reach, or closest to the ring's rim */
-                    memcpy(pt.p, in->cell_pos + 3 * q, sizeof pt.p);
-                    pt.bt = (uint32_t)bt;
-                    pt.bu = bu;
-                    pt.nt = UINT32_MAX;
-                    pt.bv = bv;
-                    pt.d2 = d2;
+                    if (!dm__sh_relevant(in, c, b, q, &hint, &pt)) continue;
                     if (!dm__sh_push_pt(sh, in, *npts, &pt)) return 0;
                     (*npts)++;
                 }
@@ -9299,39 +9319,44 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
     return 1;
 }
 
-/* one plane per relevant vertex p, from its nearest new triangle (keep, u, w) at the proposed
-   position (kept in its nt): the plane through p, u, w, pushed out by 2 margins (4 doubles each
-   into pl); returns their number */
-static size_t dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
+/* The plane of relevant vertex pt, from its nearest new triangle (keep, u, w) at the proposed
+   position (kept in its nt): through p, u and w, pushed out by 2 margins (4 doubles into out);
+   keep must lie on its outer side. 0 when there is none: a void plane (zero normal, offset
+   -DBL_MAX) that any position meets. *hint: the last point's nearest new triangle. */
+static int dm__sh_plane_of(const dm__sh_internal *in, const dm_collapse *c, dm__sh_pt *pt, size_t *hint, double out[4])
 {
-    size_t i, np = 0, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
-    int k;
-    for (i = 0; i < npts; i++) {
-        double pp[3], pu[3], pw[3], d2, bu, bv, A[3], len;
-        size_t t;
-        int j;
-        const uint32_t *tr;
-        dm__load3(in->pts[i].p, 0, pp);
-        if (in->tri_new[in->pts[i].bt] != UINT32_MAX) hint = in->tri_new[in->pts[i].bt]; /* the same answer, sooner */
-        t = dm__sh_nearest(in->tri + 16 * no, nr, pp, DBL_MAX, hint, &d2, &bu, &bv);
-        in->pts[i].nt = t == (size_t)-1 ? UINT32_MAX : (uint32_t)t;
-        if (t == (size_t)-1) continue;
-        hint = t;
-        tr = c->triangles + 3 * t;
-        for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
-        if (j == 3) continue;
-        dm__load3(c->positions, tr[(j + 1) % 3], pu);
-        dm__load3(c->positions, tr[(j + 2) % 3], pw);
-        dm__sub3(pu, pp, pu);
-        dm__sub3(pw, pp, pw);
-        dm__cross3(pu, pw, A);
-        len = dm__len3(A);
-        if (!(len > 0.0)) continue;
-        for (k = 0; k < 3; k++) pl[4 * np + (size_t)k] = A[k] / len;
-        pl[4 * np + 3] = dm__dot3(pl + 4 * np, pp) + 2.0 * in->margin;
-        np++;
-    }
-    return np;
+    double pp[3], pu[3], pw[3], d2, bu, bv, A[3], len;
+    size_t t, no = c->old_triangle_count;
+    int j, k;
+    const uint32_t *tr;
+    out[0] = out[1] = out[2] = 0.0;
+    out[3] = -DBL_MAX;
+    dm__load3(pt->p, 0, pp);
+    if (in->tri_new[pt->bt] != UINT32_MAX) *hint = in->tri_new[pt->bt]; /* the same answer, sooner */
+    t = dm__sh_nearest(in->tri + 16 * no, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
+    pt->nt = t == (size_t)-1 ? UINT32_MAX : (uint32_t)t;
+    if (t == (size_t)-1) return 0;
+    *hint = t;
+    tr = c->triangles + 3 * t;
+    for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
+    if (j == 3) return 0;
+    dm__load3(c->positions, tr[(j + 1) % 3], pu);
+    dm__load3(c->positions, tr[(j + 2) % 3], pw);
+    dm__sub3(pu, pp, pu);
+    dm__sub3(pw, pp, pw);
+    dm__cross3(pu, pw, A);
+    len = dm__len3(A);
+    if (!(len > 0.0)) return 0;
+    for (k = 0; k < 3; k++) out[k] = A[k] / len;
+    out[3] = dm__dot3(out, pp) + 2.0 * in->margin;
+    return 1;
+}
+
+/* one plane per relevant vertex (dm__sh_plane_of), in their order: 4 doubles each into pl */
+static void dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
+{
+    size_t i, hint = (size_t)-1;
+    for (i = 0; i < npts; i++) dm__sh_plane_of(in, c, in->pts + i, &hint, pl + 4 * i);
 }
 
 /* The metric the enclosure projects in: the quadric's matrix plus this fraction of its mean
@@ -9417,12 +9442,16 @@ static int dm__sh_split_span(const double *a, const size_t *act, size_t nact, co
    active set holds at most three independent planes; a violated plane that cannot be added (its
    normal in their span, no multiplier to give way) proves the planes inconsistent.
    Returns 1 with x moved (every plane met within tol), 0 with x as it was when the planes are
-   inconsistent or the steps run out. */
-static int dm__sh_project(const double metric[6], const double *pl, size_t np, double tol, double *a, double x[3])
+   inconsistent or the steps run out. Where they are found inconsistent and proof is not NULL,
+   the planes that prove it (the violated one and the active ones: at most four, with no common
+   point by themselves) go into proof, their number into *nproof (else 0). */
+static int dm__sh_project(const double metric[6], const double *pl, size_t np, double tol, double *a, double x[3],
+                          size_t proof[4], size_t *nproof)
 {
     double L[3][3], y[3], u[4], z[3], r[3];
     size_t i, act[4], nact = 0, p;
     int k, steps = 0;
+    if (nproof) *nproof = 0;
     if (!dm__sh_frame(metric, pl, np, L, a)) return 0;
     y[0] = L[0][0] * x[0] + L[1][0] * x[1] + L[2][0] * x[2]; /* y = L^T x */
     y[1] = L[1][1] * x[1] + L[2][1] * x[2];
@@ -9453,7 +9482,12 @@ static int dm__sh_project(const double metric[6], const double *pl, size_t np, d
                     t2 = u[q] / r[q];
                     kd = q;
                 }
-            if (t1 == DBL_MAX && t2 == DBL_MAX) return 0; /* inconsistent */
+            if (t1 == DBL_MAX && t2 == DBL_MAX) { /* inconsistent */
+                for (q = 0; proof && q < nact; q++) proof[q] = act[q];
+                if (proof) proof[nact] = p;
+                if (nproof) *nproof = nact + 1;
+                return 0;
+            }
             t = t1 < t2 ? t1 : t2;
             if (t1 < DBL_MAX)
                 for (k = 0; k < 3; k++) y[k] += t * z[k];
@@ -9516,6 +9550,55 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
    the bake's rays then miss. */
 #define DM__SH_REACH 0.25
 
+/* The slot of the kept proofs (in->proof) for candidate c's edge. */
+static uint32_t *dm__sh_proof_slot(const dm__sh_internal *in, const dm_collapse *c)
+{
+    uint32_t lo = c->keep < c->remove ? c->keep : c->remove, hi = c->keep ^ c->remove ^ lo;
+    return in->proof + 8 * (size_t)(((lo * 2654435761u) ^ (hi * 40503u)) & (DM__SH_PROOFS - 1));
+}
+
+/* The proof kept for c's edge, tried before the gather: its vertices, where they are still
+   relevant (dm__sh_relevant), give the planes they would give in the full plane set; lowered to
+   the recheck's tolerance, if those still have no common point, the full set has none either and
+   the enclosure vetoes as the full check would. 1 when it holds. */
+static int dm__sh_proof_holds(const dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b)
+{
+    const uint32_t *e;
+    double pl[16], a[12], x[3];
+    size_t i, hint = (size_t)-1, hint2 = (size_t)-1;
+    uint32_t lo = c->keep < c->remove ? c->keep : c->remove;
+    int k;
+    if (!in->proof || sh->fallback || c->relaxed) return 0; /* a relaxed candidate needs the gather */
+    e = dm__sh_proof_slot(in, c);
+    if (e[2] == 0 || e[0] != lo || e[1] != (c->keep ^ c->remove ^ lo)) return 0;
+    for (i = 0; i < e[2]; i++) {
+        dm__sh_pt pt;
+        if (!dm__sh_relevant(in, c, b, e[3 + i], &hint, &pt) || !dm__sh_plane_of(in, c, &pt, &hint2, pl + 4 * i))
+            return 0;
+        pl[4 * i + 3] -= 6.0 * in->margin;
+    }
+    for (k = 0; k < 3; k++) x[k] = c->position[k];
+    return !dm__sh_project(c->metric, pl, e[2], 1e-3 * in->margin, a, x, NULL, NULL);
+}
+
+/* keeps the proof (the planes proof[0..n), of the gathered vertices in in->pts) for c's edge */
+static void dm__sh_proof_keep(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const size_t *proof, size_t n)
+{
+    uint32_t *e, lo = c->keep < c->remove ? c->keep : c->remove;
+    size_t i;
+    if (!in->proof) { /* without the table (out of memory) every veto takes the full check */
+        int of = 0;
+        in->proof = (uint32_t *)dm__alloc_array(&sh->allocator, DM__SH_PROOFS * 8, sizeof(uint32_t), &of);
+        if (!in->proof) return;
+        memset(in->proof, 0, DM__SH_PROOFS * 8 * sizeof(uint32_t));
+    }
+    e = dm__sh_proof_slot(in, c);
+    e[0] = lo;
+    e[1] = c->keep ^ c->remove ^ lo;
+    e[2] = (uint32_t)n;
+    for (i = 0; i < n; i++) e[3 + i] = in->pts[proof[i]].q;
+}
+
 /* (1) of dm_shell_constraint. Enclosure: the original's vertices near the collapse whose
    closest feature of the old triangles is at keep or remove (not on the ring's rim, which
    belongs to the rest of the mesh) must stay on the inner side of the new one-ring: their
@@ -9523,27 +9606,33 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
    become positive. Each such vertex p, nearest to new triangle (keep, u, w), asks keep to lie on
    the outer side of the plane through p, u, w (an exact, linear condition on keep's position);
    the position is the point nearest the proposed one that meets all of them (dm__sh_project;
-   where the planes have no common point even at the recheck's tolerance, a veto), then
-   everything is checked again at the rounded position. */
+   where the planes have no common point even at the recheck's tolerance, a veto, whose proof is
+   kept for the edge's next time: dm__sh_proof_holds), then everything is checked again at the
+   rounded position. */
 static int dm__sh_enclose(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, double x[3], float corrected[3],
                           int *moved)
 {
     double x0[3], *pl;
     dm__sh_box b;
-    size_t npts = 0, np, i;
+    size_t npts = 0, i, proof[4], nproof;
     int k;
     dm__sh_enclose_box(sh, in, c, &b);
     for (k = 0; k < 3; k++) x0[k] = x[k] = c->position[k];
     if (!dm__sh_old_new_tris(sh, in, c, x0)) return DM_COLLAPSE_VETO;
     in->gathered = 0;
+    if (dm__sh_proof_holds(sh, in, c, &b)) {
+        sh->vetoed_enclose++; /* as the full check below would */
+        return DM_COLLAPSE_VETO;
+    }
     if (!dm__sh_gather(sh, in, c, &b, &npts)) return DM_COLLAPSE_VETO;
     in->gathered = npts;
     if (!dm__sh_grow_scratch(sh, in, 7 * npts + 9 * c->triangle_count + 16)) return DM_COLLAPSE_VETO;
     pl = in->scratch;
-    np = dm__sh_planes(in, c, npts, pl);
-    if (!dm__sh_project(c->metric, pl, np, 1e-3 * in->margin, pl + 4 * np, x)) {
-        for (i = 0; i < np; i++) pl[4 * i + 3] -= 6.0 * in->margin; /* again at the recheck's tolerance */
-        if (!dm__sh_project(c->metric, pl, np, 1e-3 * in->margin, pl + 4 * np, x)) {
+    dm__sh_planes(in, c, npts, pl);
+    if (!dm__sh_project(c->metric, pl, npts, 1e-3 * in->margin, pl + 4 * npts, x, NULL, NULL)) {
+        for (i = 0; i < npts; i++) pl[4 * i + 3] -= 6.0 * in->margin; /* again at the recheck's tolerance */
+        if (!dm__sh_project(c->metric, pl, npts, 1e-3 * in->margin, pl + 4 * npts, x, proof, &nproof)) {
+            if (nproof) dm__sh_proof_keep(sh, in, c, proof, nproof);
             sh->vetoed_enclose++; /* no position keeps them all inside */
             return DM_COLLAPSE_VETO;
         }

@@ -698,7 +698,8 @@ static void test_cancel_and_determinism(const mesh *m)
    metric on the outer side of all planes lies in the relative interior of one face, the point
    nearest x0 on the affine hull of some independent set of at most three of the planes; so the
    nearest feasible point over all such sets (each solved as a small equality problem) is the
-   answer, and no feasible one means the planes are inconsistent. Random metrics (the quadric
+   answer, and no feasible one means the planes are inconsistent (and then the at most four
+   planes dm__sh_project names as the proof have no common point by themselves). Random metrics (the quadric
    part of rank 0 to 3), plane sets around a point (consistent), with opposite pairs (not),
    fans of nearly parallel planes (where Dykstra's sweeps crawl). */
 static unsigned rnd_state = 12345u;
@@ -773,11 +774,11 @@ static int project_brute(double Mf[3][3], const double *pl, size_t np, const dou
 
 static void test_projection(void)
 {
-    int trial, agree = 0, inconsistent = 0, consistent = 0;
+    int trial, agree = 0, inconsistent = 0, consistent = 0, proved = 0;
     double worst = 0.0;
     for (trial = 0; trial < 3000; trial++) {
         double metric[6], Mf[3][3], pl[4 * 12], work[3 * 12], x0[3], x[3], xb[3];
-        size_t np = 1 + (size_t)(rnd() * 11), i;
+        size_t np = 1 + (size_t)(rnd() * 11), i, proof[4], nproof;
         int kind = trial % 3, rank = trial % 4, j, k, r1, r2;
         for (j = 0; j < 6; j++) metric[j] = 0.0;
         for (j = 0; j < rank; j++) { /* a quadric of rank `rank`: sum of outer products */
@@ -810,7 +811,7 @@ static void test_projection(void)
         dm__sh_metric(metric, Mf);
         for (k = 0; k < 3; k++) x[k] = x0[k];
         r1 = project_brute(Mf, pl, np, x0, xb);
-        r2 = dm__sh_project(metric, pl, np, 1e-12, work, x);
+        r2 = dm__sh_project(metric, pl, np, 1e-12, work, x, proof, &nproof);
         if (r1) consistent++;
         else inconsistent++;
         if (r1 != r2) {
@@ -818,8 +819,12 @@ static void test_projection(void)
                         r2 ? "consistent" : "inconsistent");
             continue;
         }
-        if (!r1) { /* x as it was */
+        if (!r1) { /* x as it was; the planes it names have no common point by themselves */
+            double sub[4 * 4], xs[3];
             agree += x[0] == x0[0] && x[1] == x0[1] && x[2] == x0[2];
+            for (i = 0; i < nproof; i++)
+                for (k = 0; k < 4; k++) sub[4 * i + (size_t)k] = pl[4 * proof[i] + (size_t)k];
+            proved += nproof >= 1 && nproof <= 4 && !project_brute(Mf, sub, nproof, x0, xs);
             continue;
         }
         {
@@ -831,6 +836,8 @@ static void test_projection(void)
     T_CHECK_MSG(agree == 3000 && consistent > 1000 && inconsistent > 300,
                 "exact projection: %d of 3000 agree with brute force (worst %.2g), %d consistent, %d not", agree, worst,
                 consistent, inconsistent);
+    T_CHECK_MSG(proved == inconsistent, "exact projection: %d of %d inconsistent sets proved by the planes it names",
+                proved, inconsistent);
 }
 
 int main(int argc, char **argv)
