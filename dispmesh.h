@@ -25,8 +25,8 @@
      PART 2  Simplification with progressive-mesh records: dm_simplify, dm_pm_*, dm_weld.
      PART 3  Bounding shell and paper 000's constraints: dm_shell_grow, dm_shell_constraint,
              dm_shell_collapsed, dm_shell_relax (the fallback), dm_shell_fallback_triangles.
-     PART 4  Parameterization, bake, surface sample grid, reconstruction: dm_parameterize,
-             dm_bake, dm_reconstruct, dm_base_normals, dm_coverage_weights, dm_surface_distance.
+     PART 4  Parameterization, bake, surface sample grid, reconstruction: dm_parameterize, dm_bake,
+             dm_reconstruct, dm_base_normals, dm_coverage_weights, dm_surface_distance.
 
    COMMON TO ALL PARTS
      Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-
@@ -39,19 +39,19 @@
      progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input
      gets a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no triangles
      (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN, infinite or huge
-     (|x| > 1e18) coordinate of a referenced vertex (DM_ERR_BAD_POSITION), sizes that overflow
+     (|x| > 1e18) referenced coordinate (DM_ERR_BAD_POSITION), sizes that overflow
      (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out is NULL and
-     nothing is left allocated. No global state; every call is re-entrant and deterministic (the
-     same input gives the same bits; ties go to the lower index). Do not build with -ffast-math.
-     FMA contraction is turned off for the implementation's code and the user's setting restored
-     (C or C++), except under clang's -ffp-contract=fast, which ignores that pragma (bits change).
+     nothing is left allocated. No global state; calls are re-entrant and deterministic (same
+     input, same bits; ties go to the lower index). Do not build with -ffast-math. FMA contraction
+     is off in the implementation (the user's setting restored), except under clang's
+     -ffp-contract=fast, which ignores that pragma (bits change).
 
    PART 1: BVH RAY CASTER
      WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
-     closest hit in [tmin, tmax], any hit, the nearest hit along a line either way, batches, and
-     the closest point on the mesh. The ray/triangle test is watertight (Woop et al. 2013): a ray
-     through a shared edge or vertex never slips between the triangles. Degenerate triangles are
-     never hit. A ray with NaN components, a zero direction or tmin > tmax misses.
+     closest hit in [tmin, tmax], any hit, the nearest hit along a line either way, batches, the
+     closest point on the mesh. The ray/triangle test is watertight (Woop et al. 2013): no ray
+     slips between triangles through a shared edge or vertex. Degenerate triangles are never hit;
+     a ray with NaN components, a zero direction or tmin > tmax misses.
          dm_bvh *bvh;  dm_bvh_build(P, nv, T, nt, NULL, &bvh);
          dm_ray ray = {{ox, oy, oz}, 0.0f, {dx, dy, dz}, INFINITY};  dm_hit hit;
          if (dm_bvh_intersect(bvh, &ray, &hit)) use(hit.t, hit.triangle, hit.u, hit.v);
@@ -70,50 +70,46 @@
 
    PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*, dm_weld)
      WHAT. Edge collapses in order of quadric error (Garland-Heckbert 1997), recorded as a
-     progressive mesh (Hoppe 1996): the base mesh and one vertex split per collapse, so any
-     level between the base and the input can be rebuilt exactly, up and down; for every base
-     vertex, the input vertices merged into it. A constraint hook lets the caller veto or move
-     each candidate (Part 3 uses it).
+     progressive mesh (Hoppe 1996): the base and one vertex split per collapse, so any level can
+     be rebuilt exactly, up and down; for every base vertex, the input vertices merged into it. A
+     constraint hook lets the caller veto or move each candidate (Part 3 uses it).
          dm_simplify_options opt = {0};  opt.target_triangles = nt / 100;
          dm_simplify(P, nv, T, nt, &opt, &pm, &report);
          dm_pm_counts(pm, &bnv, &bnt);  dm_pm_get_mesh(pm, B, BT, ids);   // level 0: the base
          dm_pm_set_level(pm, dm_pm_split_count(pm) / 2);                 // any level
-     METHOD. Quadrics in a frame centred on the bounding box and scaled by its largest side,
-     area-weighted, with Garland-Heckbert's boundary planes. The position is the quadric's
-     minimiser when it is well conditioned and near the edge, else the best point on the edge
-     (Lindstrom-Turk's fallback); a boundary stays on its edges; locked vertices stay put. Checks
-     on each candidate: the link condition (Dey et al. 1999), no degenerate fan, no triangle
-     turning by 78 degrees or more or becoming degenerate, then the constraint. Non-manifold
-     vertices and their neighbours are frozen. A refused or vetoed edge is retried when its
-     one-ring changes; a candidate moved by the constraint to more than twice its cost waits in
-     the queue at the new cost.
+     METHOD. Area-weighted quadrics (with boundary planes) in a frame centred on the bounding box,
+     scaled by its largest side. The position is the quadric's minimiser when well conditioned and
+     near the edge, else the best point on the edge (Lindstrom-Turk). Checks on each candidate: the
+     link condition (Dey et al. 1999), no degenerate fan, no triangle turning by 78 degrees or
+     more, then the constraint. Non-manifold vertices and their neighbours are frozen. A refused or
+     vetoed edge is retried when its one-ring changes; one the constraint moves to more than twice
+     its cost waits in the queue at the new cost.
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no new degenerate or
-     flipped triangle; boundary vertices stay on boundary edges; locked and frozen vertices keep
-     their positions bit for bit. A collapse's error is the area-weighted RMS distance from the
-     new position to the planes merged into it (mesh units; the report gives the largest). Level
-     k is bit for bit the mesh after the (split_count - k)-th collapse, triangles in input order.
+     flipped triangle; boundaries stay on their edges; locked and frozen vertices keep their
+     positions bit for bit. A collapse's error (mesh units): the area-weighted RMS distance from the new
+     position to the planes merged into it (the report gives the largest). Level k is bit for bit
+     the mesh after the (split_count - k)-th collapse, triangles in input order.
      dm_pm_merged_vertices gives a base vertex's sorted input vertices (a partition of them all).
      OPTIONS (dm_simplify_options). target_triangles (stop at or below; 0 none); target_error (no
-     collapse above it, mesh units; 0 none; neither: until no collapse passes the checks); flags
+     collapse above it; 0 none; neither: until no collapse passes the checks); flags
      (DM_SIMPLIFY_LOCK_BOUNDARY); locked (per vertex, nonzero = never moves or goes); max_collapses
-     (0 none; the first k collapses are the same whatever the limit); min_quality (a sliver guard:
-     no collapse drops a triangle's 2 area / longest edge^2 below it while others are left; off by
-     default: beside the shell it costs closeness); constraint, constraint_user, on_collapse (called
-     just before each collapse is applied, for a constraint that follows the mesh), relax (called
-     when no candidate is left above the target and some were vetoed: nonzero = the constraint is
-     less strict now, every vetoed edge is queued again), relax_cost (with relax, a vetoed candidate
-     also comes back at this times its cost, 0 = 16, asked with dm_collapse.relaxed); allocator;
-     progress (the fraction of the triangles to remove that are gone). dm_weld merges vertices at
-     the same position (bit for bit, -0 = +0) in first-use order.
+     (0 none; the first k are the same whatever the limit); min_quality (a sliver guard: no
+     collapse drops a triangle's 2 area / longest edge^2 below it while others are left; off by
+     default: beside the shell it costs closeness); constraint, constraint_user, on_collapse (just
+     before each collapse is applied, for a constraint that follows the mesh), relax (when no
+     candidate is left above the target and some were vetoed: nonzero = less strict now, every
+     vetoed edge is queued again), relax_cost (a vetoed candidate also comes back at this times its
+     cost, 0 = 16, asked with dm_collapse.relaxed); allocator; progress (the share of the triangles
+     to remove that are gone). dm_weld merges vertices at the same position (bit for bit, -0 = +0)
+     in first-use order.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
      the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
-     ERRORS. As in COMMON; a negative or NaN target_error, a NaN min_quality or one above 0.5
-     is DM_ERR_INVALID_ARGUMENT; a triangle soup (no vertex in two triangles) with repeated
-     positions is DM_ERR_NOT_WELDED. Stopping above the target still gives DM_OK (report.
-     reached_target = 0). Triangles with a repeated index are dropped (counted); duplicate
-     vertices are different vertices (a seam between them is two boundaries); isolated ones are
-     in no level.
+     ERRORS. As in COMMON; a negative or NaN target_error, a NaN min_quality or one above 0.5 is
+     DM_ERR_INVALID_ARGUMENT; a triangle soup (no vertex in two triangles) with repeated positions
+     is DM_ERR_NOT_WELDED. Stopping above the target still gives DM_OK (report.reached_target = 0).
+     Triangles with a repeated index are dropped (counted); duplicate vertices are different
+     vertices (a seam between them is two boundaries); isolated ones are in no level.
      THREAD SAFETY. dm_simplify is re-entrant. A dm_pm may be read from several threads;
      dm_pm_set_level and dm_pm_get_mesh must run alone on it.
      LIMITS. Fewer than 2^32 - 1 vertices and 1431655764 triangles, and 3 triangles + 2 vertices
@@ -130,48 +126,45 @@
      run into another part. The paper's smoothing pass is not needed. Per candidate collapse:
        1. Enclosure (the paper does not say how): the original's vertices that the collapse can
           sweep over (in the box of the old one-ring and the proposed position), whose closest
-          feature of the old one-ring touches keep or remove, must stay on the inner side of the
-          new one-ring (signed distance with the angle-weighted pseudonormal, Baerentzen-Aanaes
-          2005). Each asks keep to lie outside one plane; the proposed position is projected on
-          those half-spaces exactly (a dual active set, in the metric of the collapse's quadric
-          plus its mean eigenvalue: where the error grows least, without sliding far along flat
-          parts) and checked again (DM_COLLAPSE_MOVE; a veto where no position meets them all,
-          whose proof, at most four planes, is kept and tried first on the edge's next time).
-          It encloses the original itself, not the previous level (Sander et al.'s progressive
-          hulls), so offsets do not pile up.
+          feature of the old one-ring touches keep or remove, stay on the inner side of the new
+          one-ring (signed distance with the angle-weighted pseudonormal, Baerentzen-Aanaes 2005).
+          Each asks keep to lie outside one plane; the proposed position is projected on those
+          half-spaces exactly (a dual active set, in the metric of the collapse's quadric plus its
+          mean eigenvalue: where the error grows least, without sliding along flat parts) and
+          checked again (DM_COLLAPSE_MOVE; a veto where no position meets them all, whose proof,
+          at most four planes, is tried first on the edge's next time). It encloses the original,
+          not the previous level (Sander et al.'s progressive hulls): offsets do not pile up.
        2. Shell: keep within the offset grown at its closest point of the original; along each
           ray of 3., the depth to the original no more than the offset grown at the hit.
        3. Overlap: from overlap_samples points of each new triangle and the middle and quarter
           points of its edge from keep, a ray along the inverted interpolated normal (started a
           quarter thickness outside) must meet a front face of the original first, within 2.25
           thicknesses, and not go out and in again within that depth. The normals are the mesh's
-          angle-weighted vertex normals after the collapse (dm_shell_collapsed keeps their sums),
-          not the bake's turned ones (BASE NORMALS below), which differ at a few crease vertices.
-          A miss is a violation unless the original is open and the sample lies within 0.05
-          thickness of it (beside its boundary: a base reaching farther out overhangs it).
-     The checks are sampled, not a proof: a fold can hide between the samples of a triangle.
-     Asked with placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED).
+          angle-weighted ones after the collapse (dm_shell_collapsed keeps their sums), not the
+          bake's turned ones (BASE NORMALS), which differ at a few crease vertices. A miss is a
+          violation unless the original is open and the sample lies within 0.05 thickness of it
+          (beside its boundary: a base reaching farther out overhangs it).
+     The checks are sampled: a fold can hide between a triangle's samples. Asked with
+     placement_only, the constraint answers after 1 (DM_COLLAPSE_PLACED).
      FALLBACK. Where the shell is too thin for an enclosing base (thin limbs, horns, narrow gaps)
      the constraint vetoes. With opt.relax = dm_shell_relax a vetoed candidate comes back at
      relax_cost (16) times its cost, asked relaxed (relaxing only once all are stuck leaves knots of
-     small triangles there): it passes when, from each overlap sample, the nearest crossing of the
-     original along the line (either way, within the thickness) faces the way the base does (a bake
-     both ways finds one depth) and no vertex of the original ends outside the base a quarter
-     thickness beyond where it was (tips stay in reach); keep stays where the enclosure put it if
-     that passes. Still above the target, dm_simplify relaxes it everywhere (then once more: the
-     simplifier's checks only). Bake dm_shell_fallback_triangles both ways.
+     small triangles): it passes when, from each overlap sample, the nearest crossing of the
+     original either way within the thickness faces the way the base does (a bake both ways finds
+     one depth) and no vertex of the original ends a quarter thickness farther outside (tips stay
+     in reach), keep where the enclosure put it if that passes. Still above the target, dm_simplify
+     relaxes it everywhere, then to its own checks. Bake dm_shell_fallback_triangles both ways.
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
-     dm_shell_grow runs, about 100 per fragment besides; the constraint about 100 per original
-     vertex near the widest candidate, 340 per triangle of the widest one-ring and 32 KB of
-     kept proofs.
+     dm_shell_grow runs, about 100 per fragment besides; the constraint 100 per original vertex
+     near the widest candidate, 340 per triangle of the widest one-ring, 32 KB of kept proofs.
      ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
      THREAD SAFETY. One dm_simplify run at a time per shell.
-     LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed to see the mesh's own
-     vertex normals (without it, normals come from the one-ring). The overlap is checked on the new
-     one-ring only: a later collapse that turns a triangle's corner normals can make its texels miss.
+     LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed for the mesh's own
+     vertex normals (else from the one-ring). The overlap is checked on the new one-ring only: a
+     later collapse that turns a triangle's corner normals can make its texels miss.
 
    PART 4: PARAMETERIZATION, BAKE, SURFACE SAMPLE GRID, RECONSTRUCTION
      WHAT. A base mesh laid out in one width x height map, the displacement and the original's
@@ -180,49 +173,45 @@
      normal, up to max_chart_triangles). A chart's boundary is its projection on the chart's plane
      (or a circle by arc length), its inside Floater's mean value map, then Yoshizawa-Belyaev-Seidel
      stretch rounds toward area targets (triangle_weight, default the areas; dm_coverage_weights
-     gives the original's area over each base triangle), kept while the stretch drops and nothing
-     flips; a chart that curls (no flip-free layout within L2 stretch 2) is cut in two, down to lone
-     triangles. Charts turned to their smallest box (12 angles) are packed at the largest scale that
-     fits: shelves of boxes, or footprints in a bitmap, interlocking or as silhouettes (largest
-     first, best quarter turn). dm_param reports utilization, L2 and max stretch (Sander et al.
-     2001) and the share of area ratios in [0.8, 1.25]. Deviation: many charts with seams, not the
-     paper's one global chart (its text omits the cut); neighbour lookups go through nbr.
+     gives the original's area over each base triangle) while the stretch drops and nothing flips;
+     a chart that curls (no flip-free layout within L2 stretch 2) is cut in two, down to lone
+     triangles. Charts turned to their smallest box (12 angles) are packed at the largest scale
+     that fits: shelves of boxes, or footprints in a bitmap (largest first, best quarter turn).
+     dm_param reports utilization, L2 and max stretch (Sander et al. 2001) and the share of area
+     ratios in [0.8, 1.25]. Deviation: many charts with seams, not the paper's one global chart
+     (its text omits the cut); neighbour lookups go through nbr.
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
-     edge): the base point p and the interpolated base normal n; the line p - t n,
-     |t| <= max_distance (default 5% of the original's diagonal), gives disp = t (world units,
-     positive inward) and the original's interpolated normal at the hit: with inward the first hit
-     along -n (the paper's rule, for a base that encloses the original) unless a back face (p lies
-     inside), otherwise and on both_ways triangles the nearest crossing either way. No crossing, or
-     a depth more than 8 texel sizes beyond more than half of its chart neighbours within 2 texels
+     edge), base point p and interpolated base normal n: the line p - t n, |t| <= max_distance
+     (default 5% of the original's diagonal), gives disp = t (world units, positive inward) and the
+     original's interpolated normal at the hit: with inward the first hit along -n (the paper's
+     rule) unless a back face (p lies inside), else and on both_ways triangles the nearest crossing
+     either way. No crossing, or a depth 8 texel sizes beyond most chart neighbours within 2 texels
      (a ray that slipped past a thin part), is DM_TEXEL_MISS (valid = 0). Gutter texels within 2
-     texels of a chart are DM_TEXEL_BORDER, baked from the nearest such triangle's plane extended
-     (the chart's field extended where that ray meets a crease or lands 8 texel sizes off it) for
-     filtering and the first mip level, then fitted (least squares) so that a chart's bilinear read
-     along its boundary gives the depth of the edge point's own ray: the charts on a seam read one
-     depth there (on a crease of the original each keeps its own face). MISS and EMPTY texels get
-     push-pull filled values (Gortler et al. 1996) for filtering only.
+     texels of a chart (DM_TEXEL_BORDER) extend the nearest triangle's plane (the chart's field
+     where that ray meets a crease or lands 8 texel sizes off), for filtering and the first mip
+     level, fitted (least squares) so that a chart's bilinear read along its boundary gives the
+     edge point's own ray's depth: the charts on a seam read one depth there (on a crease of the
+     original each keeps its own face). MISS and EMPTY texels get push-pull values for filtering.
      BASE NORMALS (dm_base_normals, the bake's and the reconstruction's): angle-weighted, except
      where a vertex sees one of its triangles beyond 60 degrees (a short wall by a wide flat part,
-     whose lines would run along it and fold): that normal turns toward the axis of its triangles'
-     smallest normal cone, just far enough to see each within 60 degrees, and at most 30 degrees.
+     whose lines would run along it and fold): there it turns toward the axis of its triangles'
+     smallest normal cone, just enough to see each within 60 degrees, at most 30 degrees.
      Deviation: the paper names only "the interpolated vertex normal".
      SURFACE SAMPLE GRID. dm_dispmap holds per texel pos, nrm, disp, area (the base area it stands
      for: sums are areas), valid, and nbr/nbr_rot in the order +x, -x, +y, -y (the dm_param's
      arrays, shared: free the dm_dispmap first). Inside a chart nbr is the adjacent texel (rot 0);
-     across a seam, the texel's centre is carried over the nearest chart-boundary edge into the twin
-     triangle's chart and nbr is the nearest texel there; UINT32_MAX at the mesh's boundary. nbr_rot
-     = r: a step along d continues as d turned r quarter turns counter-clockwise in the neighbour's
-     axes; a step back along -(d turned r) lands where it started. Where one texel cannot serve two
-     charts (chart corners), nbr is the texel itself with a half turn (a mirror, as a clamped filter
-     sees it).
-     RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does: a barycentric grid
-     of level sqrt(2 x its uv area in texels) inside, as many points along each base edge as its
-     longer uv side has texels (shared by the triangles on the edge), strips between; its triangles
-     are then made Delaunay in the map by edge flips, border fixed. A vertex is its base point moved
-     along the base normal by the map's bilinear depth, averaged over the triangles sharing it, with
-     the map's normal (shade with those: normals computed from the geometry show the original's
-     facets). A closed manifold base gives a closed manifold result with no T-junction; nothing is
-     dropped at depth breaks. Vertex v < base_vertex_count is base vertex v; face_base gives each
+     across a seam, the texel nearest where the centre lands, carried over the nearest chart edge
+     into the twin triangle's chart; UINT32_MAX at the mesh's boundary. nbr_rot = r: a step
+     along d continues as d turned r quarter turns counter-clockwise in the neighbour's axes; a step
+     back along -(d turned r) lands where it started. Where one texel cannot serve two charts
+     (corners), nbr is the texel itself with a half turn (a mirror, as a clamped filter sees it).
+     RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does (a barycentric grid
+     of level sqrt(2 x its uv area in texels), as many points on each base edge as its longer uv
+     side has texels, shared across the edge, strips between), then made Delaunay in the map by
+     edge flips. A vertex is its base point moved along the base normal by the map's bilinear depth,
+     averaged over the triangles sharing it, with the map's normal (shade with those: geometric
+     normals show the original's facets). A closed manifold base gives a closed manifold result
+     with no T-junction. Vertex v < base_vertex_count is base vertex v; face_base gives each
      triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
      (deterministic) and measures with dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
@@ -230,12 +219,11 @@
      stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance, inward,
      both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1). dm_coverage_options:
      floor (0 = 5% of the mean weight). dm_distance_options: samples_per_side (0 = 200000, at most
-     10^9). Each with allocator and progress.
-     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (2 bytes per texel more while
-     packing); dm_dispmap: 46 bytes per texel (about 42 more while dm_bake runs) plus a BVH of the
-     original; dm_trimesh: 24 bytes per vertex and 16 per triangle (about 2 triangles per covered
-     texel), 60 more per vertex and up to 180 per triangle of the largest base triangle's
-     tessellation while dm_reconstruct runs.
+     10^9). Each also has allocator and progress.
+     MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (2 more per texel while
+     packing); dm_dispmap: 46 bytes per texel (42 more while dm_bake runs) plus a BVH of the
+     original; dm_trimesh: 24 bytes per vertex and 16 per triangle (2 triangles per covered texel);
+     while dm_reconstruct runs, 60 per vertex and 180 per triangle of the largest tessellation.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with their
      gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public dm_param
      and dm_dispmap arrays they read (a caller may have edited them): an index out of range, a
@@ -243,24 +231,23 @@
      THREAD SAFETY. Results are read-only once made; the calls are re-entrant.
      LIMITS. Maps up to 16384 x 16384; a reconstruction below 2^32 vertices (DM_ERR_TOO_LARGE), at
      most 1024 segments along one base edge. Where no direction sees all of a base vertex's
-     triangles (the rim of a thin part at a coarse level) the normal lines fold: a few
-     reconstructed triangles there face backwards (they are not repaired).
+     triangles (a thin part's rim at a coarse level) the normal lines fold: a few reconstructed
+     triangles there face backwards (not repaired).
 
    REFERENCES
-     Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald,
-     SAH-based BVH construction, RT 2007. Ize, Robust BVH ray traversal, JCGT 2013. Ericson,
-     Real-Time Collision Detection 5.1.5, 2005. Bikker, tinybvh, 2024. Dammertz, Hanika, Keller,
-     Shallow BVHs for SIMD ray tracing, EGSR 2008. Garland, Heckbert, Quadric error metrics,
-     SIGGRAPH 1997. Hoppe, Progressive meshes, SIGGRAPH 1996. Dey, Edelsbrunner, Guha, Nekhayev,
-     Topology preserving edge contraction, 1999. Lindstrom, Turk, Fast and memory efficient
-     simplification, Vis 1998. Cohen et al., Simplification envelopes, SIGGRAPH 1996. Sander et al.,
-     Silhouette clipping (progressive hulls), SIGGRAPH 2000. Baerentzen, Aanaes, Angle weighted
-     pseudonormal, TVCG 2005. Floater, Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev,
-     Seidel, Stretch-minimizing parameterization, SMI 2004. Sander, Snyder, Gortler, Hoppe, Texture
-     mapping progressive meshes, SIGGRAPH 2001. Gortler et al., The Lumigraph (push-pull), SIGGRAPH
-     1996. Thurmer, Wuthrich, Vertex normals from polygonal facets, JGT 1998. Jiang, Schneider,
-     Zorin, Panozzo, Bijective projection in a shell, TOG 2020. Goldfarb, Idnani, A numerically
-     stable dual method for strictly convex quadratic programs, Math. Programming 1983. */
+     Woop, Benthin, Wald, Watertight ray/triangle intersection, JCGT 2013. Wald, SAH-based BVH
+     construction, RT 2007. Ize, Robust BVH ray traversal, JCGT 2013. Ericson, Real-Time Collision
+     Detection 5.1.5, 2005. Bikker, tinybvh, 2024. Dammertz, Hanika, Keller, Shallow BVHs for SIMD
+     ray tracing, EGSR 2008. Garland, Heckbert, Quadric error metrics, SIGGRAPH 1997. Hoppe,
+     Progressive meshes, SIGGRAPH 1996. Dey et al., Topology preserving edge contraction, 1999.
+     Lindstrom, Turk, Fast and memory efficient simplification, Vis 1998. Cohen et al.,
+     Simplification envelopes, SIGGRAPH 1996. Sander et al., Silhouette clipping (progressive
+     hulls), SIGGRAPH 2000. Baerentzen, Aanaes, Angle weighted pseudonormal, TVCG 2005. Floater,
+     Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev, Seidel, Stretch-minimizing
+     parameterization, SMI 2004. Sander et al., Texture mapping progressive meshes, SIGGRAPH 2001.
+     Gortler et al., The Lumigraph (push-pull), SIGGRAPH 1996. Thurmer, Wuthrich, Vertex normals
+     from polygonal facets, JGT 1998. Jiang et al., Bijective projection in a shell, TOG 2020.
+     Goldfarb, Idnani, A dual method for strictly convex quadratic programs, Math. Prog. 1983. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
