@@ -9537,11 +9537,13 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
    the bake's rays then miss. */
 #define DM__SH_REACH 0.25
 
-/* The slot of the kept proofs (in->proof) for candidate c's edge. */
-static uint32_t *dm__sh_proof_slot(const dm__sh_internal *in, const dm_collapse *c)
+/* The slot of the kept proofs (in->proof) for candidate c's edge, whose ends (lower first) go
+   into end[2]. */
+static uint32_t *dm__sh_proof_slot(const dm__sh_internal *in, const dm_collapse *c, uint32_t end[2])
 {
-    uint32_t lo = c->keep < c->remove ? c->keep : c->remove, hi = c->keep ^ c->remove ^ lo;
-    return in->proof + 8 * (size_t)(((lo * 2654435761u) ^ (hi * 40503u)) & (DM__SH_PROOFS - 1));
+    end[0] = c->keep < c->remove ? c->keep : c->remove;
+    end[1] = c->keep ^ c->remove ^ end[0];
+    return in->proof + 8 * (size_t)(((end[0] * 2654435761u) ^ (end[1] * 40503u)) & (DM__SH_PROOFS - 1));
 }
 
 /* The proof kept for c's edge, tried before the gather: its vertices, where they are still
@@ -9553,11 +9555,11 @@ static int dm__sh_proof_holds(const dm_shell *sh, dm__sh_internal *in, const dm_
     const uint32_t *e;
     double pl[16], a[12], x[3];
     size_t i, hint = (size_t)-1, hint2 = (size_t)-1;
-    uint32_t lo = c->keep < c->remove ? c->keep : c->remove;
+    uint32_t end[2];
     int k;
     if (!in->proof || sh->fallback || c->relaxed) return 0; /* a relaxed candidate needs the gather */
-    e = dm__sh_proof_slot(in, c);
-    if (e[2] == 0 || e[0] != lo || e[1] != (c->keep ^ c->remove ^ lo)) return 0;
+    e = dm__sh_proof_slot(in, c, end);
+    if (e[2] == 0 || e[0] != end[0] || e[1] != end[1]) return 0;
     for (i = 0; i < e[2]; i++) {
         dm__sh_pt pt;
         if (!dm__sh_relevant(in, c, b, e[3 + i], &hint, &pt) || !dm__sh_plane_of(in, c, &pt, &hint2, pl + 4 * i))
@@ -9571,7 +9573,7 @@ static int dm__sh_proof_holds(const dm_shell *sh, dm__sh_internal *in, const dm_
 /* keeps the proof (the planes proof[0..n), of the gathered vertices in in->pts) for c's edge */
 static void dm__sh_proof_keep(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const size_t *proof, size_t n)
 {
-    uint32_t *e, lo = c->keep < c->remove ? c->keep : c->remove;
+    uint32_t *e, end[2];
     size_t i;
     if (!in->proof) { /* without the table (out of memory) every veto takes the full check */
         int of = 0;
@@ -9579,9 +9581,9 @@ static void dm__sh_proof_keep(dm_shell *sh, dm__sh_internal *in, const dm_collap
         if (!in->proof) return;
         memset(in->proof, 0, DM__SH_PROOFS * 8 * sizeof(uint32_t));
     }
-    e = dm__sh_proof_slot(in, c);
-    e[0] = lo;
-    e[1] = c->keep ^ c->remove ^ lo;
+    e = dm__sh_proof_slot(in, c, end);
+    e[0] = end[0];
+    e[1] = end[1];
     e[2] = (uint32_t)n;
     for (i = 0; i < n; i++) e[3 + i] = in->pts[proof[i]].q;
 }
