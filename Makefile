@@ -47,7 +47,7 @@ C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispme
              $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param $(B)/test_dispmesh_shell $(B)/test_dispmesh_digest \
              $(B)/test_dispmesh_recon
 ifeq ($(shell uname -m),x86_64)
-  C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2
+  C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2 $(B)/test_dispmesh_digest_avx2
 endif
 FUZZ_FMTS  = obj off ply stl
 FUZZ_PLAIN = $(FUZZ_FMTS:%=$(B)/fuzz_%)
@@ -112,6 +112,8 @@ $(B)/test_%: tests/test_%.c $(ALLDEPS) | $(B)
 $(B)/test_dispmesh_bvh_sse2: tests/test_dispmesh_bvh.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) -DDM_USE_SSE2 $< -o $@ -lm
 $(B)/test_dispmesh_bvh_avx2: tests/test_dispmesh_bvh.c $(ALLDEPS) | $(B)
+	$(CC) $(CFLAGS_ALL) -DDM_USE_AVX2 -mavx2 $< -o $@ -lm
+$(B)/test_dispmesh_digest_avx2: tests/test_dispmesh_digest.c $(ALLDEPS) | $(B)
 	$(CC) $(CFLAGS_ALL) -DDM_USE_AVX2 -mavx2 $< -o $@ -lm
 
 $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_main.c $(ALLDEPS) | $(B)

@@ -32,8 +32,9 @@
      Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-
      clockwise front faces). Compile time: DM_STATIC (static functions), DM_MALLOC/DM_FREE (the
      default allocator; both or neither), DM_USE_SSE2 (x86), DM_USE_AVX2 (needs -mavx2; implies
-     SSE2): SIMD box and triangle tests, bit-identical to the portable path, recommended where
-     available. Run-time options are structs whose zero value (or NULL) means the defaults
+     SSE2): SIMD box and triangle tests (with AVX2 also the shell constraint's nearest-triangle
+     searches), bit-identical to the portable path, recommended where available. Run-time
+     options are structs whose zero value (or NULL) means the defaults
      (dm_<call>_default_options() spells them out); allocating calls take a dm_allocator (NULL =
      DM_MALLOC/DM_FREE) that objects outliving the call keep for their free; long calls take a
      progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input
@@ -8326,6 +8327,9 @@ typedef struct dm__sh_internal {
     uint32_t *tri_new;   /* per old triangle: the new one on the same two other corners (or
                             UINT32_MAX), a first guess for the nearest new triangle */
     size_t tri_cap;      /* in triangles */
+    double *soa;         /* with DM_USE_AVX2: the same tables by coordinate (DM__SH_SOA) */
+    size_t soa_cap;      /* in doubles */
+    double *soa_old, *soa_new; /* into soa: the old and the new triangles' (NULL: the scalar search) */
     /* a uniform grid of the original's (referenced) vertices */
     double lo[3], cell;
     int dim[3];
@@ -8361,6 +8365,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->vsum);
         a.free(a.user, in->tri);
         a.free(a.user, in->tri_new);
+        a.free(a.user, in->soa);
         a.free(a.user, in->proof);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_pos);
@@ -9010,13 +9015,17 @@ static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const 
 }
 
 /* Fills 16 floats per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0)
-   into out. (A table of doubles holding these float values would be as good, but GCC 12.2's SLP
-   vectoriser drops (double)(float) round trips from such stores: the bits would then depend on
-   the compiler.) */
-static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out)
+   into out, and into soa (unless NULL) the corners by coordinate for the AVX2 search. (A table of
+   doubles holding these float values would be as good, but GCC 12.2's SLP vectoriser drops
+   (double)(float) round trips from such stores: the bits would then depend on the compiler.) */
+#define DM__SH_SOA 15 /* rows: a, b, c, b - a, c - a (3 each), each of n rounded up to 4 doubles */
+static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out,
+                        double *soa)
 {
-    size_t i;
+    size_t i, np = (n + 3) & ~(size_t)3;
     int j, k;
+    for (i = n; soa && i < np; i++)
+        for (j = 0; j < DM__SH_SOA; j++) soa[(size_t)j * np + i] = 0.0;
     for (i = 0; i < n; i++) {
         double *f = out + 16 * i;
         double p[3][3], r2 = 0.0, n[3];
@@ -9033,19 +9042,160 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
         f[12] = (float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f;
         if (!dm__sh_plane(p[0], p[1], p[2], n)) n[0] = n[1] = n[2] = 0.0;
         for (k = 0; k < 3; k++) f[13 + k] = (float)n[k];
+        for (j = 0; soa && j < 9; j++) soa[(size_t)j * np + i] = f[j];
+        for (k = 0; soa && k < 3; k++) {
+            soa[(size_t)(9 + k) * np + i] = f[3 + k] - f[k];
+            soa[(size_t)(12 + k) * np + i] = f[6 + k] - f[k];
+        }
     }
 }
 
+
+#if defined(DM_USE_AVX2)
+/* dm__triangle_d2 for triangles i .. i + 3 of an AVX2 table (soa, rows of np) and the point P:
+   their squared distances, with (u, v) and va + vb + vc (not positive: degenerate) into *t. Each
+   lane does dm__triangle_d2's operations in its order (the region's one quotient; no
+   contraction), so the same bits. */
+static __m256d dm__sh_d2x4(const double *soa, size_t np, size_t i, const __m256d P[3], __m256d *u, __m256d *v,
+                           __m256d *t)
+{
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+    __m256d A[3], AB[3], AC[3], ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, e43, e56, num, den, r, m;
+    __m256d mA, mB, mAB, mC, mAC, mBC, dist = zero;
+    int k;
+    for (k = 0; k < 3; k++) {
+        A[k] = _mm256_loadu_pd(soa + (size_t)k * np + i);
+        AB[k] = _mm256_loadu_pd(soa + (size_t)(9 + k) * np + i);
+        AC[k] = _mm256_loadu_pd(soa + (size_t)(12 + k) * np + i);
+        ap[k] = _mm256_sub_pd(P[k], A[k]);
+        bp[k] = _mm256_sub_pd(P[k], _mm256_loadu_pd(soa + (size_t)(3 + k) * np + i));
+        cp[k] = _mm256_sub_pd(P[k], _mm256_loadu_pd(soa + (size_t)(6 + k) * np + i));
+    }
+#define DM__DOT4(x, y) \
+    _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x[0], y[0]), _mm256_mul_pd(x[1], y[1])), _mm256_mul_pd(x[2], y[2]))
+#define DM__LE(x, y) _mm256_cmp_pd(x, y, _CMP_LE_OQ)
+#define DM__GE(x, y) _mm256_cmp_pd(x, y, _CMP_GE_OQ)
+    d1 = DM__DOT4(AB, ap); d2 = DM__DOT4(AC, ap); d3 = DM__DOT4(AB, bp);
+    d4 = DM__DOT4(AC, bp); d5 = DM__DOT4(AB, cp); d6 = DM__DOT4(AC, cp);
+    vc = _mm256_sub_pd(_mm256_mul_pd(d1, d4), _mm256_mul_pd(d3, d2));
+    vb = _mm256_sub_pd(_mm256_mul_pd(d5, d2), _mm256_mul_pd(d1, d6));
+    va = _mm256_sub_pd(_mm256_mul_pd(d3, d6), _mm256_mul_pd(d5, d4));
+    *t = _mm256_add_pd(_mm256_add_pd(va, vb), vc);
+    e43 = _mm256_sub_pd(d4, d3);
+    e56 = _mm256_sub_pd(d5, d6);
+    mA = _mm256_and_pd(DM__LE(d1, zero), DM__LE(d2, zero)); /* the regions, as dm__triangle_d2 asks */
+    mB = _mm256_and_pd(DM__GE(d3, zero), DM__LE(d4, d3));
+    mAB = _mm256_and_pd(DM__LE(vc, zero), _mm256_and_pd(DM__GE(d1, zero), DM__LE(d3, zero)));
+    mC = _mm256_and_pd(DM__GE(d6, zero), DM__LE(d5, d6));
+    mAC = _mm256_and_pd(DM__LE(vb, zero), _mm256_and_pd(DM__GE(d2, zero), DM__LE(d6, zero)));
+    mBC = _mm256_and_pd(DM__LE(va, zero), _mm256_and_pd(DM__GE(e43, zero), DM__GE(e56, zero)));
+#undef DM__DOT4
+#undef DM__LE
+#undef DM__GE
+    mB = _mm256_andnot_pd(mA, mB); /* a later region only where no earlier one holds */
+    mAB = _mm256_andnot_pd(_mm256_or_pd(mA, mB), mAB);
+    m = _mm256_or_pd(_mm256_or_pd(mA, mB), mAB);
+    mC = _mm256_andnot_pd(m, mC);
+    m = _mm256_or_pd(m, mC);
+    mAC = _mm256_andnot_pd(m, mAC);
+    m = _mm256_or_pd(m, mAC);
+    mBC = _mm256_andnot_pd(m, mBC);
+    m = _mm256_or_pd(m, mBC); /* any edge or vertex region; else inside: 1 / t */
+    num = _mm256_blendv_pd(one, e43, mBC);
+    den = _mm256_blendv_pd(*t, _mm256_add_pd(e43, e56), mBC);
+    num = _mm256_blendv_pd(num, d2, mAC);
+    den = _mm256_blendv_pd(den, _mm256_sub_pd(d2, d6), mAC);
+    num = _mm256_blendv_pd(num, d1, mAB);
+    den = _mm256_blendv_pd(den, _mm256_sub_pd(d1, d3), mAB);
+    r = _mm256_div_pd(num, den);
+    *u = _mm256_blendv_pd(_mm256_mul_pd(vb, r), zero, m);
+    *v = _mm256_blendv_pd(_mm256_mul_pd(vc, r), zero, m);
+    *u = _mm256_blendv_pd(_mm256_blendv_pd(*u, one, mB), r, mAB);
+    *u = _mm256_blendv_pd(*u, _mm256_sub_pd(one, r), mBC);
+    *v = _mm256_blendv_pd(_mm256_blendv_pd(_mm256_blendv_pd(*v, one, mC), r, mAC), r, mBC);
+    for (k = 0; k < 3; k++) {
+        __m256d q = _mm256_add_pd(_mm256_add_pd(A[k], _mm256_mul_pd(*u, AB[k])), _mm256_mul_pd(*v, AC[k]));
+        __m256d w = _mm256_sub_pd(P[k], q);
+        dist = k == 0 ? _mm256_mul_pd(w, w) : _mm256_add_pd(dist, _mm256_mul_pd(w, w));
+    }
+    return dist;
+}
+
+/* dm__sh_nearest with AVX2 (soa from dm__sh_tris; best: max_dist squared, or DBL_MAX): every
+   triangle's distance (dm__sh_d2x4; a degenerate one's from dm__triangle_d2 itself). No bound
+   skips any (the scalar search skips only triangles farther than its best), so the answer is the
+   same: the nearest, of equally near ones the first. */
+static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n, const double p[3], double best,
+                                  double *d2best, double *bu, double *bv)
+{
+    size_t i, np = (n + 3) & ~(size_t)3, bt = (size_t)-1;
+    const __m256d zero = _mm256_setzero_pd(), four = _mm256_set1_pd(4.0), nn = _mm256_set1_pd((double)n);
+    __m256d P[3], bd = _mm256_set1_pd(HUGE_VAL), bi = _mm256_set1_pd(-1.0), bU = zero, bV = zero;
+    __m256d idx = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+    double dd, id;
+    int k, l;
+    for (k = 0; k < 3; k++) P[k] = _mm256_set1_pd(p[k]);
+    for (i = 0; i < np; i += 4) {
+        __m256d u, v, t, m, live = _mm256_cmp_pd(idx, nn, _CMP_LT_OQ); /* not the padding */
+        __m256d dist = dm__sh_d2x4(soa, np, i, P, &u, &v, &t);
+        int deg = _mm256_movemask_pd(_mm256_andnot_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), live));
+        if (deg) { /* degenerate lanes: the edges' nearest, as dm__triangle_d2 */
+            double dl[4], ul[4], vl[4];
+            _mm256_storeu_pd(dl, dist); _mm256_storeu_pd(ul, u); _mm256_storeu_pd(vl, v);
+            for (l = 0; l < 4; l++)
+                if (deg >> l & 1) dl[l] = dm__triangle_d2(p, tf + 16 * (i + (size_t)l), ul + l, vl + l);
+            dist = _mm256_loadu_pd(dl); u = _mm256_loadu_pd(ul); v = _mm256_loadu_pd(vl);
+        }
+        m = _mm256_and_pd(_mm256_cmp_pd(dist, bd, _CMP_LT_OQ), live); /* strictly: of equally near ones the first */
+        bd = _mm256_blendv_pd(bd, dist, m);
+        bi = _mm256_blendv_pd(bi, idx, m);
+        bU = _mm256_blendv_pd(bU, u, m);
+        bV = _mm256_blendv_pd(bV, v, m);
+        idx = _mm256_add_pd(idx, four);
+    }
+    for (k = 0; k < 2; k++) { /* the lanes' best: the nearest, of equally near ones the first */
+        __m256d od = k ? _mm256_permute_pd(bd, 5) : _mm256_permute2f128_pd(bd, bd, 1);
+        __m256d oi = k ? _mm256_permute_pd(bi, 5) : _mm256_permute2f128_pd(bi, bi, 1);
+        __m256d ou = k ? _mm256_permute_pd(bU, 5) : _mm256_permute2f128_pd(bU, bU, 1);
+        __m256d ov = k ? _mm256_permute_pd(bV, 5) : _mm256_permute2f128_pd(bV, bV, 1);
+        __m256d take = _mm256_and_pd(_mm256_cmp_pd(od, bd, _CMP_EQ_OQ), _mm256_cmp_pd(oi, bi, _CMP_LT_OQ));
+        take = _mm256_or_pd(_mm256_cmp_pd(od, bd, _CMP_LT_OQ), take);
+        take = _mm256_and_pd(take, _mm256_cmp_pd(oi, zero, _CMP_GE_OQ));
+        bd = _mm256_blendv_pd(bd, od, take);
+        bi = _mm256_blendv_pd(bi, oi, take);
+        bU = _mm256_blendv_pd(bU, ou, take);
+        bV = _mm256_blendv_pd(bV, ov, take);
+    }
+    dd = _mm256_cvtsd_f64(bd);
+    id = _mm256_cvtsd_f64(bi);
+    if (id >= 0.0) bt = (size_t)id;
+    if (bt == (size_t)-1 || !(dd <= best)) { /* none within max_dist */
+        *bu = *bv = 0.0;
+        *d2best = best;
+        return (size_t)-1;
+    }
+    *bu = _mm256_cvtsd_f64(bU);
+    *bv = _mm256_cvtsd_f64(bV);
+    *d2best = dd;
+    return bt;
+}
+#endif
+
 /* The nearest to p of n one-ring triangles (tf from dm__sh_tris) closer than max_dist: its index
    ((size_t)-1 if none), with the squared distance and the barycentric (u, v) of the closest point;
-   of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
-   first, so that the others are mostly skipped by their bounding spheres and planes; the answer
-   is the one a scan in order gives. */
-static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], double max_dist, size_t hint,
-                             double *d2best, double *bu, double *bv)
+   of equally near ones the first (with DM_USE_AVX2 and soa: dm__sh_nearest_avx2). Triangle
+   `hint` (a neighbour's answer, or (size_t)-1) is tried first, so that the others are mostly
+   skipped by their bounding spheres and planes; the answer is the one a scan in order gives. */
+static size_t dm__sh_nearest(const double *tf, const double *soa, size_t n, const double p[3], double max_dist,
+                             size_t hint, double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, k, bt = (size_t)-1;
+#if defined(DM_USE_AVX2)
+    if (soa) return dm__sh_nearest_avx2(tf, soa, n, p, best, d2best, bu, bv);
+#else
+    (void)soa;
+#endif
     *bu = *bv = 0.0;
     for (k = 0; k <= n; k++) {
         const double *f;
@@ -9142,12 +9292,13 @@ static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
    is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
-static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double p[3], size_t *hint)
+static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double *soa, const double p[3],
+                                size_t *hint)
 {
     double d2, bu, bv;
     uint32_t fv[3];
     int nf;
-    size_t bt = dm__sh_nearest(tf, c->triangle_count, p, DBL_MAX, *hint, &d2, &bu, &bv);
+    size_t bt = dm__sh_nearest(tf, soa, c->triangle_count, p, DBL_MAX, *hint, &d2, &bu, &bv);
     if (bt == (size_t)-1) return -DBL_MAX;
     *hint = bt;
     dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
@@ -9226,9 +9377,25 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
         in->tri_new = nm;
         in->tri_cap = 2 * (no + nr);
     }
+    in->soa_old = in->soa_new = NULL;
+#if defined(DM_USE_AVX2)
+    if (DM__SH_SOA * (no + nr + 6) > in->soa_cap) {
+        int of = 0;
+        double *ns = (double *)dm__alloc_array(&sh->allocator, 2 * DM__SH_SOA * (no + nr + 6), sizeof(double), &of);
+        if (ns) {
+            sh->allocator.free(sh->allocator.user, in->soa);
+            in->soa = ns;
+            in->soa_cap = 2 * DM__SH_SOA * (no + nr + 6);
+        }
+    }
+    if (DM__SH_SOA * (no + nr + 6) <= in->soa_cap) {
+        in->soa_old = in->soa;
+        in->soa_new = in->soa + DM__SH_SOA * ((no + 3) & ~(size_t)3);
+    }
+#endif
     dm__load3(c->positions, c->keep, xk);
-    dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
-    dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
+    dm__sh_tris(c, c->old_triangles, no, xk, in->tri, in->soa_old);
+    dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no, in->soa_new);
     dm__sh_old_to_new(in, c);
     return 1;
 }
@@ -9267,7 +9434,7 @@ static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, cons
     if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow || pp[1] > hi[1] + grow ||
         pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
         return 0;
-    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
+    bt = dm__sh_nearest(in->tri, in->soa_old, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
     if (bt != (size_t)-1) *hint = bt;
     if (bt == (size_t)-1 || sqrt(d2) > b->reach || !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
         return 0; /* beyond reach, or closest to the ring's rim */
@@ -9320,7 +9487,7 @@ static int dm__sh_plane_of(const dm__sh_internal *in, const dm_collapse *c, dm__
     out[3] = -DBL_MAX;
     dm__load3(pt->p, 0, pp);
     if (in->tri_new[pt->bt] != UINT32_MAX) *hint = in->tri_new[pt->bt]; /* the same answer, sooner */
-    t = dm__sh_nearest(in->tri + 16 * no, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
+    t = dm__sh_nearest(in->tri + 16 * no, in->soa_new, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
     pt->nt = t == (size_t)-1 ? UINT32_MAX : (uint32_t)t;
     if (t == (size_t)-1) return 0;
     *hint = t;
@@ -9516,13 +9683,13 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
                           double outside, double slack)
 {
     size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
-    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
+    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no, in->soa_new);
     for (i = 0; i < npts; i++) {
         const dm__sh_pt *pt = in->pts + i;
         double pp[3], sd;
         dm__load3(pt->p, 0, pp);
         if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
-        sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
+        sd = dm__sh_signed_new(c, in->tri + 16 * no, in->soa_new, pp, &hint);
         if (sd > outside && sd > (double)dm__sh_old_signed(c, in->tri, pt) + slack) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
