@@ -9052,24 +9052,22 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
 
 
 #if defined(DM_USE_AVX2)
-/* dm__triangle_d2 for triangles i .. i + 3 of an AVX2 table (soa, rows of np) and the point P:
-   their squared distances, with (u, v) and va + vb + vc (not positive: degenerate) into *t. Each
-   lane does dm__triangle_d2's operations in its order (the region's one quotient; no
-   contraction), so the same bits. */
-static __m256d dm__sh_d2x4(const double *soa, size_t np, size_t i, const __m256d P[3], __m256d *u, __m256d *v,
-                           __m256d *t)
+/* dm__triangle_d2 in four lanes (four triangles and one point, or one triangle and four points):
+   corners A, B, C (AB = B - A and AC = C - A as dm__triangle_d2 takes them) and points P; the
+   squared distances, with (u, v) and va + vb + vc (not positive: degenerate) into *t. Each lane
+   does dm__triangle_d2's operations in its order (the region's one quotient; no contraction), so
+   the same bits. */
+DM__INLINE __m256d dm__sh_d2v(const __m256d A[3], const __m256d B[3], const __m256d C[3], const __m256d AB[3],
+                              const __m256d AC[3], const __m256d P[3], __m256d *u, __m256d *v, __m256d *t)
 {
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
-    __m256d A[3], AB[3], AC[3], ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, e43, e56, num, den, r, m;
+    __m256d ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, e43, e56, num, den, r, m;
     __m256d mA, mB, mAB, mC, mAC, mBC, dist = zero;
     int k;
     for (k = 0; k < 3; k++) {
-        A[k] = _mm256_loadu_pd(soa + (size_t)k * np + i);
-        AB[k] = _mm256_loadu_pd(soa + (size_t)(9 + k) * np + i);
-        AC[k] = _mm256_loadu_pd(soa + (size_t)(12 + k) * np + i);
         ap[k] = _mm256_sub_pd(P[k], A[k]);
-        bp[k] = _mm256_sub_pd(P[k], _mm256_loadu_pd(soa + (size_t)(3 + k) * np + i));
-        cp[k] = _mm256_sub_pd(P[k], _mm256_loadu_pd(soa + (size_t)(6 + k) * np + i));
+        bp[k] = _mm256_sub_pd(P[k], B[k]);
+        cp[k] = _mm256_sub_pd(P[k], C[k]);
     }
 #define DM__DOT4(x, y) \
     _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x[0], y[0]), _mm256_mul_pd(x[1], y[1])), _mm256_mul_pd(x[2], y[2]))
@@ -9122,7 +9120,7 @@ static __m256d dm__sh_d2x4(const double *soa, size_t np, size_t i, const __m256d
 }
 
 /* dm__sh_nearest with AVX2 (soa from dm__sh_tris; best: max_dist squared, or DBL_MAX): every
-   triangle's distance (dm__sh_d2x4; a degenerate one's from dm__triangle_d2 itself). No bound
+   triangle's distance (dm__sh_d2v; a degenerate one's from dm__triangle_d2 itself). No bound
    skips any (the scalar search skips only triangles farther than its best), so the answer is the
    same: the nearest, of equally near ones the first. */
 static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n, const double p[3], double best,
@@ -9137,8 +9135,17 @@ static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n,
     for (k = 0; k < 3; k++) P[k] = _mm256_set1_pd(p[k]);
     for (i = 0; i < np; i += 4) {
         __m256d u, v, t, m, live = _mm256_cmp_pd(idx, nn, _CMP_LT_OQ); /* not the padding */
-        __m256d dist = dm__sh_d2x4(soa, np, i, P, &u, &v, &t);
-        int deg = _mm256_movemask_pd(_mm256_andnot_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), live));
+        __m256d A[3], B[3], C[3], AB[3], AC[3], dist;
+        int deg;
+        for (k = 0; k < 3; k++) {
+            A[k] = _mm256_loadu_pd(soa + (size_t)k * np + i);
+            B[k] = _mm256_loadu_pd(soa + (size_t)(3 + k) * np + i);
+            C[k] = _mm256_loadu_pd(soa + (size_t)(6 + k) * np + i);
+            AB[k] = _mm256_loadu_pd(soa + (size_t)(9 + k) * np + i);
+            AC[k] = _mm256_loadu_pd(soa + (size_t)(12 + k) * np + i);
+        }
+        dist = dm__sh_d2v(A, B, C, AB, AC, P, &u, &v, &t);
+        deg = _mm256_movemask_pd(_mm256_andnot_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), live));
         if (deg) { /* degenerate lanes: the edges' nearest, as dm__triangle_d2 */
             double dl[4], ul[4], vl[4];
             _mm256_storeu_pd(dl, dist); _mm256_storeu_pd(ul, u); _mm256_storeu_pd(vl, v);
@@ -9178,6 +9185,52 @@ static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n,
     *bv = _mm256_cvtsd_f64(bV);
     *d2best = dd;
     return bt;
+}
+
+/* dm__sh_nearest for four points at once (p: 3 doubles each), one triangle of tf at a time in
+   the lanes' order, so each lane keeps the nearest, of equally near ones the first:
+   dm__sh_nearest's answers into bt, d2, bu and bv. */
+static void dm__sh_nearest4_avx2(const double *tf, size_t n, const double *p, double best, size_t bt[4],
+                                 double d2[4], double bu[4], double bv[4])
+{
+    const __m256d zero = _mm256_setzero_pd();
+    __m256d P[3], bd = _mm256_set1_pd(HUGE_VAL), bi = _mm256_set1_pd(-1.0), bU = zero, bV = zero;
+    double di[4], dd[4];
+    size_t i;
+    int k, l;
+    for (k = 0; k < 3; k++) P[k] = _mm256_set_pd(p[9 + k], p[6 + k], p[3 + k], p[k]);
+    for (i = 0; i < n; i++) {
+        const double *f = tf + 16 * i;
+        __m256d A[3], B[3], C[3], AB[3], AC[3], u, v, t, m, dist;
+        int deg;
+        for (k = 0; k < 3; k++) {
+            A[k] = _mm256_set1_pd(f[k]);
+            B[k] = _mm256_set1_pd(f[3 + k]);
+            C[k] = _mm256_set1_pd(f[6 + k]);
+            AB[k] = _mm256_set1_pd(f[3 + k] - f[k]);
+            AC[k] = _mm256_set1_pd(f[6 + k] - f[k]);
+        }
+        dist = dm__sh_d2v(A, B, C, AB, AC, P, &u, &v, &t);
+        deg = _mm256_movemask_pd(_mm256_cmp_pd(t, zero, _CMP_NGT_UQ));
+        if (deg) { /* degenerate lanes: the edges' nearest, as dm__triangle_d2 */
+            double dl[4], ul[4], vl[4];
+            _mm256_storeu_pd(dl, dist); _mm256_storeu_pd(ul, u); _mm256_storeu_pd(vl, v);
+            for (l = 0; l < 4; l++)
+                if (deg >> l & 1) dl[l] = dm__triangle_d2(p + 3 * l, f, ul + l, vl + l);
+            dist = _mm256_loadu_pd(dl); u = _mm256_loadu_pd(ul); v = _mm256_loadu_pd(vl);
+        }
+        m = _mm256_cmp_pd(dist, bd, _CMP_LT_OQ); /* strictly: of equally near ones the first */
+        bd = _mm256_blendv_pd(bd, dist, m);
+        bi = _mm256_blendv_pd(bi, _mm256_set1_pd((double)i), m);
+        bU = _mm256_blendv_pd(bU, u, m);
+        bV = _mm256_blendv_pd(bV, v, m);
+    }
+    _mm256_storeu_pd(dd, bd); _mm256_storeu_pd(di, bi); _mm256_storeu_pd(bu, bU); _mm256_storeu_pd(bv, bV);
+    for (l = 0; l < 4; l++) {
+        bt[l] = di[l] >= 0.0 && dd[l] <= best ? (size_t)di[l] : (size_t)-1;
+        d2[l] = bt[l] == (size_t)-1 ? best : dd[l];
+        if (bt[l] == (size_t)-1) bu[l] = bv[l] = 0.0;
+    }
 }
 #endif
 
@@ -9305,6 +9358,19 @@ static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const do
     return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
 }
 
+#if defined(DM_USE_AVX2)
+/* the same, given p's nearest new triangle bt (dm__sh_nearest's answer) */
+static double dm__sh_signed_at(const dm_collapse *c, const double *tf, const double p[3], size_t bt, double d2,
+                               double bu, double bv)
+{
+    uint32_t fv[3];
+    int nf;
+    if (bt == (size_t)-1) return -DBL_MAX;
+    dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
+    return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
+}
+#endif
+
 /* The box the enclosure check gathers original vertices from: the proposed position and the
    old triangles, grown by a tenth of their span; reach is how far from the old triangles a
    vertex still counts (1.5 thicknesses, at most the span: deeper than the one-ring is wide only
@@ -9422,20 +9488,19 @@ static int dm__sh_push_pt(dm_shell *sh, dm__sh_internal *in, size_t npts, const 
    reach of the old triangles, its closest feature of them at keep or remove (not on the ring's
    rim)? 1 with pt filled (its nearest old triangle); *hint: the last point's nearest triangle, the
    next one is near it. */
-static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, uint32_t q,
-                           size_t *hint, dm__sh_pt *pt)
+static int dm__sh_in_box(const dm__sh_box *b, const double pp[3])
 {
-    const double *lo = b->lo, *hi = b->hi;
-    double pp[3], d2, bu, bv, grow = b->grow;
+    const double *lo = b->lo, *hi = b->hi, grow = b->grow;
+    return !(pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow || pp[1] > hi[1] + grow ||
+             pp[2] < lo[2] - grow || pp[2] > hi[2] + grow);
+}
+
+/* the rest of dm__sh_relevant, given q's nearest old triangle bt (dm__sh_nearest's answer) */
+static int dm__sh_relevant_at(const dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, uint32_t q,
+                              size_t bt, double d2, double bu, double bv, dm__sh_pt *pt)
+{
     uint32_t fv[3];
-    size_t bt;
     int nf;
-    dm__load3(in->cell_pos, q, pp);
-    if (pp[0] < lo[0] - grow || pp[0] > hi[0] + grow || pp[1] < lo[1] - grow || pp[1] > hi[1] + grow ||
-        pp[2] < lo[2] - grow || pp[2] > hi[2] + grow)
-        return 0;
-    bt = dm__sh_nearest(in->tri, in->soa_old, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
-    if (bt != (size_t)-1) *hint = bt;
     if (bt == (size_t)-1 || sqrt(d2) > b->reach || !dm__sh_feature(c, c->old_triangles, bt, bu, bv, 1, fv, &nf))
         return 0; /* beyond reach, or closest to the ring's rim */
     memcpy(pt->p, in->cell_pos + 3 * (size_t)q, sizeof pt->p);
@@ -9448,12 +9513,64 @@ static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, cons
     return 1;
 }
 
+static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, uint32_t q,
+                           size_t *hint, dm__sh_pt *pt)
+{
+    double pp[3], d2, bu, bv;
+    size_t bt;
+    dm__load3(in->cell_pos, q, pp);
+    if (!dm__sh_in_box(b, pp)) return 0;
+    bt = dm__sh_nearest(in->tri, in->soa_old, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
+    if (bt != (size_t)-1) *hint = bt;
+    return dm__sh_relevant_at(in, c, b, q, bt, d2, bu, bv, pt);
+}
+
+/* The box vertices waiting for their nearest old triangles (four at a time with DM_USE_AVX2). */
+typedef struct dm__sh_batch {
+    uint32_t q[4];
+    double p[4][3];
+    int n;
+    size_t hint;
+} dm__sh_batch;
+
+/* the batch's relevant vertices appended to in->pts (*npts of them), in the batch's order; 0 when
+   out of memory */
+static int dm__sh_flush(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b,
+                        dm__sh_batch *bt, size_t *npts)
+{
+    size_t t[4];
+    double d2[4], bu[4], bv[4], reach2 = b->reach < 1e150 ? b->reach * b->reach : DBL_MAX;
+    int j;
+#if defined(DM_USE_AVX2)
+    if (in->soa_old && bt->n > 0) {
+        for (j = bt->n; j < 4; j++) memcpy(bt->p[j], bt->p[0], sizeof bt->p[0]); /* lanes that do not count */
+        dm__sh_nearest4_avx2(in->tri, c->old_triangle_count, bt->p[0], reach2, t, d2, bu, bv);
+    } else
+#endif
+        for (j = 0; j < bt->n; j++) {
+            t[j] = dm__sh_nearest(in->tri, NULL, c->old_triangle_count, bt->p[j], b->reach, bt->hint, d2 + j, bu + j,
+                                  bv + j);
+            if (t[j] != (size_t)-1) bt->hint = t[j];
+        }
+    (void)reach2;
+    for (j = 0; j < bt->n; j++) {
+        dm__sh_pt pt;
+        if (!dm__sh_relevant_at(in, c, b, bt->q[j], t[j], d2[j], bu[j], bv[j], &pt)) continue;
+        if (!dm__sh_push_pt(sh, in, *npts, &pt)) return 0;
+        (*npts)++;
+    }
+    bt->n = 0;
+    return 1;
+}
+
 /* the relevant original vertices (dm__sh_relevant), from the grid cells of the box: *npts of them
    in in->pts; 0 when out of memory */
 static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c, const dm__sh_box *b, size_t *npts)
 {
-    size_t hint = (size_t)-1;
+    dm__sh_batch bt;
     int cl[3], ch[3], cx, cy, cz, k;
+    bt.n = 0;
+    bt.hint = (size_t)-1;
     for (k = 0; k < 3; k++) {
         cl[k] = dm__sh_coord(in, b->lo[k] - b->grow, k);
         ch[k] = dm__sh_coord(in, b->hi[k] + b->grow, k);
@@ -9464,33 +9581,42 @@ static int dm__sh_gather(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c
                 size_t cell = ((size_t)cz * (size_t)in->dim[1] + (size_t)cy) * (size_t)in->dim[0] + (size_t)cx;
                 uint32_t q;
                 for (q = in->cell_first[cell]; q < in->cell_first[cell + 1]; q++) {
-                    dm__sh_pt pt;
-                    if (!dm__sh_relevant(in, c, b, q, &hint, &pt)) continue;
-                    if (!dm__sh_push_pt(sh, in, *npts, &pt)) return 0;
-                    (*npts)++;
+                    dm__load3(in->cell_pos, q, bt.p[bt.n]);
+                    if (!dm__sh_in_box(b, bt.p[bt.n])) continue;
+                    bt.q[bt.n++] = q;
+                    if (bt.n == 4 && !dm__sh_flush(sh, in, c, b, &bt, npts)) return 0;
                 }
             }
-    return 1;
+    return dm__sh_flush(sh, in, c, b, &bt, npts);
 }
 
 /* The plane of relevant vertex pt, from its nearest new triangle (keep, u, w) at the proposed
    position (kept in its nt): through p, u and w, pushed out by 2 margins (4 doubles into out);
    keep must lie on its outer side. 0 when there is none: a void plane (zero normal, offset
    -DBL_MAX) that any position meets. *hint: the last point's nearest new triangle. */
+static int dm__sh_plane_at(const dm__sh_internal *in, const dm_collapse *c, dm__sh_pt *pt, size_t t, double out[4]);
 static int dm__sh_plane_of(const dm__sh_internal *in, const dm_collapse *c, dm__sh_pt *pt, size_t *hint, double out[4])
 {
-    double pp[3], pu[3], pw[3], d2, bu, bv, A[3], len;
+    double pp[3], d2, bu, bv;
     size_t t, no = c->old_triangle_count;
+    dm__load3(pt->p, 0, pp);
+    if (in->tri_new[pt->bt] != UINT32_MAX) *hint = in->tri_new[pt->bt]; /* the same answer, sooner */
+    t = dm__sh_nearest(in->tri + 16 * no, in->soa_new, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
+    if (t != (size_t)-1) *hint = t;
+    return dm__sh_plane_at(in, c, pt, t, out);
+}
+
+/* the rest of dm__sh_plane_of, given pt's nearest new triangle t (or (size_t)-1) */
+static int dm__sh_plane_at(const dm__sh_internal *in, const dm_collapse *c, dm__sh_pt *pt, size_t t, double out[4])
+{
+    double pp[3], pu[3], pw[3], A[3], len;
     int j, k;
     const uint32_t *tr;
     out[0] = out[1] = out[2] = 0.0;
     out[3] = -DBL_MAX;
     dm__load3(pt->p, 0, pp);
-    if (in->tri_new[pt->bt] != UINT32_MAX) *hint = in->tri_new[pt->bt]; /* the same answer, sooner */
-    t = dm__sh_nearest(in->tri + 16 * no, in->soa_new, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
     pt->nt = t == (size_t)-1 ? UINT32_MAX : (uint32_t)t;
     if (t == (size_t)-1) return 0;
-    *hint = t;
     tr = c->triangles + 3 * t;
     for (j = 0; j < 3 && tr[j] != c->keep; j++) {}
     if (j == 3) return 0;
@@ -9506,11 +9632,23 @@ static int dm__sh_plane_of(const dm__sh_internal *in, const dm_collapse *c, dm__
     return 1;
 }
 
-/* one plane per relevant vertex (dm__sh_plane_of), in their order: 4 doubles each into pl */
+/* one plane per relevant vertex (dm__sh_plane_of; with DM_USE_AVX2 four searches at a time), in
+   their order: 4 doubles each into pl */
 static void dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts, double *pl)
 {
-    size_t i, hint = (size_t)-1;
-    for (i = 0; i < npts; i++) dm__sh_plane_of(in, c, in->pts + i, &hint, pl + 4 * i);
+    size_t i = 0, hint = (size_t)-1;
+#if defined(DM_USE_AVX2)
+    if (in->soa_new)
+        for (; i + 4 <= npts; i += 4) {
+            double p4[4][3], d2[4], bu[4], bv[4];
+            size_t t[4];
+            int j;
+            for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
+            dm__sh_nearest4_avx2(in->tri + 16 * c->old_triangle_count, c->triangle_count, p4[0], DBL_MAX, t, d2, bu, bv);
+            for (j = 0; j < 4; j++) dm__sh_plane_at(in, c, in->pts + i + (size_t)j, t[j], pl + 4 * (i + (size_t)j));
+        }
+#endif
+    for (; i < npts; i++) dm__sh_plane_of(in, c, in->pts + i, &hint, pl + 4 * i);
 }
 
 /* The metric the enclosure projects in: the quadric's matrix plus this fraction of its mean
@@ -9683,13 +9821,29 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
                           double outside, double slack)
 {
     size_t i, no = c->old_triangle_count, nr = c->triangle_count, hint = (size_t)-1;
+#if defined(DM_USE_AVX2)
+    size_t t[4];
+    double p4[4][3], d2[4], bu[4], bv[4];
+#endif
     dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no, in->soa_new);
     for (i = 0; i < npts; i++) {
         const dm__sh_pt *pt = in->pts + i;
-        double pp[3], sd;
+        double pp[3], sd = 0.0;
+        int batched = 0;
         dm__load3(pt->p, 0, pp);
-        if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
-        sd = dm__sh_signed_new(c, in->tri + 16 * no, in->soa_new, pp, &hint);
+#if defined(DM_USE_AVX2)
+        batched = in->soa_new && i - i % 4 + 4 <= npts; /* in a whole four: their searches at once */
+        if (batched && i % 4 == 0) {
+            int j;
+            for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
+            dm__sh_nearest4_avx2(in->tri + 16 * no, nr, p4[0], DBL_MAX, t, d2, bu, bv);
+        }
+        if (batched) sd = dm__sh_signed_at(c, in->tri + 16 * no, pp, t[i % 4], d2[i % 4], bu[i % 4], bv[i % 4]);
+#endif
+        if (!batched) {
+            if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
+            sd = dm__sh_signed_new(c, in->tri + 16 * no, in->soa_new, pp, &hint);
+        }
         if (sd > outside && sd > (double)dm__sh_old_signed(c, in->tri, pt) + slack) {
             sh->vetoed_enclose++;
             return DM_COLLAPSE_VETO;
