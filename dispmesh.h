@@ -9187,22 +9187,34 @@ static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n,
     return bt;
 }
 
-/* dm__sh_nearest for four points at once (p: 3 doubles each), one triangle of tf at a time in
-   the lanes' order, so each lane keeps the nearest, of equally near ones the first:
-   dm__sh_nearest's answers into bt, d2, bu and bv. */
-static void dm__sh_nearest4_avx2(const double *tf, size_t n, const double *p, double best, size_t bt[4],
+/* dm__sh_nearest for four points at once (p: 3 doubles each), one triangle of tf in the four
+   lanes at a time, triangle `hint` first: each lane keeps the nearest, of equally near ones the
+   first, skipping (as dm__sh_nearest does) the triangles whose bounding sphere lies beyond every
+   lane's best. dm__sh_nearest's answers into bt, d2, bu and bv. */
+static void dm__sh_nearest4_avx2(const double *tf, size_t n, const double *p, double best, size_t hint, size_t bt[4],
                                  double d2[4], double bu[4], double bv[4])
 {
-    const __m256d zero = _mm256_setzero_pd();
-    __m256d P[3], bd = _mm256_set1_pd(HUGE_VAL), bi = _mm256_set1_pd(-1.0), bU = zero, bV = zero;
+    const __m256d zero = _mm256_setzero_pd(), rb0 = _mm256_set1_pd(best < DBL_MAX ? sqrt(best) : 1e150);
+    __m256d P[3], bd = _mm256_set1_pd(HUGE_VAL), bi = _mm256_set1_pd(-1.0), bU = zero, bV = zero, rb = rb0;
     double di[4], dd[4];
-    size_t i;
+    size_t i, j;
     int k, l;
     for (k = 0; k < 3; k++) P[k] = _mm256_set_pd(p[9 + k], p[6 + k], p[3 + k], p[k]);
-    for (i = 0; i < n; i++) {
-        const double *f = tf + 16 * i;
-        __m256d A[3], B[3], C[3], AB[3], AC[3], u, v, t, m, dist;
+    for (j = 0; j <= n; j++) {
+        const double *f;
+        __m256d A[3], B[3], C[3], AB[3], AC[3], u, v, t, m, dist, iv, cs, e;
         int deg;
+        if (j == 0 && !(hint < n)) continue;
+        i = j == 0 ? hint : j - 1;
+        if (j > 0 && i == hint) continue;
+        f = tf + 16 * i;
+        cs = zero;
+        for (k = 0; k < 3; k++) {
+            e = _mm256_sub_pd(P[k], _mm256_set1_pd(f[9 + k]));
+            cs = k == 0 ? _mm256_mul_pd(e, e) : _mm256_add_pd(cs, _mm256_mul_pd(e, e));
+        }
+        e = _mm256_add_pd(rb, _mm256_set1_pd(f[12]));
+        if (_mm256_movemask_pd(_mm256_cmp_pd(cs, _mm256_mul_pd(e, e), _CMP_GT_OQ)) == 15) continue;
         for (k = 0; k < 3; k++) {
             A[k] = _mm256_set1_pd(f[k]);
             B[k] = _mm256_set1_pd(f[3 + k]);
@@ -9219,11 +9231,15 @@ static void dm__sh_nearest4_avx2(const double *tf, size_t n, const double *p, do
                 if (deg >> l & 1) dl[l] = dm__triangle_d2(p + 3 * l, f, ul + l, vl + l);
             dist = _mm256_loadu_pd(dl); u = _mm256_loadu_pd(ul); v = _mm256_loadu_pd(vl);
         }
-        m = _mm256_cmp_pd(dist, bd, _CMP_LT_OQ); /* strictly: of equally near ones the first */
+        iv = _mm256_set1_pd((double)i);
+        m = _mm256_and_pd(_mm256_cmp_pd(dist, bd, _CMP_EQ_OQ), _mm256_cmp_pd(iv, bi, _CMP_LT_OQ));
+        m = _mm256_or_pd(_mm256_cmp_pd(dist, bd, _CMP_LT_OQ), m); /* nearer, or as near and first */
+        if (!_mm256_movemask_pd(m)) continue;
         bd = _mm256_blendv_pd(bd, dist, m);
-        bi = _mm256_blendv_pd(bi, _mm256_set1_pd((double)i), m);
+        bi = _mm256_blendv_pd(bi, iv, m);
         bU = _mm256_blendv_pd(bU, u, m);
         bV = _mm256_blendv_pd(bV, v, m);
+        rb = _mm256_min_pd(_mm256_sqrt_pd(bd), rb0);
     }
     _mm256_storeu_pd(dd, bd); _mm256_storeu_pd(di, bi); _mm256_storeu_pd(bu, bU); _mm256_storeu_pd(bv, bV);
     for (l = 0; l < 4; l++) {
@@ -9544,7 +9560,8 @@ static int dm__sh_flush(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c,
 #if defined(DM_USE_AVX2)
     if (in->soa_old && bt->n > 0) {
         for (j = bt->n; j < 4; j++) memcpy(bt->p[j], bt->p[0], sizeof bt->p[0]); /* lanes that do not count */
-        dm__sh_nearest4_avx2(in->tri, c->old_triangle_count, bt->p[0], reach2, t, d2, bu, bv);
+        dm__sh_nearest4_avx2(in->tri, c->old_triangle_count, bt->p[0], reach2, bt->hint, t, d2, bu, bv);
+        if (t[bt->n - 1] != (size_t)-1) bt->hint = t[bt->n - 1];
     } else
 #endif
         for (j = 0; j < bt->n; j++) {
@@ -9644,7 +9661,9 @@ static void dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts
             size_t t[4];
             int j;
             for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
-            dm__sh_nearest4_avx2(in->tri + 16 * c->old_triangle_count, c->triangle_count, p4[0], DBL_MAX, t, d2, bu, bv);
+            hint = in->tri_new[in->pts[i].bt]; /* the same answer, sooner */
+            dm__sh_nearest4_avx2(in->tri + 16 * c->old_triangle_count, c->triangle_count, p4[0], DBL_MAX, hint, t, d2,
+                                 bu, bv);
             for (j = 0; j < 4; j++) dm__sh_plane_at(in, c, in->pts + i + (size_t)j, t[j], pl + 4 * (i + (size_t)j));
         }
 #endif
@@ -9836,7 +9855,7 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
         if (batched && i % 4 == 0) {
             int j;
             for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
-            dm__sh_nearest4_avx2(in->tri + 16 * no, nr, p4[0], DBL_MAX, t, d2, bu, bv);
+            dm__sh_nearest4_avx2(in->tri + 16 * no, nr, p4[0], DBL_MAX, pt->nt, t, d2, bu, bv);
         }
         if (batched) sd = dm__sh_signed_at(c, in->tri + 16 * no, pp, t[i % 4], d2[i % 4], bu[i % 4], bv[i % 4]);
 #endif
