@@ -158,7 +158,8 @@
      OPTIONS (dm_shell_options). thickness (0 = 2% of the bounding-box diagonal); steps (0 = 8);
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
-     MEMORY. About 68 bytes per original vertex, a copy of the original and its BVH; while
+     MEMORY. About 68 bytes per original vertex and 24 per triangle, a copy of the original, its
+     BVH and its face normals; while
      dm_shell_grow runs, about 100 per fragment besides; the constraint 100 per original vertex
      near the widest candidate, 340 per triangle of the widest one-ring, 32 KB of kept proofs.
      ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
@@ -8316,6 +8317,8 @@ typedef struct dm__sh_internal {
     double margin;       /* how far outside a plane counts as outside (world units) */
     double *scratch;     /* planes, their normals in the metric's frame, one-ring normals */
     size_t scratch_cap;  /* in doubles */
+    double *fnrm;        /* per triangle of the original: its unit normal (dm__sh_plane), NaN where
+                            it has none */
     double *vsum;        /* per vertex: the angle-weighted normal sum of the simplified mesh, kept
                             by dm_shell_collapsed */
     size_t accepted, collapsed; /* candidates allowed or moved; dm_shell_collapsed calls (this run) */
@@ -8363,6 +8366,7 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->scratch);
         a.free(a.user, in->pts);
         a.free(a.user, in->vsum);
+        a.free(a.user, in->fnrm);
         a.free(a.user, in->tri);
         a.free(a.user, in->tri_new);
         a.free(a.user, in->soa);
@@ -8459,8 +8463,10 @@ static dm_result dm__sh_alloc(dm__sh_run *r)
     return DM_OK;
 }
 
-/* the BVH over the original, its vertex normals (and their sums, kept for dm_shell_collapsed),
-   and whether it is open (an edge without a consistently oriented twin) */
+static int dm__sh_plane(const double *p0, const double *p1, const double *p2, double n[3]);
+
+/* the BVH over the original, its face and vertex normals (and the vertex normals' sums, kept for
+   dm_shell_collapsed), and whether it is open (an edge without a consistently oriented twin) */
 static dm_result dm__sh_normals(dm__sh_run *r)
 {
     dm__sh_internal *in = r->in;
@@ -8481,8 +8487,15 @@ static dm_result dm__sh_normals(dm__sh_run *r)
     if (!r->acc || !e || !twin || !twin_he || !r->stopped) return dm__scratch_fail(&r->sc);
     dm__vertex_normals(r->pos, nv, r->idx, nt, r->acc, r->sh->normals);
     in->vsum = (double *)dm__alloc_array(&r->a, 3 * nv, sizeof(double), &r->sc.overflow);
-    if (!in->vsum) return dm__scratch_fail(&r->sc);
+    in->fnrm = (double *)dm__alloc_array(&r->a, 3 * nt, sizeof(double), &r->sc.overflow);
+    if (!in->vsum || !in->fnrm) return dm__scratch_fail(&r->sc);
     memcpy(in->vsum, r->acc, 3 * nv * sizeof(double));
+    for (i = 0; i < nt; i++) { /* the overlap rays ask which side of it they meet, many times */
+        double q[3][3];
+        int k;
+        for (k = 0; k < 3; k++) dm__load3(r->pos, r->idx[3 * i + (size_t)k], q[k]);
+        if (!dm__sh_plane(q[0], q[1], q[2], in->fnrm + 3 * i)) in->fnrm[3 * i] = NAN;
+    }
     dm__twins(r->idx, nt, e, twin, twin_he);
     for (i = 0; i < 3 * nt && !in->open; i++) in->open = twin[i] == DM_NO_HIT;
     return DM_OK;
@@ -10049,11 +10062,8 @@ static void dm__sh_sample(const double p[3][3], const double *vn9, const double 
    across), 0 when it is degenerate. */
 static int dm__sh_side(const dm__sh_internal *in, uint32_t tri, const double n[3])
 {
-    const uint32_t *ot = in->idx + 3 * (size_t)tri;
-    double q[3][3], fn[3];
-    int k;
-    for (k = 0; k < 3; k++) dm__load3(in->pos, ot[k], q[k]);
-    if (!dm__sh_plane(q[0], q[1], q[2], fn)) return 0;
+    const double *fn = in->fnrm + 3 * (size_t)tri;
+    if (fn[0] != fn[0]) return 0; /* no normal */
     return dm__dot3(fn, n) > 0.0 ? 1 : -1;
 }
 
