@@ -8330,9 +8330,6 @@ typedef struct dm__sh_internal {
     uint32_t *tri_new;   /* per old triangle: the new one on the same two other corners (or
                             UINT32_MAX), a first guess for the nearest new triangle */
     size_t tri_cap;      /* in triangles */
-    double *soa;         /* with DM_USE_AVX2: the same tables by coordinate (DM__SH_SOA) */
-    size_t soa_cap;      /* in doubles */
-    double *soa_old, *soa_new; /* into soa: the old and the new triangles' (NULL: the scalar search) */
     /* a uniform grid of the original's (referenced) vertices */
     double lo[3], cell;
     int dim[3];
@@ -8369,7 +8366,6 @@ DMDEF void dm_shell_free(dm_shell *shell)
         a.free(a.user, in->fnrm);
         a.free(a.user, in->tri);
         a.free(a.user, in->tri_new);
-        a.free(a.user, in->soa);
         a.free(a.user, in->proof);
         a.free(a.user, in->cell_first);
         a.free(a.user, in->cell_pos);
@@ -9028,17 +9024,13 @@ static int dm__sh_in_shell(const dm_shell *sh, const dm__sh_internal *in, const 
 }
 
 /* Fills 16 floats per triangle (its corners, keep at x, a bounding sphere, the unit normal or 0)
-   into out, and into soa (unless NULL) the corners by coordinate for the AVX2 search. (A table of
-   doubles holding these float values would be as good, but GCC 12.2's SLP vectoriser drops
-   (double)(float) round trips from such stores: the bits would then depend on the compiler.) */
-#define DM__SH_SOA 15 /* rows: a, b, c, b - a, c - a (3 each), each of n rounded up to 4 doubles */
-static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out,
-                        double *soa)
+   into out. (A table of doubles holding these float values would be as good, but GCC 12.2's SLP
+   vectoriser drops (double)(float) round trips from such stores: the bits would then depend on
+   the compiler.) */
+static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, const double x[3], double *out)
 {
-    size_t i, np = (n + 3) & ~(size_t)3;
+    size_t i;
     int j, k;
-    for (i = n; soa && i < np; i++)
-        for (j = 0; j < DM__SH_SOA; j++) soa[(size_t)j * np + i] = 0.0;
     for (i = 0; i < n; i++) {
         double *f = out + 16 * i;
         double p[3][3], r2 = 0.0, n[3];
@@ -9055,18 +9047,13 @@ static void dm__sh_tris(const dm_collapse *c, const uint32_t *tris, size_t n, co
         f[12] = (float)(sqrt(r2) * (1.0 + 1e-6)) + 1e-30f;
         if (!dm__sh_plane(p[0], p[1], p[2], n)) n[0] = n[1] = n[2] = 0.0;
         for (k = 0; k < 3; k++) f[13 + k] = (float)n[k];
-        for (j = 0; soa && j < 9; j++) soa[(size_t)j * np + i] = f[j];
-        for (k = 0; soa && k < 3; k++) {
-            soa[(size_t)(9 + k) * np + i] = f[3 + k] - f[k];
-            soa[(size_t)(12 + k) * np + i] = f[6 + k] - f[k];
-        }
     }
 }
 
 
 #if defined(DM_USE_AVX2)
-/* dm__triangle_d2 in four lanes (four triangles and one point, or one triangle and four points):
-   corners A, B, C (AB = B - A and AC = C - A as dm__triangle_d2 takes them) and points P; the
+/* dm__triangle_d2 in four lanes (one triangle, four points): corners A, B, C (AB = B - A and
+   AC = C - A as dm__triangle_d2 takes them) and points P; the
    squared distances, with (u, v) and va + vb + vc (not positive: degenerate) into *t. Each lane
    does dm__triangle_d2's operations in its order (the region's one quotient; no contraction), so
    the same bits. */
@@ -9130,74 +9117,6 @@ DM__INLINE __m256d dm__sh_d2v(const __m256d A[3], const __m256d B[3], const __m2
         dist = k == 0 ? _mm256_mul_pd(w, w) : _mm256_add_pd(dist, _mm256_mul_pd(w, w));
     }
     return dist;
-}
-
-/* dm__sh_nearest with AVX2 (soa from dm__sh_tris; best: max_dist squared, or DBL_MAX): every
-   triangle's distance (dm__sh_d2v; a degenerate one's from dm__triangle_d2 itself). No bound
-   skips any (the scalar search skips only triangles farther than its best), so the answer is the
-   same: the nearest, of equally near ones the first. */
-static size_t dm__sh_nearest_avx2(const double *tf, const double *soa, size_t n, const double p[3], double best,
-                                  double *d2best, double *bu, double *bv)
-{
-    size_t i, np = (n + 3) & ~(size_t)3, bt = (size_t)-1;
-    const __m256d zero = _mm256_setzero_pd(), four = _mm256_set1_pd(4.0), nn = _mm256_set1_pd((double)n);
-    __m256d P[3], bd = _mm256_set1_pd(HUGE_VAL), bi = _mm256_set1_pd(-1.0), bU = zero, bV = zero;
-    __m256d idx = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
-    double dd, id;
-    int k, l;
-    for (k = 0; k < 3; k++) P[k] = _mm256_set1_pd(p[k]);
-    for (i = 0; i < np; i += 4) {
-        __m256d u, v, t, m, live = _mm256_cmp_pd(idx, nn, _CMP_LT_OQ); /* not the padding */
-        __m256d A[3], B[3], C[3], AB[3], AC[3], dist;
-        int deg;
-        for (k = 0; k < 3; k++) {
-            A[k] = _mm256_loadu_pd(soa + (size_t)k * np + i);
-            B[k] = _mm256_loadu_pd(soa + (size_t)(3 + k) * np + i);
-            C[k] = _mm256_loadu_pd(soa + (size_t)(6 + k) * np + i);
-            AB[k] = _mm256_loadu_pd(soa + (size_t)(9 + k) * np + i);
-            AC[k] = _mm256_loadu_pd(soa + (size_t)(12 + k) * np + i);
-        }
-        dist = dm__sh_d2v(A, B, C, AB, AC, P, &u, &v, &t);
-        deg = _mm256_movemask_pd(_mm256_andnot_pd(_mm256_cmp_pd(t, zero, _CMP_GT_OQ), live));
-        if (deg) { /* degenerate lanes: the edges' nearest, as dm__triangle_d2 */
-            double dl[4], ul[4], vl[4];
-            _mm256_storeu_pd(dl, dist); _mm256_storeu_pd(ul, u); _mm256_storeu_pd(vl, v);
-            for (l = 0; l < 4; l++)
-                if (deg >> l & 1) dl[l] = dm__triangle_d2(p, tf + 16 * (i + (size_t)l), ul + l, vl + l);
-            dist = _mm256_loadu_pd(dl); u = _mm256_loadu_pd(ul); v = _mm256_loadu_pd(vl);
-        }
-        m = _mm256_and_pd(_mm256_cmp_pd(dist, bd, _CMP_LT_OQ), live); /* strictly: of equally near ones the first */
-        bd = _mm256_blendv_pd(bd, dist, m);
-        bi = _mm256_blendv_pd(bi, idx, m);
-        bU = _mm256_blendv_pd(bU, u, m);
-        bV = _mm256_blendv_pd(bV, v, m);
-        idx = _mm256_add_pd(idx, four);
-    }
-    for (k = 0; k < 2; k++) { /* the lanes' best: the nearest, of equally near ones the first */
-        __m256d od = k ? _mm256_permute_pd(bd, 5) : _mm256_permute2f128_pd(bd, bd, 1);
-        __m256d oi = k ? _mm256_permute_pd(bi, 5) : _mm256_permute2f128_pd(bi, bi, 1);
-        __m256d ou = k ? _mm256_permute_pd(bU, 5) : _mm256_permute2f128_pd(bU, bU, 1);
-        __m256d ov = k ? _mm256_permute_pd(bV, 5) : _mm256_permute2f128_pd(bV, bV, 1);
-        __m256d take = _mm256_and_pd(_mm256_cmp_pd(od, bd, _CMP_EQ_OQ), _mm256_cmp_pd(oi, bi, _CMP_LT_OQ));
-        take = _mm256_or_pd(_mm256_cmp_pd(od, bd, _CMP_LT_OQ), take);
-        take = _mm256_and_pd(take, _mm256_cmp_pd(oi, zero, _CMP_GE_OQ));
-        bd = _mm256_blendv_pd(bd, od, take);
-        bi = _mm256_blendv_pd(bi, oi, take);
-        bU = _mm256_blendv_pd(bU, ou, take);
-        bV = _mm256_blendv_pd(bV, ov, take);
-    }
-    dd = _mm256_cvtsd_f64(bd);
-    id = _mm256_cvtsd_f64(bi);
-    if (id >= 0.0) bt = (size_t)id;
-    if (bt == (size_t)-1 || !(dd <= best)) { /* none within max_dist */
-        *bu = *bv = 0.0;
-        *d2best = best;
-        return (size_t)-1;
-    }
-    *bu = _mm256_cvtsd_f64(bU);
-    *bv = _mm256_cvtsd_f64(bV);
-    *d2best = dd;
-    return bt;
 }
 
 /* dm__sh_nearest for four points at once (p: 3 doubles each), one triangle of tf in the four
@@ -9265,19 +9184,14 @@ static void dm__sh_nearest4_avx2(const double *tf, size_t n, const double *p, do
 
 /* The nearest to p of n one-ring triangles (tf from dm__sh_tris) closer than max_dist: its index
    ((size_t)-1 if none), with the squared distance and the barycentric (u, v) of the closest point;
-   of equally near ones the first (with DM_USE_AVX2 and soa: dm__sh_nearest_avx2). Triangle
-   `hint` (a neighbour's answer, or (size_t)-1) is tried first, so that the others are mostly
-   skipped by their bounding spheres and planes; the answer is the one a scan in order gives. */
-static size_t dm__sh_nearest(const double *tf, const double *soa, size_t n, const double p[3], double max_dist,
-                             size_t hint, double *d2best, double *bu, double *bv)
+   of equally near ones the first. Triangle `hint` (a neighbour's answer, or (size_t)-1) is tried
+   first, so that the others are mostly skipped by their bounding spheres and planes; the answer
+   is the one a scan in order gives (with DM_USE_AVX2, dm__sh_nearest4_avx2 gives it for four). */
+static size_t dm__sh_nearest(const double *tf, size_t n, const double p[3], double max_dist, size_t hint,
+                             double *d2best, double *bu, double *bv)
 {
     double best = max_dist < 1e150 ? max_dist * max_dist : DBL_MAX, rb = max_dist < 1e150 ? max_dist : 1e150;
     size_t i, k, bt = (size_t)-1;
-#if defined(DM_USE_AVX2)
-    if (soa) return dm__sh_nearest_avx2(tf, soa, n, p, best, d2best, bu, bv);
-#else
-    (void)soa;
-#endif
     *bu = *bv = 0.0;
     for (k = 0; k <= n; k++) {
         const double *f;
@@ -9374,20 +9288,6 @@ static double dm__sh_sign(const uint32_t *tris, const double *tf, size_t n, size
 
 /* Signed distance from p to the new one-ring (keep at its proposed position; -DBL_MAX when there
    is no triangle); *hint: the nearest triangle of a neighbouring point, then this one's. */
-static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double *soa, const double p[3],
-                                size_t *hint)
-{
-    double d2, bu, bv;
-    uint32_t fv[3];
-    int nf;
-    size_t bt = dm__sh_nearest(tf, soa, c->triangle_count, p, DBL_MAX, *hint, &d2, &bu, &bv);
-    if (bt == (size_t)-1) return -DBL_MAX;
-    *hint = bt;
-    dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
-    return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
-}
-
-#if defined(DM_USE_AVX2)
 /* the same, given p's nearest new triangle bt (dm__sh_nearest's answer) */
 static double dm__sh_signed_at(const dm_collapse *c, const double *tf, const double p[3], size_t bt, double d2,
                                double bu, double bv)
@@ -9398,7 +9298,14 @@ static double dm__sh_signed_at(const dm_collapse *c, const double *tf, const dou
     dm__sh_feature(c, c->triangles, bt, bu, bv, 0, fv, &nf);
     return dm__sh_sign(c->triangles, tf, c->triangle_count, bt, bu, bv, fv, nf, p, sqrt(d2));
 }
-#endif
+
+static double dm__sh_signed_new(const dm_collapse *c, const double *tf, const double p[3], size_t *hint)
+{
+    double d2, bu, bv;
+    size_t bt = dm__sh_nearest(tf, c->triangle_count, p, DBL_MAX, *hint, &d2, &bu, &bv);
+    if (bt != (size_t)-1) *hint = bt;
+    return dm__sh_signed_at(c, tf, p, bt, d2, bu, bv);
+}
 
 /* The box the enclosure check gathers original vertices from: the proposed position and the
    old triangles, grown by a tenth of their span; reach is how far from the old triangles a
@@ -9472,25 +9379,9 @@ static int dm__sh_old_new_tris(dm_shell *sh, dm__sh_internal *in, const dm_colla
         in->tri_new = nm;
         in->tri_cap = 2 * (no + nr);
     }
-    in->soa_old = in->soa_new = NULL;
-#if defined(DM_USE_AVX2)
-    if (DM__SH_SOA * (no + nr + 6) > in->soa_cap) {
-        int of = 0;
-        double *ns = (double *)dm__alloc_array(&sh->allocator, 2 * DM__SH_SOA * (no + nr + 6), sizeof(double), &of);
-        if (ns) {
-            sh->allocator.free(sh->allocator.user, in->soa);
-            in->soa = ns;
-            in->soa_cap = 2 * DM__SH_SOA * (no + nr + 6);
-        }
-    }
-    if (DM__SH_SOA * (no + nr + 6) <= in->soa_cap) {
-        in->soa_old = in->soa;
-        in->soa_new = in->soa + DM__SH_SOA * ((no + 3) & ~(size_t)3);
-    }
-#endif
     dm__load3(c->positions, c->keep, xk);
-    dm__sh_tris(c, c->old_triangles, no, xk, in->tri, in->soa_old);
-    dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no, in->soa_new);
+    dm__sh_tris(c, c->old_triangles, no, xk, in->tri);
+    dm__sh_tris(c, c->triangles, nr, x0, in->tri + 16 * no);
     dm__sh_old_to_new(in, c);
     return 1;
 }
@@ -9549,7 +9440,7 @@ static int dm__sh_relevant(const dm__sh_internal *in, const dm_collapse *c, cons
     size_t bt;
     dm__load3(in->cell_pos, q, pp);
     if (!dm__sh_in_box(b, pp)) return 0;
-    bt = dm__sh_nearest(in->tri, in->soa_old, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
+    bt = dm__sh_nearest(in->tri, c->old_triangle_count, pp, b->reach, *hint, &d2, &bu, &bv);
     if (bt != (size_t)-1) *hint = bt;
     return dm__sh_relevant_at(in, c, b, q, bt, d2, bu, bv, pt);
 }
@@ -9568,21 +9459,20 @@ static int dm__sh_flush(dm_shell *sh, dm__sh_internal *in, const dm_collapse *c,
                         dm__sh_batch *bt, size_t *npts)
 {
     size_t t[4];
-    double d2[4], bu[4], bv[4], reach2 = b->reach < 1e150 ? b->reach * b->reach : DBL_MAX;
+    double d2[4], bu[4], bv[4];
     int j;
 #if defined(DM_USE_AVX2)
-    if (in->soa_old && bt->n > 0) {
-        for (j = bt->n; j < 4; j++) memcpy(bt->p[j], bt->p[0], sizeof bt->p[0]); /* lanes that do not count */
-        dm__sh_nearest4_avx2(in->tri, c->old_triangle_count, bt->p[0], reach2, bt->hint, t, d2, bu, bv);
+    if (bt->n > 0) { /* all at once: the lanes past bt->n repeat the first and do not count */
+        for (j = bt->n; j < 4; j++) memcpy(bt->p[j], bt->p[0], sizeof bt->p[0]);
+        dm__sh_nearest4_avx2(in->tri, c->old_triangle_count, bt->p[0],
+                             b->reach < 1e150 ? b->reach * b->reach : DBL_MAX, bt->hint, t, d2, bu, bv);
         if (t[bt->n - 1] != (size_t)-1) bt->hint = t[bt->n - 1];
     } else
 #endif
         for (j = 0; j < bt->n; j++) {
-            t[j] = dm__sh_nearest(in->tri, NULL, c->old_triangle_count, bt->p[j], b->reach, bt->hint, d2 + j, bu + j,
-                                  bv + j);
+            t[j] = dm__sh_nearest(in->tri, c->old_triangle_count, bt->p[j], b->reach, bt->hint, d2 + j, bu + j, bv + j);
             if (t[j] != (size_t)-1) bt->hint = t[j];
         }
-    (void)reach2;
     for (j = 0; j < bt->n; j++) {
         dm__sh_pt pt;
         if (!dm__sh_relevant_at(in, c, b, bt->q[j], t[j], d2[j], bu[j], bv[j], &pt)) continue;
@@ -9631,7 +9521,7 @@ static int dm__sh_plane_of(const dm__sh_internal *in, const dm_collapse *c, dm__
     size_t t, no = c->old_triangle_count;
     dm__load3(pt->p, 0, pp);
     if (in->tri_new[pt->bt] != UINT32_MAX) *hint = in->tri_new[pt->bt]; /* the same answer, sooner */
-    t = dm__sh_nearest(in->tri + 16 * no, in->soa_new, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
+    t = dm__sh_nearest(in->tri + 16 * no, c->triangle_count, pp, DBL_MAX, *hint, &d2, &bu, &bv);
     if (t != (size_t)-1) *hint = t;
     return dm__sh_plane_at(in, c, pt, t, out);
 }
@@ -9668,17 +9558,16 @@ static void dm__sh_planes(dm__sh_internal *in, const dm_collapse *c, size_t npts
 {
     size_t i = 0, hint = (size_t)-1;
 #if defined(DM_USE_AVX2)
-    if (in->soa_new)
-        for (; i + 4 <= npts; i += 4) {
-            double p4[4][3], d2[4], bu[4], bv[4];
-            size_t t[4];
-            int j;
-            for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
-            hint = in->tri_new[in->pts[i].bt]; /* the same answer, sooner */
-            dm__sh_nearest4_avx2(in->tri + 16 * c->old_triangle_count, c->triangle_count, p4[0], DBL_MAX, hint, t, d2,
-                                 bu, bv);
-            for (j = 0; j < 4; j++) dm__sh_plane_at(in, c, in->pts + i + (size_t)j, t[j], pl + 4 * (i + (size_t)j));
-        }
+    for (; i + 4 <= npts; i += 4) {
+        double p4[4][3], d2[4], bu[4], bv[4];
+        size_t t[4];
+        int j;
+        for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
+        hint = in->tri_new[in->pts[i].bt]; /* the same answer, sooner */
+        dm__sh_nearest4_avx2(in->tri + 16 * c->old_triangle_count, c->triangle_count, p4[0], DBL_MAX, hint, t, d2, bu,
+                             bv);
+        for (j = 0; j < 4; j++) dm__sh_plane_at(in, c, in->pts + i + (size_t)j, t[j], pl + 4 * (i + (size_t)j));
+    }
 #endif
     for (; i < npts; i++) dm__sh_plane_of(in, c, in->pts + i, &hint, pl + 4 * i);
 }
@@ -9857,14 +9746,14 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
     size_t t[4];
     double p4[4][3], d2[4], bu[4], bv[4];
 #endif
-    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no, in->soa_new);
+    dm__sh_tris(c, c->triangles, nr, x, in->tri + 16 * no);
     for (i = 0; i < npts; i++) {
         const dm__sh_pt *pt = in->pts + i;
         double pp[3], sd = 0.0;
         int batched = 0;
         dm__load3(pt->p, 0, pp);
 #if defined(DM_USE_AVX2)
-        batched = in->soa_new && i - i % 4 + 4 <= npts; /* in a whole four: their searches at once */
+        batched = i - i % 4 + 4 <= npts; /* in a whole four: their searches at once */
         if (batched && i % 4 == 0) {
             int j;
             for (j = 0; j < 4; j++) dm__load3(in->pts[i + (size_t)j].p, 0, p4[j]);
@@ -9874,7 +9763,7 @@ static int dm__sh_recheck(dm_shell *sh, dm__sh_internal *in, const dm_collapse *
 #endif
         if (!batched) {
             if (pt->nt != UINT32_MAX) hint = pt->nt; /* its nearest before the move: the same answer, sooner */
-            sd = dm__sh_signed_new(c, in->tri + 16 * no, in->soa_new, pp, &hint);
+            sd = dm__sh_signed_new(c, in->tri + 16 * no, pp, &hint);
         }
         if (sd > outside && sd > (double)dm__sh_old_signed(c, in->tri, pt) + slack) {
             sh->vetoed_enclose++;
