@@ -82,9 +82,10 @@
      scaled by its largest side. The position is the quadric's minimiser when well conditioned and
      near the edge, else the best point on the edge (Lindstrom-Turk). Checks on each candidate: the
      link condition (Dey et al. 1999), no degenerate fan, no triangle turning by 78 degrees or
-     more, then the constraint. Non-manifold vertices and their neighbours are frozen. A refused or
-     vetoed edge is retried when its one-ring changes; one the constraint moves to more than twice
-     its cost waits in the queue at the new cost.
+     more, then the constraint. Non-manifold vertices are frozen, and no collapse has one opposite
+     its edge (one of its fans could fold, or two triangles coincide). A refused or vetoed edge is
+     retried when its one-ring changes; one the constraint moves to more than twice its cost waits
+     in the queue at the new cost.
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no new degenerate or
      flipped triangle; boundaries stay on their edges; locked and frozen vertices keep their
      positions bit for bit. A collapse's error (mesh units): the area-weighted RMS distance from the new
@@ -672,7 +673,7 @@ typedef struct dm_simplify_report {
     size_t rejected;              /* candidates refused by the link, flip or degeneracy checks */
     size_t vetoed;                /* candidates vetoed by the constraint */
     size_t relaxed;               /* times the constraint was relaxed (options.relax) */
-    size_t frozen_vertices;       /* vertices left alone because they or a neighbour are non-manifold */
+    size_t frozen_vertices;       /* vertices left alone because they are non-manifold */
     double error;                 /* largest error of a collapse done (mesh units), 0 if none */
     int reached_target;           /* 1 when target_triangles (if set) was reached */
 } dm_simplify_report;
@@ -2889,7 +2890,7 @@ done:
 
 #define DM__QEM_V_BOUNDARY 1u    /* on an open boundary */
 #define DM__QEM_V_LOCKED 2u      /* never moved or removed; a free neighbour may merge into it */
-#define DM__QEM_V_FROZEN 4u      /* non-manifold, or in a triangle with such a vertex: never collapsed */
+#define DM__QEM_V_FROZEN 4u      /* non-manifold: never collapsed */
 #define DM__QEM_V_REMOVED 8u     /* merged into another vertex */
 #define DM__QEM_V_PARKED 16u     /* a candidate of it was refused: retried when its one-ring changes */
 #define DM__QEM_V_NONMANIFOLD 32u
@@ -3824,8 +3825,10 @@ static size_t dm__qem_old_ring(dm__qem_simp *s, uint32_t keep, uint32_t rem)
 }
 
 /* Topology: the link condition (Dey, Edelsbrunner et al. 1999; boundary by a virtual vertex
-   joined to every boundary vertex) and no vertex left with a degenerate fan. On the way, the
-   union of the two one-rings (keep's neighbours after the collapse) goes to nbr[0 .. nnbr). */
+   joined to every boundary vertex), no vertex left with a degenerate fan, and no non-manifold
+   vertex opposite the edge (its triangles span several fans: the fan test cannot see one fold,
+   nor a triangle land on another's vertices). On the way, the union of the two one-rings (keep's
+   neighbours after the collapse) goes to nbr[0 .. nnbr). */
 static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem, int fetched)
 {
     uint32_t st = dm__qem_new_stamp(s), opp[2], j, nk = s->vx[keep].count, nr = s->vx[rem].count;
@@ -3898,6 +3901,7 @@ static int dm__qem_check_topology(dm__qem_simp *s, uint32_t keep, uint32_t rem, 
     }
     for (i = 0; i < shared; i++) {
         size_t nt = s->vx[opp[i]].count;
+        if (s->vx[opp[i]].flag & DM__QEM_V_NONMANIFOLD) return 0;
         if (nt <= ((s->vx[opp[i]].flag & DM__QEM_V_BOUNDARY) ? 1u : 3u)) return 0;
         DM__QEM_PREFETCH(s->adj + s->vx[opp[i]].first); /* the collapse drops a corner there */
     }
@@ -4207,9 +4211,8 @@ static void dm__qem_classify(dm__qem_simp *s, uint32_t *tmp)
         double e[3], f[3], nrm[3], len, d;
         dm__qem_quadric pq;
         int k, j;
-        unsigned any = s->vx[tr[0]].flag | s->vx[tr[1]].flag | s->vx[tr[2]].flag;
-        if (any & DM__QEM_V_NONMANIFOLD)
-            for (j = 0; j < 3; j++) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
+        for (j = 0; j < 3; j++)
+            if (s->vx[tr[j]].flag & DM__QEM_V_NONMANIFOLD) s->vx[tr[j]].flag |= DM__QEM_V_FROZEN;
         p0 = s->vx[tr[0]].np;
         p1 = s->vx[tr[1]].np;
         p2 = s->vx[tr[2]].np;

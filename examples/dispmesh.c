@@ -999,7 +999,9 @@ int main(int argc, char **argv)
                 R.fallback_triangles, R.base.nt);
     if (!srep.reached_target)
         fprintf(stderr, "dispmesh: note: the simplifier stopped at %zu triangles, above --faces %ld: %s\n", R.base.nt, faces,
-                !srep.vetoed ? "no edge left passes the simplifier's own checks"
+                !srep.vetoed || R.shell->fallback >= 2
+                    ? "no edge left passes the simplifier's own checks (a collapse may not change the surface's "
+                      "topology, fold a triangle over or move a non-manifold vertex)"
                 : fallback ? "the relaxed constraint still vetoed the rest"
                            : "the shell constraint vetoed every remaining collapse (see the counts above; the shell is too "
                              "thin there for an enclosing base); without --strict it is relaxed there and those parts are "
