@@ -176,10 +176,12 @@
      normal, up to max_chart_triangles). A chart's boundary is its projection on the chart's plane
      (or a circle by arc length), its inside Floater's mean value map, then Yoshizawa-Belyaev-Seidel
      stretch rounds toward area targets (triangle_weight, default the areas; dm_coverage_weights
-     gives the original's area over each base triangle) while the stretch drops and nothing flips;
-     a chart that curls (no flip-free layout within L2 stretch 2) is cut in two, down to lone
-     triangles. Charts turned to their smallest box (12 angles) are packed at the largest scale
-     that fits: shelves of boxes, or footprints in a bitmap (largest first, best quarter turn).
+     gives the original's area over each base triangle; a sliver's is cut so that, scaled to it,
+     its longest edge spans at most the side of the total's square) while the stretch drops
+     and nothing flips; a chart that curls (no flip-free layout within L2 stretch 2) is cut in
+     two, down to lone triangles. Charts turned to their smallest box (12 angles) are packed at
+     the largest scale that fits: shelves of boxes, or footprints in a bitmap (largest first, best
+     quarter turn).
      dm_param reports utilization, L2 and max stretch (Sander et al. 2001) and the share of area
      ratios in [0.8, 1.25]. Deviation: many charts with seams, not the paper's one global chart
      (its text omits the cut); neighbour lookups go through nbr.
@@ -434,7 +436,8 @@ typedef struct dm_param {
     float utilization;         /* texels under a triangle / all texels */
     float stretch_l2;          /* Sander's L2 stretch of the whole map against the target areas
                                   (1 = every triangle its target shape-free area, isotropic) */
-    float stretch_max;         /* largest per-triangle L2 stretch against its target */
+    float stretch_max;         /* largest per-triangle L2 stretch against its target (both stretches
+                                  leave out triangles of zero area) */
     float area_ratio_ok;       /* fraction of triangles whose map-area / weight, over the mean,
                                   lies in [0.8, 1.25] */
 } dm_param;
@@ -5868,10 +5871,30 @@ static dm_result dm__pz_find_charts(dm__pz_run *r)
     return DM_OK;
 }
 
-/* 2. targets: weights (default: area), floored at 1e-4 of the mean, scaled to the total area */
+/* the squared length of triangle tri's longest edge */
+static double dm__pz_longest_edge2(const float *pos, const uint32_t *tri)
+{
+    double l2 = 0.0, d[3], a[3], b[3];
+    int c;
+    for (c = 0; c < 3; c++) {
+        dm__load3(pos, tri[c], a);
+        dm__load3(pos, tri[(c + 1) % 3], b);
+        dm__sub3(b, a, d);
+        if (dm__dot3(d, d) > l2) l2 = dm__dot3(d, d);
+    }
+    return l2;
+}
+
+/* A sliver scaled up to a larger target area is a needle that can outrun the map, whose scale
+   would then shrink to fit it: scaled to its target, a triangle's longest edge stays within the
+   side of the total area's square (DM__PZ_NEEDLE, squared; the target is cut to fit). */
+#define DM__PZ_NEEDLE 1.0
+
+/* 2. targets: weights (default: area), floored at 1e-4 of the mean, scaled to the total area,
+   needles cut */
 static dm_result dm__pz_targets(dm__pz_run *r)
 {
-    size_t t, nt = r->nt;
+    size_t t, nt = r->nt, capped = 0;
     double total_area = 0.0, total_w = 0.0, floor_w, sum = 0.0;
     double *target = r->target;
     for (t = 0; t < nt; t++) {
@@ -5887,6 +5910,17 @@ static dm_result dm__pz_targets(dm__pz_run *r)
     floor_w = 1e-4 * total_w / (double)nt;
     for (t = 0; t < nt; t++) { if (target[t] < floor_w) target[t] = floor_w; sum += target[t]; }
     for (t = 0; t < nt; t++) target[t] *= total_area / sum;
+    for (t = 0; t < nt; t++) { /* needles cut */
+        double l2 = dm__pz_longest_edge2(r->positions, r->indices + 3 * t);
+        if (l2 > 0.0 && target[t] * l2 > DM__PZ_NEEDLE * total_area * r->sig_t[t]) {
+            target[t] = DM__PZ_NEEDLE * total_area * r->sig_t[t] / l2;
+            capped++;
+        }
+    }
+    if (capped) { /* (only then: other maps keep their bits) */
+        for (t = 0, sum = 0.0; t < nt; t++) sum += target[t];
+        for (t = 0; t < nt; t++) target[t] *= total_area / sum;
+    }
     r->total_area = total_area;
     return DM_OK;
 }
@@ -6656,6 +6690,7 @@ static dm_result dm__pz_statistics(dm__pz_run *r)
         uint32_t lv[3] = {0, 1, 2};
         double xs[9], sg;
         ok += ratio >= 0.8 && ratio <= 1.25;
+        if (!(r->sig_t[t] > 0.0)) continue; /* no surface to stretch (an input's degenerate triangle) */
         memset(&one, 0, sizeof one);
         for (c = 0; c < 3; c++) dm__load3(r->positions, r->indices[3 * t + (size_t)c], xs + 3 * c);
         one.nt = 1; one.nv = 3; one.lv = lv; one.x = xs; one.uv = cuv + 6 * t; one.target = target + t;

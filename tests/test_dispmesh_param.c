@@ -174,6 +174,48 @@ static void test_curled_chart(void)
     mio_free_mesh(&m);
 }
 
+/* A sliver given a floor weight (as dm_coverage_weights gives a base triangle over little of the
+   original): scaled to its target as a whole triangle it would be a needle 28 times the side of
+   the sheet beside it, and the map would shrink to fit it. Its target is cut, so the sheet keeps
+   its texels. */
+static void test_needle(void)
+{
+    enum { N = 8 };
+    float p[3 * ((N + 1) * (N + 1) + 3)], w[2 * N * N + 1];
+    uint32_t t[3 * (2 * N * N + 1)];
+    size_t nv = 0, nt = 0, i, covered_grid = 0;
+    int x, y;
+    dm_param_options po;
+    dm_param *pm = NULL;
+    for (y = 0; y <= N; y++)
+        for (x = 0; x <= N; x++) {
+            p[3 * nv] = (float)x / N; p[3 * nv + 1] = (float)y / N; p[3 * nv + 2] = 0.0f;
+            nv++;
+        }
+    for (y = 0; y < N; y++)
+        for (x = 0; x < N; x++) {
+            uint32_t a = (uint32_t)(y * (N + 1) + x), b = a + 1, c = a + N + 1, d = c + 1;
+            t[3 * nt] = a; t[3 * nt + 1] = b; t[3 * nt + 2] = d; w[nt++] = 0.5f / (N * N);
+            t[3 * nt] = a; t[3 * nt + 1] = d; t[3 * nt + 2] = c; w[nt++] = 0.5f / (N * N);
+        }
+    p[3 * nv] = 2.0f; p[3 * nv + 1] = 0.0f; p[3 * nv + 2] = 0.0f;
+    p[3 * nv + 3] = 3.0f; p[3 * nv + 4] = 0.0f; p[3 * nv + 5] = 0.0f;
+    p[3 * nv + 6] = 2.5f; p[3 * nv + 7] = 1e-6f; p[3 * nv + 8] = 0.0f;
+    t[3 * nt] = (uint32_t)nv; t[3 * nt + 1] = (uint32_t)nv + 1; t[3 * nt + 2] = (uint32_t)nv + 2;
+    w[nt++] = 0.05f / (2 * N * N); /* 5% of the mean, the coverage weights' floor */
+    nv += 3;
+    memset(&po, 0, sizeof po);
+    po.width = po.height = 256;
+    po.triangle_weight = w;
+    if (T_CHECK(dm_parameterize(p, nv, t, nt, &po, &pm) == DM_OK)) {
+        for (i = 0; i < (size_t)po.width * po.height; i++) covered_grid += pm->texel_triangle[i] < 2 * N * N;
+        printf("  note: grid beside a needle: utilization %.3f, grid texels %zu\n", pm->utilization, covered_grid);
+        T_CHECK_MSG(covered_grid >= (size_t)(0.2 * po.width * po.height), "the grid got %zu of %d texels", covered_grid,
+                    po.width * po.height);
+    }
+    dm_param_free(pm);
+}
+
 /* the unit normal of triangle t of (p, idx) */
 static void unit_face_normal(const float *p, const uint32_t *idx, size_t t, double n[3])
 {
@@ -784,5 +826,6 @@ int main(int argc, char **argv)
     test_surface_distance();
     test_base_normals();
     test_curled_chart();
+    test_needle();
     return T_END();
 }
