@@ -29,23 +29,22 @@
              dm_reconstruct, dm_base_normals, dm_coverage_weights, dm_surface_distance.
 
    COMMON TO ALL PARTS
-     Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-
-     clockwise front faces). Compile time: DM_STATIC (static functions), DM_MALLOC/DM_FREE (the
-     default allocator; both or neither), DM_USE_SSE2 (x86), DM_USE_AVX2 (needs -mavx2; implies
-     SSE2): SIMD box and triangle tests (with AVX2 also the shell constraint's nearest-triangle
-     searches), bit-identical to the portable path, recommended where available. Run-time
-     options are structs whose zero value (or NULL) means the defaults
-     (dm_<call>_default_options() spells them out); allocating calls take a dm_allocator (NULL =
-     DM_MALLOC/DM_FREE) that objects outliving the call keep for their free; long calls take a
-     progress callback (done in [0, 1]; nonzero cancels: DM_CANCELLED, nothing leaked). Bad input
-     gets a code, never a crash: NULL arrays (DM_ERR_INVALID_ARGUMENT), no triangles
-     (DM_ERR_NO_TRIANGLES), an index >= vertex_count (DM_ERR_BAD_INDEX), a NaN, infinite or huge
-     (|x| > 1e18) referenced coordinate (DM_ERR_BAD_POSITION), sizes that overflow
-     (DM_ERR_TOO_LARGE), allocation failure (DM_ERR_OUT_OF_MEMORY); on failure *out is NULL and
-     nothing is left allocated. No global state; calls are re-entrant and deterministic (same
-     input, same bits; ties go to the lower index). Do not build with -ffast-math. FMA contraction
-     is off in the implementation (the user's setting restored), except under clang's
-     -ffp-contract=fast, which ignores that pragma (bits change).
+     Meshes: float xyz positions (3 per vertex), uint32 indices (3 per triangle, counter-clockwise
+     front faces). Compile time: DM_STATIC (static functions), DM_MALLOC/DM_FREE (the default
+     allocator; both or neither), DM_USE_SSE2 (x86), DM_USE_AVX2 (needs -mavx2; implies SSE2): SIMD
+     box and triangle tests (with AVX2 also the shell constraint's nearest-triangle searches),
+     bit-identical to the portable path, recommended where available. Run-time options are structs
+     whose zero value (or NULL) means the defaults (dm_<call>_default_options() spells them out);
+     allocating calls take a dm_allocator (NULL = DM_MALLOC/DM_FREE) that objects outliving the call
+     keep for their free; long calls take a progress callback (done in [0, 1]; nonzero cancels:
+     DM_CANCELLED, nothing leaked). Bad input gets a code, never a crash: NULL arrays
+     (DM_ERR_INVALID_ARGUMENT), no triangles (DM_ERR_NO_TRIANGLES), an index >= vertex_count
+     (DM_ERR_BAD_INDEX), a NaN, infinite or huge (|x| > 1e18) referenced coordinate
+     (DM_ERR_BAD_POSITION), sizes that overflow (DM_ERR_TOO_LARGE), allocation failure
+     (DM_ERR_OUT_OF_MEMORY); on failure *out is NULL and nothing is left allocated. No global state;
+     calls are re-entrant and deterministic (same input, same bits; ties go to the lower index). Do
+     not build with -ffast-math. FMA contraction is off in the implementation (the user's setting
+     restored), except under clang's -ffp-contract=fast, which ignores that pragma (bits change).
 
    PART 1: BVH RAY CASTER
      WHAT. A bounding volume hierarchy with the queries a bake, picking or occlusion needs: the
@@ -81,9 +80,9 @@
      METHOD. Area-weighted quadrics (with boundary planes) in a frame centred on the bounding box,
      scaled by its largest side. The position is the quadric's minimiser when well conditioned and
      near the edge, else the best point on the edge (Lindstrom-Turk). Checks on each candidate: the
-     link condition (Dey et al. 1999), no degenerate fan, no triangle turning by 78 degrees or
-     more, then the constraint. Non-manifold vertices are frozen, and no collapse has one opposite
-     its edge (one of its fans could fold, or two triangles coincide). A refused or vetoed edge is
+     link condition (Dey et al. 1999), no degenerate fan, no triangle turning by 78 degrees or more,
+     then the constraint. Non-manifold vertices are frozen, and no collapse has one opposite its
+     edge (one of its fans could fold, or two triangles coincide). A refused or vetoed edge is
      retried when its one-ring changes; one the constraint moves to more than twice its cost waits
      in the queue at the new cost.
      GUARANTEES. A manifold region stays manifold and keeps its orientation; no new degenerate or
@@ -160,9 +159,9 @@
      overlap_samples (0 = 4, at most 7); allocator; progress. A shell serves any number of
      dm_simplify runs, one at a time (a candidate at level 0 after collapses starts again).
      MEMORY. About 68 bytes per original vertex and 24 per triangle, a copy of the original, its
-     BVH and its face normals; while
-     dm_shell_grow runs, about 100 per fragment besides; the constraint 100 per original vertex
-     near the widest candidate, 340 per triangle of the widest one-ring, 32 KB of kept proofs.
+     BVH and its face normals; while dm_shell_grow runs, about 100 per fragment besides; the
+     constraint 100 per original vertex near the widest candidate, 340 per triangle of the widest
+     one-ring, 32 KB of kept proofs.
      ERRORS. dm_shell_grow as in COMMON; the constraint vetoes what it cannot check.
      THREAD SAFETY. One dm_simplify run at a time per shell.
      LIMITS. As Part 2; the constraint needs on_collapse = dm_shell_collapsed for the mesh's own
@@ -176,15 +175,14 @@
      normal, up to max_chart_triangles). A chart's boundary is its projection on the chart's plane
      (or a circle by arc length), its inside Floater's mean value map, then Yoshizawa-Belyaev-Seidel
      stretch rounds toward area targets (triangle_weight, default the areas; dm_coverage_weights
-     gives the original's area over each base triangle; a sliver's is cut so that, scaled to it,
-     its longest edge spans at most the side of the total's square) while the stretch drops
-     and nothing flips; a chart that curls (no flip-free layout within L2 stretch 2) is cut in
-     two, down to lone triangles. Charts turned to their smallest box (12 angles) are packed at
-     the largest scale that fits: shelves of boxes, or footprints in a bitmap (largest first, best
-     quarter turn).
-     dm_param reports utilization, L2 and max stretch (Sander et al. 2001) and the share of area
-     ratios in [0.8, 1.25]. Deviation: many charts with seams, not the paper's one global chart
-     (its text omits the cut); neighbour lookups go through nbr.
+     gives the original's area over each base triangle; a sliver's is cut so that, scaled to it, its
+     longest edge spans at most the side of the total's square) while the stretch drops and nothing
+     flips; a chart that curls (no flip-free layout within L2 stretch 2) is cut in two, down to lone
+     triangles. Charts turned to their smallest box (12 angles) are packed at the largest scale that
+     fits: shelves of boxes, or footprints in a bitmap (largest first, best quarter turn). dm_param
+     reports utilization, L2 and max stretch (Sander et al. 2001) and the share of area ratios in
+     [0.8, 1.25]. Deviation: many charts with seams, not the paper's one global chart (its text
+     omits the cut); neighbour lookups go through nbr.
      BAKE. For each texel whose centre lies in a base triangle (the first in index order on a shared
      edge), base point p and interpolated base normal n: the line p - t n, |t| <= max_distance
      (default 5% of the original's diagonal), gives disp = t (world units, positive inward) and the
