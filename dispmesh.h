@@ -210,23 +210,25 @@
      (corners), nbr is the texel itself with a half turn (a mirror, as a clamped filter sees it).
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does (a barycentric grid
      of level sqrt(2 x its uv area in texels), as many points on each base edge as its longer uv
-     side has texels, shared across the edge, strips between), then made Delaunay in the map by
-     edge flips. A vertex is its base point moved along the base normal by the map's bilinear depth,
-     averaged over the triangles sharing it, with the map's normal (shade with those: geometric
-     normals show the original's facets). A closed manifold base gives a closed manifold result
-     with no T-junction. Vertex v < base_vertex_count is base vertex v; face_base gives each
-     triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
+     side has texels, shared across the edge, strips between), made Delaunay in the map by edge
+     flips, then flipped where the other diagonal fits the map's depth a fifth better at the
+     diagonals' midpoints (data-dependent, so that creases are cut along; no triangle under 0.3 in
+     2 area / longest edge^2). A vertex is its base point moved along the base normal by the map's
+     bilinear depth, averaged over the triangles sharing it, with the map's normal (shade with
+     those: geometric normals show the original's facets). A closed manifold base gives a closed
+     manifold result with no T-junction. Vertex v < base_vertex_count is base vertex v; face_base
+     gives each triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
      (deterministic) and measures with dm_bvh_closest_point; its max also covers every vertex.
      OPTIONS. dm_param_options: width, height (0 = 1024, at most 16384), gutter (0 = 4),
      triangle_weight, max_chart_triangles (0 = 96), max_chart_angle (0 = 30 degrees),
      stretch_iterations (0 = 6, negative none, at most 1000). dm_bake_options: max_distance, inward,
-     both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1). dm_coverage_options:
-     floor (0 = 5% of the mean weight). dm_distance_options: samples_per_side (0 = 200000, at most
-     10^9). Each also has allocator and progress.
+     both_ways. dm_reconstruct_options: density (micro-edges per texel, 0 = 1), depth_flips (0 = on,
+     negative = off). dm_coverage_options: floor (0 = 5% of the mean weight). dm_distance_options:
+     samples_per_side (0 = 200000, at most 10^9). Each also has allocator and progress.
      MEMORY. dm_param: 32 bytes per texel and 24 per base triangle (2 more per texel while
      packing); dm_dispmap: 46 bytes per texel (42 more while dm_bake runs) plus a BVH of the
      original; dm_trimesh: 24 bytes per vertex and 16 per triangle (2 triangles per covered texel);
-     while dm_reconstruct runs, 60 per vertex and 180 per triangle of the largest tessellation.
+     while dm_reconstruct runs, 60 per vertex and 183 per triangle of the largest tessellation.
      ERRORS. As in COMMON, for every mesh argument; DM_ERR_MAP_TOO_SMALL when the charts with their
      gutters do not fit the map at any scale. dm_bake and dm_reconstruct check the public dm_param
      and dm_dispmap arrays they read (a caller may have edited them): an index out of range, a
@@ -249,8 +251,9 @@
      Mean value coordinates, CAGD 2003. Yoshizawa, Belyaev, Seidel, Stretch-minimizing
      parameterization, SMI 2004. Sander et al., Texture mapping progressive meshes, SIGGRAPH 2001.
      Gortler et al., The Lumigraph (push-pull), SIGGRAPH 1996. Thurmer, Wuthrich, Vertex normals
-     from polygonal facets, JGT 1998. Jiang et al., Bijective projection in a shell, TOG 2020.
-     Goldfarb, Idnani, A dual method for strictly convex quadratic programs, Math. Prog. 1983. */
+     from polygonal facets, JGT 1998. Dyn, Levin, Rippa, Data dependent triangulations, IMA J.
+     Numer. Anal. 1990. Jiang et al., Bijective projection in a shell, TOG 2020. Goldfarb, Idnani,
+     A dual method for strictly convex quadratic programs, Math. Prog. 1983. */
 #ifndef DM_DISPMESH_H
 #define DM_DISPMESH_H
 
@@ -532,6 +535,8 @@ DMDEF dm_result dm_base_normals(const float *positions, size_t vertex_count, con
 
 typedef struct dm_reconstruct_options {
     float density;             /* micro-edges per texel along each base edge; 0 = 1, at most 16 */
+    int depth_flips;           /* 0 = on; negative = off (Delaunay in the map only: a GPU's
+                                  tessellation pattern is closer to that) */
     const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_trimesh */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
@@ -7600,6 +7605,7 @@ typedef struct dm__rc_run {
     size_t lcap;
     int32_t *ltwin;       /* per half-edge of one triangle's tessellation: the one across it, or -1 */
     uint32_t *lstack;     /* the half-edges still to test for a flip */
+    unsigned char *lq;    /* per half-edge: 1 while it waits in lstack */
     size_t ne, nvtx, ntri, lmax;
     dm_trimesh *mesh;
 } dm__rc_run;
@@ -7723,10 +7729,12 @@ static dm_result dm__rc_alloc(dm__rc_run *r)
     r->lslot = (uint32_t *)dm__take(sc, 3 * r->lmax, sizeof(uint32_t));
     r->ltwin = (int32_t *)dm__take(sc, 3 * r->lmax, sizeof(int32_t));
     r->lstack = (uint32_t *)dm__take(sc, 3 * r->lmax, sizeof(uint32_t));
+    r->lq = (unsigned char *)dm__take(sc, 3 * r->lmax, 1);
     if (!m->positions || !m->normals || !m->indices || !m->face_base || !r->acc || !r->nb || !r->vuv || !r->lkey ||
-        !r->lval || !r->lslot || !r->ltwin || !r->lstack)
+        !r->lval || !r->lslot || !r->ltwin || !r->lstack || !r->lq)
         return dm__scratch_fail(sc);
     memset(r->lkey, 0, r->lcap * sizeof(uint64_t));
+    memset(r->lq, 0, 3 * r->lmax);
     memset(r->acc, 0, 5 * r->nvtx * sizeof(double));
     m->vertex_count = r->nvtx;
     m->triangle_count = r->ntri;
@@ -7864,18 +7872,96 @@ static int dm__rc_in_circle(const float *a, const float *b, const float *c, cons
     return det > 1e-9 * scale * scale;
 }
 
+/* 4c's tests: a flip may take the other diagonal when the map's depth bends away from the
+   surface's linear pieces by DM__RC_FIT_GAIN less that way, and only where neither new triangle
+   is thinner in the map than DM__RC_FIT_SHAPE (2 area / longest edge^2) */
+#define DM__RC_FIT_GAIN 0.8
+#define DM__RC_FIT_SHAPE 0.3
+
+/* the depth the vertex has read so far (the mean of its reads) */
+static double dm__rc_depth(const dm__rc_run *r, uint32_t id)
+{
+    const double *acc = r->acc + 5 * (size_t)id;
+    return acc[4] > 0.0 ? acc[0] / acc[4] : 0.0;
+}
+
+/* the map's bilinear depth at x (texels, as vuv) */
+static double dm__rc_map_depth(const dm__rc_run *r, const double x[2])
+{
+    size_t id[4];
+    double w[4], d = 0.0;
+    int i;
+    dm__bilinear(r->map->width, r->map->height, x[0] / r->param->width, x[1] / r->param->height, id, w);
+    for (i = 0; i < 4; i++) d += w[i] * r->map->disp[id[i]];
+    return d;
+}
+
+/* twice the signed area of (a, b, x) in the map */
+static double dm__rc_area2(const float *a, const float *b, const double x[2])
+{
+    return ((double)b[0] - a[0]) * (x[1] - a[1]) - ((double)b[1] - a[1]) * (x[0] - a[0]);
+}
+
+/* the squared error at x (map depth dx) of the linear piece over the counter-clockwise triangle
+   (p, q, s) of the vertices' depths */
+static double dm__rc_piece_err(const dm__rc_run *r, uint32_t p, uint32_t q, uint32_t s, const double x[2], double dx)
+{
+    const float *P = r->vuv + 2 * (size_t)p, *Q = r->vuv + 2 * (size_t)q, *S = r->vuv + 2 * (size_t)s;
+    double det = dm__rc_orient(P, Q, S), lq, ls, e;
+    if (!(det > 0.0)) return 0.0;
+    lq = dm__rc_area2(S, P, x) / det;
+    ls = dm__rc_area2(P, Q, x) / det;
+    e = dx - ((1.0 - lq - ls) * dm__rc_depth(r, p) + lq * dm__rc_depth(r, q) + ls * dm__rc_depth(r, s));
+    return e * e;
+}
+
+/* 2 area / longest edge^2 of (a, b, c) in the map */
+static double dm__rc_shape(const float *a, const float *b, const float *c)
+{
+    double l = 0.0, e;
+    int k;
+    const float *p[3];
+    p[0] = a; p[1] = b; p[2] = c;
+    for (k = 0; k < 3; k++) {
+        const float *u = p[k], *v = p[(k + 1) % 3];
+        e = ((double)v[0] - u[0]) * ((double)v[0] - u[0]) + ((double)v[1] - u[1]) * ((double)v[1] - u[1]);
+        if (e > l) l = e;
+    }
+    return l > 0.0 ? dm__rc_orient(a, b, c) / l : 0.0;
+}
+
+/* Does the quad (a, b, c) + (b, a, d) follow the map better cut along c-d? Both cuts are
+   measured at the two diagonals' midpoints: the map's depth there against the linear pieces
+   (data-dependent triangulation, Dyn, Levin and Rippa 1990). */
+static int dm__rc_fits_better(const dm__rc_run *r, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    const float *uv = r->vuv, *A = uv + 2 * (size_t)a, *B = uv + 2 * (size_t)b, *C = uv + 2 * (size_t)c,
+                *D = uv + 2 * (size_t)d;
+    double mab[2], mcd[2], dab, dcd, now, then;
+    int k;
+    if (dm__rc_shape(A, D, C) < DM__RC_FIT_SHAPE || dm__rc_shape(D, B, C) < DM__RC_FIT_SHAPE) return 0;
+    for (k = 0; k < 2; k++) {
+        mab[k] = 0.5 * ((double)A[k] + B[k]);
+        mcd[k] = 0.5 * ((double)C[k] + D[k]);
+    }
+    dab = dm__rc_map_depth(r, mab);
+    dcd = dm__rc_map_depth(r, mcd);
+    now = dm__rc_piece_err(r, a, b, c, mab, dab) +
+          (dm__rc_area2(A, B, mcd) >= 0.0 ? dm__rc_piece_err(r, a, b, c, mcd, dcd) : dm__rc_piece_err(r, b, a, d, mcd, dcd));
+    then = dm__rc_piece_err(r, a, d, c, mcd, dcd) +
+           (dm__rc_area2(D, C, mab) >= 0.0 ? dm__rc_piece_err(r, a, d, c, mab, dab) : dm__rc_piece_err(r, d, b, c, mab, dab));
+    return then < DM__RC_FIT_GAIN * now;
+}
+
 /* half-edge h of the local triangles (3 lt + c) of the mesh's triangles from tri0 */
 #define DM__RC_HE(tri0, h) (3 * (tri0) + (size_t)(h))
 
-/* 4b. base triangle t's tessellation (its triangles tri0 .. tri1) made Delaunay in the map by
-   edge flips (Lawson), its border fixed: the strips' and corners' slivers become the triangles
-   with the largest smallest angles the same points allow, so that the surface's normals do not
-   jump where the grid meets its edges */
-static void dm__rc_delaunay(dm__rc_run *r, size_t tri0, size_t tri1)
+/* 4b. base triangle t's tessellation (its triangles tri0 .. tri1): each edge's two half-edges
+   paired in ltwin (-1 on its border), one of each pair queued in lstack; returns how many */
+static size_t dm__rc_twins(dm__rc_run *r, size_t tri0, size_t tri1)
 {
-    uint32_t *I = r->mesh->indices;
-    const float *uv = r->vuv;
-    size_t nh = 3 * (tri1 - tri0), i, ns = 0, budget, mask = 63;
+    const uint32_t *I = r->mesh->indices;
+    size_t nh = 3 * (tri1 - tri0), i, ns = 0, mask = 63;
     int32_t *tw = r->ltwin;
     while (mask + 1 < 2 * nh && mask + 1 < r->lcap) mask = 2 * mask + 1; /* a table this triangle's size */
     for (i = 0; i < nh; i++) { /* the twins: each edge's two half-edges meet in the table */
@@ -7889,17 +7975,32 @@ static void dm__rc_delaunay(dm__rc_run *r, size_t tri0, size_t tri1)
             tw[i] = (int32_t)r->lval[slot];
             tw[r->lval[slot]] = (int32_t)i;
             r->lstack[ns++] = r->lval[slot];
+            r->lq[r->lval[slot]] = 1;
         } else {
             r->lkey[slot] = key;
             r->lval[slot] = (uint32_t)i;
         }
     }
     for (i = 0; i < nh; i++) r->lkey[r->lslot[i]] = 0; /* the table emptied again */
-    budget = 8 * nh + 64; /* Lawson's flips end; the budget only guards rounding */
+    return ns;
+}
+
+/* 4c. edge flips over the tessellation's ns queued edges, its border fixed (Lawson): with fit = 0
+   until it is Delaunay in the map (the strips' and corners' slivers become the triangles with
+   the largest smallest angles the same points allow, so that the surface's normals do not jump
+   where the grid meets its edges); with fit = 1 where the other diagonal follows the map's depth
+   better (dm__rc_fits_better). Each edge waits in the queue at most once. */
+static void dm__rc_flips(dm__rc_run *r, size_t tri0, size_t tri1, size_t ns, int fit)
+{
+    uint32_t *I = r->mesh->indices;
+    const float *uv = r->vuv;
+    size_t budget = 8 * 3 * (tri1 - tri0) + 64; /* Delaunay flips end; the budget bounds the fit's */
+    int32_t *tw = r->ltwin;
     while (ns > 0 && budget-- > 0) {
         uint32_t h = r->lstack[--ns], g, f0, f1, a, b, c, d, out[4];
         int32_t ot[4];
         int k;
+        r->lq[h] = 0;
         if (tw[h] < 0) continue;
         g = (uint32_t)tw[h];
         f0 = h / 3; f1 = g / 3;
@@ -7907,9 +8008,10 @@ static void dm__rc_delaunay(dm__rc_run *r, size_t tri0, size_t tri1)
         b = I[DM__RC_HE(tri0, 3 * f0 + (h % 3 + 1) % 3)];
         c = I[DM__RC_HE(tri0, 3 * f0 + (h % 3 + 2) % 3)];
         d = I[DM__RC_HE(tri0, 3 * f1 + (g % 3 + 2) % 3)];
-        if (!dm__rc_in_circle(uv + 2 * (size_t)a, uv + 2 * (size_t)b, uv + 2 * (size_t)c, uv + 2 * (size_t)d) ||
-            !(dm__rc_orient(uv + 2 * (size_t)a, uv + 2 * (size_t)d, uv + 2 * (size_t)c) > 0.0) ||
-            !(dm__rc_orient(uv + 2 * (size_t)d, uv + 2 * (size_t)b, uv + 2 * (size_t)c) > 0.0))
+        if (!(dm__rc_orient(uv + 2 * (size_t)a, uv + 2 * (size_t)d, uv + 2 * (size_t)c) > 0.0) ||
+            !(dm__rc_orient(uv + 2 * (size_t)d, uv + 2 * (size_t)b, uv + 2 * (size_t)c) > 0.0) ||
+            !(fit ? dm__rc_fits_better(r, a, b, c, d)
+                  : dm__rc_in_circle(uv + 2 * (size_t)a, uv + 2 * (size_t)b, uv + 2 * (size_t)c, uv + 2 * (size_t)d)))
             continue;
         /* the outer half-edges: b->c, c->a of f0; a->d, d->b of f1, and who is across them */
         out[0] = 3 * f0 + (h % 3 + 1) % 3; out[1] = 3 * f0 + (h % 3 + 2) % 3;
@@ -7928,11 +8030,27 @@ static void dm__rc_delaunay(dm__rc_run *r, size_t tri0, size_t tri1)
                 tw[nhs[k]] = nt[k];
                 if (nt[k] >= 0 && k != 1 && k != 5) {
                     tw[nt[k]] = (int32_t)nhs[k];
-                    r->lstack[ns++] = nhs[k];
+                    if (!r->lq[nhs[k]] && !r->lq[nt[k]]) {
+                        r->lq[nhs[k]] = 1;
+                        r->lstack[ns++] = nhs[k];
+                    }
                 }
             }
         }
     }
+    while (ns > 0) r->lq[r->lstack[--ns]] = 0; /* what the budget left */
+}
+
+/* 4d. the fit's queue: one half-edge of every inner edge */
+static size_t dm__rc_queue_all(dm__rc_run *r, size_t tri0, size_t tri1)
+{
+    size_t i, ns = 0;
+    for (i = 0; i < 3 * (tri1 - tri0); i++)
+        if (r->ltwin[i] > (int32_t)i) {
+            r->lq[i] = 1;
+            r->lstack[ns++] = (uint32_t)i;
+        }
+    return ns;
 }
 #undef DM__RC_HE
 
@@ -7983,7 +8101,8 @@ static void dm__rc_triangle(dm__rc_run *r, size_t t, size_t *tri)
             }
         }
     for (c = 0; c < 3; c++) dm__rc_strip(r, t, n, c, tri);
-    dm__rc_delaunay(r, tri0, *tri);
+    dm__rc_flips(r, tri0, *tri, dm__rc_twins(r, tri0, *tri), 0);     /* Delaunay in the map */
+    if (r->o.depth_flips >= 0) dm__rc_flips(r, tri0, *tri, dm__rc_queue_all(r, tri0, *tri), 1); /* along the depth */
 }
 
 /* 5. every vertex: its base point moved by the mean of its samples' depths along the base
