@@ -7903,15 +7903,15 @@ static double dm__rc_area2(const float *a, const float *b, const double x[2])
 }
 
 /* the squared error at x (map depth dx) of the linear piece over the counter-clockwise triangle
-   (p, q, s) of the vertices' depths */
-static double dm__rc_piece_err(const dm__rc_run *r, uint32_t p, uint32_t q, uint32_t s, const double x[2], double dx)
+   (P, Q, S) in the map, of the depths dp, dq, ds at its corners */
+static double dm__rc_piece_err(const float *P, const float *Q, const float *S, double dp, double dq, double ds,
+                               const double x[2], double dx)
 {
-    const float *P = r->vuv + 2 * (size_t)p, *Q = r->vuv + 2 * (size_t)q, *S = r->vuv + 2 * (size_t)s;
     double det = dm__rc_orient(P, Q, S), lq, ls, e;
     if (!(det > 0.0)) return 0.0;
     lq = dm__rc_area2(S, P, x) / det;
     ls = dm__rc_area2(P, Q, x) / det;
-    e = dx - ((1.0 - lq - ls) * dm__rc_depth(r, p) + lq * dm__rc_depth(r, q) + ls * dm__rc_depth(r, s));
+    e = dx - ((1.0 - lq - ls) * dp + lq * dq + ls * ds);
     return e * e;
 }
 
@@ -7937,7 +7937,7 @@ static int dm__rc_fits_better(const dm__rc_run *r, uint32_t a, uint32_t b, uint3
 {
     const float *uv = r->vuv, *A = uv + 2 * (size_t)a, *B = uv + 2 * (size_t)b, *C = uv + 2 * (size_t)c,
                 *D = uv + 2 * (size_t)d;
-    double mab[2], mcd[2], dab, dcd, now, then;
+    double mab[2], mcd[2], dab, dcd, da, db, dc, dd, now, then;
     int k;
     if (dm__rc_shape(A, D, C) < DM__RC_FIT_SHAPE || dm__rc_shape(D, B, C) < DM__RC_FIT_SHAPE) return 0;
     for (k = 0; k < 2; k++) {
@@ -7946,10 +7946,13 @@ static int dm__rc_fits_better(const dm__rc_run *r, uint32_t a, uint32_t b, uint3
     }
     dab = dm__rc_map_depth(r, mab);
     dcd = dm__rc_map_depth(r, mcd);
-    now = dm__rc_piece_err(r, a, b, c, mab, dab) +
-          (dm__rc_area2(A, B, mcd) >= 0.0 ? dm__rc_piece_err(r, a, b, c, mcd, dcd) : dm__rc_piece_err(r, b, a, d, mcd, dcd));
-    then = dm__rc_piece_err(r, a, d, c, mcd, dcd) +
-           (dm__rc_area2(D, C, mab) >= 0.0 ? dm__rc_piece_err(r, a, d, c, mab, dab) : dm__rc_piece_err(r, d, b, c, mab, dab));
+    da = dm__rc_depth(r, a); db = dm__rc_depth(r, b); dc = dm__rc_depth(r, c); dd = dm__rc_depth(r, d);
+    now = dm__rc_piece_err(A, B, C, da, db, dc, mab, dab) +
+          (dm__rc_area2(A, B, mcd) >= 0.0 ? dm__rc_piece_err(A, B, C, da, db, dc, mcd, dcd)
+                                          : dm__rc_piece_err(B, A, D, db, da, dd, mcd, dcd));
+    then = dm__rc_piece_err(A, D, C, da, dd, dc, mcd, dcd) +
+           (dm__rc_area2(D, C, mab) >= 0.0 ? dm__rc_piece_err(A, D, C, da, dd, dc, mab, dab)
+                                           : dm__rc_piece_err(D, B, C, dd, db, dc, mab, dab));
     return then < DM__RC_FIT_GAIN * now;
 }
 
