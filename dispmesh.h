@@ -211,8 +211,8 @@
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does (a barycentric grid
      of level sqrt(2 x its uv area in texels), as many points on each base edge as its longer uv
      side has texels, shared across the edge, strips between), made Delaunay in the map by edge
-     flips, then flipped where the other diagonal fits the map's depth a fifth better at the
-     diagonals' midpoints (data-dependent, so that creases are cut along; no triangle under 0.3 in
+     flips, then flipped where the map's depth bends away from the other diagonal's midpoint a
+     fifth less (squared; data-dependent, so that creases are cut along; no triangle under 0.3 in
      2 area / longest edge^2). A vertex is its base point moved along the base normal by the map's
      bilinear depth, averaged over the triangles sharing it, with the map's normal (shade with
      those: geometric normals show the original's facets). A closed manifold base gives a closed
@@ -7872,9 +7872,9 @@ static int dm__rc_in_circle(const float *a, const float *b, const float *c, cons
     return det > 1e-9 * scale * scale;
 }
 
-/* 4c's tests: a flip may take the other diagonal when the map's depth bends away from the
-   surface's linear pieces by DM__RC_FIT_GAIN less that way, and only where neither new triangle
-   is thinner in the map than DM__RC_FIT_SHAPE (2 area / longest edge^2) */
+/* 4c's tests: a flip may take the other diagonal when the map's depth bends away from it
+   (squared) by DM__RC_FIT_GAIN less than from the edge, and only where neither new triangle is
+   thinner in the map than DM__RC_FIT_SHAPE (2 area / longest edge^2) */
 #define DM__RC_FIT_GAIN 0.8
 #define DM__RC_FIT_SHAPE 0.3
 
@@ -7896,25 +7896,6 @@ static double dm__rc_map_depth(const dm__rc_run *r, const double x[2])
     return d;
 }
 
-/* twice the signed area of (a, b, x) in the map */
-static double dm__rc_area2(const float *a, const float *b, const double x[2])
-{
-    return ((double)b[0] - a[0]) * (x[1] - a[1]) - ((double)b[1] - a[1]) * (x[0] - a[0]);
-}
-
-/* the squared error at x (map depth dx) of the linear piece over the counter-clockwise triangle
-   (P, Q, S) in the map, of the depths dp, dq, ds at its corners */
-static double dm__rc_piece_err(const float *P, const float *Q, const float *S, double dp, double dq, double ds,
-                               const double x[2], double dx)
-{
-    double det = dm__rc_orient(P, Q, S), lq, ls, e;
-    if (!(det > 0.0)) return 0.0;
-    lq = dm__rc_area2(S, P, x) / det;
-    ls = dm__rc_area2(P, Q, x) / det;
-    e = dx - ((1.0 - lq - ls) * dp + lq * dq + ls * ds);
-    return e * e;
-}
-
 /* 2 area / longest edge^2 of (a, b, c) in the map */
 static double dm__rc_shape(const float *a, const float *b, const float *c)
 {
@@ -7930,30 +7911,27 @@ static double dm__rc_shape(const float *a, const float *b, const float *c)
     return l > 0.0 ? dm__rc_orient(a, b, c) / l : 0.0;
 }
 
-/* Does the quad (a, b, c) + (b, a, d) follow the map better cut along c-d? Both cuts are
-   measured at the two diagonals' midpoints: the map's depth there against the linear pieces
-   (data-dependent triangulation, Dyn, Levin and Rippa 1990). */
+/* the squared gap between the map's depth at the middle of edge (a, b) and the mean of its ends'
+   depths: how far the map bends away from the edge */
+static double dm__rc_edge_gap(const dm__rc_run *r, uint32_t a, uint32_t b)
+{
+    const float *A = r->vuv + 2 * (size_t)a, *B = r->vuv + 2 * (size_t)b;
+    double m[2], g;
+    m[0] = 0.5 * ((double)A[0] + B[0]);
+    m[1] = 0.5 * ((double)A[1] + B[1]);
+    g = dm__rc_map_depth(r, m) - 0.5 * (dm__rc_depth(r, a) + dm__rc_depth(r, b));
+    return g * g;
+}
+
+/* Does the quad (a, b, c) + (b, a, d) follow the map better cut along c-d (data-dependent
+   triangulation, Dyn, Levin and Rippa 1990)? Each flip lowers the sum of the inner edges' gaps,
+   which depend on the edges alone, so the flips end. */
 static int dm__rc_fits_better(const dm__rc_run *r, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 {
     const float *uv = r->vuv, *A = uv + 2 * (size_t)a, *B = uv + 2 * (size_t)b, *C = uv + 2 * (size_t)c,
                 *D = uv + 2 * (size_t)d;
-    double mab[2], mcd[2], dab, dcd, da, db, dc, dd, now, then;
-    int k;
     if (dm__rc_shape(A, D, C) < DM__RC_FIT_SHAPE || dm__rc_shape(D, B, C) < DM__RC_FIT_SHAPE) return 0;
-    for (k = 0; k < 2; k++) {
-        mab[k] = 0.5 * ((double)A[k] + B[k]);
-        mcd[k] = 0.5 * ((double)C[k] + D[k]);
-    }
-    dab = dm__rc_map_depth(r, mab);
-    dcd = dm__rc_map_depth(r, mcd);
-    da = dm__rc_depth(r, a); db = dm__rc_depth(r, b); dc = dm__rc_depth(r, c); dd = dm__rc_depth(r, d);
-    now = dm__rc_piece_err(A, B, C, da, db, dc, mab, dab) +
-          (dm__rc_area2(A, B, mcd) >= 0.0 ? dm__rc_piece_err(A, B, C, da, db, dc, mcd, dcd)
-                                          : dm__rc_piece_err(B, A, D, db, da, dd, mcd, dcd));
-    then = dm__rc_piece_err(A, D, C, da, dd, dc, mcd, dcd) +
-           (dm__rc_area2(D, C, mab) >= 0.0 ? dm__rc_piece_err(A, D, C, da, dd, dc, mab, dab)
-                                           : dm__rc_piece_err(D, B, C, dd, db, dc, mab, dab));
-    return then < DM__RC_FIT_GAIN * now;
+    return dm__rc_edge_gap(r, c, d) < DM__RC_FIT_GAIN * dm__rc_edge_gap(r, a, b);
 }
 
 /* half-edge h of the local triangles (3 lt + c) of the mesh's triangles from tri0 */
@@ -7997,7 +7975,7 @@ static void dm__rc_flips(dm__rc_run *r, size_t tri0, size_t tri1, size_t ns, int
 {
     uint32_t *I = r->mesh->indices;
     const float *uv = r->vuv;
-    size_t budget = 8 * 3 * (tri1 - tri0) + 64; /* Delaunay flips end; the budget bounds the fit's */
+    size_t budget = 8 * 3 * (tri1 - tri0) + 64; /* both kinds end; the budget only guards rounding */
     int32_t *tw = r->ltwin;
     while (ns > 0 && budget-- > 0) {
         uint32_t h = r->lstack[--ns], g, f0, f1, a, b, c, d, out[4];

@@ -32,17 +32,17 @@ static const expected table[] = {
     {"sphere simplify shell", 0xdac7f0eb9933fc4full},
     {"sphere parameterize", 0x6f87ae37c32d5792ull},
     {"sphere bake", 0x05c5cfa1d298d350ull},
-    {"sphere reconstruct", 0xe86531de48107315ull},
+    {"sphere reconstruct", 0x0e6bd84495bcf8feull},
     {"torus simplify", 0xab7b78e3a557c32cull},
     {"torus simplify shell", 0xc6ec232a9782a890ull},
     {"torus parameterize", 0x8f1a778e3feb883dull},
     {"torus bake", 0x15ad6076342c371aull},
-    {"torus reconstruct", 0x50d777b1c543c7d0ull},
+    {"torus reconstruct", 0x8ae7e049b362f4caull},
     {"thin torus simplify", 0xcd39fba057e9cf67ull},
     {"thin torus simplify shell", 0x2ef8a356b616dfc8ull},
     {"thin torus parameterize", 0x75bbc14a58cf0286ull},
     {"thin torus bake", 0xe072a69dd65b89bcull},
-    {"thin torus reconstruct", 0x9af5a1707326d1e9ull},
+    {"thin torus reconstruct", 0xe7dd65e075aca8c1ull},
 };
 
 #define STAGES 5
