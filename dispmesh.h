@@ -211,9 +211,9 @@
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does (a barycentric grid
      of level sqrt(2 x its uv area in texels), as many points on each base edge as its longer uv
      side has texels, shared across the edge, strips between), made Delaunay in the map by edge
-     flips, then flipped where the map's depth bends away from the other diagonal's midpoint a
-     fifth less (squared; data-dependent, so that creases are cut along; no triangle under 0.3 in
-     2 area / longest edge^2). A vertex is its base point moved along the base normal by the map's
+     flips, then flipped where the map's depth at the other diagonal's midpoint lies nearer the
+     mean of its ends (squared gap a fifth smaller; data-dependent, so that creases are cut along;
+     no triangle under 0.3 in 2 area / longest edge^2). A vertex is its base point moved along the base normal by the map's
      bilinear depth, averaged over the triangles sharing it, with the map's normal (shade with
      those: geometric normals show the original's facets). A closed manifold base gives a closed
      manifold result with no T-junction. Vertex v < base_vertex_count is base vertex v; face_base
