@@ -211,10 +211,10 @@
      RECONSTRUCTION. Each base triangle is tessellated as a GPU tessellator does (a barycentric grid
      of level sqrt(2 x its uv area in texels), as many points on each base edge as its longer uv
      side has texels, shared across the edge, strips between), made Delaunay in the map by edge
-     flips, then flipped where the map's depth at the other diagonal's midpoint lies nearer the
-     mean of its ends (squared gap a fifth smaller; data-dependent, so that creases are cut along;
-     no triangle under 0.3 in 2 area / longest edge^2). A vertex is its base point moved along the base normal by the map's
-     bilinear depth, averaged over the triangles sharing it, with the map's normal (shade with
+     flips, then flipped where the map's depth at the other diagonal's midpoint lies nearer the mean
+     of its ends (a squared gap a fifth smaller, no triangle under 0.3 in 2 area / longest edge^2),
+     so that creases are cut along. A vertex is its base point moved along the base normal by the
+     map's bilinear depth, averaged over the triangles sharing it, with the map's normal (shade with
      those: geometric normals show the original's facets). A closed manifold base gives a closed
      manifold result with no T-junction. Vertex v < base_vertex_count is base vertex v; face_base
      gives each triangle's base triangle. dm_surface_distance samples both meshes area-uniformly
@@ -535,8 +535,8 @@ DMDEF dm_result dm_base_normals(const float *positions, size_t vertex_count, con
 
 typedef struct dm_reconstruct_options {
     float density;             /* micro-edges per texel along each base edge; 0 = 1, at most 16 */
-    int depth_flips;           /* 0 = on; negative = off (Delaunay in the map only: a GPU's
-                                  tessellation pattern is closer to that) */
+    int depth_flips;           /* 0 = on; negative = off: the tessellation is only made
+                                  Delaunay in the map (RECONSTRUCTION above) */
     const dm_allocator *allocator; /* NULL = DM_MALLOC/DM_FREE; kept in the dm_trimesh */
     int (*progress)(void *user, float done); /* NULL, or nonzero return cancels */
     void *progress_user;
