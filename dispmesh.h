@@ -8036,7 +8036,8 @@ static size_t dm__rc_queue_all(dm__rc_run *r, size_t tri0, size_t tri1)
 #undef DM__RC_HE
 
 /* 4. base triangle t: its samples (corners, edge points, interior grid), then its triangles
-   (the interior grid and the three strips), made Delaunay in the map */
+   (the interior grid and the three strips), made Delaunay in the map, then flipped along its
+   depth */
 static void dm__rc_triangle(dm__rc_run *r, size_t t, size_t *tri)
 {
     size_t tri0 = *tri;
