@@ -45,7 +45,7 @@ HAVE_TINYOBJ  := $(wildcard /usr/include/tiny_obj_loader.h)
 EXAMPLES   = $(B)/meshconv $(B)/render_mesh $(B)/terrain $(B)/dispmesh
 C_TESTS    = $(B)/test_meshio $(B)/test_sphere $(B)/test_render $(B)/test_dispmesh_bvh $(B)/test_dispmesh_simplify \
              $(B)/test_subdiv4 $(B)/test_deform_chol $(B)/test_dispmesh_param $(B)/test_dispmesh_shell $(B)/test_dispmesh_digest \
-             $(B)/test_dispmesh_recon
+             $(B)/test_dispmesh_recon $(B)/test_dispmesh_orient
 ifeq ($(shell uname -m),x86_64)
   C_TESTS += $(B)/test_dispmesh_bvh_sse2 $(B)/test_dispmesh_bvh_avx2 $(B)/test_dispmesh_digest_avx2
 endif

@@ -17,12 +17,13 @@
        dm_trimesh_free(dense); dm_dispmap_free(map); dm_param_free(param); dm_pm_free(pm);
        dm_shell_free(shell);
      Every call returns a dm_result (DM_OK = 0; dm_result_string() names it). Check each one.
-     A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it.
+     A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it. Triangles
+     that disagree with their neighbours' orientation are turned first with dm_orient.
 
    THE PARTS (each below under the same headings: options, memory, errors, thread safety, limits)
      PART 1  BVH ray caster: dm_bvh_build, dm_bvh_intersect, _occluded, _intersect_line, batches,
              dm_bvh_closest_point, dm_bvh_refit.
-     PART 2  Simplification with progressive-mesh records: dm_simplify, dm_pm_*, dm_weld.
+     PART 2  Simplification with progressive-mesh records: dm_simplify, dm_pm_*, dm_weld, dm_orient.
      PART 3  Bounding shell and paper 000's constraints: dm_shell_grow, dm_shell_constraint,
              dm_shell_collapsed, dm_shell_relax (the fallback), dm_shell_fallback_triangles.
      PART 4  Parameterization, bake, surface sample grid, reconstruction: dm_parameterize, dm_bake,
@@ -68,7 +69,7 @@
      THREAD SAFETY. A built BVH may be queried from any number of threads; refit and free run alone.
      LIMITS. At most 2^30 - 1 triangles; coordinates up to 1e18; FMA as in COMMON.
 
-   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*, dm_weld)
+   PART 2: SIMPLIFICATION (dm_simplify, dm_pm_*, dm_weld, dm_orient)
      WHAT. Edge collapses in order of quadric error (Garland-Heckbert 1997), recorded as a
      progressive mesh (Hoppe 1996): the base and one vertex split per collapse, so any level can
      be rebuilt exactly, up and down; for every base vertex, the input vertices merged into it. A
@@ -102,10 +103,12 @@
      vetoed edge is queued again), relax_cost (a vetoed candidate also comes back at this times its
      cost, 0 = 16, asked with dm_collapse.relaxed); allocator; progress (the share of the triangles
      to remove that are gone). dm_weld merges vertices at the same position (bit for bit, -0 = +0)
-     in first-use order.
+     in first-use order. dm_orient turns triangles to agree with their neighbours (the way each
+     part faces: out of what it encloses, else as most of its area did); it has no options.
      MEMORY. During dm_simplify about 160 bytes per vertex and 45 per triangle plus the candidate
      queue (16 bytes an entry, about 1.5 per triangle). The progressive mesh keeps the positions,
-     the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex.
+     the triangles, about 72 bytes per split and 12 bytes per vertex. dm_weld: 8 bytes per vertex;
+     dm_orient: about 80 bytes per triangle.
      ERRORS. As in COMMON; a negative or NaN target_error, a NaN min_quality or one above 0.5 is
      DM_ERR_INVALID_ARGUMENT; a triangle soup (no vertex in two triangles) with repeated positions
      is DM_ERR_NOT_WELDED. Stopping above the target still gives DM_OK (report.reached_target = 0).
@@ -719,6 +722,19 @@ DMDEF void dm_pm_free(dm_pm *pm);
 DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint32_t *indices,
                         size_t triangle_count, const dm_allocator *allocator, float *out_positions,
                         uint32_t *out_indices, size_t *out_vertex_count);
+
+/* Turns triangles (a, b, c) -> (a, c, b) in place so that across every edge that exactly two
+   triangles share they run it in opposite directions (a consistently oriented surface), where
+   the surface allows it (a Moebius band keeps one seam). A connected part whose triangles agree
+   already is left as it is. A part that needed turning ends facing out of the volume it encloses
+   when closed (into it when it lies inside an odd number of other closed parts: a cavity's wall),
+   likewise when open but clearly bowl-shaped, else the way most of its area faced. *turned (may
+   be NULL) receives the number of triangles turned. Cost: a sort of the edges, and for each closed
+   part that needed turning one ray against the closed parts whose boxes hold its start. allocator
+   NULL = default (about 80 bytes per triangle while it runs). Errors as for dm_weld; on an error
+   indices are unchanged. */
+DMDEF dm_result dm_orient(const float *positions, size_t vertex_count, uint32_t *indices,
+                          size_t triangle_count, const dm_allocator *allocator, size_t *turned);
 
 /* Number of vertex splits (= collapses done). Levels run from 0 (base) to this (the input). */
 DMDEF size_t dm_pm_split_count(const dm_pm *pm);
@@ -4369,6 +4385,234 @@ DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint3
         *out_vertex_count = welded;
     }
     a.free(a.user, remap);
+    return r;
+}
+
+/* ---- dm_orient: triangles turned to agree with their neighbours ---------------------------- */
+
+/* nb[he]: the triangle across half-edge he where exactly two triangles share its edge (either
+   direction), else DM_NO_HIT; same[he] = 1 when that triangle runs the edge the same way. */
+static void dm__orient_links(const uint32_t *idx, size_t nt, dm__edge *e, uint32_t *nb, uint8_t *same)
+{
+    size_t i, j, n = 3 * nt;
+    for (i = 0; i < n; i++) {
+        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
+        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+        e[i].he = (uint32_t)i;
+        nb[i] = DM_NO_HIT;
+        same[i] = 0;
+    }
+    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    for (i = 0; i < n; i = j) {
+        for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
+        if (j - i == 2 && e[i].he / 3 != e[i + 1].he / 3 && (e[i].key >> 32) != (e[i].key & 0xffffffffu)) {
+            uint32_t h0 = e[i].he, h1 = e[i + 1].he;
+            nb[h0] = h1 / 3;
+            nb[h1] = h0 / 3;
+            same[h0] = same[h1] = (uint8_t)(idx[h0] == idx[h1]);
+        }
+    }
+}
+
+/* The parts (triangles joined across links), each walked breadth-first from its lowest triangle:
+   flip[t] = 1 where t must turn to agree with it. order[] lists the triangles part by part
+   (start[p] to start[p + 1]); returns the part count. A link the walk cannot satisfy (a
+   non-orientable part) is left as it is. */
+static size_t dm__orient_walk(const uint32_t *nb, const uint8_t *same, size_t nt, uint32_t *part, uint8_t *flip,
+                              uint32_t *order, uint32_t *start)
+{
+    size_t t, head = 0, tail = 0, np = 0;
+    for (t = 0; t < nt; t++) part[t] = DM_NO_HIT;
+    for (t = 0; t < nt; t++) {
+        if (part[t] != DM_NO_HIT) continue;
+        start[np] = (uint32_t)tail;
+        part[t] = (uint32_t)np;
+        flip[t] = 0;
+        order[tail++] = (uint32_t)t;
+        while (head < tail) {
+            uint32_t u = order[head++];
+            int k;
+            for (k = 0; k < 3; k++) {
+                size_t h = 3 * (size_t)u + (size_t)k;
+                uint32_t w = nb[h];
+                if (w == DM_NO_HIT || part[w] != DM_NO_HIT) continue;
+                part[w] = (uint32_t)np;
+                flip[w] = (uint8_t)(flip[u] ^ same[h]);
+                order[tail++] = w;
+            }
+        }
+        np++;
+    }
+    start[np] = (uint32_t)tail;
+    return np;
+}
+
+/* corners of triangle t as walked (b and c swapped where flip[t]) */
+static void dm__orient_corners(const float *pos, const uint32_t *idx, const uint8_t *flip, size_t t, double q[3][3])
+{
+    dm__load3(pos, idx[3 * t], q[0]);
+    dm__load3(pos, idx[3 * t + (flip[t] ? 2 : 1)], q[1]);
+    dm__load3(pos, idx[3 * t + (flip[t] ? 1 : 2)], q[2]);
+}
+
+/* Part p as walked: *vol = its enclosed volume seen from its area centroid (6 x), *area (2 x),
+   *turned_area (2 x, of its triangles with flip set), *mixed (any flip set), *closed (every edge
+   linked), at = the centroid of its largest triangle, box = its bounding box. */
+typedef struct dm__orient_part {
+    double vol, area, turned_area, at[3], lo[3], hi[3];
+    int mixed, closed;
+} dm__orient_part;
+
+static void dm__orient_measure(const float *pos, const uint32_t *idx, const uint32_t *nb, const uint8_t *flip,
+                               const uint32_t *tris, size_t n, dm__orient_part *pt)
+{
+    double c[3] = {0.0, 0.0, 0.0}, best = -1.0, q[3][3], e1[3], e2[3], x[3], r[3], a;
+    size_t i;
+    int k, j;
+    memset(pt, 0, sizeof *pt);
+    pt->closed = 1;
+    for (k = 0; k < 3; k++) {
+        pt->lo[k] = DBL_MAX;
+        pt->hi[k] = -DBL_MAX;
+    }
+    for (i = 0; i < n; i++) { /* area, the centroid, the box, the largest triangle */
+        size_t t = tris[i];
+        dm__orient_corners(pos, idx, flip, t, q);
+        dm__sub3(q[1], q[0], e1);
+        dm__sub3(q[2], q[0], e2);
+        dm__cross3(e1, e2, x);
+        a = dm__len3(x);
+        pt->area += a;
+        if (flip[t]) pt->turned_area += a;
+        pt->mixed |= flip[t];
+        for (k = 0; k < 3; k++) {
+            c[k] += a * (q[0][k] + q[1][k] + q[2][k]) / 3.0;
+            for (j = 0; j < 3; j++) {
+                if (q[j][k] < pt->lo[k]) pt->lo[k] = q[j][k];
+                if (q[j][k] > pt->hi[k]) pt->hi[k] = q[j][k];
+            }
+            pt->closed &= nb[3 * t + (size_t)k] != DM_NO_HIT;
+        }
+        if (a > best) {
+            best = a;
+            for (k = 0; k < 3; k++) pt->at[k] = (q[0][k] + q[1][k] + q[2][k]) / 3.0;
+        }
+    }
+    if (pt->area > 0.0)
+        for (k = 0; k < 3; k++) c[k] /= pt->area;
+    for (i = 0; i < n; i++) { /* the volume of the cones from the centroid */
+        dm__orient_corners(pos, idx, flip, tris[i], q);
+        dm__sub3(q[1], q[0], e1);
+        dm__sub3(q[2], q[0], e2);
+        dm__cross3(e1, e2, x);
+        dm__sub3(q[0], c, r);
+        pt->vol += dm__dot3(r, x);
+    }
+}
+
+/* 1 when the ray from o along the fixed direction D crosses triangle t (Moeller-Trumbore) */
+static int dm__orient_crosses(const float *pos, const uint32_t *idx, size_t t, const double o[3])
+{
+    static const double D[3] = {0.5734623443633283, 0.5239859690962837, 0.6297937373427766};
+    double q[3][3], e1[3], e2[3], s[3], h[3], w[3], det, u, v, tt;
+    int k;
+    for (k = 0; k < 3; k++) dm__load3(pos, idx[3 * t + (size_t)k], q[k]);
+    dm__sub3(q[1], q[0], e1);
+    dm__sub3(q[2], q[0], e2);
+    dm__cross3(D, e2, h);
+    det = dm__dot3(e1, h);
+    if (det == 0.0) return 0;
+    dm__sub3(o, q[0], s);
+    u = dm__dot3(s, h) / det;
+    if (!(u >= 0.0 && u <= 1.0)) return 0;
+    dm__cross3(s, e1, w);
+    v = dm__dot3(D, w) / det;
+    if (!(v >= 0.0 && u + v <= 1.0)) return 0;
+    tt = dm__dot3(e2, w) / det;
+    return tt > 0.0;
+}
+
+/* 1 when part p lies inside an odd number of the other closed parts (a cavity's wall): one
+   ray's crossings from its largest triangle, against each closed part whose box holds that point */
+static int dm__orient_nested(const float *pos, const uint32_t *idx, const uint32_t *order, const uint32_t *start,
+                             const dm__orient_part *parts, size_t np, size_t p)
+{
+    const double *o = parts[p].at;
+    size_t q, i;
+    int odd = 0;
+    for (q = 0; q < np; q++) {
+        const dm__orient_part *b = parts + q;
+        int k, in = 1, cross = 0;
+        if (q == p || !b->closed) continue;
+        for (k = 0; k < 3; k++) in &= o[k] >= b->lo[k] && o[k] <= b->hi[k];
+        if (!in) continue;
+        for (i = start[q]; i < start[q + 1]; i++) cross ^= dm__orient_crosses(pos, idx, order[i], o);
+        odd ^= cross;
+    }
+    return odd;
+}
+
+/* Whether part p, as walked, turns as a whole: a part whose triangles agreed already never does;
+   a closed one faces out of the volume it encloses (into it when nested in an odd number of
+   closed parts); an open one too when it clearly encloses one (|vol| >= DM__ORIENT_BOWL area^1.5),
+   else it keeps the way most of its area faced. */
+#define DM__ORIENT_BOWL 0.01
+static int dm__orient_turns(const float *pos, const uint32_t *idx, const uint32_t *order, const uint32_t *start,
+                            const dm__orient_part *parts, size_t np, size_t p)
+{
+    const dm__orient_part *pt = parts + p;
+    double a = 0.5 * pt->area, v = pt->vol / 6.0;
+    if (!pt->mixed) return 0;
+    if (pt->closed && v != 0.0) return (v < 0.0) != dm__orient_nested(pos, idx, order, start, parts, np, p);
+    if (fabs(v) >= DM__ORIENT_BOWL * a * sqrt(a)) return v < 0.0;
+    return pt->turned_area > 0.5 * pt->area;
+}
+
+DMDEF dm_result dm_orient(const float *positions, size_t vertex_count, uint32_t *indices, size_t triangle_count,
+                          const dm_allocator *allocator, size_t *turned)
+{
+    dm__scratch sc;
+    dm__edge *e;
+    uint32_t *nb, *part, *order, *start;
+    uint8_t *same, *flip;
+    dm__orient_part *parts;
+    size_t np, p, i, count = 0;
+    dm_result r;
+    if (turned) *turned = 0;
+    r = dm__check_mesh(positions, vertex_count, indices, triangle_count);
+    if (r != DM_OK) return r;
+    memset(&sc, 0, sizeof sc);
+    sc.a = dm__resolve_allocator(allocator);
+    e = (dm__edge *)dm__take(&sc, 3 * triangle_count, sizeof(dm__edge)); /* 1. links across edges */
+    nb = (uint32_t *)dm__take(&sc, 3 * triangle_count, sizeof(uint32_t));
+    same = (uint8_t *)dm__take(&sc, 3 * triangle_count, 1);
+    part = (uint32_t *)dm__take(&sc, triangle_count, sizeof(uint32_t));
+    order = (uint32_t *)dm__take(&sc, triangle_count, sizeof(uint32_t));
+    start = (uint32_t *)dm__take(&sc, triangle_count + 1, sizeof(uint32_t));
+    flip = (uint8_t *)dm__take(&sc, triangle_count, 1);
+    if (!e || !nb || !same || !part || !order || !start || !flip) goto fail;
+    dm__orient_links(indices, triangle_count, e, nb, same);
+    np = dm__orient_walk(nb, same, triangle_count, part, flip, order, start); /* 2. parts */
+    parts = (dm__orient_part *)dm__take(&sc, np, sizeof(dm__orient_part));
+    if (!parts) goto fail;
+    for (p = 0; p < np; p++) /* 3. each part measured as walked */
+        dm__orient_measure(positions, indices, nb, flip, order + start[p], start[p + 1] - start[p], parts + p);
+    for (p = 0; p < np; p++) /* 4. which way each part faces */
+        if (dm__orient_turns(positions, indices, order, start, parts, np, p))
+            for (i = start[p]; i < start[p + 1]; i++) flip[order[i]] ^= 1;
+    for (i = 0; i < triangle_count; i++) /* 5. the triangles turned */
+        if (flip[i]) {
+            uint32_t b = indices[3 * i + 1];
+            indices[3 * i + 1] = indices[3 * i + 2];
+            indices[3 * i + 2] = b;
+            count++;
+        }
+    if (turned) *turned = count;
+    dm__release(&sc);
+    return DM_OK;
+fail:
+    r = dm__scratch_fail(&sc);
+    dm__release(&sc);
     return r;
 }
 

@@ -31,10 +31,11 @@
                  run faster, the RMS figures to about 1/sqrt(N), the max from fewer points)
    The pipeline (dispmesh.h): vertices at equal positions joined where they close a seam (an STL
    soup is welded whole; vertices that meet only at a point stay apart, said on stderr),
-   dm_shell_grow (the bounding shell of the original), dm_simplify with
-   dm_shell_constraint down to N triangles (the base), dm_coverage_weights + dm_parameterize (an
-   R x R map), dm_bake (displacement along the base normals), dm_reconstruct (base + map as a dense
-   mesh) and dm_surface_distance (--samples points a side) against the original.
+   dm_orient (triangles turned to agree with their neighbours, counted on stderr), dm_shell_grow
+   (the bounding shell of the original), dm_simplify with dm_shell_constraint down to N triangles
+   (the base), dm_coverage_weights + dm_parameterize (an R x R map), dm_bake (displacement along
+   the base normals), dm_reconstruct (base + map as a dense mesh) and dm_surface_distance
+   (--samples points a side) against the original.
    Writes
      PREFIX_base.obj     the base mesh with its map coordinates (v, vt, f v/vt; vt v = 0 is the
                          map's row 0, which is the bottom row of the PFM and of the PNG)
@@ -913,6 +914,7 @@ int main(int argc, char **argv)
         mio_result mr;
         size_t before;
         long apart, crossings;
+        size_t turned = 0;
         errno = 0;
         if ((mr = mio_read_file(in, NULL, &R.loaded, &err)) != MIO_OK) {
             cli_read_error("dispmesh", in, err.message, mio_result_string(mr), mio_result_description(mr),
@@ -933,6 +935,15 @@ int main(int argc, char **argv)
         R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
+        /* triangles that disagree with their neighbours' orientation: the simplifier cannot
+           collapse across them, and the shell would grow to both sides */
+        if ((r = dm_orient(R.orig.p, R.orig.nv, R.orig.t, R.orig.nt, NULL, &turned)) != DM_OK) {
+            fprintf(stderr, "dispmesh: %s: %s\n", in, dm_result_string(r));
+            goto done;
+        }
+        if (turned > 0)
+            fprintf(stderr, "dispmesh: note: %zu of %zu triangles turned to agree with their neighbours' orientation\n",
+                    turned, R.orig.nt);
         if ((crossings = self_crossings(&R.orig)) < 0) {
             fprintf(stderr, "dispmesh: out of memory\n");
             goto done;

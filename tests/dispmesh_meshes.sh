@@ -11,7 +11,8 @@
 # as skipped; a known miss that is met says so (take it off the list). Every other criterion is
 # asserted. Meshes: the generated brick, sphere (bench/gen_sphere.c), three parts with a thin limb and an
 # open patch (tests/gen_shapes.c); the bunny (glmark2-data); the elephant, triceratops, cow, fandisk and
-# camel of CGAL's data set (libcgal-demo). A missing package skips its meshes (counted).
+# camel of CGAL's data set (libcgal-demo), and its blobby-shuffled (half of its triangles turned the
+# other way: build/dispmesh orients it with dm_orient). A missing package skips its meshes (counted).
 # Under TEST_SANITIZE=1 only the generated meshes at 500 faces run (the rest take minutes there).
 B="$1"
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -54,12 +55,12 @@ if [ "${TEST_SANITIZE:-0}" != 1 ]; then
   fi
   data=/usr/share/doc/libcgal-dev/data.tar.gz
   if [ -f "$data" ]; then
-    for m in elephant triceratops cow fandisk camel; do
+    for m in elephant triceratops cow fandisk camel blobby-shuffled; do
       tar xzf "$data" -O "data/meshes/$m.off" >"$tmp/$m.off" 2>/dev/null && [ -s "$tmp/$m.off" ] &&
         set -- "$@" "$tmp/$m.off"
     done
   else
-    echo "SKIP CGAL's meshes: need libcgal-demo (apt-get install libcgal-demo)"; skip=$((skip + 5))
+    echo "SKIP CGAL's meshes: need libcgal-demo (apt-get install libcgal-demo)"; skip=$((skip + 6))
   fi
 fi
 

@@ -1,5 +1,5 @@
 /* fuzz_dispmesh.c - fuzz target for dispmesh.h: BVH build, refit and queries, dm_simplify with its
-   progressive mesh, dm_weld, dm_shell_grow with the shell constraint, dm_parameterize, dm_bake,
+   progressive mesh, dm_weld, dm_orient, dm_shell_grow with the shell constraint, dm_parameterize, dm_bake,
    dm_reconstruct, dm_coverage_weights and dm_surface_distance, on a tiny mesh decoded from the
    bytes.
    libFuzzer: clang -g -O1 -I. -Itests -fsanitize=fuzzer,address,undefined tests/fuzz_dispmesh.c -o fuzz_dispmesh -lm
@@ -201,6 +201,19 @@ static void fz_simplify(fz_in *in, unsigned op, const dm_allocator *al, fz_cance
         for (i = 0; i < 3 * m.nt; i++) /* the same corners, bit for bit up to -0 = +0 */
             fz_check(wpos[3 * widx[i]] == m.pos[3 * m.idx[i]] && wpos[3 * widx[i] + 1] == m.pos[3 * m.idx[i] + 1] &&
                      wpos[3 * widx[i] + 2] == m.pos[3 * m.idx[i] + 2]);
+    }
+    if (m.nt <= FZ_T) { /* the orientation, checked on its own: each triangle keeps its corners' cycle or turns */
+        size_t turned = 0, n = 0;
+        memcpy(gidx, m.idx, 3 * m.nt * sizeof(uint32_t));
+        r = dm_orient(m.pos, m.nv, gidx, m.nt, al, &turned);
+        fz_check(fz_known(r));
+        for (i = 0; i < m.nt; i++) {
+            const uint32_t *a = m.idx + 3 * i, *g = gidx + 3 * i;
+            int kept = a[0] == g[0] && a[1] == g[1] && a[2] == g[2], turn = a[0] == g[0] && a[1] == g[2] && a[2] == g[1];
+            fz_check(kept || turn);
+            n += !kept;
+        }
+        fz_check(r == DM_OK ? n == turned : n == 0 && turned == 0);
     }
     o.target_triangles = fz_u8(in) % (m.nt + 1);
     o.target_error = (f & 1) ? (double)fz_f32(in) : 0.0;
