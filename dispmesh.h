@@ -17,8 +17,8 @@
        dm_trimesh_free(dense); dm_dispmap_free(map); dm_param_free(param); dm_pm_free(pm);
        dm_shell_free(shell);
      Every call returns a dm_result (DM_OK = 0; dm_result_string() names it). Check each one.
-     A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it. Triangles
-     that disagree with their neighbours' orientation are turned first with dm_orient.
+     A triangle soup (an STL file) is welded first with dm_weld; dm_simplify refuses it. A mesh wound
+     clockwise, or whose triangles disagree with their neighbours, is turned first with dm_orient.
 
    THE PARTS (each below under the same headings: options, memory, errors, thread safety, limits)
      PART 1  BVH ray caster: dm_bvh_build, dm_bvh_intersect, _occluded, _intersect_line, batches,
@@ -725,14 +725,15 @@ DMDEF dm_result dm_weld(const float *positions, size_t vertex_count, const uint3
 
 /* Turns triangles (a, b, c) -> (a, c, b) in place so that across every edge that exactly two
    triangles share they run it in opposite directions (a consistently oriented surface), where
-   the surface allows it (a Moebius band keeps one seam). A connected part whose triangles agree
-   already is left as it is. A part that needed turning ends facing out of the volume it encloses
-   when closed (into it when it lies inside an odd number of other closed parts: a cavity's wall),
-   likewise when open but clearly bowl-shaped, else the way most of its area faced. *turned (may
-   be NULL) receives the number of triangles turned. Cost: a sort of the edges, and for each closed
-   part that needed turning one ray against the closed parts whose boxes hold its start. allocator
-   NULL = default (about 80 bytes per triangle while it runs). Errors as for dm_weld; on an error
-   indices are unchanged. */
+   the surface allows it (a Moebius band keeps one seam), and then picks the way each connected
+   part faces. A closed part faces out of the volume it encloses, or into it when it lies inside
+   an odd number of other closed parts (a cavity's wall), so a mesh wound clockwise is turned
+   too; a consistent closed part that faces out already is left as it is. A consistent open part
+   is left as it is; another faces out of what it clearly encloses (a bowl), else the way most
+   of its area faced. *turned (may be NULL) receives the number of triangles turned. Cost: a sort
+   of the edges, and for each closed part that may turn a box test against the other closed
+   parts and one ray against those whose box holds its own. allocator NULL = default (about 80
+   bytes per triangle while it runs). Errors as for dm_weld; on an error indices are unchanged. */
 DMDEF dm_result dm_orient(const float *positions, size_t vertex_count, uint32_t *indices,
                           size_t triangle_count, const dm_allocator *allocator, size_t *turned);
 
@@ -4533,7 +4534,8 @@ static int dm__orient_crosses(const float *pos, const uint32_t *idx, size_t t, c
 }
 
 /* 1 when part p lies inside an odd number of the other closed parts (a cavity's wall): one
-   ray's crossings from its largest triangle, against each closed part whose box holds that point */
+   ray's crossings from its largest triangle, against each closed part whose box holds p's box
+   (parts that only overlap, as primitives built into one model do, are not nested) */
 static int dm__orient_nested(const float *pos, const uint32_t *idx, const uint32_t *order, const uint32_t *start,
                              const dm__orient_part *parts, size_t np, size_t p)
 {
@@ -4544,7 +4546,7 @@ static int dm__orient_nested(const float *pos, const uint32_t *idx, const uint32
         const dm__orient_part *b = parts + q;
         int k, in = 1, cross = 0;
         if (q == p || !b->closed) continue;
-        for (k = 0; k < 3; k++) in &= o[k] >= b->lo[k] && o[k] <= b->hi[k];
+        for (k = 0; k < 3; k++) in &= parts[p].lo[k] >= b->lo[k] && parts[p].hi[k] <= b->hi[k];
         if (!in) continue;
         for (i = start[q]; i < start[q + 1]; i++) cross ^= dm__orient_crosses(pos, idx, order[i], o);
         odd ^= cross;
@@ -4552,18 +4554,20 @@ static int dm__orient_nested(const float *pos, const uint32_t *idx, const uint32
     return odd;
 }
 
-/* Whether part p, as walked, turns as a whole: a part whose triangles agreed already never does;
-   a closed one faces out of the volume it encloses (into it when nested in an odd number of
-   closed parts); an open one too when it clearly encloses one (|vol| >= DM__ORIENT_BOWL area^1.5),
-   else it keeps the way most of its area faced. */
+/* Whether part p, as walked, turns as a whole. A closed part faces out of the volume it encloses
+   (into it when nested in an odd number of closed parts), except that one whose triangles agreed
+   and faced out already is left as it is (not tested for nesting). An open part whose triangles
+   agreed is left as it is; else it faces out of what it clearly encloses (|vol| >=
+   DM__ORIENT_BOWL area^1.5), or the way most of its area faced. */
 #define DM__ORIENT_BOWL 0.01
 static int dm__orient_turns(const float *pos, const uint32_t *idx, const uint32_t *order, const uint32_t *start,
                             const dm__orient_part *parts, size_t np, size_t p)
 {
     const dm__orient_part *pt = parts + p;
     double a = 0.5 * pt->area, v = pt->vol / 6.0;
+    if (pt->closed && v != 0.0 && (pt->mixed || v < 0.0))
+        return (v < 0.0) != dm__orient_nested(pos, idx, order, start, parts, np, p);
     if (!pt->mixed) return 0;
-    if (pt->closed && v != 0.0) return (v < 0.0) != dm__orient_nested(pos, idx, order, start, parts, np, p);
     if (fabs(v) >= DM__ORIENT_BOWL * a * sqrt(a)) return v < 0.0;
     return pt->turned_area > 0.5 * pt->area;
 }

@@ -31,7 +31,7 @@
                  run faster, the RMS figures to about 1/sqrt(N), the max from fewer points)
    The pipeline (dispmesh.h): vertices at equal positions joined where they close a seam (an STL
    soup is welded whole; vertices that meet only at a point stay apart, said on stderr),
-   dm_orient (triangles turned to agree with their neighbours, counted on stderr), dm_shell_grow
+   triangles that repeat another's corners dropped (said on stderr), dm_orient (triangles turned to agree with their neighbours, counted on stderr), dm_shell_grow
    (the bounding shell of the original), dm_simplify with dm_shell_constraint down to N triangles
    (the base), dm_coverage_weights + dm_parameterize (an R x R map), dm_bake (displacement along
    the base normals), dm_reconstruct (base + map as a dense mesh) and dm_surface_distance
@@ -753,6 +753,52 @@ static long stitch(mio_mesh *m)
     return apart;
 }
 
+/* Drop the triangles that repeat an earlier one's corners (in any order: a face written twice, or
+   once each way), keeping the first and the order of the rest: a repeated face makes its edges
+   non-manifold, which the simplifier cannot collapse across, and hides a sheet from the bake.
+   Triangles with a repeated index stay (dm_simplify drops them). Returns the number dropped, or
+   -1 when out of memory. */
+typedef struct { uint32_t k[3], t; } trikey;
+static int trikey_cmp(const void *pa, const void *pb)
+{
+    const trikey *x = (const trikey *)pa, *y = (const trikey *)pb;
+    int i;
+    for (i = 0; i < 3; i++)
+        if (x->k[i] != y->k[i]) return x->k[i] < y->k[i] ? -1 : 1;
+    return x->t < y->t ? -1 : x->t > y->t;
+}
+
+static long drop_repeats(mio_mesh *m)
+{
+    size_t nt = m->triangle_count, i, j, kept = 0;
+    trikey *tk = (trikey *)malloc((nt + 1) * sizeof *tk);
+    unsigned char *drop = (unsigned char *)calloc(nt + 1, 1);
+    long dropped = 0;
+    if (!tk || !drop) {
+        free(tk); free(drop);
+        return -1;
+    }
+    for (i = 0; i < nt; i++) { /* the corners sorted, then the triangle's index */
+        uint32_t a = m->indices[3 * i], b = m->indices[3 * i + 1], c = m->indices[3 * i + 2], x;
+        if (a > b) { x = a; a = b; b = x; }
+        if (b > c) { x = b; b = c; c = x; }
+        if (a > b) { x = a; a = b; b = x; }
+        tk[i].k[0] = a; tk[i].k[1] = b; tk[i].k[2] = c; tk[i].t = (uint32_t)i;
+    }
+    qsort(tk, nt, sizeof *tk, trikey_cmp);
+    for (i = 0; i < nt; i = j)
+        for (j = i + 1; j < nt && memcmp(tk[j].k, tk[i].k, sizeof tk[i].k) == 0; j++)
+            if (tk[i].k[0] != tk[i].k[1] && tk[i].k[1] != tk[i].k[2]) {
+                drop[tk[j].t] = 1;
+                dropped++;
+            }
+    for (i = 0; i < nt; i++)
+        if (!drop[i]) memmove(m->indices + 3 * kept++, m->indices + 3 * i, 3 * sizeof(uint32_t));
+    m->triangle_count = kept;
+    free(tk); free(drop);
+    return dropped;
+}
+
 /* How often the surface runs through itself: the edges of m that pass through one of its
    triangles (away from the edge's own ends), each counted once; -1 when out of memory. No
    enclosing base can follow such a surface, and its shell cannot grow there. */
@@ -913,7 +959,7 @@ int main(int argc, char **argv)
         mio_error err;
         mio_result mr;
         size_t before;
-        long apart, crossings;
+        long apart, crossings, repeats;
         size_t turned = 0;
         errno = 0;
         if ((mr = mio_read_file(in, NULL, &R.loaded, &err)) != MIO_OK) {
@@ -932,6 +978,13 @@ int main(int argc, char **argv)
         if (apart > 0)
             fprintf(stderr, "dispmesh: %ld vertices share a position with another but meet it only at a point: "
                             "kept apart (joined, they would be non-manifold)\n", apart);
+        if ((repeats = drop_repeats(&R.loaded)) < 0) {
+            fprintf(stderr, "dispmesh: out of memory\n");
+            goto done;
+        }
+        if (repeats > 0)
+            fprintf(stderr, "dispmesh: note: %ld triangles repeat another's corners: dropped (the first of each kept)\n",
+                    repeats);
         R.orig.p = R.loaded.positions; R.orig.nv = R.loaded.vertex_count;
         R.orig.t = R.loaded.indices; R.orig.nt = R.loaded.triangle_count;
         fprintf(stderr, "dispmesh: %s: %zu vertices, %zu triangles\n", in, R.orig.nv, R.orig.nt);
@@ -942,7 +995,8 @@ int main(int argc, char **argv)
             goto done;
         }
         if (turned > 0)
-            fprintf(stderr, "dispmesh: note: %zu of %zu triangles turned to agree with their neighbours' orientation\n",
+            fprintf(stderr, "dispmesh: note: %zu of %zu triangles turned (to agree with their neighbours, each closed "
+                            "part facing out)\n",
                     turned, R.orig.nt);
         if ((crossings = self_crossings(&R.orig)) < 0) {
             fprintf(stderr, "dispmesh: out of memory\n");

@@ -6,7 +6,9 @@
 #   flagged <= 0.01; target = 12.
 #   an unwelded copy of the brick (ASCII STL, every triangle its own vertices): welded, exit 0, faces <= 12;
 #   two octahedra whose corners share a position: the two vertices stay apart (no weld into a pinch);
-#   two octahedra that run through each other: a note says so (not for the touching pair, nor the brick).
+#   two octahedra that run through each other: a note says so (not for the touching pair, nor the brick);
+#   the brick wound clockwise, scrambled (a third of its faces turned) and with faces written twice:
+#   turned back and the repeats dropped (said), each the same RESULT as the brick itself.
 #   bad input (missing file, malformed files of our own and, when installed, of assimp-testmodels,
 #   a mesh without extent, an unwritable prefix, a map too coarse for the base so that base triangles
 #   get no texel): exit 1 (failure); bad arguments (--res 0, a bad number, no input, an unknown
@@ -119,6 +121,36 @@ check "two interpenetrating octahedra: the note says the surface runs through it
   grep -q '^dispmesh: note: the surface runs through itself: [1-9][0-9]* of its edges' "$tmp/cross_err.txt"
 check "octahedra touching at a corner: no such note" sh -c "! grep -q 'runs through itself' '$tmp/pinch_err.txt'"
 check "the brick: no such note" sh -c "! grep -q 'runs through itself' '$tmp/full_err.txt'"
+
+# ---- the brick as exporters mangle it: the same RESULT ----------------------------------------------
+# its 496 triangles as an OFF file (reference); wound clockwise (every face turned); scrambled (every
+# third face turned); with its first 40 faces written again (every other one turned). The tool turns
+# them back (dm_orient) and drops the repeats, so each gives the reference's RESULT, bit for bit.
+if [ -s "$tmp/full_base.obj" ]; then
+  for v in ref cw scrambled repeats; do
+    awk -v v="$v" '/^v / { n++; p[n] = $2 " " $3 " " $4 }
+      /^f / { m++; for (i = 2; i <= 4; i++) { split($i, a, "/"); c[m, i - 1] = a[1] - 1 } }
+      END { extra = v == "repeats" ? 40 : 0; print "OFF"; print n, m + extra, 0
+            for (i = 1; i <= n; i++) print p[i]
+            for (k = 1; k <= m + extra; k++) { f = k <= m ? k : k - m
+              t = (v == "cw") || (v == "scrambled" && k % 3 == 0) || (k > m && k % 2 == 0)
+              if (t) print 3, c[f, 1], c[f, 3], c[f, 2]; else print 3, c[f, 1], c[f, 2], c[f, 3] } }' \
+      "$tmp/full_base.obj" >"$tmp/brick_$v.off"
+    "$prog" "$tmp/brick_$v.off" --faces 48 --res 128 --no-views -o "$tmp/m_$v" >"$tmp/m_${v}_out.txt" 2>"$tmp/m_${v}_err.txt"
+    rc=$?
+    check "brick ($v) exits 0 (status $rc): $(tail -n 1 "$tmp/m_${v}_err.txt")" [ $rc -eq 0 ]
+  done
+  same() { grep '^RESULT dispmesh ' "$1" | sed 's/ bake_ms=.*//'; }
+  ref=$(same "$tmp/m_ref_out.txt")
+  check "the brick's reference run has a RESULT" [ -n "$ref" ]
+  for v in cw scrambled repeats; do
+    check "brick ($v): the reference's RESULT ($(same "$tmp/m_${v}_out.txt") vs $ref)" [ "$(same "$tmp/m_${v}_out.txt")" = "$ref" ]
+  done
+  check "brick (cw): all 496 turned, said" grep -q '^dispmesh: note: 496 of 496 triangles turned' "$tmp/m_cw_err.txt"
+  check "brick (scrambled): 165 turned, said" grep -q '^dispmesh: note: 165 of 496 triangles turned' "$tmp/m_scrambled_err.txt"
+  check "brick (repeats): 40 dropped, said" grep -q "^dispmesh: note: 40 triangles repeat another's corners: dropped" "$tmp/m_repeats_err.txt"
+  check "brick (ref): nothing turned or dropped" sh -c "! grep -q -E 'turned|repeat' '$tmp/m_ref_err.txt'"
+fi
 
 # ---- a target the paper's constraints cannot reach: the brick's box has 12 faces -----------------
 "$prog" --brick --strict --faces 8 --res 128 --no-views -o "$tmp/b8" >"$tmp/b8_out.txt" 2>"$tmp/b8_err.txt"

@@ -1,9 +1,10 @@
 /* test_dispmesh_orient.c - dispmesh.h's dm_orient: triangles turned to agree with their neighbours.
    - a bumpy sphere with a scattered third of its triangles turned comes back exactly as it was
      made (every turned triangle turned back, none other), and its edges each run once each way;
-   - a sphere facing inward throughout (consistent) is left alone;
+   - a sphere facing inward throughout (wound clockwise) is turned whole, one facing out is left alone;
    - a hollow ball (an outer sphere facing out, an inner one facing into the cavity), both
-     scrambled: each comes back as made, the inner one by its nesting in the outer one;
+     scrambled: each comes back as made, the inner one by its nesting in the outer one; as made it is
+     left alone; two overlapping spheres (not nested) both face out;
    - open parts: a bowl (a sphere's lower half) scrambled comes back facing out of it; a flat sheet
      with a quarter of its triangles turned comes back the way most of it faced; a torus too;
    - parts apart: two scrambled spheres side by side both face out;
@@ -126,7 +127,7 @@ static void closed_checks(void)
     round_trip("sphere, two thirds", &s, 0.67, 2u);
     T_CHECK(volume6(s.p, s.t, 0, s.nt) > 0.0);
     T_EQ_SIZE(disagreeing_edges(s.t, s.nt), 0);
-    /* consistent but facing inward: left alone */
+    /* consistent but facing inward (wound clockwise): turned whole */
     idx = (uint32_t *)malloc(3 * s.nt * sizeof(uint32_t));
     if (T_CHECK(idx != NULL)) {
         memcpy(idx, s.t, 3 * s.nt * sizeof(uint32_t));
@@ -136,8 +137,12 @@ static void closed_checks(void)
             if (T_CHECK(was != NULL)) {
                 memcpy(was, idx, 3 * s.nt * sizeof(uint32_t));
                 T_CHECK(dm_orient(s.p, s.nv, idx, s.nt, NULL, &turned) == DM_OK);
+                T_EQ_SIZE(turned, s.nt);
+                T_CHECK(memcmp(s.t, idx, 3 * s.nt * sizeof(uint32_t)) == 0);
+                memcpy(idx, s.t, 3 * s.nt * sizeof(uint32_t)); /* consistent and facing out: left alone */
+                T_CHECK(dm_orient(s.p, s.nv, idx, s.nt, NULL, &turned) == DM_OK);
                 T_EQ_SIZE(turned, 0);
-                T_CHECK(memcmp(was, idx, 3 * s.nt * sizeof(uint32_t)) == 0);
+                T_CHECK(memcmp(s.t, idx, 3 * s.nt * sizeof(uint32_t)) == 0);
                 free(was);
             }
         }
@@ -149,6 +154,24 @@ static void closed_checks(void)
     if (T_CHECK(hollow.nt > 0)) {
         T_CHECK(volume6(hollow.p, hollow.t, s.nt, hollow.nt) < 0.0);
         round_trip("hollow ball", &hollow, 0.5, 3u);
+        { /* as made (consistent, the cavity's wall facing into it): left alone */
+            uint32_t *h = (uint32_t *)malloc(3 * hollow.nt * sizeof(uint32_t));
+            if (T_CHECK(h != NULL)) {
+                memcpy(h, hollow.t, 3 * hollow.nt * sizeof(uint32_t));
+                T_CHECK(dm_orient(hollow.p, hollow.nv, h, hollow.nt, NULL, &turned) == DM_OK);
+                T_EQ_SIZE(turned, 0);
+                T_CHECK(memcmp(h, hollow.t, 3 * hollow.nt * sizeof(uint32_t)) == 0);
+                free(h);
+            }
+        }
+        { /* two overlapping spheres, both facing out: neither is nested in the other */
+            mesh o = make_sphere(10, 0.0, 0.8), lap;
+            for (t = 0; t < o.nv; t++) o.p[3 * t] += 0.9f;
+            lap = join(&s, &o);
+            if (T_CHECK(lap.nt > 0)) round_trip("overlapping spheres", &lap, 0.5, 10u);
+            mesh_free(&o);
+            mesh_free(&lap);
+        }
     }
     /* two spheres apart, both facing out */
     off = make_sphere(10, 0.0, 0.5);
