@@ -973,7 +973,7 @@ static dm_result dm__scratch_fail(const dm__scratch *s)
 }
 
 /* ---------------------------------------------------------------------------------------------
-   Section: small maths in double, vertex normals, edge twins (shared by parts 3 and 4)
+   Section: small maths in double, vertex normals, sorted edges and twins (shared by parts 2, 3, 4)
    --------------------------------------------------------------------------------------------- */
 
 static double dm__dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -1212,19 +1212,28 @@ static int dm__edge_cmp(const void *a, const void *b)
     return x->he < y->he ? -1 : x->he > y->he ? 1 : 0;
 }
 
+/* e[]: the 3 nt half-edges keyed by their vertex pair, sorted (by key, then half-edge) */
+static void dm__sorted_edges(const uint32_t *idx, size_t nt, dm__edge *e)
+{
+    size_t i, n = 3 * nt;
+    for (i = 0; i < n; i++) {
+        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
+        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+        e[i].he = (uint32_t)i;
+    }
+    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+}
+
 /* twin[he]: the opposite half-edge's triangle, when exactly two triangles share the edge and
    run it in opposite directions (a consistently oriented manifold edge); DM_NO_HIT otherwise. */
 static void dm__twins(const uint32_t *idx, size_t nt, dm__edge *e, uint32_t *twin, uint32_t *twin_he)
 {
     size_t i, j, n = 3 * nt;
     for (i = 0; i < n; i++) {
-        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
-        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
-        e[i].he = (uint32_t)i;
         twin[i] = DM_NO_HIT;
         twin_he[i] = DM_NO_HIT;
     }
-    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    dm__sorted_edges(idx, nt, e);
     for (i = 0; i < n; i = j) {
         for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
         if (j - i == 2) {
@@ -4397,13 +4406,10 @@ static void dm__orient_links(const uint32_t *idx, size_t nt, dm__edge *e, uint32
 {
     size_t i, j, n = 3 * nt;
     for (i = 0; i < n; i++) {
-        uint32_t a = idx[i], b = idx[i - i % 3 + (i % 3 + 1) % 3];
-        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
-        e[i].he = (uint32_t)i;
         nb[i] = DM_NO_HIT;
         same[i] = 0;
     }
-    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    dm__sorted_edges(idx, nt, e);
     for (i = 0; i < n; i = j) {
         for (j = i + 1; j < n && e[j].key == e[i].key; j++) {}
         if (j - i == 2 && e[i].he / 3 != e[i + 1].he / 3 && (e[i].key >> 32) != (e[i].key & 0xffffffffu)) {
@@ -7900,12 +7906,7 @@ static dm_result dm__rc_edges(dm__rc_run *r)
 {
     size_t i, j, n = 3 * r->bnt, t;
     dm__edge *e = r->edges;
-    for (i = 0; i < n; i++) {
-        uint32_t a = r->bidx[i], b = r->bidx[i - i % 3 + (i % 3 + 1) % 3];
-        e[i].key = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
-        e[i].he = (uint32_t)i;
-    }
-    qsort(e, n, sizeof(dm__edge), dm__edge_cmp);
+    dm__sorted_edges(r->bidx, r->bnt, e);
     r->ne = 0;
     for (i = 0; i < n; i = j) {
         uint32_t level = 1;
