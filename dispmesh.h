@@ -682,7 +682,9 @@ typedef struct dm_simplify_report {
     size_t rejected;              /* candidates refused by the link, flip or degeneracy checks */
     size_t vetoed;                /* candidates vetoed by the constraint */
     size_t relaxed;               /* times the constraint was relaxed (options.relax) */
-    size_t frozen_vertices;       /* vertices left alone because they are non-manifold */
+    size_t frozen_vertices;       /* vertices left alone because they are non-manifold (their
+                                     triangles make no single consistently oriented fan: where
+                                     they only disagree in orientation, dm_orient mends that) */
     double error;                 /* largest error of a collapse done (mesh units), 0 if none */
     int reached_target;           /* 1 when target_triangles (if set) was reached */
 } dm_simplify_report;

@@ -1062,6 +1062,10 @@ int main(int argc, char **argv)
                 R.shell->fallback >= 2 ? " (at the end with the simplifier's own checks only)"
                 : R.shell->fallback ? " (at the end everywhere)" : "",
                 R.fallback_triangles, R.base.nt);
+    if (!srep.reached_target && srep.frozen_vertices)
+        fprintf(stderr, "dispmesh: note: %zu vertices are non-manifold (their triangles do not make one oriented fan): "
+                        "the simplifier does not move or remove them\n",
+                srep.frozen_vertices);
     if (!srep.reached_target)
         fprintf(stderr, "dispmesh: note: the simplifier stopped at %zu triangles, above --faces %ld: %s\n", R.base.nt, faces,
                 !srep.vetoed || R.shell->fallback >= 2
