@@ -202,18 +202,30 @@ static void fz_simplify(fz_in *in, unsigned op, const dm_allocator *al, fz_cance
             fz_check(wpos[3 * widx[i]] == m.pos[3 * m.idx[i]] && wpos[3 * widx[i] + 1] == m.pos[3 * m.idx[i] + 1] &&
                      wpos[3 * widx[i] + 2] == m.pos[3 * m.idx[i] + 2]);
     }
-    if (m.nt <= FZ_T) { /* the orientation, checked on its own: each triangle keeps its corners' cycle or turns */
-        size_t turned = 0, n = 0;
-        memcpy(gidx, m.idx, 3 * m.nt * sizeof(uint32_t));
-        r = dm_orient(m.pos, m.nv, gidx, m.nt, al, &turned);
-        fz_check(fz_known(r));
-        for (i = 0; i < m.nt; i++) {
-            const uint32_t *a = m.idx + 3 * i, *g = gidx + 3 * i;
-            int kept = a[0] == g[0] && a[1] == g[1] && a[2] == g[2], turn = a[0] == g[0] && a[1] == g[2] && a[2] == g[1];
-            fz_check(kept || turn);
-            n += !kept;
+    { /* the orientation, checked on its own, on the mesh and on a copy with some triangles turned
+         (chosen from op, no byte taken): each triangle keeps its corners' cycle or turns */
+        int pass;
+        for (pass = 0; pass < 2; pass++) {
+            uint32_t src[3 * FZ_T];
+            size_t turned = 0, n = 0;
+            memcpy(src, m.idx, 3 * m.nt * sizeof(uint32_t));
+            for (i = 0; pass && i < m.nt; i++)
+                if ((((uint32_t)i * 2654435761u) >> 13 ^ op) & 1) {
+                    uint32_t x = src[3 * i + 1];
+                    src[3 * i + 1] = src[3 * i + 2];
+                    src[3 * i + 2] = x;
+                }
+            memcpy(gidx, src, 3 * m.nt * sizeof(uint32_t));
+            r = dm_orient(m.pos, m.nv, gidx, m.nt, al, &turned);
+            fz_check(fz_known(r));
+            for (i = 0; i < m.nt; i++) {
+                const uint32_t *a = src + 3 * i, *g = gidx + 3 * i;
+                int kept = a[0] == g[0] && a[1] == g[1] && a[2] == g[2], turn = a[0] == g[0] && a[1] == g[2] && a[2] == g[1];
+                fz_check(kept || turn);
+                n += !kept;
+            }
+            fz_check(r == DM_OK ? n == turned : n == 0 && turned == 0);
         }
-        fz_check(r == DM_OK ? n == turned : n == 0 && turned == 0);
     }
     o.target_triangles = fz_u8(in) % (m.nt + 1);
     o.target_error = (f & 1) ? (double)fz_f32(in) : 0.0;
