@@ -6,7 +6,7 @@ set -e
 B="$1"; OUT="$2"
 docs=$(cd "$(dirname "$0")" && pwd)
 made=0; missing=0
-for name in dispmesh_bunny_views dispmesh_brick_views dispmesh_camel_views \
+for name in dispmesh_bunny_views dispmesh_brick_views dispmesh_camel_views dispmesh_blobby_shuffled_views \
             terrain_desert terrain_vegetation terrain_mountain5 terrain_mountain6 \
             grass_mountain grass_wither grass_mingle grass_mesh_sphere grass_mesh_bunny \
             deform_fig4-4_cylinder_bend90 deform_fig4-4_cylinder_bend180 deform_fig4-4b_box_twist720 \

@@ -38,6 +38,15 @@ if [ -f "$cgal" ] && tar xzf "$cgal" -O data/meshes/camel.off >"$OUT/camel.off" 
 else
   echo "demo: $cgal not found (apt-get install libcgal-demo): dispmesh camel skipped"
 fi
+# ... and CGAL's blobby with half of its triangles turned the other way, as exporters leave meshes:
+# dm_orient turns them back (the tool says how many), and the base is blobby's own
+if [ -f "$cgal" ] && tar xzf "$cgal" -O data/meshes/blobby-shuffled.off >"$OUT/blobby-shuffled.off" 2>/dev/null &&
+   [ -s "$OUT/blobby-shuffled.off" ]; then
+  "$B/dispmesh" "$OUT/blobby-shuffled.off" --faces 500 --res 512 -o "$OUT/dispmesh_blobby_shuffled"
+  rendered=$((rendered + 1))
+else
+  echo "demo: $cgal not found (apt-get install libcgal-demo): dispmesh blobby-shuffled skipped"
+fi
 # subdiv4.h: paper 001's four terrain scenes (its Figs 3-6)
 for scene in desert vegetation mountain5 mountain6; do
   "$B/terrain" --preset "$scene" -o "$OUT/terrain_$scene.png" && rendered=$((rendered + 1))
